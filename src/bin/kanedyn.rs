@@ -1,0 +1,2 @@
+//! The `kanedyn` command-line tool (being written).
+fn main() {}

@@ -1,0 +1,1 @@
+//! Time integration (DOP853) with a streaming fixed-rate sampler (being written).

@@ -1,0 +1,22 @@
+//! kanedyn: planar multibody dynamics by Kane's method, for torsional-vibration engineering.
+//!
+//! A mechanism (bodies joined by revolute joints in a tree, read from RON) becomes the equations
+//! of motion `M(q) u̇ = F(q, u, t)`, `q̇ = W⁻¹ u`, evaluated numerically from Kane's partial
+//! velocities without heap allocation. The rotor with centrifugal pendulum vibration absorbers
+//! (CPVA) is the flagship example; see the README.
+
+pub mod cpva;
+pub mod error;
+pub mod excitation;
+pub mod inertia;
+pub mod integrate;
+pub mod io;
+pub mod kane;
+pub mod kinematics;
+pub mod loads;
+pub mod math;
+pub mod mechanism;
+pub mod plot;
+pub mod shape;
+pub mod signal;
+pub mod speeds;

@@ -1,0 +1,1 @@
+//! Signal processing: STFT order tracking and angle-domain order tracking (being written).
