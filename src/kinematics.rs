@@ -1,1 +1,85 @@
-//! (being written)
+//! World-frame poses and velocities of a mechanism's bodies (for outputs, energies and tests).
+//!
+//! The engine's hot forward pass lives in [`crate::kane`], which may express each subtree in its
+//! root body's frame; the functions here always use the world frame and allocate their result.
+
+use crate::math::{Vec2, perp, rot2};
+use crate::mechanism::Mechanism;
+
+/// A body's pose in the world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Absolute angle β (rad): the sum of the joint angles from ground.
+    pub angle: f64,
+    /// The body frame's origin (its inboard joint point), m.
+    pub origin: Vec2,
+    /// The centre of mass, m.
+    pub com: Vec2,
+}
+
+/// Poses of all bodies at coordinates `q` (rad).
+pub fn world_poses(mech: &Mechanism, q: &[f64]) -> Vec<Pose> {
+    let mut out: Vec<Pose> = Vec::with_capacity(mech.ndof());
+    for (j, joint) in mech.joints.iter().enumerate() {
+        let (angle, origin) = match joint.parent {
+            None => (q[j], joint.at),
+            Some(p) => (out[p].angle + q[j], out[p].origin + rot2(out[p].angle) * joint.at),
+        };
+        let com = origin + rot2(angle) * mech.bodies[j].inertia.com;
+        out.push(Pose { angle, origin, com });
+    }
+    out
+}
+
+/// World-frame velocity of each body: (angular velocity ω, rad/s; centre-of-mass velocity, m/s),
+/// from the joint rates `qdot` (rad/s) — not from the generalized speeds.
+pub fn world_velocities(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> Vec<(f64, Vec2)> {
+    let poses = world_poses(mech, q);
+    let mut w = vec![0.0; mech.ndof()];
+    let mut v_origin = vec![Vec2::zeros(); mech.ndof()];
+    let mut out = Vec::with_capacity(mech.ndof());
+    for (j, joint) in mech.joints.iter().enumerate() {
+        let (wp, vo) = match joint.parent {
+            None => (0.0, Vec2::zeros()),
+            Some(p) => (w[p], v_origin[p] + w[p] * perp(poses[j].origin - poses[p].origin)),
+        };
+        w[j] = wp + qdot[j];
+        v_origin[j] = vo;
+        out.push((w[j], vo + w[j] * perp(poses[j].com - poses[j].origin)));
+    }
+    out
+}
+
+/// Kinetic energy `Σ ½ m |v|² + ½ I ω²` (J), body by body, from joint rates.
+pub fn kinetic_energy(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> f64 {
+    world_velocities(mech, q, qdot)
+        .iter()
+        .zip(&mech.bodies)
+        .map(|((w, v), b)| 0.5 * b.inertia.mass * v.norm_squared() + 0.5 * b.inertia.i_com * w * w)
+        .sum()
+}
+
+/// Potential energy of gravity and the joint springs (J).
+pub fn potential_energy(mech: &Mechanism, q: &[f64]) -> f64 {
+    let poses = world_poses(mech, q);
+    let g = mech.loads.gravity;
+    let grav: f64 = poses.iter().zip(&mech.bodies).map(|(p, b)| -b.inertia.mass * g.dot(&p.com)).sum();
+    let springs: f64 = mech
+        .joints
+        .iter()
+        .zip(q)
+        .filter_map(|(j, &qj)| j.spring.map(|s| 0.5 * s.stiffness * (qj - s.free_angle).powi(2)))
+        .sum();
+    grav + springs
+}
+
+/// Angular momentum about the world origin (kg·m²/s), from joint rates.
+pub fn angular_momentum(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> f64 {
+    let poses = world_poses(mech, q);
+    world_velocities(mech, q, qdot)
+        .iter()
+        .zip(&mech.bodies)
+        .zip(&poses)
+        .map(|(((w, v), b), p)| b.inertia.i_com * w + b.inertia.mass * crate::math::cross2(p.com, *v))
+        .sum()
+}

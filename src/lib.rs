@@ -5,12 +5,14 @@
 //! velocities without heap allocation. The rotor with centrifugal pendulum vibration absorbers
 //! (CPVA) is the flagship example; see the README.
 
+pub mod body;
 pub mod cpva;
 pub mod error;
 pub mod excitation;
 pub mod inertia;
 pub mod integrate;
 pub mod io;
+pub mod joint;
 pub mod kane;
 pub mod kinematics;
 pub mod loads;
