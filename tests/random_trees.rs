@@ -1,0 +1,251 @@
+//! Invariants of the engine on seeded random revolute trees (up to 10 bodies, random branching,
+//! offsets, masses, inertias, gravity, springs, dampers and point forces), each checked against
+//! an independent route: world-frame velocity recursion, finite differences of positions, and
+//! Lagrange's equations by numeric differentiation of the kinetic and potential energy.
+
+use kanedyn::body::BodySpec;
+use kanedyn::excitation::Excitation;
+use kanedyn::io::Source;
+use kanedyn::joint::{JointSpec, Spring};
+use kanedyn::kane::Kane;
+use kanedyn::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
+use kanedyn::loads::{ForceFrame, LoadSpec};
+use kanedyn::math::{Vec2, rot2};
+use kanedyn::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::speeds::Speeds;
+use nalgebra::{DMatrix, DVector};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+const TREES: u64 = 60;
+
+fn random_tree(seed: u64) -> Mechanism {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let n = rng.random_range(1..=10);
+    let name = |i: usize| format!("b{i}");
+    let mut bodies = Vec::new();
+    let mut joints = Vec::new();
+    let mut loads = Vec::new();
+    for i in 0..n {
+        let point_mass = rng.random_bool(0.2);
+        bodies.push(BodySpec {
+            name: Some(name(i)),
+            mass: Some(rng.random_range(0.1..10.0)),
+            com: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
+            inertia: if point_mass { None } else { Some(rng.random_range(0.01..1.0)) },
+            ..BodySpec::default()
+        });
+        // Roughly one tree in five has a second root on ground.
+        let parent = if i == 0 || rng.random_bool(0.1) { "ground".to_string() } else { name(rng.random_range(0..i)) };
+        joints.push(JointSpec {
+            name: Some(format!("j{i}")),
+            parent: Some(parent),
+            child: Some(name(i)),
+            at: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
+            spring: rng.random_bool(0.5).then(|| Spring { stiffness: rng.random_range(0.0..50.0), free_angle: rng.random_range(-1.0..1.0) }),
+            damper: rng.random_bool(0.5).then(|| rng.random_range(0.0..2.0)),
+            ..JointSpec::default()
+        });
+        if rng.random_bool(0.3) {
+            loads.push(LoadSpec::GroundDamper { body: name(i), c: rng.random_range(0.0..1.0) });
+        }
+        if rng.random_bool(0.3) {
+            loads.push(LoadSpec::PointForce {
+                body: name(i),
+                at: (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+                force: (rng.random_range(-20.0..20.0), rng.random_range(-20.0..20.0)),
+                frame: if rng.random_bool(0.5) { ForceFrame::World } else { ForceFrame::Body },
+            });
+        }
+        if rng.random_bool(0.3) {
+            loads.push(LoadSpec::JointTorque { joint: format!("j{i}"), excitation: Excitation::constant(rng.random_range(-5.0..5.0)) });
+        }
+    }
+    let gravity = if rng.random_bool(0.7) { (rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)) } else { (0.0, 0.0) };
+    let speeds = if rng.random_bool(0.5) { Speeds::JointRates } else { Speeds::AbsoluteAngularVelocities };
+    let spec = MechanismSpec { name: format!("tree{seed}"), speeds, gravity, bodies, joints, loads };
+    Mechanism::from_spec(&spec, &Source::from_text("<random tree>", "")).unwrap()
+}
+
+fn random_state(mech: &Mechanism, rng: &mut StdRng) -> (Vec<f64>, Vec<f64>) {
+    let n = mech.ndof();
+    let q = (0..n).map(|_| rng.random_range(-3.0..3.0)).collect();
+    let u = (0..n).map(|_| rng.random_range(-5.0..5.0)).collect();
+    (q, u)
+}
+
+fn qdot_of(mech: &Mechanism, u: &[f64]) -> Vec<f64> {
+    let mut qd = vec![0.0; u.len()];
+    mech.speeds.qdot(&mech.parents(), u, &mut qd);
+    qd
+}
+
+#[test]
+fn mass_matrix_is_symmetric_positive_definite_and_gives_kinetic_energy() {
+    let mut worst: f64 = 0.0;
+    for seed in 0..TREES {
+        let mech = random_tree(seed);
+        let mut kane = Kane::new(&mech).unwrap();
+        let mut rng = StdRng::seed_from_u64(1000 + seed);
+        for _ in 0..10 {
+            let (q, u) = random_state(&mech, &mut rng);
+            let m = kane.mass_matrix(&q).clone();
+            assert!((&m - m.transpose()).amax() == 0.0, "tree {seed}: M not symmetric");
+            let eig = m.clone().symmetric_eigen().eigenvalues;
+            assert!(eig.min() > 0.0, "tree {seed}: M has eigenvalue {}", eig.min());
+            let uv = DVector::from_column_slice(&u);
+            let t_kane = 0.5 * (uv.transpose() * &m * &uv)[0];
+            let t_bodies = kinetic_energy(&mech, &q, &qdot_of(&mech, &u));
+            let rel = (t_kane - t_bodies).abs() / t_bodies;
+            worst = worst.max(rel);
+            assert!(rel < 1e-12, "tree {seed}: ½uᵀMu = {t_kane}, Σ bodies = {t_bodies}");
+        }
+    }
+    println!("largest relative kinetic-energy difference: {worst:e}");
+}
+
+#[test]
+fn partial_velocities_equal_finite_differences_of_body_velocities() {
+    let mut worst: f64 = 0.0;
+    for seed in 0..TREES {
+        let mech = random_tree(seed);
+        let mut kane = Kane::new_world_frame(&mech).unwrap();
+        let mut rng = StdRng::seed_from_u64(2000 + seed);
+        let (q, u) = random_state(&mech, &mut rng);
+        let n = mech.ndof();
+        // The velocity recursion itself is checked against positions: v ≈ Δr/Δt along q̇.
+        let qd = qdot_of(&mech, &u);
+        let h = 1e-6;
+        let qp: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a + h * b).collect();
+        let qm: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a - h * b).collect();
+        let (pp, pm) = (world_poses(&mech, &qp), world_poses(&mech, &qm));
+        let vel = world_velocities(&mech, &q, &qd);
+        for j in 0..n {
+            let v_fd = (pp[j].com - pm[j].com) / (2.0 * h);
+            let w_fd = (pp[j].angle - pm[j].angle) / (2.0 * h);
+            assert!((v_fd - vel[j].1).norm() < 1e-6 * (1.0 + vel[j].1.norm()), "tree {seed} body {j}: velocity");
+            assert!((w_fd - vel[j].0).abs() < 1e-6 * (1.0 + vel[j].0.abs()));
+        }
+        // ∂v_j/∂u_r by central differences in u (exact up to rounding: v is linear in u).
+        for j in 0..n {
+            let (pv, pw) = kane.partial_velocities(&q, j);
+            for r in 0..n {
+                let mut up = u.clone();
+                let mut um = u.clone();
+                up[r] += 0.5;
+                um[r] -= 0.5;
+                let vp = world_velocities(&mech, &q, &qdot_of(&mech, &up));
+                let vm = world_velocities(&mech, &q, &qdot_of(&mech, &um));
+                let dv = vp[j].1 - vm[j].1;
+                let dw = vp[j].0 - vm[j].0;
+                let err = (dv - pv[r]).norm() + (dw - pw[r]).abs();
+                worst = worst.max(err);
+                assert!(err < 1e-12, "tree {seed}: ∂v_{j}/∂u_{r} = {:?}, finite difference {:?}", pv[r], dv);
+            }
+        }
+    }
+    println!("largest partial-velocity difference: {worst:e}");
+}
+
+/// Generalized forces in joint-rate space by Lagrange's equations, from the energies only:
+/// `Q = −d/dt(∂T/∂q̇)|_{q̈=0} + ∂T/∂q − ∂V/∂q + Q_nc`.
+fn lagrange_forcing(mech: &Mechanism, t: f64, q: &[f64], qd: &[f64]) -> DVector<f64> {
+    let n = q.len();
+    let h = 1e-5;
+    let t_of = |q: &[f64], qd: &[f64]| kinetic_energy(mech, q, qd);
+    // ∂T/∂q̇ by central differences (T is quadratic in q̇, so exact up to rounding).
+    let dt_dqd = |q: &[f64], qd: &[f64]| -> Vec<f64> {
+        (0..n)
+            .map(|k| {
+                let mut a = qd.to_vec();
+                let mut b = qd.to_vec();
+                a[k] += 0.5;
+                b[k] -= 0.5;
+                t_of(q, &a) - t_of(q, &b)
+            })
+            .collect()
+    };
+    let qp: Vec<f64> = q.iter().zip(qd).map(|(a, b)| a + h * b).collect();
+    let qm: Vec<f64> = q.iter().zip(qd).map(|(a, b)| a - h * b).collect();
+    let (pp, pm) = (dt_dqd(&qp, qd), dt_dqd(&qm, qd));
+    let mut out = DVector::zeros(n);
+    for k in 0..n {
+        let mut a = q.to_vec();
+        let mut b = q.to_vec();
+        a[k] += h;
+        b[k] -= h;
+        let dt_dq = (t_of(&a, qd) - t_of(&b, qd)) / (2.0 * h);
+        let dv_dq = (potential_energy(mech, &a) - potential_energy(mech, &b)) / (2.0 * h);
+        out[k] = -(pp[k] - pm[k]) / (2.0 * h) + dt_dq - dv_dq;
+    }
+    // Non-conservative generalized forces, each by its virtual power along e_k in q̇.
+    let poses = world_poses(mech, q);
+    let vel = world_velocities(mech, q, qd);
+    for k in 0..n {
+        let mut e = vec![0.0; n];
+        e[k] = 1.0;
+        let ve = world_velocities(mech, q, &e);
+        out[k] -= mech.joints[k].damper * qd[k];
+        for g in &mech.loads.ground_dampers {
+            out[k] -= g.c * vel[g.body].0 * ve[g.body].0;
+        }
+        for pf in &mech.loads.point_forces {
+            let b = pf.body;
+            let arm = rot2(poses[b].angle) * pf.at + poses[b].origin - poses[b].com;
+            let f = match pf.frame {
+                ForceFrame::World => pf.force,
+                ForceFrame::Body => rot2(poses[b].angle) * pf.force,
+            };
+            let v_point = ve[b].1 + ve[b].0 * Vec2::new(-arm.y, arm.x);
+            out[k] += f.dot(&v_point);
+        }
+        for jt in &mech.loads.joint_torques {
+            if jt.joint == k {
+                out[k] += jt.excitation.torque(t);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn forcing_agrees_with_lagrange_route() {
+    let mut worst: f64 = 0.0;
+    for seed in 0..TREES {
+        let mech = random_tree(seed);
+        let mut kane = Kane::new(&mech).unwrap();
+        let mut rng = StdRng::seed_from_u64(3000 + seed);
+        let (q, u) = random_state(&mech, &mut rng);
+        let qd = qdot_of(&mech, &u);
+        let f = kane.forcing(0.0, &q, &u).clone();
+        // Kane's F in the mechanism's speeds equals W⁻ᵀ Q_rates: compare in joint-rate space,
+        // F_rates = Wᵀ F_u.
+        let w = mech.speeds.w_matrix(&mech.parents());
+        let f_rates = w.transpose() * f;
+        let f_lag = lagrange_forcing(&mech, 0.0, &q, &qd);
+        let scale = f_lag.amax().max(1.0);
+        let err = (&f_rates - &f_lag).amax() / scale;
+        worst = worst.max(err);
+        assert!(err <= 1e-7, "tree {seed}: Kane {f_rates:?} vs Lagrange {f_lag:?} (rel {err:e})");
+    }
+    println!("largest relative difference to the Lagrange route: {worst:e}");
+}
+
+#[test]
+fn rhs_solves_m_udot_equals_f() {
+    for seed in 0..TREES {
+        let mech = random_tree(seed);
+        let mut kane = Kane::new(&mech).unwrap();
+        let mut rng = StdRng::seed_from_u64(4000 + seed);
+        let (q, u) = random_state(&mech, &mut rng);
+        let n = mech.ndof();
+        let x: Vec<f64> = q.iter().chain(&u).copied().collect();
+        let mut xd = vec![0.0; 2 * n];
+        kane.rhs(0.0, &x, &mut xd).unwrap();
+        let (m, f) = kane.mass_matrix_and_forcing(0.0, &q, &u);
+        let (m, f): (DMatrix<f64>, DVector<f64>) = (m.clone(), f.clone());
+        let resid = &m * DVector::from_column_slice(&xd[n..]) - &f;
+        assert!(resid.amax() <= 1e-10 * f.amax().max(1.0), "tree {seed}: residual {}", resid.amax());
+        assert_eq!(&xd[..n], &qdot_of(&mech, &u)[..]);
+    }
+}
