@@ -296,6 +296,69 @@ impl Mechanism {
         self.bodies.iter().map(|b| b.inertia.mass).sum()
     }
 
+    /// The mechanism with joint `name` locked at angle `q_lock` (rad): its child body is merged
+    /// rigidly into the parent (parallel-axis inertia), the child's children hang from the parent
+    /// at their transformed joint points, the locked joint's spring, damper and applied torque
+    /// disappear, and loads on the child move to the parent. Used for the "locked pendulum"
+    /// reference of the paper (Fig. 2 and 5). Locking a joint to ground is refused: it would weld
+    /// the whole subtree to ground.
+    pub fn lock(&self, name: &str, q_lock: f64) -> Result<Mechanism> {
+        let model = |message: String| Error::Model { mechanism: self.name.clone(), message };
+        let c = self.joint_index(name).ok_or_else(|| {
+            model(format!("cannot lock unknown joint `{name}` (joints: {})", known_list(self.joints.iter().map(|j| j.name.as_str()))))
+        })?;
+        let Some(p) = self.joints[c].parent else {
+            return Err(model(format!("joint `{name}` connects to ground; locking it would weld its subtree to ground")));
+        };
+        let rot = crate::math::rot2(q_lock);
+        let at_c = self.joints[c].at;
+        // Child-frame vectors expressed in the parent frame.
+        let to_parent = |v: Vec2| at_c + rot * v;
+        let mut out = self.clone();
+        out.name = format!("{}_locked", self.name);
+        let child = &self.bodies[c].inertia;
+        let moved = crate::inertia::PlanarInertia::new(child.mass, to_parent(child.com), child.i_com);
+        out.bodies[p].inertia = out.bodies[p].inertia + moved;
+        for (j, joint) in out.joints.iter_mut().enumerate() {
+            if joint.parent == Some(c) {
+                joint.parent = Some(p);
+                joint.at = to_parent(self.joints[j].at);
+            }
+        }
+        for g in &mut out.loads.ground_dampers {
+            if g.body == c {
+                g.body = p;
+            }
+        }
+        for f in &mut out.loads.point_forces {
+            if f.body == c {
+                f.body = p;
+                f.at = to_parent(f.at);
+                if f.frame == crate::loads::ForceFrame::Body {
+                    f.force = rot * f.force;
+                }
+            }
+        }
+        out.loads.joint_torques.retain(|t| t.joint != c);
+        // Remove body/joint c and shift the later indices down (order stays parents-first).
+        out.bodies.remove(c);
+        out.joints.remove(c);
+        let shift = |i: usize| if i > c { i - 1 } else { i };
+        for joint in &mut out.joints {
+            joint.parent = joint.parent.map(shift);
+        }
+        for g in &mut out.loads.ground_dampers {
+            g.body = shift(g.body);
+        }
+        for f in &mut out.loads.point_forces {
+            f.body = shift(f.body);
+        }
+        for t in &mut out.loads.joint_torques {
+            t.joint = shift(t.joint);
+        }
+        Ok(out)
+    }
+
     /// Joint indices from the root to body `j` (inclusive).
     pub fn path_to(&self, j: usize) -> Vec<usize> {
         let mut path = vec![j];

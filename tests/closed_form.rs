@@ -167,3 +167,27 @@ fn closed_form_rhs_matches_engine_rhs() {
         }
     }
 }
+
+#[test]
+fn locked_twin_is_one_rigid_rotor() {
+    // Locking every pivot at φ = 0 leaves one body with the locked inertia of DESIGN.md,
+    // I_A + I_B + m_p (R + L)², and the rotor's damping only.
+    for n_pend in [1, 4] {
+        let p = CpvaParams::canonical().with_pendulums(n_pend);
+        let mut mech = p.mechanism(Some(Excitation::constant(TORQUE))).unwrap();
+        for i in 0..n_pend {
+            mech = mech.lock(&p.pivot_name(i), 0.0).unwrap();
+        }
+        assert_eq!(mech.ndof(), 1);
+        let mut k = Kane::new(&mech).unwrap();
+        let m = k.mass_matrix(&[0.7])[(0, 0)];
+        assert!((m - p.locked_inertia()).abs() / p.locked_inertia() < 1e-13, "N = {n_pend}: {m}");
+        let mut xd = [0.0; 2];
+        k.rhs(0.0, &[0.0, 100.0], &mut xd).unwrap();
+        let expect = (TORQUE - p.c_r * 100.0) / p.locked_inertia();
+        assert!((xd[1] - expect).abs() < 1e-12 * expect.abs());
+    }
+    let mech = CpvaParams::canonical().mechanism(None).unwrap();
+    assert!(mech.lock("spin", 0.0).is_err(), "locking to ground must be refused");
+    assert!(mech.lock("nope", 0.0).is_err());
+}
