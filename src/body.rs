@@ -1,9 +1,9 @@
 //! Body specifications (the RON form) and resolved bodies.
 
+use crate::error::Result;
 use crate::inertia::PlanarInertia;
 use crate::io::Source;
 use crate::math::Vec2;
-use crate::error::Result;
 use serde::{Deserialize, Serialize};
 
 /// A body as written in a mechanism or catalog file.
@@ -57,10 +57,10 @@ impl BodySpec {
                 return Err(src.error(&format!("{path}.inertia"), format!("negative moment of inertia {i} kg·m²")));
             }
         }
-        if let Some((x, y)) = self.com {
-            if !(x.is_finite() && y.is_finite()) {
-                return Err(src.error(&format!("{path}.com"), "centre of mass must be finite"));
-            }
+        if let Some((x, y)) = self.com
+            && !(x.is_finite() && y.is_finite())
+        {
+            return Err(src.error(&format!("{path}.com"), "centre of mass must be finite"));
         }
         Ok(())
     }

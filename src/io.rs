@@ -52,11 +52,7 @@ impl Source {
 
     fn spanned_error(&self, e: &ron::error::SpannedError, path: String) -> Error {
         Error::Input {
-            location: Location {
-                file: self.file.clone(),
-                line_col: Some((e.span.start.line, e.span.start.col)),
-                path,
-            },
+            location: Location { file: self.file.clone(), line_col: Some((e.span.start.line, e.span.start.col)), path },
             message: e.code.to_string(),
         }
     }

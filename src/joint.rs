@@ -68,18 +68,18 @@ impl JointSpec {
 
     /// Checks the numbers given in this spec (before merging), naming the field at `path`.
     pub fn check_numbers(&self, src: &Source, path: &str) -> Result<()> {
-        if let Some((x, y)) = self.at {
-            if !(x.is_finite() && y.is_finite()) {
-                return Err(src.error(&format!("{path}.at"), "joint point must be finite"));
-            }
+        if let Some((x, y)) = self.at
+            && !(x.is_finite() && y.is_finite())
+        {
+            return Err(src.error(&format!("{path}.at"), "joint point must be finite"));
         }
-        if let Some(c) = self.damper {
-            if !(c.is_finite() && c >= 0.0) {
-                return Err(src.error(
-                    &format!("{path}.damper"),
-                    format!("damping must be finite and non-negative (N·m·s/rad), got {c}"),
-                ));
-            }
+        if let Some(c) = self.damper
+            && !(c.is_finite() && c >= 0.0)
+        {
+            return Err(src.error(
+                &format!("{path}.damper"),
+                format!("damping must be finite and non-negative (N·m·s/rad), got {c}"),
+            ));
         }
         if let Some(s) = self.spring {
             if !(s.stiffness.is_finite() && s.stiffness >= 0.0) {

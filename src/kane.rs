@@ -378,7 +378,11 @@ impl Kane {
                 return Err(EngineError::NonFinite { what: "mass matrix", index: j });
             }
             if d <= PIVOT_TOL * scale || d <= 0.0 {
-                return Err(EngineError::NotPositiveDefinite { dof: j, joint: self.mech.joints[j].name.clone(), pivot: d });
+                return Err(EngineError::NotPositiveDefinite {
+                    dof: j,
+                    joint: self.mech.joints[j].name.clone(),
+                    pivot: d,
+                });
             }
             let ljj = d.sqrt();
             self.l[j * n + j] = ljj;

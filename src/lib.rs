@@ -5,6 +5,9 @@
 //! velocities without heap allocation. The rotor with centrifugal pendulum vibration absorbers
 //! (CPVA) is the flagship example; see the README.
 
+// Index loops mirror the formulas (M_rs, paths r..s) and keep parallel arrays in step.
+#![allow(clippy::needless_range_loop)]
+
 pub mod body;
 pub mod cpva;
 pub mod error;

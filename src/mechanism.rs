@@ -88,7 +88,9 @@ impl Mechanism {
                 return Err(src.error(&format!("{path}.name"), "`ground` is the implicit root and cannot be a body"));
             }
             if let Some(prev) = body_index.insert(name.clone(), i) {
-                return Err(src.error(&format!("{path}.name"), format!("duplicate body name `{name}` (also bodies[{prev}])")));
+                return Err(
+                    src.error(&format!("{path}.name"), format!("duplicate body name `{name}` (also bodies[{prev}])"))
+                );
             }
             let props = merged.inertia_props();
             if props.mass == 0.0 && props.i_com == 0.0 {
@@ -113,7 +115,9 @@ impl Mechanism {
             };
             check_name(src, &format!("{path}.name"), &name)?;
             if let Some(prev) = joint_names.insert(name.clone(), k) {
-                return Err(src.error(&format!("{path}.name"), format!("duplicate joint name `{name}` (also joints[{prev}])")));
+                return Err(
+                    src.error(&format!("{path}.name"), format!("duplicate joint name `{name}` (also joints[{prev}])"))
+                );
             }
             let known = || known_list(body_specs.iter().map(|(n, _)| n.as_str()));
             let Some(parent) = merged.parent.clone() else {
@@ -138,7 +142,9 @@ impl Mechanism {
             let child_idx = match body_index.get(&child) {
                 Some(&c) => c,
                 None if child == GROUND => {
-                    return Err(src.error(&format!("{path}.child"), format!("joint `{name}`: `ground` cannot be a child")));
+                    return Err(
+                        src.error(&format!("{path}.child"), format!("joint `{name}`: `ground` cannot be a child"))
+                    );
                 }
                 None => {
                     return Err(src.error(
@@ -148,12 +154,17 @@ impl Mechanism {
                 }
             };
             if parent_idx == Some(child_idx) {
-                return Err(src.error(&format!("{path}.parent"), format!("joint `{name}` joins body `{child}` to itself")));
+                return Err(
+                    src.error(&format!("{path}.parent"), format!("joint `{name}` joins body `{child}` to itself"))
+                );
             }
             if let Some(prev) = joint_of_child[child_idx] {
                 return Err(src.error(
                     &format!("{path}.child"),
-                    format!("body `{child}` has two parents: joints `{}` and `{name}`", spec.joints[prev].name.as_deref().unwrap_or("?")),
+                    format!(
+                        "body `{child}` has two parents: joints `{}` and `{name}`",
+                        spec.joints[prev].name.as_deref().unwrap_or("?")
+                    ),
                 ));
             }
             joint_of_child[child_idx] = Some(k);
@@ -185,7 +196,8 @@ impl Mechanism {
             }
         }
         if order.len() < nb {
-            let stuck: Vec<&str> = (0..nb).filter(|&b| new_index[b].is_none()).map(|b| body_specs[b].0.as_str()).collect();
+            let stuck: Vec<&str> =
+                (0..nb).filter(|&b| new_index[b].is_none()).map(|b| body_specs[b].0.as_str()).collect();
             let k = joint_of_child[(0..nb).find(|&b| new_index[b].is_none()).unwrap_or(0)].unwrap_or(0);
             return Err(src.error(
                 &format!("joints[{k}]"),
@@ -217,7 +229,13 @@ impl Mechanism {
         let mut loads = Loads { gravity: Vec2::new(gx, gy), ..Loads::default() };
         let body_of = |name: &str, path: &str| -> Result<usize> {
             body_index.get(name).and_then(|&b| new_index[b]).ok_or_else(|| {
-                src.error(path, format!("unknown body `{name}` (bodies: {})", known_list(body_specs.iter().map(|(n, _)| n.as_str()))))
+                src.error(
+                    path,
+                    format!(
+                        "unknown body `{name}` (bodies: {})",
+                        known_list(body_specs.iter().map(|(n, _)| n.as_str()))
+                    ),
+                )
             })
         };
         for (l, load) in spec.loads.iter().enumerate() {
@@ -227,7 +245,10 @@ impl Mechanism {
                     let Some(&k) = joint_names.get(joint) else {
                         return Err(src.error(
                             &format!("{path}.joint"),
-                            format!("unknown joint `{joint}` (joints: {})", known_list(joint_specs.iter().map(|j| j.0.as_str()))),
+                            format!(
+                                "unknown joint `{joint}` (joints: {})",
+                                known_list(joint_specs.iter().map(|j| j.0.as_str()))
+                            ),
                         ));
                     };
                     if let Err((field, msg)) = excitation.validate() {
@@ -239,7 +260,8 @@ impl Mechanism {
                 LoadSpec::GroundDamper { body, c } => {
                     let b = body_of(body, &format!("{path}.body"))?;
                     if !(c.is_finite() && *c >= 0.0) {
-                        return Err(src.error(&format!("{path}.c"), format!("damping must be finite and non-negative, got {c}")));
+                        return Err(src
+                            .error(&format!("{path}.c"), format!("damping must be finite and non-negative, got {c}")));
                     }
                     loads.ground_dampers.push(GroundDamper { body: b, c: *c });
                 }
@@ -258,7 +280,14 @@ impl Mechanism {
             }
         }
 
-        let mech = Mechanism { name: spec.name.clone(), file: Some(src.file.clone()), speeds: spec.speeds, bodies, joints, loads };
+        let mech = Mechanism {
+            name: spec.name.clone(),
+            file: Some(src.file.clone()),
+            speeds: spec.speeds,
+            bodies,
+            joints,
+            loads,
+        };
         // A tree whose mass matrix is singular at q = 0 cannot be simulated: say which joint.
         if let Err(e) = crate::kane::Kane::new(&mech) {
             let joint_name = match &e {
@@ -305,10 +334,15 @@ impl Mechanism {
     pub fn lock(&self, name: &str, q_lock: f64) -> Result<Mechanism> {
         let model = |message: String| Error::Model { mechanism: self.name.clone(), message };
         let c = self.joint_index(name).ok_or_else(|| {
-            model(format!("cannot lock unknown joint `{name}` (joints: {})", known_list(self.joints.iter().map(|j| j.name.as_str()))))
+            model(format!(
+                "cannot lock unknown joint `{name}` (joints: {})",
+                known_list(self.joints.iter().map(|j| j.name.as_str()))
+            ))
         })?;
         let Some(p) = self.joints[c].parent else {
-            return Err(model(format!("joint `{name}` connects to ground; locking it would weld its subtree to ground")));
+            return Err(model(format!(
+                "joint `{name}` connects to ground; locking it would weld its subtree to ground"
+            )));
         };
         let rot = crate::math::rot2(q_lock);
         let at_c = self.joints[c].at;
@@ -417,7 +451,10 @@ impl Part for JointSpec {
 /// Loads a catalog part relative to `base`, following its own `part` references.
 fn resolve_part<T: Part>(base: &Path, part: &str, referrer: &Source, path: &str, depth: usize) -> Result<T> {
     if depth >= MAX_PART_DEPTH {
-        return Err(referrer.error(&format!("{path}.part"), format!("parts nest deeper than {MAX_PART_DEPTH} levels (a part naming itself?)")));
+        return Err(referrer.error(
+            &format!("{path}.part"),
+            format!("parts nest deeper than {MAX_PART_DEPTH} levels (a part naming itself?)"),
+        ));
     }
     let file = base.join(part);
     let src = Source::read(&file).map_err(|e| referrer.error(&format!("{path}.part"), e.to_string()))?;

@@ -126,7 +126,8 @@ fn synchronous_pendulums_equal_one() {
     let one = CpvaParams::canonical().mechanism(Some(Excitation::constant(TORQUE))).unwrap();
     let mut k1 = Kane::new(&one).unwrap();
     for n_pend in [2, 3, 4, 6] {
-        let many = CpvaParams::canonical().with_pendulums(n_pend).mechanism(Some(Excitation::constant(TORQUE))).unwrap();
+        let many =
+            CpvaParams::canonical().with_pendulums(n_pend).mechanism(Some(Excitation::constant(TORQUE))).unwrap();
         let mut kn = Kane::new(&many).unwrap();
         for _ in 0..100 {
             let (q, u) = random_state(&mut rng, 2);

@@ -42,7 +42,9 @@ fn random_tree(seed: u64) -> Mechanism {
             parent: Some(parent),
             child: Some(name(i)),
             at: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
-            spring: rng.random_bool(0.5).then(|| Spring { stiffness: rng.random_range(0.0..50.0), free_angle: rng.random_range(-1.0..1.0) }),
+            spring: rng
+                .random_bool(0.5)
+                .then(|| Spring { stiffness: rng.random_range(0.0..50.0), free_angle: rng.random_range(-1.0..1.0) }),
             damper: rng.random_bool(0.5).then(|| rng.random_range(0.0..2.0)),
             ..JointSpec::default()
         });
@@ -58,10 +60,14 @@ fn random_tree(seed: u64) -> Mechanism {
             });
         }
         if rng.random_bool(0.3) {
-            loads.push(LoadSpec::JointTorque { joint: format!("j{i}"), excitation: Excitation::constant(rng.random_range(-5.0..5.0)) });
+            loads.push(LoadSpec::JointTorque {
+                joint: format!("j{i}"),
+                excitation: Excitation::constant(rng.random_range(-5.0..5.0)),
+            });
         }
     }
-    let gravity = if rng.random_bool(0.7) { (rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)) } else { (0.0, 0.0) };
+    let gravity =
+        if rng.random_bool(0.7) { (rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)) } else { (0.0, 0.0) };
     let speeds = if rng.random_bool(0.5) { Speeds::JointRates } else { Speeds::AbsoluteAngularVelocities };
     let spec = MechanismSpec { name: format!("tree{seed}"), speeds, gravity, bodies, joints, loads };
     Mechanism::from_spec(&spec, &Source::from_text("<random tree>", "")).unwrap()

@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use kanedyn::excitation::Excitation;
 use kanedyn::kane::Kane;
 use kanedyn::mechanism::Mechanism;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -58,7 +58,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn check(file: &PathBuf) -> Result<()> {
+fn check(file: &Path) -> Result<()> {
     let mech = Mechanism::from_file(file)?;
     println!("mechanism `{}` ({}): OK", mech.name, file.display());
     println!("degrees of freedom: {}", mech.ndof());
@@ -116,7 +116,7 @@ fn parse_list(name: &str, values: &[String], n: usize) -> Result<Vec<f64>> {
         .collect()
 }
 
-fn eom(file: &PathBuf, q: &[String], u: &[String], t: f64, torques: &[String]) -> Result<()> {
+fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> Result<()> {
     let mech = Mechanism::from_file(file)?;
     let n = mech.ndof();
     let q = parse_list("q", q, n)?;
@@ -126,12 +126,14 @@ fn eom(file: &PathBuf, q: &[String], u: &[String], t: f64, torques: &[String]) -
     }
     let mut kane = Kane::new(&mech)?;
     for spec in torques {
-        let (name, value) = spec.split_once('=').ok_or_else(|| anyhow!("--joint-torque `{spec}`: expected NAME=VALUE"))?;
+        let (name, value) =
+            spec.split_once('=').ok_or_else(|| anyhow!("--joint-torque `{spec}`: expected NAME=VALUE"))?;
         let joint = mech.joint_index(name.trim()).ok_or_else(|| {
             let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
             anyhow!("--joint-torque: unknown joint `{name}` (joints: {})", names.join(", "))
         })?;
-        let v: f64 = value.trim().parse().with_context(|| format!("--joint-torque `{spec}`: `{value}` is not a number"))?;
+        let v: f64 =
+            value.trim().parse().with_context(|| format!("--joint-torque `{spec}`: `{value}` is not a number"))?;
         if !v.is_finite() {
             bail!("--joint-torque `{spec}`: value is not finite");
         }
@@ -151,7 +153,12 @@ fn eom(file: &PathBuf, q: &[String], u: &[String], t: f64, torques: &[String]) -
         qdot: Vec<f64>,
         udot: Vec<f64>,
     }
-    let out = Eom { mass_matrix: rows, forcing: f.iter().copied().collect(), qdot: xdot[..n].to_vec(), udot: xdot[n..].to_vec() };
+    let out = Eom {
+        mass_matrix: rows,
+        forcing: f.iter().copied().collect(),
+        qdot: xdot[..n].to_vec(),
+        udot: xdot[n..].to_vec(),
+    };
     println!("{}", serde_json::to_string(&out)?);
     Ok(())
 }
