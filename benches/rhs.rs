@@ -1,1 +1,90 @@
-fn main() {}
+//! The cost of one right-hand-side evaluation: the generic Kane engine on examples/cpva.ron
+//! against the hand-written closed form of eq. (7) at the same state and time (both
+//! allocation-free, both evaluating the same excitation torque), and planar chains of N links.
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use kanedyn::body::BodySpec;
+use kanedyn::cpva::CpvaParams;
+use kanedyn::io::Source;
+use kanedyn::joint::JointSpec;
+use kanedyn::kane::Kane;
+use kanedyn::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::speeds::Speeds;
+use std::hint::black_box;
+use std::path::Path;
+
+fn chain(n: usize) -> Mechanism {
+    let bodies = (0..n)
+        .map(|i| BodySpec {
+            name: Some(format!("link{i}")),
+            mass: Some(1.0),
+            com: Some((0.25, 0.0)),
+            inertia: Some(1.0 / 48.0),
+            ..BodySpec::default()
+        })
+        .collect();
+    let joints = (0..n)
+        .map(|i| JointSpec {
+            name: Some(format!("j{i}")),
+            parent: Some(if i == 0 { "ground".into() } else { format!("link{}", i - 1) }),
+            child: Some(format!("link{i}")),
+            at: Some((if i == 0 { 0.0 } else { 0.5 }, 0.0)),
+            damper: Some(0.01),
+            ..JointSpec::default()
+        })
+        .collect();
+    let spec = MechanismSpec {
+        name: format!("chain{n}"),
+        speeds: Speeds::JointRates,
+        gravity: (0.0, -9.81),
+        bodies,
+        joints,
+        loads: vec![],
+    };
+    Mechanism::from_spec(&spec, &Source::from_text("<bench chain>", "")).unwrap()
+}
+
+fn rhs(c: &mut Criterion) {
+    let mut g = c.benchmark_group("rhs");
+    let mech = Mechanism::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva.ron")).unwrap();
+    let excitation = mech.loads.joint_torques[0].excitation.clone();
+    let mut kane = Kane::new(&mech).unwrap();
+    let cf = CpvaParams::canonical().closed_form();
+    // A state in the middle of a run: large spin angle, pendulum swinging.
+    let x = [1234.5, 0.4, 104.9, 108.2];
+    let t = 12.345;
+    let mut xdot = [0.0; 4];
+    g.bench_function("generic_cpva", |b| {
+        b.iter(|| {
+            kane.rhs(black_box(t), black_box(&x), &mut xdot).unwrap();
+            black_box(xdot[2])
+        })
+    });
+    g.bench_function("closed_form_cpva", |b| {
+        b.iter(|| {
+            let torque = excitation.torque(black_box(t));
+            cf.rhs1(torque, black_box(&x), &mut xdot);
+            black_box(xdot[2])
+        })
+    });
+    for n in [2, 4, 8, 16, 32, 64] {
+        let m = chain(n);
+        let mut k = Kane::new(&m).unwrap();
+        let x: Vec<f64> = (0..2 * n).map(|i| 0.1 + 0.05 * i as f64).collect();
+        let mut xd = vec![0.0; 2 * n];
+        g.bench_with_input(BenchmarkId::new("chain", n), &n, |b, _| {
+            b.iter(|| {
+                k.rhs(black_box(0.5), black_box(&x), &mut xd).unwrap();
+                black_box(xd[n])
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2));
+    targets = rhs
+}
+criterion_main!(benches);

@@ -21,7 +21,7 @@
 
 use crate::error::{EngineError, Error, Result};
 use crate::excitation::Excitation;
-use crate::loads::{ForceFrame, JointTorque};
+use crate::loads::{ForceFrame, JointTorque, PointForce};
 use crate::math::{Vec2, cross2, perp, rotate_cs};
 use crate::mechanism::Mechanism;
 use crate::speeds::Speeds;
@@ -30,6 +30,46 @@ use nalgebra::{DMatrix, DVector};
 /// Relative size (to the largest diagonal entry of M) below which a Cholesky pivot counts as zero.
 const PIVOT_TOL: f64 = 1e-12;
 
+/// Parent index of a root body (hangs from ground).
+const GROUND_PARENT: usize = usize::MAX;
+
+/// Constant data of one body and its inboard joint, packed so the hot loop touches one record.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    parent: usize,
+    mass: f64,
+    i_com: f64,
+    com_local: Vec2,
+    at: Vec2,
+    k_spring: f64,
+    q_free: f64,
+    c_joint: f64,
+    c_ground: f64,
+    forces: (usize, usize),
+}
+
+/// Composite sums of a subtree about its root joint's point o: mass, first moment S = Σ m (r − o),
+/// inertia J = Σ I + m |r − o|², resultant force and moment about o (applied minus inertial).
+#[derive(Debug, Clone, Copy, Default)]
+struct Composite {
+    mass: f64,
+    first: Vec2,
+    inertia: f64,
+    force: Vec2,
+    moment: f64,
+}
+
+/// Per-evaluation kinematic state of one body (in the subtree's basis).
+#[derive(Debug, Clone, Copy, Default)]
+struct Frame {
+    c: f64,
+    s: f64,
+    origin: Vec2,
+    com: Vec2,
+    omega: f64,
+    acc_o: Vec2,
+}
+
 /// The equation-of-motion evaluator of one mechanism, with its work buffers.
 #[derive(Debug, Clone)]
 pub struct Kane {
@@ -37,32 +77,17 @@ pub struct Kane {
     n: usize,
     parent: Vec<Option<usize>>,
     speeds: Speeds,
+    absolute: bool,
     world: bool,
-    // Constants per body / joint.
-    mass: Vec<f64>,
-    i_com: Vec<f64>,
-    com_local: Vec<Vec2>,
-    at: Vec<Vec2>,
-    k_spring: Vec<f64>,
-    q_free: Vec<f64>,
-    c_joint: Vec<f64>,
-    c_ground: Vec<f64>,
-    path_start: Vec<usize>,
-    path: Vec<usize>,
+    gravity: Vec2,
+    nodes: Vec<Node>,
+    point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
     // Work buffers.
-    cs: Vec<(f64, f64)>,
-    origin: Vec<Vec2>,
-    com: Vec<Vec2>,
-    omega: Vec<f64>,
-    acc_o: Vec<Vec2>,
-    acc_c: Vec<Vec2>,
+    frames: Vec<Frame>,
+    comp: Vec<Composite>,
     qdot: Vec<f64>,
-    force: Vec<Vec2>,
-    torque: Vec<f64>,
     tau: Vec<f64>,
-    jv: Vec<Vec2>,
-    jw: Vec<f64>,
     m: Vec<f64>,
     f: Vec<f64>,
     l: Vec<f64>,
@@ -94,48 +119,45 @@ impl Kane {
                 });
             }
         }
-        let mut path_start = Vec::with_capacity(n + 1);
-        let mut path = Vec::new();
-        let mut depth = 0;
-        for j in 0..n {
-            path_start.push(path.len());
-            let p = mech.path_to(j);
-            depth = depth.max(p.len());
-            path.extend(p);
-        }
-        path_start.push(path.len());
         let mut c_ground = vec![0.0; n];
         for g in &mech.loads.ground_dampers {
             c_ground[g.body] += g.c;
+        }
+        // Point forces grouped by body so each body's iteration finds its own.
+        let mut point_forces = mech.loads.point_forces.clone();
+        point_forces.sort_by_key(|p| p.body);
+        let mut nodes = Vec::with_capacity(n);
+        for j in 0..n {
+            let f0 = point_forces.iter().position(|p| p.body == j).unwrap_or(0);
+            let f1 = f0 + point_forces.iter().filter(|p| p.body == j).count();
+            let (b, jt) = (&mech.bodies[j], &mech.joints[j]);
+            nodes.push(Node {
+                parent: jt.parent.unwrap_or(GROUND_PARENT),
+                mass: b.inertia.mass,
+                i_com: b.inertia.i_com,
+                com_local: b.inertia.com,
+                at: jt.at,
+                k_spring: jt.spring.map_or(0.0, |s| s.stiffness),
+                q_free: jt.spring.map_or(0.0, |s| s.free_angle),
+                c_joint: jt.damper,
+                c_ground: c_ground[j],
+                forces: (f0, f1),
+            });
         }
         let mut k = Kane {
             mech: mech.clone(),
             n,
             speeds: mech.speeds,
+            absolute: mech.speeds == Speeds::AbsoluteAngularVelocities,
             world,
-            mass: mech.bodies.iter().map(|b| b.inertia.mass).collect(),
-            i_com: mech.bodies.iter().map(|b| b.inertia.i_com).collect(),
-            com_local: mech.bodies.iter().map(|b| b.inertia.com).collect(),
-            at: mech.joints.iter().map(|j| j.at).collect(),
-            k_spring: mech.joints.iter().map(|j| j.spring.map_or(0.0, |s| s.stiffness)).collect(),
-            q_free: mech.joints.iter().map(|j| j.spring.map_or(0.0, |s| s.free_angle)).collect(),
-            c_joint: mech.joints.iter().map(|j| j.damper).collect(),
-            c_ground,
-            path_start,
-            path,
+            gravity: mech.loads.gravity,
+            nodes,
+            point_forces,
             torques: mech.loads.joint_torques.clone(),
-            cs: vec![(1.0, 0.0); n],
-            origin: vec![Vec2::zeros(); n],
-            com: vec![Vec2::zeros(); n],
-            omega: vec![0.0; n],
-            acc_o: vec![Vec2::zeros(); n],
-            acc_c: vec![Vec2::zeros(); n],
+            frames: vec![Frame::default(); n],
+            comp: vec![Composite::default(); n],
             qdot: vec![0.0; n],
-            force: vec![Vec2::zeros(); n],
-            torque: vec![0.0; n],
             tau: vec![0.0; n],
-            jv: vec![Vec2::zeros(); depth],
-            jw: vec![0.0; depth],
             m: vec![0.0; n * n],
             f: vec![0.0; n],
             l: vec![0.0; n * n],
@@ -143,9 +165,8 @@ impl Kane {
             f_out: DVector::zeros(n),
             parent,
         };
-        let q0 = vec![0.0; n];
-        k.positions(&q0);
-        k.accumulate(false);
+        let zeros = vec![0.0; n];
+        k.evaluate(0.0, &zeros, &zeros, false);
         k.factor()?;
         Ok(k)
     }
@@ -176,8 +197,8 @@ impl Kane {
 
     /// The mass matrix M(q) (kg·m² for rotational speeds), symmetric positive definite.
     pub fn mass_matrix(&mut self, q: &[f64]) -> &DMatrix<f64> {
-        self.positions(q);
-        self.accumulate(false);
+        // Without forcing, `u` and `t` are not read.
+        self.evaluate(0.0, q, q, false);
         self.copy_out();
         &self.m_out
     }
@@ -185,14 +206,14 @@ impl Kane {
     /// The forcing vector F(q, u, t) of `M u̇ = F` (N·m for rotational speeds): applied forces
     /// minus the inertia forces at `u̇ = 0`.
     pub fn forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> &DVector<f64> {
-        self.evaluate(t, q, u);
+        self.evaluate(t, q, u, true);
         self.copy_out();
         &self.f_out
     }
 
     /// Both M and F at one state.
     pub fn mass_matrix_and_forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&DMatrix<f64>, &DVector<f64>) {
-        self.evaluate(t, q, u);
+        self.evaluate(t, q, u, true);
         self.copy_out();
         (&self.m_out, &self.f_out)
     }
@@ -211,7 +232,7 @@ impl Kane {
             return Err(EngineError::Dimension { what, got, expected: 2 * n });
         }
         let (q, u) = x.split_at(n);
-        self.evaluate(t, q, u);
+        self.evaluate(t, q, u, true);
         self.factor()?;
         let (qd, ud) = xdot.split_at_mut(n);
         qd.copy_from_slice(&self.qdot);
@@ -220,143 +241,171 @@ impl Kane {
         Ok(())
     }
 
-    /// Full evaluation of M, F and q̇ into the work buffers.
-    fn evaluate(&mut self, t: f64, q: &[f64], u: &[f64]) {
-        self.positions(q);
-        self.rates_and_bias(u);
-        self.applied(t, q);
-        self.accumulate(true);
-    }
-
-    /// Step 1: rotations, joint points and centres of mass.
-    #[inline]
-    fn positions(&mut self, q: &[f64]) {
-        for j in 0..self.n {
-            match self.parent[j] {
-                None => {
-                    self.cs[j] = if self.world {
-                        let (s, c) = q[j].sin_cos();
-                        (c, s)
-                    } else {
-                        (1.0, 0.0)
-                    };
-                    self.origin[j] = self.at[j];
-                }
-                Some(p) => {
-                    let (s, c) = q[j].sin_cos();
-                    let (cp, sp) = self.cs[p];
-                    self.cs[j] = (cp * c - sp * s, sp * c + cp * s);
-                    self.origin[j] = self.origin[p] + rotate_cs(cp, sp, self.at[j]);
-                }
-            }
-            let (c, s) = self.cs[j];
-            self.com[j] = self.origin[j] + rotate_cs(c, s, self.com_local[j]);
+    /// Evaluates M (and F, q̇ when `forcing`; only then are `u` and `t` read) into the buffers.
+    ///
+    /// Kane's sums `M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}` and
+    /// `F_r = Σ_j f_j·v_{j,r} + T_j ω_{j,r}` are first formed for the joint rates, where
+    /// `v_{j,k} = ẑ × (r_j − o_k)` and `ω_{j,k} = 1` for every body j below joint k. Grouping the
+    /// bodies by subtree turns them into composite sums:
+    /// `M_kl = Σ_{j below k} I_j + m_j (r_j − o_k)·(r_j − o_l) = J_k + S_k·(o_k − o_l)` for l on the
+    /// path to k (J_k: the subtree's inertia about o_k; S_k: its first moment about o_k), and
+    /// `F_k = Σ_{j below k} (r_j − o_k) × f_j + T_j` (the subtree's moment about o_k). One backward
+    /// pass accumulates J, S and the moments child → parent, so the cost is O(n·depth) instead of
+    /// O(Σ depth²), and for the CPVA it is a handful of flops. The speeds' `W⁻¹` is applied last:
+    /// `M_u = W⁻ᵀ M_q̇ W⁻¹`, `F_u = W⁻ᵀ F_q̇`. `partial_velocities` exposes the per-body v_{j,r}
+    /// and the tests rebuild M and F from them body by body.
+    fn evaluate(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+        // NOTE: a literal n per arm lets the compiler unroll the loops and drop most bounds checks
+        // for the small mechanisms that dominate torsional work (measured: the CPVA's rhs went
+        // from ~1300 to ~… instructions per call; see BENCHMARKS.md).
+        match self.n {
+            1 => self.evaluate_n::<1>(t, q, u, forcing),
+            2 => self.evaluate_n::<2>(t, q, u, forcing),
+            3 => self.evaluate_n::<3>(t, q, u, forcing),
+            4 => self.evaluate_n::<4>(t, q, u, forcing),
+            5 => self.evaluate_n::<5>(t, q, u, forcing),
+            6 => self.evaluate_n::<6>(t, q, u, forcing),
+            _ => self.evaluate_n::<0>(t, q, u, forcing),
         }
     }
 
-    /// Steps 2 and 3: joint rates, angular velocities and centripetal bias accelerations.
-    #[inline]
-    fn rates_and_bias(&mut self, u: &[f64]) {
-        self.speeds.qdot(&self.parent, u, &mut self.qdot);
-        for j in 0..self.n {
-            match self.parent[j] {
-                None => {
-                    self.omega[j] = self.qdot[j];
-                    self.acc_o[j] = Vec2::zeros();
-                }
-                Some(p) => {
-                    self.omega[j] = self.omega[p] + self.qdot[j];
-                    let wp = self.omega[p];
-                    self.acc_o[j] = self.acc_o[p] - wp * wp * (self.origin[j] - self.origin[p]);
-                }
-            }
-            let w = self.omega[j];
-            self.acc_c[j] = self.acc_o[j] - w * w * (self.com[j] - self.origin[j]);
-        }
-    }
-
-    /// Applied loads: joint torques τ (springs, dampers, excitations), body forces and torques.
-    #[inline]
-    fn applied(&mut self, t: f64, q: &[f64]) {
-        for k in 0..self.n {
-            self.tau[k] = -self.k_spring[k] * (q[k] - self.q_free[k]) - self.c_joint[k] * self.qdot[k];
-        }
-        for jt in &self.torques {
-            self.tau[jt.joint] += jt.excitation.torque(t);
-        }
-        let g = self.mech.loads.gravity;
-        for j in 0..self.n {
-            self.force[j] = self.mass[j] * g;
-            self.torque[j] = -self.c_ground[j] * self.omega[j];
-        }
-        for pf in &self.mech.loads.point_forces {
-            let b = pf.body;
-            let (c, s) = self.cs[b];
-            let f = match pf.frame {
-                ForceFrame::World => pf.force,
-                ForceFrame::Body => rotate_cs(c, s, pf.force),
-            };
-            let p = self.origin[b] + rotate_cs(c, s, pf.at);
-            self.force[b] += f;
-            self.torque[b] += cross2(p - self.com[b], f);
-        }
-    }
-
-    /// Steps 4 and 5: partial velocities per body, then M (and F when `forcing`).
-    #[inline]
-    fn accumulate(&mut self, forcing: bool) {
-        let n = self.n;
-        self.m.iter_mut().for_each(|x| *x = 0.0);
+    /// The body of [`Kane::evaluate`] for `N` degrees of freedom (`N = 0`: any, read at run time).
+    #[inline(always)]
+    fn evaluate_n<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+        let n = if N == 0 { self.n } else { N };
+        let (q, u) = (&q[..n], &u[..n]);
+        let (absolute, world, g) = (self.absolute, self.world, self.gravity);
+        let nodes = &self.nodes[..n];
+        let frames = &mut self.frames[..n];
+        let comp = &mut self.comp[..n];
+        let m = &mut self.m[..n * n];
+        let f = &mut self.f[..n];
+        let qdot = &mut self.qdot[..n];
+        let tau = &mut self.tau[..n];
         if forcing {
-            // A joint torque's generalized force is τ_k ∂q̇_k/∂u_r.
-            self.f.copy_from_slice(&self.tau);
-            if self.speeds == Speeds::AbsoluteAngularVelocities {
-                for k in 0..n {
-                    if let Some(p) = self.parent[k] {
-                        self.f[p] -= self.tau[k];
-                    }
-                }
+            tau.iter_mut().for_each(|x| *x = 0.0);
+            for jt in &self.torques {
+                tau[jt.joint] += jt.excitation.torque(t);
             }
         }
-        let absolute = self.speeds == Speeds::AbsoluteAngularVelocities;
+        // Forward pass, parents first: poses, rates, centripetal bias accelerations (q̈ = 0 at
+        // u̇ = 0), and each body's own contribution to its composite sums about its origin o_j.
         for j in 0..n {
-            let path = &self.path[self.path_start[j]..self.path_start[j + 1]];
-            let d = path.len();
-            let r = self.com[j];
-            for (a, &k) in path.iter().enumerate() {
-                self.jv[a] = perp(r - self.origin[k]);
-                self.jw[a] = 1.0;
-            }
-            if absolute {
-                // ∂q̇_k/∂u = e_k − e_parent(k): the column of u_k is the joint-rate column of k
-                // minus that of the next joint on the path, i.e. ẑ × (o_next − o_k), and only
-                // the body's own speed turns it.
-                for a in 0..d - 1 {
-                    let next = self.jv[a + 1];
-                    self.jv[a] -= next;
-                    self.jw[a] = 0.0;
+            let nd = &nodes[j];
+            let root = nd.parent == GROUND_PARENT;
+            let mut fr = if root {
+                let (s, c) = if world { q[j].sin_cos() } else { (0.0, 1.0) };
+                Frame { c, s, origin: nd.at, ..Frame::default() }
+            } else {
+                let p = &frames[nd.parent];
+                let (s, c) = q[j].sin_cos();
+                Frame {
+                    c: p.c * c - p.s * s,
+                    s: p.s * c + p.c * s,
+                    origin: p.origin + rotate_cs(p.c, p.s, nd.at),
+                    ..Frame::default()
                 }
-            }
-            let (m, i) = (self.mass[j], self.i_com[j]);
-            for a in 0..d {
-                let ra = path[a];
-                let (va, wa) = (self.jv[a], self.jw[a]);
-                for b in a..d {
-                    self.m[ra * n + path[b]] += m * va.dot(&self.jv[b]) + i * wa * self.jw[b];
+            };
+            let arm = rotate_cs(fr.c, fr.s, nd.com_local);
+            let mut cj = Composite {
+                mass: nd.mass,
+                first: nd.mass * arm,
+                inertia: nd.i_com + nd.mass * arm.norm_squared(),
+                force: Vec2::zeros(),
+                moment: 0.0,
+            };
+            if forcing {
+                let (w_p, acc_p, o_p) = if root {
+                    (0.0, Vec2::zeros(), fr.origin)
+                } else {
+                    let p = &frames[nd.parent];
+                    (p.omega, p.acc_o, p.origin)
+                };
+                let qd = if absolute && !root { u[j] - u[nd.parent] } else { u[j] };
+                qdot[j] = qd;
+                fr.omega = w_p + qd;
+                fr.acc_o = acc_p - w_p * w_p * (fr.origin - o_p);
+                let acc_c = fr.acc_o - fr.omega * fr.omega * arm;
+                // Applied force at the centre of mass minus the inertia force m a⁰, and torque.
+                let fi = nd.mass * (g - acc_c);
+                let mut ti = -nd.c_ground * fr.omega;
+                let mut fsum = fi;
+                let mut moment = cross2(arm, fi);
+                for pfc in &self.point_forces[nd.forces.0..nd.forces.1] {
+                    let force = match pfc.frame {
+                        ForceFrame::World => pfc.force,
+                        ForceFrame::Body => rotate_cs(fr.c, fr.s, pfc.force),
+                    };
+                    fsum += force;
+                    moment += cross2(rotate_cs(fr.c, fr.s, pfc.at), force);
                 }
+                ti += moment;
+                cj.force = fsum;
+                cj.moment = ti;
+                // Joint torque (spring, damper, excitation): +τ on the child, −τ on the parent;
+                // in joint rates its generalized force is τ on its own coordinate.
+                tau[j] += -nd.k_spring * (q[j] - nd.q_free) - nd.c_joint * qd;
+            }
+            fr.com = fr.origin + arm;
+            frames[j] = fr;
+            comp[j] = cj;
+        }
+        // Backward pass, children first: composite sums, rows of M and entries of F (joint rates).
+        m.iter_mut().for_each(|x| *x = 0.0);
+        for j in (0..n).rev() {
+            let c = comp[j];
+            let oj = frames[j].origin;
+            m[j * n + j] = c.inertia;
+            let mut l = nodes[j].parent;
+            while l != GROUND_PARENT {
+                let v = c.inertia + c.first.dot(&(oj - frames[l].origin));
+                m[j * n + l] = v;
+                m[l * n + j] = v;
+                l = nodes[l].parent;
             }
             if forcing {
-                let fi = self.force[j] - m * self.acc_c[j];
-                let ti = self.torque[j];
-                for a in 0..d {
-                    self.f[path[a]] += fi.dot(&self.jv[a]) + ti * self.jw[a];
-                }
+                f[j] = c.moment + tau[j];
+            }
+            let p = nodes[j].parent;
+            if p != GROUND_PARENT {
+                let d = oj - frames[p].origin;
+                let cp = &mut comp[p];
+                cp.inertia += c.inertia + 2.0 * d.dot(&c.first) + c.mass * d.norm_squared();
+                cp.first += c.first + c.mass * d;
+                cp.mass += c.mass;
+                cp.moment += c.moment + cross2(d, c.force);
+                cp.force += c.force;
             }
         }
-        // The loops above fill the upper triangle (path indices increase from the root).
-        for r in 0..n {
-            for s in 0..r {
-                self.m[r * n + s] = self.m[s * n + r];
+        if absolute {
+            // W⁻¹ has +1 at (k, k) and −1 at (k, parent(k)). Ascending k: a row or column is
+            // used before its own children have modified it, so the update can be in place.
+            for k in 0..n {
+                let p = nodes[k].parent;
+                if p == GROUND_PARENT {
+                    continue;
+                }
+                for r in 0..n {
+                    m[r * n + p] -= m[r * n + k];
+                }
+            }
+            for k in 0..n {
+                let p = nodes[k].parent;
+                if p == GROUND_PARENT {
+                    continue;
+                }
+                for c in 0..n {
+                    m[p * n + c] -= m[k * n + c];
+                }
+                if forcing {
+                    f[p] -= f[k];
+                }
+            }
+            // The two passes round differently on each side: restore exact symmetry.
+            for r in 0..n {
+                for c in 0..r {
+                    m[r * n + c] = m[c * n + r];
+                }
             }
         }
     }
@@ -365,33 +414,47 @@ impl Kane {
     ///
     /// NOTE: written here rather than calling nalgebra's `Cholesky` so the factorisation works in
     /// place on the preallocated buffer (no allocation per call) and a failure names the speed
-    /// (joint) whose pivot vanished; for n = 2 it is also a few ns faster.
+    /// (joint) whose pivot vanished.
     fn factor(&mut self) -> Result<(), EngineError> {
-        let n = self.n;
-        let scale = (0..n).map(|i| self.m[i * n + i].abs()).fold(0.0, f64::max);
+        match self.n {
+            1 => self.factor_n::<1>(),
+            2 => self.factor_n::<2>(),
+            3 => self.factor_n::<3>(),
+            4 => self.factor_n::<4>(),
+            5 => self.factor_n::<5>(),
+            6 => self.factor_n::<6>(),
+            _ => self.factor_n::<0>(),
+        }
+    }
+
+    #[inline(always)]
+    fn factor_n<const N: usize>(&mut self) -> Result<(), EngineError> {
+        let n = if N == 0 { self.n } else { N };
+        let (m, l) = (&self.m[..n * n], &mut self.l[..n * n]);
+        let mut scale = 0.0f64;
+        for i in 0..n {
+            scale = scale.max(m[i * n + i].abs());
+        }
         for j in 0..n {
-            let mut d = self.m[j * n + j];
+            let mut d = m[j * n + j];
             for k in 0..j {
-                d -= self.l[j * n + k] * self.l[j * n + k];
+                d -= l[j * n + k] * l[j * n + k];
             }
-            if d.is_nan() {
-                return Err(EngineError::NonFinite { what: "mass matrix", index: j });
-            }
-            if d <= PIVOT_TOL * scale || d <= 0.0 {
-                return Err(EngineError::NotPositiveDefinite {
-                    dof: j,
-                    joint: self.mech.joints[j].name.clone(),
-                    pivot: d,
+            if !(d > PIVOT_TOL * scale) {
+                return Err(if d.is_nan() {
+                    EngineError::NonFinite { what: "mass matrix", index: j }
+                } else {
+                    EngineError::NotPositiveDefinite { dof: j, joint: self.mech.joints[j].name.clone(), pivot: d }
                 });
             }
             let ljj = d.sqrt();
-            self.l[j * n + j] = ljj;
+            l[j * n + j] = ljj;
             for i in j + 1..n {
-                let mut s = self.m[i * n + j];
+                let mut s = m[i * n + j];
                 for k in 0..j {
-                    s -= self.l[i * n + k] * self.l[j * n + k];
+                    s -= l[i * n + k] * l[j * n + k];
                 }
-                self.l[i * n + j] = s / ljj;
+                l[i * n + j] = s / ljj;
             }
         }
         Ok(())
@@ -399,20 +462,34 @@ impl Kane {
 
     /// Solves `L Lᵀ x = b` in place.
     fn solve(&self, b: &mut [f64]) {
-        let n = self.n;
+        match self.n {
+            1 => self.solve_n::<1>(b),
+            2 => self.solve_n::<2>(b),
+            3 => self.solve_n::<3>(b),
+            4 => self.solve_n::<4>(b),
+            5 => self.solve_n::<5>(b),
+            6 => self.solve_n::<6>(b),
+            _ => self.solve_n::<0>(b),
+        }
+    }
+
+    #[inline(always)]
+    fn solve_n<const N: usize>(&self, b: &mut [f64]) {
+        let n = if N == 0 { self.n } else { N };
+        let (l, b) = (&self.l[..n * n], &mut b[..n]);
         for i in 0..n {
             let mut s = b[i];
             for k in 0..i {
-                s -= self.l[i * n + k] * b[k];
+                s -= l[i * n + k] * b[k];
             }
-            b[i] = s / self.l[i * n + i];
+            b[i] = s / l[i * n + i];
         }
         for i in (0..n).rev() {
             let mut s = b[i];
             for k in i + 1..n {
-                s -= self.l[k * n + i] * b[k];
+                s -= l[k * n + i] * b[k];
             }
-            b[i] = s / self.l[i * n + i];
+            b[i] = s / l[i * n + i];
         }
     }
 
@@ -430,12 +507,13 @@ impl Kane {
     /// evaluator from [`Kane::new_world_frame`]): `(v_{j,r}, ω_{j,r})` for r = 0..n. Allocates;
     /// for tests and reports.
     pub fn partial_velocities(&mut self, q: &[f64], j: usize) -> (Vec<Vec2>, Vec<f64>) {
-        self.positions(q);
+        self.evaluate(0.0, q, q, false);
         let mut v = vec![Vec2::zeros(); self.n];
         let mut w = vec![0.0; self.n];
         let path = self.mech.path_to(j);
         let d = path.len();
-        let mut jv: Vec<Vec2> = path.iter().map(|&k| perp(self.com[j] - self.origin[k])).collect();
+        let com = self.frames[j].com;
+        let mut jv: Vec<Vec2> = path.iter().map(|&k| perp(com - self.frames[k].origin)).collect();
         let mut jw = vec![1.0; d];
         if self.speeds == Speeds::AbsoluteAngularVelocities {
             for a in 0..d - 1 {
