@@ -440,7 +440,8 @@ impl Kane {
             for k in 0..j {
                 d -= l[j * n + k] * l[j * n + k];
             }
-            if !(d > PIVOT_TOL * scale) {
+            // NaN must fail too, so test for "not greater" rather than "less or equal".
+            if d.is_nan() || d <= PIVOT_TOL * scale {
                 return Err(if d.is_nan() {
                     EngineError::NonFinite { what: "mass matrix", index: j }
                 } else {
