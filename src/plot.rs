@@ -1,1 +1,243 @@
-//! SVG plots (plotters) and CSV helpers (being written).
+//! SVG line plots for reports, in the manner of the paper's figures: panels of x–y series, each
+//! solid, dashed or dotted, optionally with a logarithmic y axis (Figure 2 of the paper).
+//!
+//! This is the one module that sees plotters. SVG needs no system font library (plotters' default
+//! features, which pull in font-kit, stay off), so text is laid out with plotters' naive metrics
+//! and drawn by the SVG viewer.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LineStyle {
+    /// A continuous line.
+    #[default]
+    Solid,
+    /// Dashes (the paper's down-sweeps).
+    Dashed,
+    /// Dots (the paper's locked-rotor references).
+    Dotted,
+}
+
+/// One curve: points `(x[i], y[i])`, a legend label, a colour index into a fixed palette and a
+/// line style. Non-finite points (and, on a log axis, non-positive `y`) are skipped.
+#[derive(Debug, Clone, Default)]
+pub struct Series {
+    /// Legend text (empty: no legend entry).
+    pub label: String,
+    /// Abscissae.
+    pub x: Vec<f64>,
+    /// Ordinates.
+    pub y: Vec<f64>,
+    /// Index into the palette (same index, same colour across panels).
+    pub color: usize,
+    /// Line style.
+    pub style: LineStyle,
+}
+
+/// One set of axes.
+#[derive(Debug, Clone, Default)]
+pub struct Panel {
+    /// Title above the axes.
+    pub title: String,
+    /// x-axis label (with units).
+    pub x_label: String,
+    /// y-axis label (with units).
+    pub y_label: String,
+    /// Logarithmic y axis.
+    pub log_y: bool,
+    /// Fixed x range; `None` fits the data.
+    pub x_range: Option<(f64, f64)>,
+    /// Fixed y range; `None` fits the data (with a margin).
+    pub y_range: Option<(f64, f64)>,
+    /// Vertical reference lines (e.g. n_t, n_r), each with a label.
+    pub markers: Vec<(f64, String)>,
+    /// The curves.
+    pub series: Vec<Series>,
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// Writes `panels` side by side (one row) to an SVG file of `width`×`height` pixels per panel.
+pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Result<()> {
+    let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
+        let cols = panels.len().max(1) as u32;
+        let root = SVGBackend::new(path, (width * cols, height)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let areas = root.split_evenly((1, cols as usize));
+        for (panel, area) in panels.iter().zip(areas.iter()) {
+            draw_panel(panel, area)?;
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| Error::Io {
+        file: path.to_path_buf(),
+        action: "cannot write plot",
+        source: std::io::Error::other(e.to_string()),
+    })
+}
+
+fn keep(log_y: bool) -> impl Fn(&(f64, f64)) -> bool {
+    move |&(x, y)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0)
+}
+
+fn data_range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for s in &panel.series {
+        for p in s.x.iter().copied().zip(s.y.iter().copied()).filter(keep(panel.log_y)) {
+            x0 = x0.min(p.0);
+            x1 = x1.max(p.0);
+            y0 = y0.min(p.1);
+            y1 = y1.max(p.1);
+        }
+    }
+    if !x0.is_finite() {
+        (x0, x1) = (0.0, 1.0);
+    }
+    if !y0.is_finite() {
+        (y0, y1) = if panel.log_y { (0.1, 1.0) } else { (0.0, 1.0) };
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    // A margin so curves do not run along the frame.
+    if panel.log_y {
+        if y1 <= y0 {
+            y1 = y0 * 10.0;
+        }
+        let f = (y1 / y0).powf(0.05);
+        (y0, y1) = (y0 / f, y1 * f);
+    } else {
+        if y1 <= y0 {
+            y1 = y0 + 1.0;
+        }
+        let d = 0.05 * (y1 - y0);
+        (y0, y1) = (y0 - d, y1 + d);
+    }
+    (panel.x_range.unwrap_or((x0, x1)), panel.y_range.unwrap_or((y0, y1)))
+}
+
+type DynResult = std::result::Result<(), Box<dyn std::error::Error>>;
+
+fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> DynResult {
+    let ((x0, x1), (y0, y1)) = data_range(panel);
+    let mut builder = ChartBuilder::on(area);
+    builder.caption(&panel.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+    if panel.log_y {
+        let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?;
+        chart.configure_mesh().x_desc(&panel.x_label).y_desc(&panel.y_label).draw()?;
+        draw_series(&mut chart, panel, y0, y1)?;
+        finish(&mut chart)
+    } else {
+        let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
+        chart.configure_mesh().x_desc(&panel.x_label).y_desc(&panel.y_label).draw()?;
+        draw_series(&mut chart, panel, y0, y1)?;
+        finish(&mut chart)
+    }
+}
+
+fn draw_series<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    panel: &Panel,
+    y0: f64,
+    y1: f64,
+) -> DynResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for (x, label) in &panel.markers {
+        chart.draw_series(DashedLineSeries::new(vec![(*x, y0), (*x, y1)], 3, 4, BLACK.mix(0.4).stroke_width(1)))?;
+        chart.draw_series(std::iter::once(Text::new(label.clone(), (*x, y1), ("sans-serif", 13).into_font())))?;
+    }
+    for s in &panel.series {
+        let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).filter(keep(panel.log_y)).collect();
+        let c = color(s.color);
+        let style = c.stroke_width(2);
+        let anno = match s.style {
+            LineStyle::Solid => chart.draw_series(LineSeries::new(pts, style))?,
+            LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?,
+            LineStyle::Dotted => chart.draw_series(DashedLineSeries::new(pts, 2, 4, style))?,
+        };
+        if !s.label.is_empty() {
+            // NOTE: a legend sample is one path; a short stub for dashed/dotted lines reads well
+            // enough next to the label, which names the style's meaning (up/down, locked).
+            let len = match s.style {
+                LineStyle::Solid => 20,
+                LineStyle::Dashed => 8,
+                LineStyle::Dotted => 3,
+            };
+            anno.label(&s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(2)));
+        }
+    }
+    Ok(())
+}
+
+fn finish<'a, X, Y>(chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>) -> DynResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.3))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_an_svg_with_all_styles_and_a_log_axis() {
+        let dir = std::env::temp_dir().join(format!("kanedyn_plot_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let x: Vec<f64> = (0..50).map(|i| 2.9 + 0.008 * i as f64).collect();
+        let s = |style, color, f: fn(f64) -> f64| Series {
+            label: format!("{style:?}"),
+            x: x.clone(),
+            y: x.iter().map(|&v| f(v)).collect(),
+            color,
+            style,
+        };
+        let panel = Panel {
+            title: "test".into(),
+            x_label: "order n".into(),
+            y_label: "rad/s²".into(),
+            log_y: true,
+            markers: vec![(3.11, "n_t".into())],
+            series: vec![
+                s(LineStyle::Solid, 0, |v| v * v),
+                s(LineStyle::Dashed, 1, |v| v),
+                s(LineStyle::Dotted, 2, |v| (v - 3.0).abs()),
+            ],
+            ..Panel::default()
+        };
+        let lin = Panel { log_y: false, ..panel.clone() };
+        let path = dir.join("p.svg");
+        write_svg(&path, &[panel, lin], 500, 350).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("<svg"));
+        assert!(text.contains("order n") && text.contains("Dashed") && text.contains("n_t"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
