@@ -4,14 +4,27 @@ use crate::error::Result;
 use crate::inertia::PlanarInertia;
 use crate::io::Source;
 use crate::math::Vec2;
+use crate::shape::ShapeSpec;
 use serde::{Deserialize, Serialize};
 
 /// A body as written in a mechanism or catalog file.
 ///
-/// Give the mass properties directly (`mass` in kg, `com` in m in the body frame, `inertia` the
-/// centroidal moment in kg·m²; `inertia` may be left out for a point mass). A body's frame has its
-/// origin at its inboard joint point. With `part`, the fields of the catalog file are taken first
-/// and the fields given here override them.
+/// A body's frame has its origin at its inboard joint point. Its mass properties come from
+/// exactly one of two sources:
+/// - **directly**: `mass` in kg, `com` in m in the body frame, `inertia` the centroidal moment in
+///   kg·m² (`inertia` may be left out for a point mass, `com` for a centre of mass on the joint);
+/// - **from a shape** ([`ShapeSpec`], placed with its origin on the body origin) and a density,
+///   either `areal_density` (kg/m²) or `density` (kg/m³) with `thickness` (m).
+///
+/// Mixing the two (say `shape` with `mass` or `com`) is an error rather than an override, so that
+/// a number never silently disagrees with the geometry it sits next to. To put a shape off the
+/// joint, place it inside a `Compound`:
+/// ```ron
+/// Body(name: "bob", shape: Compound(parts: [Placed(shape: Disc(radius: 0.05), at: (0.3, 0.0))]),
+///      density: 7850.0, thickness: 0.02)
+/// ```
+/// With `part`, the fields of the catalog file are taken first and the fields given here override
+/// them one by one (a use can change the `density` of a shaped part, but not add a `mass` to it).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename = "Body", deny_unknown_fields)]
 pub struct BodySpec {
@@ -25,6 +38,19 @@ pub struct BodySpec {
     pub com: Option<(f64, f64)>,
     /// Centroidal moment of inertia about z, kg·m² (default 0: a point mass).
     pub inertia: Option<f64>,
+    /// Shape in the body frame, for mass properties from a density instead of the three above.
+    pub shape: Option<ShapeSpec>,
+    /// Mass per unit area of the shape, kg/m² (instead of `density` and `thickness`).
+    pub areal_density: Option<f64>,
+    /// Mass per unit volume of the shape's material, kg/m³ (with `thickness`; steel ≈ 7850).
+    pub density: Option<f64>,
+    /// Uniform thickness of the shape out of the plane, m (with `density`).
+    pub thickness: Option<f64>,
+}
+
+/// Names of the fields that give mass properties directly, with whether each is set.
+fn direct_fields(b: &BodySpec) -> [(&'static str, bool); 3] {
+    [("mass", b.mass.is_some()), ("com", b.com.is_some()), ("inertia", b.inertia.is_some())]
 }
 
 impl BodySpec {
@@ -36,6 +62,10 @@ impl BodySpec {
             mass: over.mass.or(self.mass),
             com: over.com.or(self.com),
             inertia: over.inertia.or(self.inertia),
+            shape: over.shape.clone().or_else(|| self.shape.clone()),
+            areal_density: over.areal_density.or(self.areal_density),
+            density: over.density.or(self.density),
+            thickness: over.thickness.or(self.thickness),
         }
     }
 
@@ -62,13 +92,98 @@ impl BodySpec {
         {
             return Err(src.error(&format!("{path}.com"), "centre of mass must be finite"));
         }
+        for (field, value, what) in [
+            ("areal_density", self.areal_density, "areal density (kg/m²)"),
+            ("density", self.density, "density (kg/m³)"),
+        ] {
+            if let Some(v) = value
+                && !(v.is_finite() && v >= 0.0)
+            {
+                return Err(
+                    src.error(&format!("{path}.{field}"), format!("{what} must be finite and non-negative, got {v}"))
+                );
+            }
+        }
+        if let Some(t) = self.thickness
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(
+                src.error(&format!("{path}.thickness"), format!("thickness must be a positive number of m, got {t}"))
+            );
+        }
+        if let Some(shape) = &self.shape {
+            shape.validate().map_err(|e| src.error(&format!("{path}.shape{}", e.field), e.message))?;
+        }
+        self.check_conflicts(src, path)
+    }
+
+    /// Fields that can never go together, whatever a merge adds: a shape with direct mass
+    /// properties, and the two density forms.
+    fn check_conflicts(&self, src: &Source, path: &str) -> Result<()> {
+        if self.shape.is_some() {
+            for (field, set) in direct_fields(self) {
+                if set {
+                    return Err(src.error(
+                        &format!("{path}.{field}"),
+                        format!(
+                            "`{field}` cannot be given with `shape`: a body takes its mass properties either \
+                             directly (mass, com, inertia) or from a shape with a density"
+                        ),
+                    ));
+                }
+            }
+        }
+        if self.areal_density.is_some() {
+            for (field, set) in [("density", self.density.is_some()), ("thickness", self.thickness.is_some())] {
+                if set {
+                    return Err(src.error(
+                        &format!("{path}.{field}"),
+                        format!(
+                            "`{field}` cannot be given with `areal_density`: give kg/m², or kg/m³ with a thickness"
+                        ),
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 
-    /// The mass properties of a merged spec.
-    pub fn inertia_props(&self) -> PlanarInertia {
-        let com = self.com.map_or(Vec2::zeros(), |(x, y)| Vec2::new(x, y));
-        PlanarInertia::new(self.mass.unwrap_or(0.0), com, self.inertia.unwrap_or(0.0))
+    /// The mass properties of a merged spec, checking that the source of mass properties is
+    /// complete and unambiguous (`src` and `path` locate the body for messages).
+    pub fn inertia_props(&self, src: &Source, path: &str) -> Result<PlanarInertia> {
+        self.check_conflicts(src, path)?;
+        let Some(shape) = &self.shape else {
+            for (field, value) in
+                [("areal_density", self.areal_density), ("density", self.density), ("thickness", self.thickness)]
+            {
+                if value.is_some() {
+                    return Err(
+                        src.error(&format!("{path}.{field}"), format!("`{field}` is given but there is no `shape`"))
+                    );
+                }
+            }
+            let com = self.com.map_or(Vec2::zeros(), |(x, y)| Vec2::new(x, y));
+            return Ok(PlanarInertia::new(self.mass.unwrap_or(0.0), com, self.inertia.unwrap_or(0.0)));
+        };
+        let areal_density = match (self.areal_density, self.density, self.thickness) {
+            (Some(a), None, None) => a,
+            (None, Some(rho), Some(t)) => rho * t,
+            (None, Some(_), None) => {
+                return Err(src.error(&format!("{path}.density"), "`density` (kg/m³) needs a `thickness` (m)"));
+            }
+            (None, None, Some(_)) => {
+                return Err(src.error(&format!("{path}.thickness"), "`thickness` (m) needs a `density` (kg/m³)"));
+            }
+            (None, None, None) => {
+                return Err(src.error(
+                    &format!("{path}.shape"),
+                    "a shape needs a density: `areal_density` (kg/m²), or `density` (kg/m³) and `thickness` (m)",
+                ));
+            }
+            // check_conflicts has ruled out areal_density with either of the others.
+            _ => return Err(src.error(path, "internal: density forms not exclusive")),
+        };
+        shape.mass_properties(areal_density).map_err(|e| src.error(&format!("{path}.shape{}", e.field), e.message))
     }
 }
 

@@ -92,7 +92,7 @@ impl Mechanism {
                     src.error(&format!("{path}.name"), format!("duplicate body name `{name}` (also bodies[{prev}])"))
                 );
             }
-            let props = merged.inertia_props();
+            let props = merged.inertia_props(src, &path)?;
             if props.mass == 0.0 && props.i_com == 0.0 {
                 return Err(src.error(&path, format!("body `{name}` has no mass and no inertia")));
             }

@@ -26,8 +26,12 @@ fn every_catalog_part_parses() {
     let joints = ron_files("joints");
     assert!(bodies.len() >= 3 && joints.len() >= 2);
     for p in bodies {
-        let spec: BodySpec = Source::read(&p).unwrap().parse().unwrap_or_else(|e| panic!("{e}"));
-        assert!(spec.mass.is_some() || spec.inertia.is_some(), "{}", p.display());
+        let src = Source::read(&p).unwrap();
+        let spec: BodySpec = src.parse().unwrap_or_else(|e| panic!("{e}"));
+        // Mass properties given directly or computed from a shape with its density.
+        spec.check_numbers(&src, "").unwrap_or_else(|e| panic!("{e}"));
+        let props = spec.inertia_props(&src, "").unwrap_or_else(|e| panic!("{e}"));
+        assert!(props.mass > 0.0 || props.i_com > 0.0, "{}", p.display());
     }
     for p in joints {
         let _: JointSpec = Source::read(&p).unwrap().parse().unwrap_or_else(|e| panic!("{e}"));
