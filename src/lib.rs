@@ -22,6 +22,7 @@ pub mod loads;
 pub mod math;
 pub mod mechanism;
 pub mod plot;
+pub mod probe;
 pub mod shape;
 pub mod signal;
 pub mod speeds;
