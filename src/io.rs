@@ -3,7 +3,8 @@
 //! offending value just like syntax errors do.
 //!
 //! RON files are read with the `implicit_some` extension on, so optional fields are written
-//! plainly (`damper: 5e-4`, not `damper: Some(5e-4)`).
+//! plainly (`damper: 5e-4`, not `damper: Some(5e-4)`), and `unwrap_variant_newtypes`, so an
+//! enum variant holding a struct is written `OrderSweep(name: …)`, not `OrderSweep((name: …))`.
 
 use crate::error::{Error, Location, Result};
 use serde::de::DeserializeOwned;
@@ -37,7 +38,9 @@ impl Source {
     /// Deserializes the whole text as `T`, turning ron and serde errors into [`Error::Input`] with
     /// the file, line:column and field path.
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T> {
-        let opts = ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+        let opts = ron::Options::default().with_default_extension(
+            ron::extensions::Extensions::IMPLICIT_SOME | ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES,
+        );
         let mut de = ron::Deserializer::from_str_with_options(&self.text, &opts)
             .map_err(|e| self.spanned_error(&e, String::new()))?;
         let value: T = serde_path_to_error::deserialize(&mut de).map_err(|e| {

@@ -26,3 +26,4 @@ pub mod probe;
 pub mod shape;
 pub mod signal;
 pub mod speeds;
+pub mod study;

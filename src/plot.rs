@@ -133,6 +133,20 @@ fn data_range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
     (panel.x_range.unwrap_or((x0, x1)), panel.y_range.unwrap_or((y0, y1)))
 }
 
+/// A tick label: at most four significant digits, exponent form only for very large or small values
+/// (plotters prints log-axis ticks as `9.999999999999999e-6` otherwise).
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.0e}")
+    } else {
+        let s = format!("{:.*}", (3 - a.log10().floor() as i32).clamp(0, 6) as usize, v);
+        if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+    }
+}
+
 type DynResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
 fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> DynResult {
@@ -141,12 +155,24 @@ fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shi
     builder.caption(&panel.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
     if panel.log_y {
         let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?;
-        chart.configure_mesh().x_desc(&panel.x_label).y_desc(&panel.y_label).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc(&panel.x_label)
+            .y_desc(&panel.y_label)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()?;
         draw_series(&mut chart, panel, y0, y1)?;
         finish(&mut chart)
     } else {
         let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-        chart.configure_mesh().x_desc(&panel.x_label).y_desc(&panel.y_label).draw()?;
+        chart
+            .configure_mesh()
+            .x_desc(&panel.x_label)
+            .y_desc(&panel.y_label)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()?;
         draw_series(&mut chart, panel, y0, y1)?;
         finish(&mut chart)
     }
@@ -239,5 +265,15 @@ mod tests {
         assert!(text.starts_with("<svg"));
         assert!(text.contains("order n") && text.contains("Dashed") && text.contains("n_t"));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick(9.999999999999999e-6), "1e-5");
+        assert_eq!(tick(2.95), "2.95");
+        assert_eq!(tick(600.0), "600");
+        assert_eq!(tick(0.001), "0.001");
+        assert_eq!(tick(123456.0), "1e5");
+        assert_eq!(tick(0.0), "0");
     }
 }

@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 use kanedyn::excitation::Excitation;
 use kanedyn::kane::Kane;
 use kanedyn::mechanism::Mechanism;
+use kanedyn::study::{RunOptions, Study};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -41,6 +42,17 @@ enum Command {
         #[arg(long = "joint-torque", value_name = "NAME=VALUE")]
         joint_torque: Vec<String>,
     },
+    /// Run a study file: every analysis, with CSV, SVG and a Markdown summary in OUT/<study name>/.
+    Run {
+        /// Study file (RON).
+        study: PathBuf,
+        /// Output root folder.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Number of worker threads (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -48,6 +60,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { file } => check(&file),
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
+        Command::Run { study, out, threads } => run(&study, &out, threads),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -160,5 +173,25 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
         udot: xdot[n..].to_vec(),
     };
     println!("{}", serde_json::to_string(&out)?);
+    Ok(())
+}
+
+fn run(file: &Path, out: &Path, threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        // Only fails when a pool already exists, which cannot happen this early in main.
+        rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global().ok();
+    }
+    let study = Study::from_file(file)?;
+    let start = std::time::Instant::now();
+    let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: true })?;
+    println!("{}", report.summary);
+    println!("files written:");
+    for f in &report.files {
+        println!("  {}", f.display());
+    }
+    println!("study `{}` finished in {:.2} s", study.spec.name, start.elapsed().as_secs_f64());
+    if !report.failures.is_empty() {
+        bail!("{} run(s) failed (partial results written): {}", report.failures.len(), report.failures.join("; "));
+    }
     Ok(())
 }

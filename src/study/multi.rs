@@ -1,0 +1,258 @@
+//! Load case 2 (paper section 4.2, Table 1, Fig. 5): a multi-order torque held at each operating
+//! speed until the response is steady; the steady amplitude of each tracked order, with the locked
+//! twin for comparison.
+
+use super::sim::{self, Progress};
+use super::sweep::order_name;
+use super::{MultiOrderSpec, Study, write_csv};
+use crate::error::Result;
+use crate::excitation::{Excitation, Order, rpm_to_rad_s};
+use crate::plot::{LineStyle, Panel, Series};
+use crate::study::TrackingSpec;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The steady state at one speed (of the mechanism or of its locked twin).
+#[derive(Debug, Clone)]
+pub struct Steady {
+    /// Amplitude of each tracked multiple over the last window, rad/s².
+    pub amplitudes: Vec<f64>,
+    /// Largest relative change of those amplitudes between the last two windows (steadiness).
+    pub change: f64,
+    /// Simulated time, s.
+    pub time_s: f64,
+    /// Largest |q| of the joints other than the spin joint over the last window, rad.
+    pub max_relative_angle: f64,
+    /// The simulation's statistics and outcome.
+    pub sim: sim::SimInfo,
+}
+
+/// One operating speed.
+#[derive(Debug, Clone)]
+pub struct SpeedResult {
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// The mechanism's steady state.
+    pub response: Steady,
+    /// The locked twin's, when the study locks joints.
+    pub locked: Option<Steady>,
+}
+
+/// A multi-order analysis over speed.
+#[derive(Debug, Clone)]
+pub struct MultiOrderResult {
+    /// Analysis name.
+    pub name: String,
+    /// Base order n.
+    pub order: f64,
+    /// Tracked multiples (1 = n, 2 = 2n).
+    pub multiples: Vec<f64>,
+    /// One result per speed, in the file's order.
+    pub speeds: Vec<SpeedResult>,
+}
+
+pub(crate) struct Output {
+    pub markdown: String,
+    pub files: Vec<PathBuf>,
+    pub failures: Vec<String>,
+    pub result: MultiOrderResult,
+}
+
+pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+    let mut jobs: Vec<(usize, bool)> = (0..spec.speeds.len()).map(|i| (i, false)).collect();
+    if study.locked.is_some() {
+        jobs.extend((0..spec.speeds.len()).map(|i| (i, true)));
+    }
+    let done: Vec<Result<Steady>> =
+        jobs.par_iter().map(|&(i, locked)| steady(study, spec, i, locked, progress)).collect();
+    let mut response: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
+    let mut locked: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
+    for (&(i, l), r) in jobs.iter().zip(done) {
+        let s = r?;
+        if l {
+            locked[i] = Some(s);
+        } else {
+            response[i] = Some(s);
+        }
+    }
+    let speeds: Vec<SpeedResult> = spec
+        .speeds
+        .iter()
+        .zip(response.into_iter().zip(locked))
+        .filter_map(|(p, (r, l))| r.map(|response| SpeedResult { rpm: p.rpm, response, locked: l }))
+        .collect();
+    let result =
+        MultiOrderResult { name: spec.name.clone(), order: spec.order, multiples: spec.multiples.clone(), speeds };
+
+    let mut failures = Vec::new();
+    for s in &result.speeds {
+        for (what, st) in [("", Some(&s.response)), (" locked", s.locked.as_ref())] {
+            if let Some(e) = st.and_then(|st| st.sim.error.as_ref()) {
+                failures.push(format!("{} at {} rpm{what}: {e}", spec.name, s.rpm));
+            }
+        }
+    }
+
+    // CSV: one row per speed.
+    let mut header = vec!["rpm".to_string()];
+    let mut cols: Vec<Vec<f64>> = vec![result.speeds.iter().map(|s| s.rpm).collect()];
+    for (k, m) in spec.multiples.iter().enumerate() {
+        let tag = fmt_mult(*m);
+        header.push(format!("amp_{tag}x_rad_s2"));
+        cols.push(result.speeds.iter().map(|s| s.response.amplitudes[k]).collect());
+        if study.locked.is_some() {
+            header.push(format!("locked_{tag}x_rad_s2"));
+            cols.push(result.speeds.iter().map(|s| s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k])).collect());
+            header.push(format!("ratio_{tag}x"));
+            cols.push(
+                result
+                    .speeds
+                    .iter()
+                    .map(|s| s.response.amplitudes[k] / s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k]))
+                    .collect(),
+            );
+        }
+    }
+    header.push("steady_change".into());
+    cols.push(result.speeds.iter().map(|s| s.response.change).collect());
+    header.push("max_relative_angle_rad".into());
+    cols.push(result.speeds.iter().map(|s| s.response.max_relative_angle).collect());
+    header.push("simulated_s".into());
+    cols.push(result.speeds.iter().map(|s| s.response.time_s).collect());
+    let csv = dir.join(format!("{}.csv", spec.name));
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    write_csv(&csv, &h, &c)?;
+
+    // Figure 5: each order vs speed, mechanism solid, locked twin dotted.
+    let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
+    let mut series = Vec::new();
+    for (k, m) in spec.multiples.iter().enumerate() {
+        series.push(Series {
+            label: format!("{} ({}n)", order_name(*m), fmt_mult(*m)),
+            x: rpm.clone(),
+            y: result.speeds.iter().map(|s| s.response.amplitudes[k]).collect(),
+            color: k,
+            style: LineStyle::Solid,
+        });
+        if study.locked.is_some() {
+            series.push(Series {
+                label: format!("{}, locked", order_name(*m)),
+                x: rpm.clone(),
+                y: result.speeds.iter().map(|s| s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k])).collect(),
+                color: k,
+                style: LineStyle::Dotted,
+            });
+        }
+    }
+    let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let panel = Panel {
+        y_range: Some((0.0, 1.1 * top.max(f64::MIN_POSITIVE))),
+        title: format!("Steady multi-order response, n = {}", spec.order),
+        x_label: "mean speed, rpm".into(),
+        y_label: format!("{} angular acceleration, rad/s²", study.spec.response_body),
+        log_y: false,
+        series,
+        ..Panel::default()
+    };
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &[panel], 720, 480)?;
+
+    let markdown = summary(spec, &result);
+    Ok(Output { markdown, files: vec![csv, svg], failures, result })
+}
+
+fn fmt_mult(m: f64) -> String {
+    if m.fract() == 0.0 { format!("{m:.0}") } else { format!("{m}") }
+}
+
+/// Integrates in windows of `window_s` until the amplitudes of the last two windows agree to
+/// `steady_tol` (relative) or `max_time_s` is reached.
+fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress: &Progress) -> Result<Steady> {
+    let point = &spec.speeds[i];
+    let omega = rpm_to_rad_s(point.rpm);
+    let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
+    let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
+    let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
+    let excitation = Excitation {
+        mean: spec.mean_torque.unwrap_or_else(|| Study::loss_torque(mech, spin, omega)),
+        rpm: point.rpm,
+        order: Order::Fixed(spec.order),
+        harmonics: point.harmonics.clone(),
+        ramp_s: spec.ramp_s,
+    };
+    let mut kane = study.kane(locked)?;
+    kane.set_joint_torque(spin, excitation);
+    let fs = study.spec.integration.sample_hz;
+    let win = (spec.window_s * fs).round() as usize;
+    let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
+    let bar = progress.bar(spec.max_time_s, &label);
+    let mut rec = sim::Recorder::new(mech, spin, body, false);
+    let mut x = Study::initial_state(mech, spin, omega);
+    let mut t = 0.0;
+    // Start comparing once the ramp is over and two full windows follow it.
+    let first = spec.ramp_s + 2.0 * spec.window_s;
+    let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
+    let mut info = sim::SimInfo::default();
+    let mut last: Option<(Vec<f64>, f64)> = None;
+    let order = spec.order;
+    loop {
+        let t_next = if t < first { first } else { (t + spec.window_s).min(spec.max_time_s) };
+        let chunk = sim::simulate(&mut kane, &x, t, t_next, &study.spec.integration, &mut rec, &bar);
+        info.absorb(&chunk);
+        x = chunk.x_end.clone();
+        t = chunk.t_end;
+        if chunk.error.is_some() || rec.accel.len() < 2 * win {
+            break;
+        }
+        let tail = &rec.accel[rec.accel.len() - 2 * win..];
+        let traces = sim::track(tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
+        let a_prev: Vec<f64> = traces.iter().map(|tr| tr.amplitude[0]).collect();
+        let a_last: Vec<f64> = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
+        let change = a_prev.iter().zip(&a_last).map(|(p, l)| ((l - p) / l).abs()).fold(0.0, f64::max);
+        last = Some((a_last, change));
+        if change <= spec.steady_tol || t >= spec.max_time_s - 1e-9 {
+            break;
+        }
+        // Keep memory bounded: only the last two windows are ever analysed.
+        rec.keep_last(2 * win);
+    }
+    bar.finish_and_clear();
+    let (amplitudes, change) = last.unwrap_or((vec![f64::NAN; spec.multiples.len()], f64::NAN));
+    Ok(Steady { amplitudes, change, time_s: t, max_relative_angle: rec.max_relative_angle_recent(win), sim: info })
+}
+
+fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "## Multi-order response `{}`: n = {}, steady states\n", spec.name, spec.order);
+    let mut head = "| rpm |".to_string();
+    let mut rule = "|---|".to_string();
+    for m in &spec.multiples {
+        let tag = fmt_mult(*m);
+        let _ = write!(head, " {tag}n (rad/s²) | {tag}n locked | {tag}n ratio |");
+        rule += "---|---|---|";
+    }
+    head += " last-two-window change | max abs relative angle (rad) | simulated (s) |";
+    rule += "---|---|---|";
+    let _ = writeln!(md, "{head}\n{rule}");
+    for s in &r.speeds {
+        let mut row = format!("| {} |", s.rpm);
+        for k in 0..spec.multiples.len() {
+            let a = s.response.amplitudes[k];
+            let l = s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k]);
+            let _ = write!(row, " {a:.4} | {l:.4} | {:.3} |", a / l);
+        }
+        let _ = write!(
+            row,
+            " {:.1e}{} | {:.4} | {:.0} |",
+            s.response.change,
+            s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {:.1e})", l.change)),
+            s.response.max_relative_angle,
+            s.response.time_s
+        );
+        let _ = writeln!(md, "{row}");
+    }
+    md.push('\n');
+    md
+}

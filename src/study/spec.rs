@@ -1,0 +1,188 @@
+//! The study file (RON): a mechanism, the joint that spins, the body whose response is reported,
+//! the joints locked in the reference twin, and a list of analyses.
+
+use crate::excitation::Harmonic;
+use serde::{Deserialize, Serialize};
+
+/// A study as written. Paths are relative to the study file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Study", deny_unknown_fields)]
+pub struct StudySpec {
+    /// Name: the output folder is `<out>/<name>/`.
+    pub name: String,
+    /// Mechanism file, relative to the study file.
+    pub mechanism: String,
+    /// The joint driven by the excitation torque and spinning at the operating speed (default `spin`).
+    #[serde(default = "default_spin")]
+    pub spin_joint: String,
+    /// The body whose angular acceleration is the reported response (default `rotor`).
+    #[serde(default = "default_body")]
+    pub response_body: String,
+    /// Joints locked (child merged into parent at q = 0) to make the reference twin, e.g. the
+    /// pendulum pivots: the paper's "locked pendulum" rotor. Empty: no locked comparison.
+    #[serde(default)]
+    pub lock: Vec<String>,
+    /// Time-integration settings.
+    #[serde(default)]
+    pub integration: IntegrationSpec,
+    /// Order-tracking settings.
+    #[serde(default)]
+    pub order_tracking: TrackingSpec,
+    /// The analyses, run in parallel where independent.
+    pub analyses: Vec<AnalysisSpec>,
+}
+
+fn default_spin() -> String {
+    "spin".into()
+}
+fn default_body() -> String {
+    "rotor".into()
+}
+
+/// DOP853 settings shared by every time-domain run of a study.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IntegrationSpec {
+    /// Relative tolerance (default 1e-9).
+    pub rtol: f64,
+    /// Absolute tolerance (default 1e-9).
+    pub atol: f64,
+    /// Output sample rate of the dense-output sampler, Hz (default 2000).
+    pub sample_hz: f64,
+    /// Step limit per run (default 50 million).
+    pub max_steps: usize,
+}
+
+impl Default for IntegrationSpec {
+    fn default() -> Self {
+        Self { rtol: 1e-9, atol: 1e-9, sample_hz: 2000.0, max_steps: 50_000_000 }
+    }
+}
+
+/// Short-time FFT order-tracking settings (DESIGN.md: 2 s Hann windows, 0.25 s hop, 5 bins).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrackingSpec {
+    /// Window length, s.
+    pub window_s: f64,
+    /// Hop between windows, s.
+    pub hop_s: f64,
+    /// Bins summed each side of the tracked bin (2 → 5 bins).
+    pub half_width_bins: usize,
+}
+
+impl Default for TrackingSpec {
+    fn default() -> Self {
+        Self { window_s: 2.0, hop_s: 0.25, half_width_bins: 2 }
+    }
+}
+
+/// Direction of an order sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Direction {
+    /// From the lower order to the higher.
+    Up,
+    /// From the higher order to the lower.
+    Down,
+}
+
+/// One analysis of a study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum AnalysisSpec {
+    /// Single-order excitation swept in order (the paper's load case 1, Figs. 3 and 4).
+    OrderSweep(SweepSpec),
+    /// Multi-order excitation at steady speeds (the paper's load case 2, Table 1, Fig. 5).
+    MultiOrder(MultiOrderSpec),
+}
+
+/// Load case 1: `T = T_m + T_n sin(Ω∫n dt)`, n swept linearly, for each amplitude and direction.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// Lower end of the order range.
+    pub order_min: f64,
+    /// Upper end of the order range.
+    pub order_max: f64,
+    /// Sweep duration, s.
+    pub duration_s: f64,
+    /// Torque amplitudes T_n, N·m; one run per amplitude and direction.
+    pub amplitudes: Vec<f64>,
+    /// Directions (default both).
+    #[serde(default = "both_directions")]
+    pub directions: Vec<Direction>,
+    /// Harmonic multiples m of the excitation order to track (default 1 and 2: main and second order).
+    #[serde(default = "default_multiples")]
+    pub multiples: Vec<f64>,
+    /// Ramp-in of the oscillating torque, s (default 2).
+    #[serde(default = "default_ramp")]
+    pub ramp_s: f64,
+    /// Mean torque T_m, N·m; default: the losses at the operating speed.
+    #[serde(default)]
+    pub mean_torque: Option<f64>,
+    /// Write the sampled time series (time, rotor angle, rate, acceleration, joint angles) as CSV.
+    #[serde(default)]
+    pub write_time_series: bool,
+}
+
+/// One operating speed of a multi-order load case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedPoint {
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// The order harmonics at this speed (`multiple` 1 = order n, 2 = 2n), N·m and rad.
+    pub harmonics: Vec<Harmonic>,
+}
+
+/// Load case 2: `T = T_m + Σ T_k sin(k n Ω t + α_k)` held at each speed until steady.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MultiOrderSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Base excitation order n.
+    pub order: f64,
+    /// The operating speeds and their harmonics.
+    pub speeds: Vec<SpeedPoint>,
+    /// Harmonic multiples m tracked (default 1 and 2).
+    #[serde(default = "default_multiples")]
+    pub multiples: Vec<f64>,
+    /// Ramp-in of the oscillating torque, s (default 2).
+    #[serde(default = "default_ramp")]
+    pub ramp_s: f64,
+    /// Length of each steadiness window, s (default 4: the last two windows are compared).
+    #[serde(default = "default_window")]
+    pub window_s: f64,
+    /// Relative agreement of the last two windows that counts as steady (default 1e-3).
+    #[serde(default = "default_steady_tol")]
+    pub steady_tol: f64,
+    /// Longest simulated time per speed, s (default 400).
+    #[serde(default = "default_max_time")]
+    pub max_time_s: f64,
+    /// Mean torque T_m, N·m; default: the losses at each operating speed.
+    #[serde(default)]
+    pub mean_torque: Option<f64>,
+}
+
+fn both_directions() -> Vec<Direction> {
+    vec![Direction::Up, Direction::Down]
+}
+fn default_multiples() -> Vec<f64> {
+    vec![1.0, 2.0]
+}
+fn default_ramp() -> f64 {
+    2.0
+}
+fn default_window() -> f64 {
+    4.0
+}
+fn default_steady_tol() -> f64 {
+    1e-3
+}
+fn default_max_time() -> f64 {
+    400.0
+}

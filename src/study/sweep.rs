@@ -1,0 +1,378 @@
+//! Load case 1 (paper section 4.1, Figs. 3 and 4): a single-order torque swept in order, up and
+//! down, at each amplitude; order traces of the response by the short-time FFT.
+
+use super::sim::{self, Progress};
+use super::{Direction, Study, SweepSpec, write_csv};
+use crate::error::Result;
+use crate::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
+use crate::plot::{LineStyle, Panel, Series};
+use crate::signal::OrderTrace;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One sweep run: the order traces of the response and what the run did.
+#[derive(Debug, Clone)]
+pub struct SweepRun {
+    /// The analysis name.
+    pub analysis: String,
+    /// Torque amplitude T_n, N·m.
+    pub amplitude: f64,
+    /// Sweep direction.
+    pub direction: Direction,
+    /// True for the locked twin.
+    pub locked: bool,
+    /// One trace per tracked multiple (time, order, amplitude in rad/s²).
+    pub traces: Vec<OrderTrace>,
+    /// Largest |q| of the joints other than the spin joint (the pendulum angles φ), rad.
+    pub max_relative_angle: f64,
+    /// The simulation's statistics and outcome.
+    pub sim: sim::SimInfo,
+}
+
+impl SweepRun {
+    /// The trace of multiple `m` (1 = main order), if tracked.
+    pub fn trace(&self, m: f64) -> Option<&OrderTrace> {
+        self.traces.iter().find(|t| (t.multiple - m).abs() < 1e-12)
+    }
+
+    fn label(&self) -> String {
+        let dir = match self.direction {
+            Direction::Up => "up",
+            Direction::Down => "down",
+        };
+        format!("{}_{}Nm_{}{}", self.analysis, fmt_num(self.amplitude), dir, if self.locked { "_locked" } else { "" })
+    }
+}
+
+fn fmt_num(v: f64) -> String {
+    if v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v}") }
+}
+
+/// What [`run`] hands back to the study runner.
+pub(crate) struct Output {
+    pub markdown: String,
+    pub files: Vec<PathBuf>,
+    pub failures: Vec<String>,
+    pub runs: Vec<SweepRun>,
+}
+
+struct Job {
+    amplitude: f64,
+    direction: Direction,
+    locked: bool,
+}
+
+/// Runs every amplitude × direction (and the locked twin once per amplitude: it is linear, so
+/// its traces do not depend on the direction), in parallel.
+pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+    let omega = rpm_to_rad_s(spec.rpm);
+    let mut jobs = Vec::new();
+    for &amplitude in &spec.amplitudes {
+        for &direction in &spec.directions {
+            jobs.push(Job { amplitude, direction, locked: false });
+        }
+        if study.locked.is_some() {
+            jobs.push(Job { amplitude, direction: Direction::Up, locked: true });
+        }
+    }
+    let results: Vec<Result<SweepRun>> =
+        jobs.par_iter().map(|job| run_one(study, spec, omega, job, progress)).collect();
+    let mut runs = Vec::with_capacity(results.len());
+    for r in results {
+        runs.push(r?);
+    }
+
+    let mut files = Vec::new();
+    let mut failures = Vec::new();
+    for r in &runs {
+        if let Some(e) = &r.sim.error {
+            failures.push(format!("{}: {e}", r.label()));
+        }
+        if let Some(ts) = &r.sim.time_series
+            && spec.write_time_series
+        {
+            let path = dir.join(format!("{}_time_series.csv", r.label()));
+            let cols: Vec<&[f64]> = ts.columns.iter().map(Vec::as_slice).collect();
+            let header: Vec<&str> = ts.names.iter().map(String::as_str).collect();
+            write_csv(&path, &header, &cols)?;
+            files.push(path);
+        }
+    }
+    // One CSV per run: the traces side by side, with the locked reference and the ratios.
+    for r in runs.iter().filter(|r| !r.locked) {
+        let locked = runs.iter().find(|l| l.locked && l.amplitude == r.amplitude);
+        let Some(main) = r.traces.first() else { continue };
+        let mut header = vec!["time_s".to_string(), "order".to_string()];
+        let mut cols: Vec<Vec<f64>> = vec![main.time_s.clone(), main.order.clone()];
+        for t in &r.traces {
+            header.push(format!("amp_{}x_rad_s2", fmt_num(t.multiple)));
+            cols.push(t.amplitude.clone());
+        }
+        if let Some(l) = locked {
+            for t in &r.traces {
+                let lt = l.trace(t.multiple);
+                let ref_amp: Vec<f64> = t.order.iter().map(|&n| lt.map_or(f64::NAN, |lt| at_order(lt, n))).collect();
+                header.push(format!("locked_{}x_rad_s2", fmt_num(t.multiple)));
+                header.push(format!("ratio_{}x", fmt_num(t.multiple)));
+                let ratio = t.amplitude.iter().zip(&ref_amp).map(|(a, b)| a / b).collect();
+                cols.push(ref_amp);
+                cols.push(ratio);
+            }
+        }
+        let path = dir.join(format!("{}.csv", r.label()));
+        let h: Vec<&str> = header.iter().map(String::as_str).collect();
+        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        write_csv(&path, &h, &c)?;
+        files.push(path);
+    }
+
+    // Figures 3 and 4: one panel per amplitude; main and second order, up solid, down dashed.
+    let panels: Vec<Panel> = spec
+        .amplitudes
+        .iter()
+        .map(|&amp| {
+            let mut series = Vec::new();
+            for r in runs.iter().filter(|r| r.amplitude == amp) {
+                for (k, t) in r.traces.iter().enumerate() {
+                    // The locked twin is linear: it answers at the excitation order only, and its
+                    // higher-order traces are numerical noise (1e-6 of the main order).
+                    if r.locked && t.multiple != 1.0 {
+                        continue;
+                    }
+                    let (style, what) = match (r.locked, r.direction) {
+                        (true, _) => (LineStyle::Dotted, "locked"),
+                        (false, Direction::Up) => (LineStyle::Solid, "up"),
+                        (false, Direction::Down) => (LineStyle::Dashed, "down"),
+                    };
+                    series.push(Series {
+                        label: format!("{} {what}", order_name(t.multiple)),
+                        x: t.order.clone(),
+                        y: t.amplitude.clone(),
+                        color: if r.locked { 7 } else { k },
+                        style,
+                    });
+                }
+            }
+            Panel {
+                title: format!("T_n = {} N·m, {} rpm", fmt_num(amp), fmt_num(spec.rpm)),
+                x_label: "excitation order n".into(),
+                y_label: format!("{} angular acceleration, rad/s²", study.spec.response_body),
+                log_y: true,
+                x_range: Some((spec.order_min, spec.order_max)),
+                series,
+                ..Panel::default()
+            }
+        })
+        .collect();
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 640, 440)?;
+    files.push(svg);
+
+    let markdown = summary(spec, &runs);
+    Ok(Output { markdown, files, failures, runs })
+}
+
+/// "main order" for m = 1, "2nd order" for m = 2, …
+pub(crate) fn order_name(m: f64) -> String {
+    match m {
+        1.0 => "main order".into(),
+        2.0 => "2nd order".into(),
+        3.0 => "3rd order".into(),
+        _ => format!("{}× order", fmt_num(m)),
+    }
+}
+
+fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Progress) -> Result<SweepRun> {
+    let (from, to) = match job.direction {
+        Direction::Up => (spec.order_min, spec.order_max),
+        Direction::Down => (spec.order_max, spec.order_min),
+    };
+    let mech = if job.locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
+    let body = if job.locked { study.locked_body.unwrap_or(study.body) } else { study.body };
+    let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
+    let excitation = Excitation {
+        mean: spec.mean_torque.unwrap_or_else(|| Study::loss_torque(mech, spin, omega)),
+        rpm: spec.rpm,
+        order: Order::Sweep { from, to, duration_s: spec.duration_s },
+        harmonics: vec![Harmonic { multiple: 1.0, amplitude: job.amplitude, phase: 0.0 }],
+        ramp_s: spec.ramp_s,
+    };
+    let mut kane = study.kane(job.locked)?;
+    kane.set_joint_torque(spin, excitation.clone());
+    let x0 = Study::initial_state(mech, spin, omega);
+    let label = format!(
+        "{} {} N·m {}{}",
+        spec.name,
+        fmt_num(job.amplitude),
+        if job.direction == Direction::Up { "up" } else { "down" },
+        if job.locked { " locked" } else { "" }
+    );
+    let bar = progress.bar(spec.duration_s, &label);
+    let mut rec = sim::Recorder::new(mech, spin, body, spec.write_time_series);
+    let info = sim::simulate(&mut kane, &x0, 0.0, spec.duration_s, &study.spec.integration, &mut rec, &bar);
+    bar.finish_and_clear();
+    let order = excitation.order;
+    let traces = sim::track(
+        &rec.accel,
+        study.spec.integration.sample_hz,
+        omega,
+        &move |t| order.at(t),
+        &spec.multiples,
+        &study.spec.order_tracking,
+    )?;
+    Ok(SweepRun {
+        analysis: spec.name.clone(),
+        amplitude: job.amplitude,
+        direction: job.direction,
+        locked: job.locked,
+        traces,
+        max_relative_angle: rec.max_relative_angle,
+        sim: sim::SimInfo { time_series: rec.into_time_series(), ..info },
+    })
+}
+
+/// The trace's amplitude at order `n` (NaN outside its range).
+fn at_order(t: &OrderTrace, n: f64) -> f64 {
+    t.amplitude_at_order(n).unwrap_or(f64::NAN)
+}
+
+/// Order and amplitude of a trace's minimum, ignoring the windows before `skip_before_s` (the
+/// ramp-in, where the amplitude is still growing).
+pub fn trace_minimum(t: &OrderTrace, skip_before_s: f64) -> Option<(f64, f64)> {
+    skip_ramp(t, skip_before_s).min().map(|p| (p.order, p.amplitude))
+}
+
+/// Order intervals where `pred(order)` holds, sampled on `orders` (sorted ascending).
+fn intervals(orders: &[f64], pred: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut start: Option<f64> = None;
+    let mut last = f64::NAN;
+    for &n in orders {
+        if pred(n) {
+            start.get_or_insert(n);
+            last = n;
+        } else if let Some(s) = start.take() {
+            out.push((s, last));
+        }
+    }
+    if let Some(s) = start {
+        out.push((s, last));
+    }
+    out
+}
+
+fn fmt_intervals(iv: &[(f64, f64)]) -> String {
+    if iv.is_empty() {
+        return "none".into();
+    }
+    iv.iter().map(|(a, b)| format!("{a:.3}–{b:.3}")).collect::<Vec<_>>().join(", ")
+}
+
+/// Where the up and down main-order traces differ by more than `factor` (either way), on an
+/// order grid of step 0.002 over the common range.
+pub fn branch_differences(up: &OrderTrace, down: &OrderTrace, factor: f64) -> Vec<(f64, f64)> {
+    let lo = up.order.iter().chain(&down.order).copied().fold(f64::INFINITY, f64::min);
+    let hi = up.order.iter().chain(&down.order).copied().fold(f64::NEG_INFINITY, f64::max);
+    let grid = order_grid(lo, hi);
+    let (u_lo, u_hi) = minmax(&up.order);
+    let (d_lo, d_hi) = minmax(&down.order);
+    intervals(&grid, |n| {
+        if n < u_lo.max(d_lo) || n > u_hi.min(d_hi) {
+            return false;
+        }
+        let (a, b) = (at_order(up, n), at_order(down, n));
+        a > factor * b || b > factor * a
+    })
+}
+
+fn order_grid(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    let steps = ((hi - lo) / 0.002).ceil() as usize;
+    (0..=steps).map(|i| lo + (hi - lo) * i as f64 / steps.max(1) as f64).collect()
+}
+
+fn minmax(v: &[f64]) -> (f64, f64) {
+    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+}
+
+fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Order sweep `{}`: {} rpm, n from {} to {} over {} s\n",
+        spec.name,
+        fmt_num(spec.rpm),
+        spec.order_min,
+        spec.order_max,
+        fmt_num(spec.duration_s)
+    );
+    let _ = writeln!(
+        md,
+        "| run | max abs relative angle (rad) | main-order minimum at n | its amplitude (rad/s²) | orders where 2nd > main | RHS evaluations | steps (rejected) | wall time (s) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let skip = spec.ramp_s + 1.0;
+    for r in runs {
+        let min = r.trace(1.0).and_then(|t| trace_minimum(t, skip));
+        let second_over = match (r.trace(1.0), r.trace(2.0)) {
+            (Some(m), Some(s)) => {
+                let mut pairs: Vec<(f64, bool)> = m
+                    .time_s
+                    .iter()
+                    .zip(m.order.iter().zip(m.amplitude.iter().zip(&s.amplitude)))
+                    .filter(|(t, _)| **t >= skip)
+                    .map(|(_, (&o, (&a1, &a2)))| (o, a2 > a1))
+                    .collect();
+                pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let orders: Vec<f64> = pairs.iter().map(|p| p.0).collect();
+                let flags = pairs;
+                fmt_intervals(&intervals(&orders, |n| flags.iter().find(|p| p.0 == n).is_some_and(|p| p.1)))
+            }
+            _ => "–".into(),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {:.4} | {} | {} | {} | {} | {} ({}) | {:.3} |",
+            r.label(),
+            r.max_relative_angle,
+            min.map_or("–".into(), |m| format!("{:.4}", m.0)),
+            min.map_or("–".into(), |m| format!("{:.4}", m.1)),
+            second_over,
+            r.sim.rhs_evals,
+            r.sim.accepted,
+            r.sim.rejected,
+            r.sim.wall_s
+        );
+    }
+    md.push('\n');
+    for &amp in &spec.amplitudes {
+        let up = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Up);
+        let down = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Down);
+        if let (Some(u), Some(d)) = (up.and_then(|r| r.trace(1.0)), down.and_then(|r| r.trace(1.0))) {
+            let _ = writeln!(
+                md,
+                "- T_n = {} N·m: up and down main-order traces differ by more than 1.5× at n = {}",
+                fmt_num(amp),
+                fmt_intervals(&branch_differences(&skip_ramp(u, skip), &skip_ramp(d, skip), 1.5))
+            );
+        }
+    }
+    md.push('\n');
+    md
+}
+
+/// The trace without its windows inside the ramp-in (their amplitudes are still growing).
+pub fn skip_ramp(t: &OrderTrace, skip_before_s: f64) -> OrderTrace {
+    let keep: Vec<usize> = (0..t.time_s.len()).filter(|&i| t.time_s[i] >= skip_before_s).collect();
+    let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+    OrderTrace {
+        multiple: t.multiple,
+        time_s: pick(&t.time_s),
+        order: pick(&t.order),
+        freq_hz: pick(&t.freq_hz),
+        amplitude: pick(&t.amplitude),
+    }
+}
