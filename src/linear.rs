@@ -1306,8 +1306,9 @@ pub fn multi_order_response(
     Ok(out)
 }
 
-/// The generalized-speed choice does not change any physical result; this helper returns the
-/// same mechanism with other speeds (for comparisons).
+/// The same mechanism with another choice of generalized speeds. No result of this module (eigen-
+/// orders, shapes in q, responses of body accelerations) depends on that choice; this is for
+/// checking exactly that.
 pub fn with_speeds(mech: &Mechanism, speeds: Speeds) -> Mechanism {
     Mechanism { speeds, ..mech.clone() }
 }

@@ -15,7 +15,7 @@ use kanedyn::linear::{
 };
 use kanedyn::mechanism::{Mechanism, MechanismSpec};
 use kanedyn::speeds::Speeds;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
 const RPM: f64 = 1000.0;
@@ -343,8 +343,14 @@ fn figure2_extremes_for_three_pendulum_dampings() {
     // Fig. 2 of the paper: 1000 rpm, c_r = 5e-3, c_p = 5e-4, 5e-3, 5e-2. The minimum sits at
     // ≈ n_t, the maximum at ≈ n_r, above 1 beyond a crossing just above n_t (the paper reads
     // ≈ 1.015 n_t). Checks: the smallest-damping minimum within 1e-3 of n_t and maximum within
-    // 1e-3 of n_r; extremes move away (min up, max down) as c_p grows.
+    // 1e-3 of n_r; extremes move away (min up, max down) as c_p grows. The crossing of 1 is
+    // Den Hartog's invariant point: the locked rotor is the c_p → ∞ limit, so every c_p curve
+    // passes where the undamped ratio is 1; with c_r = 5e-3 (not 0) it stays within 1e-6 of the
+    // undamped closed form.
     let k = closed(&CpvaParams::canonical());
+    let nt2 = k.n_t * k.n_t;
+    let cross_cf =
+        k.n_t * (2.0 * (k.i_tilde + 1.0 + 2.0 * nt2) / (2.0 * k.i_tilde + 1.0 + 2.0 * nt2 - nt2 * nt2)).sqrt();
     let mut prev: Option<(f64, f64)> = None;
     for c_p in [5e-4, 5e-3, 5e-2] {
         let p = params(1, c_p, 5e-3);
@@ -352,7 +358,7 @@ fn figure2_extremes_for_three_pendulum_dampings() {
         let e = r.extremes(0.9 * k.n_t, 1.2 * k.n_t, 3000).unwrap();
         let cross = r.first_amplification(e.min_order, 1.2 * k.n_t, 3000).unwrap().unwrap();
         println!(
-            "c_p = {c_p:e}: min {:.6e} at n/n_t = {:.6}, max {:.6} at n/n_t = {:.6} (n_r/n_t = {:.6}), crossing n/n_t = {:.6}, asymptote {:.6}",
+            "c_p = {c_p:e}: min {:.6e} at n/n_t = {:.6}, max {:.6} at n/n_t = {:.6} (n_r/n_t = {:.6}), crossing n/n_t = {:.9}, asymptote {:.6}",
             e.min_ratio,
             e.min_order / k.n_t,
             e.max_ratio,
@@ -361,6 +367,7 @@ fn figure2_extremes_for_three_pendulum_dampings() {
             cross / k.n_t,
             r.asymptote().unwrap()
         );
+        assert!(rel(cross, cross_cf) < 1e-6, "crossing {cross} vs {cross_cf}");
         if c_p == 5e-4 {
             assert!(rel(e.min_order, k.n_t) < 1e-3 && rel(e.max_order, k.n_r) < 1e-3);
         }
@@ -569,5 +576,19 @@ fn refuses_what_it_cannot_linearise() {
     kane.set_joint_torque(1, kanedyn::excitation::Excitation::constant(1.0));
     let f1 = kane.forcing(0.0, &q, &u).clone();
     assert!((f1 - f0 - lin.generalized_torque(1)).amax() < 1e-12);
-    let _ = DVector::<f64>::zeros(1);
+}
+
+#[test]
+fn a_locked_away_body_is_watched_through_the_body_that_absorbed_it() {
+    // Watching the pendulum with its pivot locked: the reference is the rotor that absorbed it
+    // (same rigid body), so the locked responses agree exactly.
+    let p = CpvaParams::canonical();
+    let m = p.mechanism(None).unwrap();
+    let rotor = OrderResponse::new(&m, &cpva_spec(1), omega(), None).unwrap();
+    let spec = ResponseSpec { body: "pendulum".into(), ..cpva_spec(1) };
+    let pend = OrderResponse::new(&m, &spec, omega(), None).unwrap();
+    for n in [1.5, 3.0, 6.0] {
+        assert_eq!(pend.locked_response(n).unwrap(), rotor.locked_response(n).unwrap());
+        assert_ne!(pend.response(n).unwrap(), rotor.response(n).unwrap());
+    }
 }
