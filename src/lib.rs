@@ -18,6 +18,7 @@ pub mod io;
 pub mod joint;
 pub mod kane;
 pub mod kinematics;
+pub mod linear;
 pub mod loads;
 pub mod math;
 pub mod mechanism;
