@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+mod linear;
 mod multi;
 mod sim;
 pub mod spec;
@@ -51,8 +52,11 @@ pub struct StudyReport {
     pub sweeps: Vec<sweep::SweepRun>,
     /// Multi-order results.
     pub multi: Vec<multi::MultiOrderResult>,
+    /// Linear frequency-response results.
+    pub linear: Vec<linear::LinearResult>,
 }
 
+pub use linear::{LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;
 
@@ -101,7 +105,7 @@ impl Study {
             })?),
             None => None,
         };
-        check_spec(&spec, &src)?;
+        check_spec(&spec, &mechanism, &src)?;
         Ok(Study { spec, file: path.to_path_buf(), mechanism, locked, spin, body, locked_body })
     }
 
@@ -138,7 +142,7 @@ impl Study {
     }
 }
 
-fn check_spec(spec: &StudySpec, src: &Source) -> Result<()> {
+fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
     let pos = |v: f64| v.is_finite() && v > 0.0;
     let i = spec.integration;
     if !pos(i.rtol) || !pos(i.atol) {
@@ -213,6 +217,44 @@ fn check_spec(spec: &StudySpec, src: &Source) -> Result<()> {
                 check_common(src, &path, &m.multiples, m.ramp_s, m.mean_torque)?;
                 &m.name
             }
+            AnalysisSpec::LinearResponse(l) => {
+                if !pos(l.rpm) {
+                    return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
+                }
+                if !(pos(l.from) && l.to.is_finite() && l.from < l.to) {
+                    return Err(src.error(&format!("{path}.from"), "need 0 < from < to"));
+                }
+                if l.points < 2 {
+                    return Err(src.error(&format!("{path}.points"), "need at least 2 points"));
+                }
+                if l.relative && spec.lock.is_empty() {
+                    return Err(src.error(
+                        &format!("{path}.relative"),
+                        "orders relative to n_t need a locked joint (`lock`) to define the tuning order",
+                    ));
+                }
+                for (j, v) in l.variants.iter().enumerate() {
+                    for (d, (joint, c)) in v.dampers.iter().enumerate() {
+                        let at = format!("{path}.variants[{j}].dampers[{d}]");
+                        if mech.joint_index(joint).is_none() {
+                            return Err(src.error(&at, format!("unknown joint `{joint}`")));
+                        }
+                        if !(c.is_finite() && *c >= 0.0) {
+                            return Err(src.error(&at, format!("damping must be finite and non-negative, got {c}")));
+                        }
+                    }
+                }
+                &l.name
+            }
+            AnalysisSpec::Campbell(c) => {
+                if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
+                    return Err(src.error(&format!("{path}.rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
+                }
+                if c.points < 2 || c.orders.iter().any(|o| !pos(*o)) {
+                    return Err(src.error(&format!("{path}.points"), "need ≥ 2 points and positive orders"));
+                }
+                &c.name
+            }
         };
         if !names.insert(name.clone()) {
             return Err(src.error(&format!("{path}.name"), format!("duplicate analysis name `{name}`")));
@@ -284,6 +326,17 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
                 report.files.extend(out.files);
                 report.failures.extend(out.failures);
                 report.multi.push(out.result);
+            }
+            AnalysisSpec::LinearResponse(l) => {
+                let (out, result) = linear::run_response(study, l, &dir)?;
+                md += &out.markdown;
+                report.files.extend(out.files);
+                report.linear.push(result);
+            }
+            AnalysisSpec::Campbell(c) => {
+                let out = linear::run_campbell(study, c, &dir)?;
+                md += &out.markdown;
+                report.files.extend(out.files);
             }
         }
     }

@@ -33,10 +33,29 @@ pub struct Steady {
 pub struct SpeedResult {
     /// Mean speed, rpm.
     pub rpm: f64,
-    /// The mechanism's steady state.
-    pub response: Steady,
+    /// The mechanism's steady state (when the time-domain run is asked for).
+    pub response: Option<Steady>,
     /// The locked twin's, when the study locks joints.
     pub locked: Option<Steady>,
+    /// Linear amplitudes per tracked multiple (eq. 22, one harmonic per multiple), rad/s².
+    pub linear: Option<Vec<f64>>,
+    /// The locked twin's linear amplitudes, rad/s².
+    pub linear_locked: Option<Vec<f64>>,
+}
+
+impl SpeedResult {
+    /// Nonlinear amplitude of multiple k (NaN when not run).
+    pub fn amplitude(&self, k: usize) -> f64 {
+        self.response.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
+    }
+    /// The locked twin's nonlinear amplitude of multiple k (NaN when not run).
+    pub fn locked_amplitude(&self, k: usize) -> f64 {
+        self.locked.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
+    }
+    fn linear_amplitude(&self, k: usize, locked: bool) -> f64 {
+        let v = if locked { &self.linear_locked } else { &self.linear };
+        v.as_ref().map_or(f64::NAN, |v| v[k])
+    }
 }
 
 /// A multi-order analysis over speed.
@@ -60,8 +79,9 @@ pub(crate) struct Output {
 }
 
 pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &Progress) -> Result<Output> {
-    let mut jobs: Vec<(usize, bool)> = (0..spec.speeds.len()).map(|i| (i, false)).collect();
-    if study.locked.is_some() {
+    let mut jobs: Vec<(usize, bool)> =
+        if spec.time_domain { (0..spec.speeds.len()).map(|i| (i, false)).collect() } else { Vec::new() };
+    if study.locked.is_some() && spec.time_domain {
         jobs.extend((0..spec.speeds.len()).map(|i| (i, true)));
     }
     let done: Vec<Result<Steady>> =
@@ -76,18 +96,26 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
             response[i] = Some(s);
         }
     }
+    let (linear, linear_locked) = if spec.linear { linear_amplitudes(study, spec)? } else { (Vec::new(), Vec::new()) };
     let speeds: Vec<SpeedResult> = spec
         .speeds
         .iter()
+        .enumerate()
         .zip(response.into_iter().zip(locked))
-        .filter_map(|(p, (r, l))| r.map(|response| SpeedResult { rpm: p.rpm, response, locked: l }))
+        .map(|((i, p), (response, locked))| SpeedResult {
+            rpm: p.rpm,
+            response,
+            locked,
+            linear: linear.get(i).cloned(),
+            linear_locked: linear_locked.get(i).cloned(),
+        })
         .collect();
     let result =
         MultiOrderResult { name: spec.name.clone(), order: spec.order, multiples: spec.multiples.clone(), speeds };
 
     let mut failures = Vec::new();
     for s in &result.speeds {
-        for (what, st) in [("", Some(&s.response)), (" locked", s.locked.as_ref())] {
+        for (what, st) in [("", s.response.as_ref()), (" locked", s.locked.as_ref())] {
             if let Some(e) = st.and_then(|st| st.sim.error.as_ref()) {
                 failures.push(format!("{} at {} rpm{what}: {e}", spec.name, s.rpm));
             }
@@ -97,29 +125,40 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
     // CSV: one row per speed.
     let mut header = vec!["rpm".to_string()];
     let mut cols: Vec<Vec<f64>> = vec![result.speeds.iter().map(|s| s.rpm).collect()];
+    let has_locked = study.locked.is_some();
     for (k, m) in spec.multiples.iter().enumerate() {
         let tag = fmt_mult(*m);
-        header.push(format!("amp_{tag}x_rad_s2"));
-        cols.push(result.speeds.iter().map(|s| s.response.amplitudes[k]).collect());
-        if study.locked.is_some() {
-            header.push(format!("locked_{tag}x_rad_s2"));
-            cols.push(result.speeds.iter().map(|s| s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k])).collect());
-            header.push(format!("ratio_{tag}x"));
-            cols.push(
-                result
-                    .speeds
-                    .iter()
-                    .map(|s| s.response.amplitudes[k] / s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k]))
-                    .collect(),
-            );
+        let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
+        if spec.time_domain {
+            header.push(format!("amp_{tag}x_rad_s2"));
+            cols.push(col(&|s| s.amplitude(k)));
+            if has_locked {
+                header.push(format!("locked_{tag}x_rad_s2"));
+                cols.push(col(&|s| s.locked_amplitude(k)));
+                header.push(format!("ratio_{tag}x"));
+                cols.push(col(&|s| s.amplitude(k) / s.locked_amplitude(k)));
+            }
+        }
+        if spec.linear {
+            header.push(format!("linear_{tag}x_rad_s2"));
+            cols.push(col(&|s| s.linear_amplitude(k, false)));
+            if has_locked {
+                header.push(format!("linear_locked_{tag}x_rad_s2"));
+                cols.push(col(&|s| s.linear_amplitude(k, true)));
+            }
         }
     }
-    header.push("steady_change".into());
-    cols.push(result.speeds.iter().map(|s| s.response.change).collect());
-    header.push("max_relative_angle_rad".into());
-    cols.push(result.speeds.iter().map(|s| s.response.max_relative_angle).collect());
-    header.push("simulated_s".into());
-    cols.push(result.speeds.iter().map(|s| s.response.time_s).collect());
+    if spec.time_domain {
+        let col = |f: &dyn Fn(&Steady) -> f64| {
+            result.speeds.iter().map(|s| s.response.as_ref().map_or(f64::NAN, f)).collect::<Vec<f64>>()
+        };
+        header.push("steady_change".into());
+        cols.push(col(&|s| s.change));
+        header.push("max_relative_angle_rad".into());
+        cols.push(col(&|s| s.max_relative_angle));
+        header.push("simulated_s".into());
+        cols.push(col(&|s| s.time_s));
+    }
     let csv = dir.join(format!("{}.csv", spec.name));
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
     let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
@@ -129,21 +168,24 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
     let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
     let mut series = Vec::new();
     for (k, m) in spec.multiples.iter().enumerate() {
-        series.push(Series {
-            label: format!("{} ({}n)", order_name(*m), fmt_mult(*m)),
-            x: rpm.clone(),
-            y: result.speeds.iter().map(|s| s.response.amplitudes[k]).collect(),
-            color: k,
-            style: LineStyle::Solid,
-        });
-        if study.locked.is_some() {
-            series.push(Series {
-                label: format!("{}, locked", order_name(*m)),
-                x: rpm.clone(),
-                y: result.speeds.iter().map(|s| s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k])).collect(),
-                color: k,
-                style: LineStyle::Dotted,
-            });
+        let ys = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
+        let mut add =
+            |label: String, y: Vec<f64>, style| series.push(Series { label, x: rpm.clone(), y, color: k, style });
+        if spec.time_domain {
+            add(format!("{} ({}n)", order_name(*m), fmt_mult(*m)), ys(&|s| s.amplitude(k)), LineStyle::Solid);
+            if has_locked {
+                add(format!("{}, locked", order_name(*m)), ys(&|s| s.locked_amplitude(k)), LineStyle::Dotted);
+            }
+        }
+        if spec.linear {
+            add(format!("{}, linear", order_name(*m)), ys(&|s| s.linear_amplitude(k, false)), LineStyle::Dashed);
+            if !spec.time_domain && has_locked {
+                add(
+                    format!("{}, linear locked", order_name(*m)),
+                    ys(&|s| s.linear_amplitude(k, true)),
+                    LineStyle::Dotted,
+                );
+            }
         }
     }
     let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
@@ -165,6 +207,39 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
 
 fn fmt_mult(m: f64) -> String {
     if m.fract() == 0.0 { format!("{m:.0}") } else { format!("{m}") }
+}
+
+/// Linear amplitudes per speed and tracked multiple, of the mechanism and of its locked twin:
+/// each harmonic through the order-domain response of eq. (22).
+fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>)> {
+    let rspec = crate::linear::ResponseSpec {
+        spin_joint: study.spec.spin_joint.clone(),
+        input_joint: study.spec.spin_joint.clone(),
+        body: study.spec.response_body.clone(),
+        lock: study.spec.lock.clone(),
+    };
+    let cases: Vec<crate::linear::SpeedCase> =
+        spec.speeds.iter().map(|p| crate::linear::SpeedCase { rpm: p.rpm, harmonics: p.harmonics.clone() }).collect();
+    let mech = &study.mechanism;
+    let res = crate::linear::multi_order_response(mech, &rspec, spec.order, &cases, None).map_err(|e| {
+        crate::error::Error::Model {
+            mechanism: mech.name.clone(),
+            message: format!("linear multi-order response: {e}"),
+        }
+    })?;
+    let pick = |r: &crate::linear::SpeedResponse, locked: bool| -> Vec<f64> {
+        spec.multiples
+            .iter()
+            .map(|m| {
+                r.harmonics
+                    .iter()
+                    .filter(|h| (h.multiple - m).abs() < 1e-12)
+                    .map(|h| if locked { h.locked_amplitude } else { h.amplitude })
+                    .sum()
+            })
+            .collect()
+    };
+    Ok((res.iter().map(|r| pick(r, false)).collect(), res.iter().map(|r| pick(r, true)).collect()))
 }
 
 /// Integrates in windows of `window_s` until the amplitudes of the last two windows agree to
@@ -230,27 +305,42 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
         let tag = fmt_mult(*m);
-        let _ = write!(head, " {tag}n (rad/s²) | {tag}n locked | {tag}n ratio |");
+        if spec.time_domain {
+            let _ = write!(head, " {tag}n (rad/s²) | {tag}n locked | {tag}n ratio |");
+            rule += "---|---|---|";
+        }
+        if spec.linear {
+            let _ = write!(head, " {tag}n linear | {tag}n linear ratio |");
+            rule += "---|---|";
+        }
+    }
+    if spec.time_domain {
+        head += " last-two-window change | max abs relative angle (rad) | simulated (s) |";
         rule += "---|---|---|";
     }
-    head += " last-two-window change | max abs relative angle (rad) | simulated (s) |";
-    rule += "---|---|---|";
     let _ = writeln!(md, "{head}\n{rule}");
     for s in &r.speeds {
         let mut row = format!("| {} |", s.rpm);
         for k in 0..spec.multiples.len() {
-            let a = s.response.amplitudes[k];
-            let l = s.locked.as_ref().map_or(f64::NAN, |l| l.amplitudes[k]);
-            let _ = write!(row, " {a:.4} | {l:.4} | {:.3} |", a / l);
+            if spec.time_domain {
+                let (a, l) = (s.amplitude(k), s.locked_amplitude(k));
+                let _ = write!(row, " {a:.4} | {l:.4} | {:.3} |", a / l);
+            }
+            if spec.linear {
+                let (a, l) = (s.linear_amplitude(k, false), s.linear_amplitude(k, true));
+                let _ = write!(row, " {a:.4} | {:.3} |", a / l);
+            }
         }
-        let _ = write!(
-            row,
-            " {:.1e}{} | {:.4} | {:.0} |",
-            s.response.change,
-            s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {:.1e})", l.change)),
-            s.response.max_relative_angle,
-            s.response.time_s
-        );
+        if let Some(resp) = &s.response {
+            let _ = write!(
+                row,
+                " {:.1e}{} | {:.4} | {:.0} |",
+                resp.change,
+                s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {:.1e})", l.change)),
+                resp.max_relative_angle,
+                resp.time_s
+            );
+        }
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');

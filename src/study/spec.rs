@@ -93,6 +93,83 @@ pub enum AnalysisSpec {
     OrderSweep(SweepSpec),
     /// Multi-order excitation at steady speeds (the paper's load case 2, Table 1, Fig. 5).
     MultiOrder(MultiOrderSpec),
+    /// Linear order-domain frequency response normalised by the locked twin (eq. 22, Fig. 2).
+    LinearResponse(LinearResponseSpec),
+    /// Natural frequencies against spin speed with engine-order lines.
+    Campbell(CampbellSpec),
+}
+
+/// Joint dampers replaced for one variant of a linear analysis (e.g. the pivot damping c_p).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// Legend and file label.
+    pub label: String,
+    /// `(joint, damping in N·m·s/rad)` pairs.
+    pub dampers: Vec<(String, f64)>,
+}
+
+/// The linear frequency response of the response body's angular acceleration under a torque on
+/// the spin joint, `|α̂(n)| / |α̂_locked(n)|`, over an order range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinearResponseSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// Lower end of the order range (in units of the tuning order n_t when `relative`).
+    pub from: f64,
+    /// Upper end of the order range.
+    pub to: f64,
+    /// Number of orders evaluated (default 1201).
+    #[serde(default = "default_points")]
+    pub points: usize,
+    /// Give `from`/`to` and plot in units of the tuning order n_t: the undamped eigen-order of the
+    /// first locked joint's mode with the spin held (eq. 15 for the CPVA). Default true.
+    #[serde(default = "default_true")]
+    pub relative: bool,
+    /// Damping variants (default: the mechanism as it is).
+    #[serde(default)]
+    pub variants: Vec<Variant>,
+}
+
+/// A Campbell diagram: damped natural frequencies over a speed range, modes tracked by shape.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampbellSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Lowest speed, rpm.
+    pub rpm_min: f64,
+    /// Highest speed, rpm.
+    pub rpm_max: f64,
+    /// Number of speeds (default 61).
+    #[serde(default = "default_campbell_points")]
+    pub points: usize,
+    /// Engine orders drawn as lines `f = n·rpm/60` (default 1.5, 3, 4.5, 6).
+    #[serde(default = "default_engine_orders")]
+    pub orders: Vec<f64>,
+    /// Hold the spin speed (prescribed) instead of leaving it free (default false).
+    #[serde(default)]
+    pub spin_held: bool,
+    /// Damped frequencies |Im λ|/2π instead of the undamped natural frequencies (default false:
+    /// a Campbell diagram shows the undamped ones, whose order lines are exact).
+    #[serde(default)]
+    pub damped: bool,
+}
+
+fn default_points() -> usize {
+    1201
+}
+fn default_true() -> bool {
+    true
+}
+fn default_campbell_points() -> usize {
+    61
+}
+fn default_engine_orders() -> Vec<f64> {
+    vec![1.5, 3.0, 4.5, 6.0]
 }
 
 /// Load case 1: `T = T_m + T_n sin(Ω∫n dt)`, n swept linearly, for each amplitude and direction.
@@ -166,6 +243,13 @@ pub struct MultiOrderSpec {
     /// Mean torque T_m, N·m; default: the losses at each operating speed.
     #[serde(default)]
     pub mean_torque: Option<f64>,
+    /// Integrate the nonlinear equations to steady state at each speed (default true).
+    #[serde(default = "default_true")]
+    pub time_domain: bool,
+    /// Also give the linear response (superposed harmonics through eq. 22), plotted dashed next
+    /// to the nonlinear one (default true).
+    #[serde(default = "default_true")]
+    pub linear: bool,
 }
 
 fn both_directions() -> Vec<Direction> {
