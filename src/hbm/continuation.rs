@@ -7,10 +7,16 @@
 //! points. The new tangent solves `[[∂R̂/∂x, ∂R̂/∂n], [t_oldᵀ]] t = [0, 1]` (so it keeps the
 //! orientation), normalised.
 //!
-//! Step control: the step grows by 1.5 after a corrector of at most 2 iterations and shrinks by
-//! 0.7 after 5 or more; a failed corrector, or a tangent that turned by more than
-//! `acos(min_cos)`, halves the step and retries (the turning guard keeps the corrector from
-//! jumping to a neighbouring branch near a fold).
+//! The corrector is a Newton–chord iteration: it reuses the bordered matrix factorised at the
+//! previous point (its Jacobian is needed there anyway for the tangent), so an iteration costs
+//! one residual; when an iteration contracts by less than half, the Jacobian is refreshed at the
+//! current iterate (at most 3 times). With light damping the Jacobian changes quickly along the
+//! branch near resonance, so about one refresh per point is typical.
+//!
+//! Step control: the step grows by 1.5 after a corrector of at most 7 iterations with at most
+//! one refresh, and shrinks by 0.7 after 10 iterations or 3 refreshes; a failed corrector, or a
+//! tangent that turned by more than `acos(min_cos)`, halves the step and retries (the turning
+//! guard keeps the corrector from jumping to a neighbouring branch near a fold).
 //!
 //! Folds are the points where `dn/ds` changes sign: there the branch turns back in n and a sweep
 //! jumps, so the fold orders are the jump orders of the paper's up- and down-sweeps (Figs. 3, 4).
@@ -162,7 +168,15 @@ impl Branch {
         self.points
             .windows(2)
             .filter(|w| (w[0].order - order) * (w[1].order - order) <= 0.0)
-            .map(|w| if (w[0].order - order).abs() <= (w[1].order - order).abs() { &w[0].solution } else { &w[1].solution })
+            .map(
+                |w| {
+                    if (w[0].order - order).abs() <= (w[1].order - order).abs() {
+                        &w[0].solution
+                    } else {
+                        &w[1].solution
+                    }
+                },
+            )
             .collect()
     }
 }
@@ -198,7 +212,12 @@ impl Hbm {
     }
 
     /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
-    fn correct(&mut self, pred: &DVector<f64>, t: &DVector<f64>, max_iter: usize) -> Result<(DVector<f64>, usize), HbmError> {
+    fn correct(
+        &mut self,
+        pred: &DVector<f64>,
+        t: &DVector<f64>,
+        max_iter: usize,
+    ) -> Result<(DVector<f64>, usize), HbmError> {
         let m = self.unknowns();
         let mut y = pred.clone();
         let mut step = f64::INFINITY;
@@ -278,7 +297,14 @@ impl Hbm {
         Err(HbmError::NoConvergence { order: y[m], iterations: max_iter, step: last })
     }
 
-    fn branch_point(&mut self, y: &DVector<f64>, slope: f64, s: f64, iterations: usize, stability: bool) -> Result<BranchPoint, HbmError> {
+    fn branch_point(
+        &mut self,
+        y: &DVector<f64>,
+        slope: f64,
+        s: f64,
+        iterations: usize,
+        stability: bool,
+    ) -> Result<BranchPoint, HbmError> {
         let m = self.unknowns();
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
         let mut sol = self.solution_from(&x, y[m], iterations);
@@ -378,7 +404,7 @@ impl Hbm {
             let pred = &cur.y + &cur.t * ds;
             let (y, iters, refreshes) = match self.correct_chord(&lu, &pred, &cur.t, copts.corrector_iter, 3) {
                 Ok(r) => r,
-                Err(e) => {
+                Err(_) => {
                     ds *= 0.5;
                     continue;
                 }
@@ -426,7 +452,13 @@ impl Hbm {
                 let fold = match refined {
                     Some(yf) => {
                         let p = self.branch_point(&yf, 0.0, 0.0, 0, false)?;
-                        Fold { order: p.order, kind, after: points.len() - 1, accel_main: p.accel_main, pendulum_amplitude: p.pendulum_amplitude }
+                        Fold {
+                            order: p.order,
+                            kind,
+                            after: points.len() - 1,
+                            accel_main: p.accel_main,
+                            pendulum_amplitude: p.pendulum_amplitude,
+                        }
                     }
                     None => {
                         // dn/ds linear over the chord: the fold where it vanishes.
@@ -469,7 +501,11 @@ fn bifurcations(points: &[BranchPoint]) -> Vec<Bifurcation> {
         let unstable = if a.stable { b } else { a };
         let kind = match unstable.critical() {
             Some(mu) if mu.im.abs() < 1e-9 * mu.norm().max(1.0) || mu.arg().abs() < 0.02 => {
-                if mu.re > 0.0 { BifurcationKind::PlusOne } else { BifurcationKind::PeriodDoubling }
+                if mu.re > 0.0 {
+                    BifurcationKind::PlusOne
+                } else {
+                    BifurcationKind::PeriodDoubling
+                }
             }
             Some(mu) if (mu.arg().abs() - PI).abs() < 0.02 => BifurcationKind::PeriodDoubling,
             _ => BifurcationKind::NeimarkSacker,

@@ -61,7 +61,8 @@ mod continuation;
 mod stability;
 
 pub use continuation::{
-    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationOptions, Fold, FoldKind, continue_in_order,
+    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationOptions, Fold, FoldKind,
+    continue_in_order,
 };
 pub use stability::Stability;
 
@@ -90,7 +91,9 @@ pub enum HbmError {
         step: f64,
     },
     /// The Jacobian could not be factorised (a fold at fixed order, or a free coordinate).
-    #[error("harmonic balance at order {order}: singular Jacobian (at a fold, or a coordinate without restoring force?)")]
+    #[error(
+        "harmonic balance at order {order}: singular Jacobian (at a fold, or a coordinate without restoring force?)"
+    )]
     Singular {
         /// Excitation order n.
         order: f64,
@@ -120,8 +123,9 @@ pub struct HbmOptions {
     /// Central-difference step for the per-sample derivatives: rad for angles, and relative
     /// (times max(1, |q̇|)) for rates.
     pub fd_step: f64,
-    /// Samples per period for the Floquet monodromy (even; RK4 on the sampled variational
-    /// equations with step 2T/N_s, T = 2π/ω₀).
+    /// Samples per period N_s for the Floquet monodromy (even, ≥ 8; 0 disables stability): RK4
+    /// with step 2T/N_s (T = 2π/ω₀) on the variational equations, whose coefficients are
+    /// interpolated from the N_t samples of the harmonic balance.
     pub stability_samples: usize,
 }
 
@@ -313,7 +317,8 @@ struct Grid {
 impl Grid {
     fn new(nt: usize, harmonics: usize) -> Self {
         let nb = 2 * harmonics + 1;
-        let mut g = Grid { nt, e: vec![0.0; nt * nb], ed: vec![0.0; nt * nb], edd: vec![0.0; nt * nb], p: vec![0.0; nb * nt] };
+        let mut g =
+            Grid { nt, e: vec![0.0; nt * nb], ed: vec![0.0; nt * nb], edd: vec![0.0; nt * nb], p: vec![0.0; nb * nt] };
         for j in 0..nt {
             let tau = 2.0 * PI * j as f64 / nt as f64;
             let r = j * nb;
@@ -378,7 +383,17 @@ impl SampleLin {
 
 impl Evaluator {
     /// R at one sample; writes `M W` into `mw` when given.
-    fn residual(&mut self, t: f64, q: &[f64], qd: &[f64], qdd: &[f64], torque: f64, r: &mut [f64], mw: Option<&mut [f64]>) {
+    #[allow(clippy::too_many_arguments)]
+    fn residual(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        torque: f64,
+        r: &mut [f64],
+        mw: Option<&mut [f64]>,
+    ) {
         let n = self.n;
         self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
         self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
@@ -406,7 +421,17 @@ impl Evaluator {
     /// R, A, B, C at one sample by central differences (q and q̇ are restored on return). The
     /// spin angle is cyclic, so its column of A is zero and not differenced.
     #[allow(clippy::too_many_arguments)]
-    fn linearize(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], qdd: &[f64], torque: f64, spin: usize, h: f64, lin: &mut SampleLin) {
+    fn linearize(
+        &mut self,
+        t: f64,
+        q: &mut [f64],
+        qd: &mut [f64],
+        qdd: &[f64],
+        torque: f64,
+        spin: usize,
+        h: f64,
+        lin: &mut SampleLin,
+    ) {
         let n = self.n;
         let (mut rp, mut rm) = (std::mem::take(&mut self.rp), std::mem::take(&mut self.rm));
         self.residual(t, q, qd, qdd, torque, &mut lin.r, Some(&mut lin.c));
@@ -488,7 +513,13 @@ impl Hbm {
     /// world-frame force, or a spring on it), when another joint carries an oscillating torque,
     /// when a multiple is not a positive rational with denominator ≤ 12, or when the options are
     /// inconsistent.
-    pub fn new(kane: &Kane, spin_joint: usize, omega: f64, harmonics: &[Harmonic], options: HbmOptions) -> Result<Self, HbmError> {
+    pub fn new(
+        kane: &Kane,
+        spin_joint: usize,
+        omega: f64,
+        harmonics: &[Harmonic],
+        options: HbmOptions,
+    ) -> Result<Self, HbmError> {
         let bad = |m: String| Err(HbmError::Invalid(m));
         let mech = kane.mechanism();
         let n = kane.ndof();
@@ -524,7 +555,7 @@ impl Hbm {
         if nt < 2 * opts.harmonics + 1 {
             return bad(format!("{nt} time samples cannot resolve {} harmonics (need ≥ 2H + 1)", opts.harmonics));
         }
-        if opts.stability_samples != 0 && (opts.stability_samples < 8 || opts.stability_samples % 2 != 0) {
+        if opts.stability_samples != 0 && (opts.stability_samples < 8 || !opts.stability_samples.is_multiple_of(2)) {
             return bad(format!("stability_samples must be even and ≥ 8 (or 0), got {}", opts.stability_samples));
         }
         // Base frequency: the multiples as fractions k_i/d with a common denominator d ≤ 12.
@@ -537,8 +568,12 @@ impl Hbm {
                 }
             }
             let d = (1..=12u64)
-                .find(|&d| harmonics.iter().all(|h| (h.multiple * d as f64 - (h.multiple * d as f64).round()).abs() < 1e-9))
-                .ok_or_else(|| HbmError::Invalid("excitation multiples must be rationals with denominator ≤ 12".into()))?;
+                .find(|&d| {
+                    harmonics.iter().all(|h| (h.multiple * d as f64 - (h.multiple * d as f64).round()).abs() < 1e-9)
+                })
+                .ok_or_else(|| {
+                    HbmError::Invalid("excitation multiples must be rationals with denominator ≤ 12".into())
+                })?;
             let ints: Vec<u64> = harmonics.iter().map(|h| (h.multiple * d as f64).round() as u64).collect();
             let g = ints.iter().fold(0, |a, &b| gcd(a, b));
             ratio = g as f64 / d as f64;
@@ -602,7 +637,12 @@ impl Hbm {
 
     /// Like [`Hbm::new`], taking Ω (from `rpm`) and the terms from an [`Excitation`]; its mean
     /// (solved instead), order (the free parameter) and ramp (steady state) are not used.
-    pub fn from_excitation(kane: &Kane, spin_joint: usize, excitation: &Excitation, options: HbmOptions) -> Result<Self, HbmError> {
+    pub fn from_excitation(
+        kane: &Kane,
+        spin_joint: usize,
+        excitation: &Excitation,
+        options: HbmOptions,
+    ) -> Result<Self, HbmError> {
         Self::new(kane, spin_joint, excitation.omega(), &excitation.harmonics, options)
     }
 
@@ -638,7 +678,21 @@ impl Hbm {
 
     /// q, q̇, q̈ at one sample from the unknowns x (basis rows e, e', e'' in normalised time).
     #[allow(clippy::too_many_arguments)]
-    fn synth(x: &[f64], n: usize, nb: usize, spin: usize, omega: f64, w0: f64, t: f64, e: &[f64], ed: &[f64], edd: &[f64], q: &mut [f64], qd: &mut [f64], qdd: &mut [f64]) {
+    fn synth(
+        x: &[f64],
+        n: usize,
+        nb: usize,
+        spin: usize,
+        omega: f64,
+        w0: f64,
+        t: f64,
+        e: &[f64],
+        ed: &[f64],
+        edd: &[f64],
+        q: &mut [f64],
+        qd: &mut [f64],
+        qdd: &mut [f64],
+    ) {
         for k in 0..n {
             let c = &x[k * nb..(k + 1) * nb];
             // The spin coordinate's constant slot holds the mean torque, not an angle.
@@ -679,7 +733,16 @@ impl Hbm {
             Self::synth(x, n, nb, spin, self.omega, w0, t, e, ed, edd, &mut self.q, &mut self.qd, &mut self.qdd);
             let torque = tm + self.excitation(tau);
             if jacobian {
-                self.ev.linearize(t, &mut self.q, &mut self.qd, &self.qdd, torque, spin, self.opts.fd_step, &mut self.lin);
+                self.ev.linearize(
+                    t,
+                    &mut self.q,
+                    &mut self.qd,
+                    &self.qdd,
+                    torque,
+                    spin,
+                    self.opts.fd_step,
+                    &mut self.lin,
+                );
             } else {
                 self.ev.residual(t, &self.q, &self.qd, &self.qdd, torque, &mut self.lin.r, None);
             }
@@ -841,7 +904,7 @@ fn interpolation_matrix(nt: usize, ns: usize) -> Vec<f64> {
             for h in 1..nt.div_ceil(2) {
                 w += 2.0 * (h as f64 * (ti - tj)).cos();
             }
-            if nt % 2 == 0 {
+            if nt.is_multiple_of(2) {
                 w += (nt as f64 / 2.0 * ti).cos() * (nt as f64 / 2.0 * tj).cos();
             }
             m[i * nt + j] = w / nt as f64;

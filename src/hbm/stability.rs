@@ -3,9 +3,15 @@
 //! The variational equations of `R(q, q̇, q̈, t) = 0` about the periodic orbit are
 //! `C δq̈ + B δq̇ + A δq = 0` with the per-sample derivatives A, B, C of the harmonic balance
 //! (`C = M W` is invertible). In the state `z = (δq, δq̇)` they read `ż = 𝒜(t) z`,
-//! `𝒜 = [[0, I], [−C⁻¹A, −C⁻¹B]]`. 𝒜 is sampled at N_s equally spaced instants of one period
-//! T = 2π/ω₀ and the monodromy matrix Φ(T) is integrated by the classical fourth-order Runge–Kutta
-//! method with step 2T/N_s, whose stages fall exactly on the samples (t, t + h/2, t + h).
+//! `𝒜 = [[0, I], [−C⁻¹A, −C⁻¹B]]`. A, B, C are those of the last Jacobian of the harmonic balance
+//! at the solution (N_t samples; no new engine calls when the continuation just assembled it),
+//! carried to N_s equally spaced instants of the period T = 2π/ω₀ by trigonometric
+//! interpolation (they are smooth periodic functions, band-limited to far below N_t/2 on the
+//! branches checked), and the monodromy matrix Φ(T) is integrated by the classical fourth-order
+//! Runge–Kutta method with step 2T/N_s, whose stages fall exactly on the samples (t, t + h/2,
+//! t + h). Measured on the canonical CPVA, the multipliers do not move by 1e-8 when H, N_t, N_s
+//! or the difference step change, and agree with a monodromy matrix differenced from time
+//! integrations to 2e-6 (tests/hbm.rs).
 //!
 //! The spin angle is cyclic: its column of A is zero, so `δq_s` feeds nothing and the column of
 //! Φ for it is the unit vector — the trivial multiplier +1 (a shift of the spin angle is again a
@@ -40,8 +46,8 @@ impl Stability {
 
 impl Hbm {
     /// Floquet multipliers of a solution of this problem (see the module docs of
-    /// [`crate::hbm`] and the `stability` submodule): monodromy by RK4 over the sampled
-    /// variational equations with [`super::HbmOptions::stability_samples`] samples.
+    /// [`crate::hbm`]): monodromy by RK4 over the variational equations with
+    /// [`super::HbmOptions::stability_samples`] samples per period.
     pub fn stability(&mut self, sol: &HbmSolution) -> Result<Stability, HbmError> {
         let ns = self.opts.stability_samples;
         let order = sol.order;
@@ -55,7 +61,9 @@ impl Hbm {
         // Per-sample derivatives at this solution (reused when the last Jacobian was assembled
         // there, as in the continuation), interpolated to the N_s stability samples.
         let x = self.unknowns_from(Some(sol));
-        let same = |(xs, o): &(Vec<f64>, f64)| *o == order && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()));
+        let same = |(xs, o): &(Vec<f64>, f64)| {
+            *o == order && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
+        };
         if !self.samples_at.as_ref().is_some_and(same) {
             self.assemble(&x, order, true);
         }
@@ -99,7 +107,8 @@ impl Hbm {
         for i in 0..d {
             phi[i * d + i] = 1.0;
         }
-        let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
+        let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
+            (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
         for step in 0..ns / 2 {
             let a0 = &sys[2 * step * dd..(2 * step + 1) * dd];
             let a1 = &sys[(2 * step + 1) * dd..(2 * step + 2) * dd];
