@@ -162,8 +162,8 @@ pub struct Branch {
 }
 
 impl Branch {
-    /// Points within `tol` of order `n` are none in general; this returns, for each segment that
-    /// crosses n, the solution of the nearer end point (a guess for [`Hbm::solve`] at n).
+    /// Starting guesses at order n: for each segment of the branch that crosses n, the solution
+    /// at its nearer end (pass it to [`Hbm::solve`] at n; one per sheet of an S-shaped branch).
     pub fn guesses_at(&self, order: f64) -> Vec<&HbmSolution> {
         self.points
             .windows(2)
