@@ -12,6 +12,7 @@ pub mod body;
 pub mod cpva;
 pub mod error;
 pub mod excitation;
+pub mod hbm;
 pub mod inertia;
 pub mod integrate;
 pub mod io;

@@ -1,0 +1,539 @@
+//! Pseudo-arclength continuation of harmonic-balance solutions in the excitation order n.
+//!
+//! The branch is the curve `R̂(x, n) = 0` in the space `y = (x, n)` of the Fourier unknowns (rad;
+//! the scaled mean torque) and the order. From a point y with unit tangent t, the predictor is
+//! `y + Δs t` and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` by Newton's
+//! method on the bordered Jacobian `[[∂R̂/∂x, ∂R̂/∂n], [tᵀ]]`, which stays regular through turning
+//! points. The new tangent solves `[[∂R̂/∂x, ∂R̂/∂n], [t_oldᵀ]] t = [0, 1]` (so it keeps the
+//! orientation), normalised.
+//!
+//! The corrector is a Newton–chord iteration: it reuses the bordered matrix factorised at the
+//! previous point (its Jacobian is needed there anyway for the tangent), so an iteration costs
+//! one residual; when an iteration contracts by less than half, the Jacobian is refreshed at the
+//! current iterate (at most 3 times). With light damping the Jacobian changes quickly along the
+//! branch near resonance, so about one refresh per point is typical.
+//!
+//! Step control: the step grows by 1.5 after a corrector of at most 7 iterations with at most
+//! one refresh, and shrinks by 0.7 after 10 iterations or 3 refreshes; a failed corrector, or a
+//! tangent that turned by more than `acos(min_cos)`, halves the step and retries (the turning
+//! guard keeps the corrector from jumping to a neighbouring branch near a fold).
+//!
+//! Folds are the points where `dn/ds` changes sign: there the branch turns back in n and a sweep
+//! jumps, so the fold orders are the jump orders of the paper's up- and down-sweeps (Figs. 3, 4).
+//! Each detected fold is refined by a secant search on `dn/ds = 0` along the arclength.
+
+use super::{Hbm, HbmError, HbmOptions, HbmSolution};
+use crate::excitation::Harmonic;
+use crate::kane::Kane;
+use nalgebra::{DMatrix, DVector};
+use std::f64::consts::PI;
+
+/// Settings of the continuation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContinuationOptions {
+    /// Initial arclength step (in the norm of (coefficients in rad, order)).
+    pub ds: f64,
+    /// Smallest step before giving up.
+    pub ds_min: f64,
+    /// Largest step.
+    pub ds_max: f64,
+    /// Largest number of points on a branch.
+    pub max_points: usize,
+    /// Newton iterations allowed per corrector.
+    pub corrector_iter: usize,
+    /// Smallest accepted cosine between successive tangents.
+    pub min_cos: f64,
+    /// Compute the Floquet stability of every point.
+    pub stability: bool,
+    /// Refine each fold to `|dn/ds| < 1e-6` by a secant search.
+    pub refine_folds: bool,
+}
+
+impl Default for ContinuationOptions {
+    fn default() -> Self {
+        Self {
+            ds: 0.01,
+            ds_min: 1e-7,
+            ds_max: 0.1,
+            max_points: 2000,
+            corrector_iter: 14,
+            min_cos: 0.98,
+            stability: true,
+            refine_folds: true,
+        }
+    }
+}
+
+/// One point of a branch, with the quantities of the paper's figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BranchPoint {
+    /// Excitation order n.
+    pub order: f64,
+    /// Arclength from the first point (chord sum).
+    pub arclength: f64,
+    /// dn/ds: the order component of the unit tangent (its sign change marks a fold).
+    pub order_slope: f64,
+    /// Amplitude of the spin body's angular acceleration at the main order n, rad/s².
+    pub accel_main: f64,
+    /// The same at the second order 2n, rad/s².
+    pub accel_second: f64,
+    /// Largest peak amplitude of the non-spin coordinates (the pendulum angle φ), rad.
+    pub pendulum_amplitude: f64,
+    /// Floquet verdict (None when stability was not computed).
+    pub stable: Option<bool>,
+    /// The full solution.
+    pub solution: HbmSolution,
+}
+
+/// Direction of the turn at a fold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FoldKind {
+    /// The branch reaches its largest order and turns back (an up-sweep jumps here).
+    OrderMaximum,
+    /// The branch reaches its smallest order and turns back (a down-sweep jumps here).
+    OrderMinimum,
+}
+
+/// A turning point of the branch in the order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fold {
+    /// Order at the fold (refined when [`ContinuationOptions::refine_folds`]).
+    pub order: f64,
+    /// Which way the branch turns.
+    pub kind: FoldKind,
+    /// Index of the branch point just before the fold.
+    pub after: usize,
+    /// Main-order rotor acceleration at the fold, rad/s².
+    pub accel_main: f64,
+    /// Pendulum peak amplitude at the fold, rad.
+    pub pendulum_amplitude: f64,
+}
+
+/// How a branch loses or gains stability (by the critical Floquet multiplier).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BifurcationKind {
+    /// A real multiplier through +1 (a fold, or a symmetry-breaking pitchfork).
+    PlusOne,
+    /// A real multiplier through −1 (period doubling).
+    PeriodDoubling,
+    /// A complex pair through the unit circle (Neimark–Sacker: quasi-periodic motion).
+    NeimarkSacker,
+}
+
+/// A change of stability between two successive branch points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bifurcation {
+    /// Index of the point before the change.
+    pub after: usize,
+    /// Order, interpolated where the largest multiplier modulus crosses 1.
+    pub order: f64,
+    /// The kind, by the argument of the critical multiplier on the unstable side.
+    pub kind: BifurcationKind,
+    /// True when the branch becomes stable at this change (in the direction of the branch).
+    pub gains_stability: bool,
+}
+
+/// Why the continuation stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BranchEnd {
+    /// Reached the target order (the last point is at it exactly).
+    ReachedTarget,
+    /// Turned back and left the range at the starting order (the last point is at it).
+    LeftRange,
+    /// Hit [`ContinuationOptions::max_points`].
+    MaxPoints,
+    /// The step fell below [`ContinuationOptions::ds_min`] (the last point is the last success).
+    StepTooSmall,
+}
+
+/// A solution branch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Branch {
+    /// The points in the order of the arclength.
+    pub points: Vec<BranchPoint>,
+    /// Turning points in n.
+    pub folds: Vec<Fold>,
+    /// Stability changes (when stability was computed).
+    pub bifurcations: Vec<Bifurcation>,
+    /// Why the continuation stopped.
+    pub end: BranchEnd,
+    /// Total Newton iterations (correctors and fold refinement).
+    pub newton_iterations: usize,
+}
+
+impl Branch {
+    /// Starting guesses at order n: for each segment of the branch that crosses n, the solution
+    /// at its nearer end (pass it to [`Hbm::solve`] at n; one per sheet of an S-shaped branch).
+    pub fn guesses_at(&self, order: f64) -> Vec<&HbmSolution> {
+        self.points
+            .windows(2)
+            .filter(|w| (w[0].order - order) * (w[1].order - order) <= 0.0)
+            .map(
+                |w| {
+                    if (w[0].order - order).abs() <= (w[1].order - order).abs() {
+                        &w[0].solution
+                    } else {
+                        &w[1].solution
+                    }
+                },
+            )
+            .collect()
+    }
+}
+
+/// Unit tangent and state carried along the branch.
+struct Cursor {
+    y: DVector<f64>,
+    t: DVector<f64>,
+}
+
+impl Hbm {
+    /// The bordered matrix `[[J, ∂R̂/∂n], [rowᵀ]]` from the work buffers.
+    fn bordered(&self, row: &DVector<f64>) -> DMatrix<f64> {
+        let m = self.unknowns();
+        let mut b = DMatrix::zeros(m + 1, m + 1);
+        b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
+        b.view_mut((0, m), (m, 1)).copy_from(&self.gn);
+        b.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
+        b
+    }
+
+    /// Unit tangent from the buffers' Jacobian, oriented by `row` (previous tangent).
+    fn tangent(&self, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
+        let m = self.unknowns();
+        let mut rhs = DVector::zeros(m + 1);
+        rhs[m] = 1.0;
+        let t = self.bordered(row).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
+        let norm = t.norm();
+        if !norm.is_finite() || norm == 0.0 {
+            return Err(HbmError::NonFinite { order });
+        }
+        Ok(t / norm)
+    }
+
+    /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
+    fn correct(
+        &mut self,
+        pred: &DVector<f64>,
+        t: &DVector<f64>,
+        max_iter: usize,
+    ) -> Result<(DVector<f64>, usize), HbmError> {
+        let m = self.unknowns();
+        let mut y = pred.clone();
+        let mut step = f64::INFINITY;
+        for it in 1..=max_iter {
+            let order = y[m];
+            if !(order.is_finite() && order > 0.0) {
+                return Err(HbmError::NonFinite { order });
+            }
+            let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+            self.assemble(&x, order, true);
+            let mut rhs = DVector::zeros(m + 1);
+            rhs.rows_mut(0, m).copy_from(&self.rhat);
+            rhs[m] = t.dot(&(&y - pred));
+            let dy = self.bordered(t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
+            step = dy.amax();
+            if !step.is_finite() {
+                return Err(HbmError::NonFinite { order });
+            }
+            y -= dy;
+            if step <= self.opts.tol {
+                return Ok((y, it));
+            }
+        }
+        Err(HbmError::NoConvergence { order: y[m], iterations: max_iter, step })
+    }
+
+    /// Newton–chord corrector: like [`Hbm::correct`], but it iterates with the bordered matrix
+    /// factorised at the previous point (`lu`), so most iterations cost one residual (N_t engine
+    /// calls) instead of a Jacobian. When an iteration contracts by less than half, the Jacobian
+    /// is refreshed at the current iterate (at most `max_refresh` times). Returns the point, the
+    /// iterations and the refreshes.
+    fn correct_chord(
+        &mut self,
+        lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        pred: &DVector<f64>,
+        t: &DVector<f64>,
+        max_iter: usize,
+        max_refresh: usize,
+    ) -> Result<(DVector<f64>, usize, usize), HbmError> {
+        let m = self.unknowns();
+        let mut y = pred.clone();
+        let mut x = vec![0.0; m];
+        let mut rhs = DVector::zeros(m + 1);
+        let mut last = f64::INFINITY;
+        let mut fresh: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
+        let mut refreshes = 0;
+        for it in 1..=max_iter {
+            let order = y[m];
+            if !(order.is_finite() && order > 0.0) {
+                return Err(HbmError::NonFinite { order });
+            }
+            x.copy_from_slice(&y.as_slice()[..m]);
+            self.assemble(&x, order, false);
+            rhs.rows_mut(0, m).copy_from(&self.rhat);
+            rhs[m] = t.dot(&(&y - pred));
+            let mut dy = fresh.as_ref().unwrap_or(lu).solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let mut step = dy.amax();
+            if it > 1 && step > 0.5 * last && refreshes < max_refresh {
+                self.assemble(&x, order, true);
+                let f = self.bordered(t).lu();
+                dy = f.solve(&rhs).ok_or(HbmError::Singular { order })?;
+                step = dy.amax();
+                fresh = Some(f);
+                refreshes += 1;
+            } else if it > 1 && step > 0.5 * last {
+                return Err(HbmError::NoConvergence { order, iterations: it, step });
+            }
+            if !step.is_finite() {
+                return Err(HbmError::NonFinite { order });
+            }
+            y -= dy;
+            if step <= self.opts.tol {
+                return Ok((y, it, refreshes));
+            }
+            last = step;
+        }
+        Err(HbmError::NoConvergence { order: y[m], iterations: max_iter, step: last })
+    }
+
+    fn branch_point(
+        &mut self,
+        y: &DVector<f64>,
+        slope: f64,
+        s: f64,
+        iterations: usize,
+        stability: bool,
+    ) -> Result<BranchPoint, HbmError> {
+        let m = self.unknowns();
+        let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+        let mut sol = self.solution_from(&x, y[m], iterations);
+        if stability && self.opts.stability_samples > 0 {
+            sol.stability = Some(self.stability(&sol)?);
+        }
+        Ok(BranchPoint {
+            order: sol.order,
+            arclength: s,
+            order_slope: slope,
+            accel_main: sol.order_acceleration(self.spin, 1.0),
+            accel_second: sol.order_acceleration(self.spin, 2.0),
+            pendulum_amplitude: sol.max_peak_amplitude(),
+            stable: sol.stability.as_ref().map(|st| st.stable),
+            solution: sol,
+        })
+    }
+
+    fn y_of(&self, sol: &HbmSolution) -> DVector<f64> {
+        let m = self.unknowns();
+        let x = self.unknowns_from(Some(sol));
+        let mut y = DVector::zeros(m + 1);
+        y.rows_mut(0, m).copy_from_slice(&x);
+        y[m] = sol.order;
+        y
+    }
+
+    /// Secant search for `dn/ds = 0` between a (dn/ds > 0 side or < 0) and b along a's tangent.
+    fn refine_fold(&mut self, a: &Cursor, chord: f64, slope_b: f64, iterations: &mut usize) -> Option<DVector<f64>> {
+        let m = self.unknowns();
+        let (mut s0, mut f0) = (0.0, a.t[m]);
+        let (mut s1, mut f1) = (chord, slope_b);
+        let mut best = None;
+        for _ in 0..20 {
+            if f1 == f0 {
+                break;
+            }
+            // Regula falsi (bracketing keeps it inside the segment).
+            let s = s1 - f1 * (s1 - s0) / (f1 - f0);
+            let pred = &a.y + &a.t * s;
+            let (y, it) = self.correct(&pred, &a.t, self.opts.max_iter).ok()?;
+            *iterations += it;
+            let f = self.tangent(&a.t, y[m]).ok()?[m];
+            best = Some(y);
+            if f.abs() < 1e-6 {
+                break;
+            }
+            if f.signum() == f0.signum() {
+                s0 = s;
+                f0 = f;
+            } else {
+                s1 = s;
+                f1 = f;
+            }
+        }
+        best
+    }
+
+    /// Continues the periodic solution from order `n_from` towards `n_to` (see the module docs
+    /// of the `continuation` submodule), starting from `guess` or from the rigid rotation. The
+    /// branch may turn back at folds; it ends on reaching `n_to`, on leaving the range at
+    /// `n_from`, or when the step control gives up (the points found are kept).
+    pub fn continue_in_order(
+        &mut self,
+        n_from: f64,
+        n_to: f64,
+        guess: Option<&HbmSolution>,
+        copts: &ContinuationOptions,
+    ) -> Result<Branch, HbmError> {
+        if !(n_from.is_finite() && n_to.is_finite() && n_from > 0.0 && n_to > 0.0 && n_from != n_to) {
+            return Err(HbmError::Invalid(format!("order range {n_from} → {n_to} must be positive and non-empty")));
+        }
+        let m = self.unknowns();
+        let dir = (n_to - n_from).signum();
+        let mut newton = 0;
+        let sol0 = self.solve(n_from, guess)?;
+        newton += sol0.iterations;
+        let y0 = self.y_of(&sol0);
+        // Initial tangent: the row e_n fixes dn = 1, then the sign follows the direction.
+        self.assemble(&y0.as_slice()[..m], n_from, true);
+        let mut e_n = DVector::zeros(m + 1);
+        e_n[m] = 1.0;
+        let t0 = self.tangent(&e_n, n_from)? * dir;
+        let mut cur = Cursor { y: y0, t: t0 };
+        let mut lu = self.bordered(&cur.t).lu();
+        let mut points = vec![self.branch_point(&cur.y, cur.t[m], 0.0, sol0.iterations, copts.stability)?];
+        let mut folds = Vec::new();
+        let mut ds = copts.ds;
+        let mut s = 0.0;
+        let end = loop {
+            if points.len() >= copts.max_points {
+                break BranchEnd::MaxPoints;
+            }
+            if ds < copts.ds_min {
+                break BranchEnd::StepTooSmall;
+            }
+            let pred = &cur.y + &cur.t * ds;
+            let (y, iters, refreshes) = match self.correct_chord(&lu, &pred, &cur.t, copts.corrector_iter, 3) {
+                Ok(r) => r,
+                Err(_) => {
+                    ds *= 0.5;
+                    continue;
+                }
+            };
+            newton += iters;
+            // The Jacobian at the new point gives its tangent and the next chord matrix.
+            self.assemble(&y.as_slice()[..m], y[m], true);
+            let t = match self.tangent(&cur.t, y[m]) {
+                Ok(t) => t,
+                Err(_) => {
+                    ds *= 0.5;
+                    continue;
+                }
+            };
+            if t.dot(&cur.t) < copts.min_cos && ds > copts.ds_min {
+                ds *= 0.5;
+                continue;
+            }
+            let next_lu = self.bordered(&t).lu();
+            let chord = (&y - &cur.y).norm();
+            let (n_new, n_old) = (y[m], cur.y[m]);
+            // Leaving the range: finish exactly at its end by a solve at fixed order.
+            let past_target = dir * (n_new - n_to) >= 0.0;
+            let past_start = dir * (n_new - n_from) < 0.0;
+            if past_target || past_start {
+                let n_end = if past_target { n_to } else { n_from };
+                let frac = (n_end - n_old) / (n_new - n_old);
+                let y_guess = &cur.y + (&y - &cur.y) * frac;
+                let x_guess: Vec<f64> = y_guess.rows(0, m).iter().copied().collect();
+                let guess_sol = self.solution_from(&x_guess, n_end, 0);
+                let y_end = match self.solve(n_end, Some(&guess_sol)) {
+                    Ok(sol) => {
+                        newton += sol.iterations;
+                        self.y_of(&sol)
+                    }
+                    Err(_) => y.clone(),
+                };
+                s += (&y_end - &cur.y).norm();
+                points.push(self.branch_point(&y_end, t[m], s, iters, copts.stability)?);
+                break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
+            }
+            if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
+                let kind = if cur.t[m] > 0.0 { FoldKind::OrderMaximum } else { FoldKind::OrderMinimum };
+                let refined = if copts.refine_folds { self.refine_fold(&cur, chord, t[m], &mut newton) } else { None };
+                let fold = match refined {
+                    Some(yf) => {
+                        let p = self.branch_point(&yf, 0.0, 0.0, 0, false)?;
+                        Fold {
+                            order: p.order,
+                            kind,
+                            after: points.len() - 1,
+                            accel_main: p.accel_main,
+                            pendulum_amplitude: p.pendulum_amplitude,
+                        }
+                    }
+                    None => {
+                        // dn/ds linear over the chord: the fold where it vanishes.
+                        let f = cur.t[m] / (cur.t[m] - t[m]);
+                        let last = points.last();
+                        Fold {
+                            order: n_old + 0.5 * cur.t[m] * f * chord,
+                            kind,
+                            after: points.len() - 1,
+                            accel_main: last.map_or(0.0, |p| p.accel_main),
+                            pendulum_amplitude: last.map_or(0.0, |p| p.pendulum_amplitude),
+                        }
+                    }
+                };
+                folds.push(fold);
+            }
+            s += chord;
+            points.push(self.branch_point(&y, t[m], s, iters, copts.stability)?);
+            cur = Cursor { y, t };
+            lu = next_lu;
+            if iters <= 7 && refreshes <= 1 {
+                ds = (ds * 1.5).min(copts.ds_max);
+            } else if iters >= 10 || refreshes >= 3 {
+                ds *= 0.7;
+            }
+        };
+        let bifurcations = bifurcations(&points);
+        Ok(Branch { points, folds, bifurcations, end, newton_iterations: newton })
+    }
+}
+
+/// Stability changes between successive points.
+fn bifurcations(points: &[BranchPoint]) -> Vec<Bifurcation> {
+    let mut out = Vec::new();
+    for (i, w) in points.windows(2).enumerate() {
+        let (Some(a), Some(b)) = (&w[0].solution.stability, &w[1].solution.stability) else { continue };
+        if a.stable == b.stable {
+            continue;
+        }
+        let unstable = if a.stable { b } else { a };
+        let kind = match unstable.critical() {
+            Some(mu) if mu.im.abs() < 1e-9 * mu.norm().max(1.0) || mu.arg().abs() < 0.02 => {
+                if mu.re > 0.0 {
+                    BifurcationKind::PlusOne
+                } else {
+                    BifurcationKind::PeriodDoubling
+                }
+            }
+            Some(mu) if (mu.arg().abs() - PI).abs() < 0.02 => BifurcationKind::PeriodDoubling,
+            _ => BifurcationKind::NeimarkSacker,
+        };
+        let (ma, mb) = (a.max_modulus, b.max_modulus);
+        let f = if mb != ma { ((1.0 - ma) / (mb - ma)).clamp(0.0, 1.0) } else { 0.5 };
+        out.push(Bifurcation {
+            after: i,
+            order: w[0].order + f * (w[1].order - w[0].order),
+            kind,
+            gains_stability: b.stable,
+        });
+    }
+    out
+}
+
+/// One-call convenience: the branch of periodic solutions of `kane`'s mechanism from order
+/// `n_from` to `n_to` (see [`Hbm::new`] and [`Hbm::continue_in_order`]).
+#[allow(clippy::too_many_arguments)]
+pub fn continue_in_order(
+    kane: &Kane,
+    spin_joint: usize,
+    omega: f64,
+    harmonics: &[Harmonic],
+    n_from: f64,
+    n_to: f64,
+    options: HbmOptions,
+    copts: &ContinuationOptions,
+) -> Result<Branch, HbmError> {
+    Hbm::new(kane, spin_joint, omega, harmonics, options)?.continue_in_order(n_from, n_to, None, copts)
+}
