@@ -209,9 +209,12 @@ fn fmt_mult(m: f64) -> String {
     if m.fract() == 0.0 { format!("{m:.0}") } else { format!("{m}") }
 }
 
+/// Amplitudes indexed `[speed][multiple]`, rad/s².
+type PerSpeed = Vec<Vec<f64>>;
+
 /// Linear amplitudes per speed and tracked multiple, of the mechanism and of its locked twin:
 /// each harmonic through the order-domain response of eq. (22).
-fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>)> {
+fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, PerSpeed)> {
     let rspec = crate::linear::ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
         input_joint: study.spec.spin_joint.clone(),
