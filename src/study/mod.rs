@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+pub mod hbm;
 mod linear;
 mod multi;
 mod sim;
@@ -54,6 +55,8 @@ pub struct StudyReport {
     pub multi: Vec<multi::MultiOrderResult>,
     /// Linear frequency-response results.
     pub linear: Vec<linear::LinearResult>,
+    /// Harmonic-balance branches.
+    pub hbm: Vec<hbm::HbmBranch>,
 }
 
 pub use linear::{LinearResult, ResponseVariant};
@@ -246,6 +249,32 @@ fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
                 }
                 &l.name
             }
+            AnalysisSpec::HarmonicBalance(h) => {
+                if !pos(h.rpm) {
+                    return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
+                }
+                if !(pos(h.order_min) && pos(h.order_max) && h.order_min < h.order_max) {
+                    return Err(src.error(&format!("{path}.order_min"), "need 0 < order_min < order_max"));
+                }
+                if h.amplitudes.is_empty() || h.amplitudes.iter().any(|a| !a.is_finite()) {
+                    return Err(src.error(&format!("{path}.amplitudes"), "give at least one finite amplitude (N·m)"));
+                }
+                if h.harmonics == 0 || h.harmonics > 64 {
+                    return Err(src.error(&format!("{path}.harmonics"), "need 1 to 64 harmonics"));
+                }
+                check_common(src, &path, &h.multiples, 0.0, None)?;
+                if let Some(o) = &h.overlay {
+                    let earlier =
+                        spec.analyses[..k].iter().any(|a| matches!(a, AnalysisSpec::OrderSweep(s) if &s.name == o));
+                    if !earlier {
+                        return Err(src.error(
+                            &format!("{path}.overlay"),
+                            format!("no OrderSweep named `{o}` before this analysis"),
+                        ));
+                    }
+                }
+                &h.name
+            }
             AnalysisSpec::Campbell(c) => {
                 if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
                     return Err(src.error(&format!("{path}.rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
@@ -337,6 +366,12 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
                 let out = linear::run_campbell(study, c, &dir)?;
                 md += &out.markdown;
                 report.files.extend(out.files);
+            }
+            AnalysisSpec::HarmonicBalance(h) => {
+                let out = hbm::run(study, h, &report.sweeps, &dir)?;
+                md += &out.markdown;
+                report.files.extend(out.files);
+                report.hbm.extend(out.branches);
             }
         }
     }

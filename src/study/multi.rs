@@ -41,9 +41,36 @@ pub struct SpeedResult {
     pub linear: Option<Vec<f64>>,
     /// The locked twin's linear amplitudes, rad/s².
     pub linear_locked: Option<Vec<f64>>,
+    /// Every periodic steady state found by harmonic balance at this speed.
+    pub hbm: Vec<HbmState>,
+}
+
+/// One periodic steady state by harmonic balance.
+#[derive(Debug, Clone)]
+pub struct HbmState {
+    /// Amplitude per tracked multiple, rad/s².
+    pub amplitudes: Vec<f64>,
+    /// Floquet stability.
+    pub stable: Option<bool>,
+    /// Largest peak |relative angle| of the non-spin joints, rad.
+    pub max_relative_angle: f64,
 }
 
 impl SpeedResult {
+    /// The stable harmonic-balance state closest to the time-domain steady state, and the largest
+    /// relative difference of their tracked amplitudes.
+    pub fn hbm_match(&self) -> Option<(&HbmState, f64)> {
+        let r = self.response.as_ref()?;
+        self.hbm
+            .iter()
+            .filter(|h| h.stable == Some(true))
+            .map(|h| {
+                let d = h.amplitudes.iter().zip(&r.amplitudes).map(|(a, b)| ((a - b) / b).abs()).fold(0.0, f64::max);
+                (h, d)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
     /// Nonlinear amplitude of multiple k (NaN when not run).
     pub fn amplitude(&self, k: usize) -> f64 {
         self.response.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
@@ -108,8 +135,16 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
             locked,
             linear: linear.get(i).cloned(),
             linear_locked: linear_locked.get(i).cloned(),
+            hbm: Vec::new(),
         })
         .collect();
+    let mut speeds = speeds;
+    if spec.hbm {
+        let states: Vec<Result<Vec<HbmState>>> = spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
+        for (s, st) in speeds.iter_mut().zip(states) {
+            s.hbm = st?;
+        }
+    }
     let result =
         MultiOrderResult { name: spec.name.clone(), order: spec.order, multiples: spec.multiples.clone(), speeds };
 
@@ -209,6 +244,35 @@ fn fmt_mult(m: f64) -> String {
     if m.fract() == 0.0 { format!("{m:.0}") } else { format!("{m}") }
 }
 
+/// All periodic steady states at the operating order: the response is continued in order from
+/// `order + 0.4` down to `order − 0.4` and back up (a branch crosses the operating order once per
+/// sheet of an S-shaped response, and each direction reaches the sheets connected to its start),
+/// and each crossing is solved exactly at the order.
+fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<Vec<HbmState>> {
+    let omega = rpm_to_rad_s(p.rpm);
+    let path = study.mechanism.path_to(study.body);
+    let mut out: Vec<HbmState> = Vec::new();
+    let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
+    for (from, to) in [(hi, lo), (lo, hi)] {
+        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, 10, from, to)?;
+        for guess in branch.guesses_at(spec.order) {
+            let sol = hbm.solve(spec.order, Some(guess)).map_err(super::hbm::hbm_error(study))?;
+            let stable = hbm.stability(&sol).ok().map(|s| s.stable);
+            let amplitudes: Vec<f64> = spec.multiples.iter().map(|&m| super::hbm::body_accel(&sol, &path, m)).collect();
+            let same = |h: &HbmState| (h.amplitudes[0] - amplitudes[0]).abs() <= 1e-6 * amplitudes[0].abs();
+            if !out.iter().any(same) {
+                out.push(HbmState {
+                    amplitudes,
+                    stable,
+                    max_relative_angle: super::hbm::relative_peak(&sol, study.spin),
+                });
+            }
+        }
+    }
+    out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
+    Ok(out)
+}
+
 /// Amplitudes indexed `[speed][multiple]`, rad/s².
 type PerSpeed = Vec<Vec<f64>>;
 
@@ -269,8 +333,9 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     let mut rec = sim::Recorder::new(mech, spin, body, false);
     let mut x = Study::initial_state(mech, spin, omega);
     let mut t = 0.0;
-    // Start comparing once the ramp is over and two full windows follow it.
-    let first = spec.ramp_s + 2.0 * spec.window_s;
+    // Start comparing once the ramp is over, two full windows follow it, and the minimum time has
+    // passed.
+    let first = (spec.ramp_s + 2.0 * spec.window_s).max(spec.min_time_s).min(spec.max_time_s);
     let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
     let mut info = sim::SimInfo::default();
     let mut last: Option<(Vec<f64>, f64)> = None;
@@ -347,5 +412,28 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');
+    if spec.hbm {
+        let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
+        let _ = writeln!(md, "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM |");
+        let _ = writeln!(md, "|---|---|---|");
+        for s in &r.speeds {
+            let states: Vec<String> = s
+                .hbm
+                .iter()
+                .map(|h| {
+                    let st = match h.stable {
+                        Some(true) => "stable",
+                        Some(false) => "unstable",
+                        None => "?",
+                    };
+                    let amps: Vec<String> = h.amplitudes.iter().map(|a| format!("{a:.3}")).collect();
+                    format!("({}; {st})", amps.join(", "))
+                })
+                .collect();
+            let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{:.2e} relative", d));
+            let _ = writeln!(md, "| {} | {} | {m} |", s.rpm, states.join(" "));
+        }
+        md.push('\n');
+    }
     md
 }

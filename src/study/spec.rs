@@ -97,6 +97,39 @@ pub enum AnalysisSpec {
     LinearResponse(LinearResponseSpec),
     /// Natural frequencies against spin speed with engine-order lines.
     Campbell(CampbellSpec),
+    /// Periodic steady states by harmonic balance, continued in the excitation order, with
+    /// stability: the branches behind the sweeps' jumps.
+    HarmonicBalance(HbmSpec),
+}
+
+/// Harmonic balance of a single-order excitation `T_n sin(nΩt)`, continued in n from `order_max`
+/// down to `order_min` (so an S-shaped branch is traced whole), for each amplitude.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HbmSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// Lower end of the order range.
+    pub order_min: f64,
+    /// Upper end of the order range.
+    pub order_max: f64,
+    /// Torque amplitudes T_n, N·m.
+    pub amplitudes: Vec<f64>,
+    /// Harmonics of nΩ kept (default 10).
+    #[serde(default = "default_harmonics")]
+    pub harmonics: usize,
+    /// Harmonic multiples reported (default 1 and 2).
+    #[serde(default = "default_multiples")]
+    pub multiples: Vec<f64>,
+    /// Name of an `OrderSweep` of the same study whose traces are drawn under the branches.
+    #[serde(default)]
+    pub overlay: Option<String>,
+}
+
+fn default_harmonics() -> usize {
+    10
 }
 
 /// Joint dampers replaced for one variant of a linear analysis (e.g. the pivot damping c_p).
@@ -237,6 +270,11 @@ pub struct MultiOrderSpec {
     /// Relative agreement of the last two windows that counts as steady (default 1e-3).
     #[serde(default = "default_steady_tol")]
     pub steady_tol: f64,
+    /// Shortest simulated time per speed, s (default 60): about ten decay times of the canonical
+    /// pendulum's free motion (c_p/J_B ≈ 0.31 s⁻¹), whose frequency can sit close enough to the
+    /// tracked orders for two windows to agree by chance while it still decays.
+    #[serde(default = "default_min_time")]
+    pub min_time_s: f64,
     /// Longest simulated time per speed, s (default 400).
     #[serde(default = "default_max_time")]
     pub max_time_s: f64,
@@ -250,6 +288,10 @@ pub struct MultiOrderSpec {
     /// to the nonlinear one (default true).
     #[serde(default = "default_true")]
     pub linear: bool,
+    /// Also find every periodic steady state by harmonic balance (continued in order through the
+    /// operating order, so coexisting branches all appear) with their stability (default false).
+    #[serde(default)]
+    pub hbm: bool,
 }
 
 fn both_directions() -> Vec<Direction> {
@@ -266,6 +308,9 @@ fn default_window() -> f64 {
 }
 fn default_steady_tol() -> f64 {
     1e-3
+}
+fn default_min_time() -> f64 {
+    60.0
 }
 fn default_max_time() -> f64 {
     400.0

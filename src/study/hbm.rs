@@ -1,0 +1,281 @@
+//! Harmonic balance in a study: branches of periodic steady states continued in the excitation
+//! order, stable and unstable, with their folds, drawn over the time-domain sweeps.
+
+use super::sweep::SweepRun;
+use super::{Direction, HbmSpec, Study, write_csv};
+use crate::error::{Error, Result};
+use crate::excitation::{Harmonic, rpm_to_rad_s};
+use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution};
+use crate::plot::{LineStyle, Panel, Series};
+use crate::signal::OrderTrace;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One branch of one amplitude.
+#[derive(Debug, Clone)]
+pub struct HbmBranch {
+    /// Torque amplitude T_n, N·m.
+    pub amplitude: f64,
+    /// Orders of the branch points, in continuation order.
+    pub order: Vec<f64>,
+    /// Response-body acceleration amplitude per reported multiple (outer index), rad/s².
+    pub accel: Vec<Vec<f64>>,
+    /// Largest peak |relative angle| of the non-spin joints, rad.
+    pub relative_angle: Vec<f64>,
+    /// Floquet stability per point (None: not computed).
+    pub stable: Vec<Option<bool>>,
+    /// Fold (turning-point) orders.
+    pub folds: Vec<f64>,
+    /// Other bifurcations: (order, kind) in words.
+    pub bifurcations: Vec<(f64, String)>,
+    /// Wall time of the continuation, s.
+    pub wall_s: f64,
+    /// How the branch ended, in words.
+    pub end: String,
+    /// The order the continuation started from.
+    pub from: f64,
+}
+
+pub(crate) struct Output {
+    pub markdown: String,
+    pub files: Vec<PathBuf>,
+    pub branches: Vec<HbmBranch>,
+}
+
+pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
+    move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
+}
+
+/// Acceleration amplitude of the response body (Σ of its path's coordinates) at order m·n.
+pub(crate) fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f64 {
+    let Some(h) = sol.harmonic_of(multiple) else { return 0.0 };
+    let (a, b) = path.iter().fold((0.0, 0.0), |(a, b), &k| {
+        let (ak, bk) = sol.coefficient(k, h);
+        (a + ak, b + bk)
+    });
+    let w = h as f64 * sol.base_frequency;
+    w * w * a.hypot(b)
+}
+
+/// Largest peak |q| of the joints other than the spin joint, rad.
+pub(crate) fn relative_peak(sol: &HbmSolution, spin: usize) -> f64 {
+    (0..sol.ndof()).filter(|&k| k != spin).map(|k| sol.peak_amplitude(k)).fold(0.0, f64::max)
+}
+
+/// Continues the periodic solution in order from `from` to `to` for the excitation `harmonics`.
+pub(crate) fn branch(
+    study: &Study,
+    omega: f64,
+    harmonics: &[Harmonic],
+    h: usize,
+    from: f64,
+    to: f64,
+) -> Result<(Hbm, Branch, f64)> {
+    let kane = study.kane(false)?;
+    let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
+    let mut hbm = Hbm::new(&kane, study.spin, omega, harmonics, opts).map_err(hbm_error(study))?;
+    let start = std::time::Instant::now();
+    let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).map_err(hbm_error(study))?;
+    Ok((hbm, b, start.elapsed().as_secs_f64()))
+}
+
+pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path) -> Result<Output> {
+    let omega = rpm_to_rad_s(spec.rpm);
+    let path = study.mechanism.path_to(study.body);
+    let mut branches = Vec::new();
+    for &amp in &spec.amplitudes {
+        let harmonics = [Harmonic { multiple: 1.0, amplitude: amp, phase: 0.0 }];
+        // From above, the continuation follows the branch that comes down from high orders; from
+        // below, the one that comes up from low orders. Where the response is S-shaped and a fold
+        // lies outside the range, each reaches sheets the other cannot.
+        for (from, to) in [(spec.order_max, spec.order_min), (spec.order_min, spec.order_max)] {
+            let (_, b, wall_s) = branch(study, omega, &harmonics, spec.harmonics, from, to)?;
+            let p = &b.points;
+            branches.push(HbmBranch {
+                amplitude: amp,
+                order: p.iter().map(|x| x.order).collect(),
+                accel: spec
+                    .multiples
+                    .iter()
+                    .map(|&m| p.iter().map(|x| body_accel(&x.solution, &path, m)).collect())
+                    .collect(),
+                relative_angle: p.iter().map(|x| relative_peak(&x.solution, study.spin)).collect(),
+                stable: p.iter().map(|x| x.stable).collect(),
+                folds: b.folds.iter().map(|f| f.order).collect(),
+                bifurcations: b.bifurcations.iter().map(|x| (x.order, format!("{:?}", x.kind))).collect(),
+                wall_s,
+                end: format!("{:?}", b.end),
+                from,
+            });
+        }
+    }
+
+    let mut files = Vec::new();
+    for br in &branches {
+        let mut header = vec!["order".to_string()];
+        let mut cols = vec![br.order.clone()];
+        for (k, m) in spec.multiples.iter().enumerate() {
+            header.push(format!("accel_{m}x_rad_s2"));
+            cols.push(br.accel[k].clone());
+        }
+        header.push("max_relative_angle_rad".into());
+        cols.push(br.relative_angle.clone());
+        header.push("stable".into());
+        cols.push(br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect());
+        let dir_tag = if br.from > spec.order_min { "from_above" } else { "from_below" };
+        let csv = dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, br.amplitude));
+        let h: Vec<&str> = header.iter().map(String::as_str).collect();
+        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        write_csv(&csv, &h, &c)?;
+        files.push(csv);
+    }
+
+    let overlay: Vec<&SweepRun> = match &spec.overlay {
+        Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
+        None => Vec::new(),
+    };
+    let panels: Vec<Panel> = spec
+        .amplitudes
+        .iter()
+        .map(|&amp| {
+            let mut series = Vec::new();
+            for r in overlay.iter().filter(|r| r.amplitude == amp) {
+                for (k, t) in r.traces.iter().enumerate() {
+                    let dir = if r.direction == Direction::Up { "up" } else { "down" };
+                    series.push(Series {
+                        label: format!("sweep {dir}, {}", super::sweep::order_name(t.multiple)),
+                        x: t.order.clone(),
+                        y: t.amplitude.clone(),
+                        color: 2 + 2 * k + usize::from(r.direction == Direction::Down),
+                        style: LineStyle::Dotted,
+                    });
+                }
+            }
+            let mut labelled = [false; 2];
+            let mut markers: Vec<(f64, String)> = Vec::new();
+            for br in branches.iter().filter(|b| b.amplitude == amp) {
+                for (k, m) in spec.multiples.iter().enumerate() {
+                    push_segments(&mut series, br, k, &super::sweep::order_name(*m), k == 0, &mut labelled);
+                }
+                markers.extend(br.folds.iter().map(|&f| (f, "fold".to_string())));
+            }
+            markers.sort_by(|a, b| a.0.total_cmp(&b.0));
+            markers.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-3);
+            Panel {
+                title: format!("Harmonic balance, T_n = {amp} N·m, {} rpm", spec.rpm),
+                x_label: "excitation order n".into(),
+                y_label: format!("{} angular acceleration, rad/s²", study.spec.response_body),
+                log_y: true,
+                x_range: Some((spec.order_min, spec.order_max)),
+                markers,
+                series,
+                ..Panel::default()
+            }
+        })
+        .collect();
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 640, 460)?;
+    files.push(svg);
+
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Harmonic balance `{}`: {} rpm, n from {} down to {}, H = {}\n",
+        spec.name, spec.rpm, spec.order_max, spec.order_min, spec.harmonics
+    );
+    let _ = writeln!(
+        md,
+        "| T_n (N·m) | continued from n | points | stable / unstable | fold orders | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
+    let t = study.spec.order_tracking;
+    let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
+    for br in &branches {
+        let stable = br.stable.iter().filter(|s| **s == Some(true)).count();
+        let unstable = br.stable.iter().filter(|s| **s == Some(false)).count();
+        let jumps = jump_orders(&overlay, br.amplitude, lag);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {stable} / {unstable} | {} | {} | {} | {:.1} | {} |",
+            br.amplitude,
+            br.from,
+            br.order.len(),
+            list(&br.folds),
+            if br.bifurcations.is_empty() {
+                "none".into()
+            } else {
+                br.bifurcations.iter().map(|(o, k)| format!("{k} at {o:.5}")).collect::<Vec<_>>().join(", ")
+            },
+            jumps.map_or("–".into(), |(u, d)| format!(
+                "{}, {}",
+                u.map_or("none".into(), |v| format!("{v:.4}")),
+                d.map_or("none".into(), |v| format!("{v:.4}"))
+            )),
+            1e3 * br.wall_s,
+            br.end
+        );
+    }
+    md.push('\n');
+    Ok(Output { markdown: md, files, branches })
+}
+
+fn list(v: &[f64]) -> String {
+    if v.is_empty() { "none".into() } else { v.iter().map(|x| format!("{x:.5}")).collect::<Vec<_>>().join(", ") }
+}
+
+/// Splits a branch into runs of equal stability, solid when stable, dashed when not; only the
+/// first stable and first unstable segment of the main order get a legend entry.
+fn push_segments(
+    series: &mut Vec<Series>,
+    br: &HbmBranch,
+    k: usize,
+    name: &str,
+    legend: bool,
+    labelled: &mut [bool; 2],
+) {
+    let mut i = 0;
+    while i < br.order.len() {
+        let s = br.stable[i] != Some(false);
+        let mut j = i;
+        while j + 1 < br.order.len() && (br.stable[j + 1] != Some(false)) == s {
+            j += 1;
+        }
+        // Overlap one point so the segments join.
+        let end = (j + 1).min(br.order.len() - 1);
+        let idx = usize::from(!s);
+        series.push(Series {
+            label: if labelled[idx] || !legend {
+                String::new()
+            } else {
+                format!("HBM, {}", if s { "stable" } else { "unstable" })
+            },
+            x: br.order[i..=end].to_vec(),
+            y: br.accel[k][i..=end].to_vec(),
+            color: k,
+            style: if s { LineStyle::Solid } else { LineStyle::Dashed },
+        });
+        if legend {
+            labelled[idx] = true;
+        }
+        let _ = name;
+        i = j + 1;
+    }
+}
+
+/// The orders where the up and the down sweep jump: the largest change (at least 2×) of the
+/// main-order trace between windows `lag` apart, after the ramp-in; the order halfway between.
+pub fn jump_orders(sweeps: &[&SweepRun], amplitude: f64, lag: usize) -> Option<(Option<f64>, Option<f64>)> {
+    let find = |dir: Direction| sweeps.iter().find(|r| r.amplitude == amplitude && r.direction == dir);
+    let (up, down) = (find(Direction::Up)?, find(Direction::Down)?);
+    let jump = |t: &OrderTrace| -> Option<f64> {
+        let t = super::sweep::skip_ramp(t, 5.0);
+        let a = &t.amplitude;
+        (lag..a.len())
+            .map(|i| (i, (a[i] / a[i - lag]).ln().abs()))
+            .filter(|(_, r)| *r > std::f64::consts::LN_2)
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .map(|(i, _)| 0.5 * (t.order[i] + t.order[i - lag]))
+    };
+    Some((up.trace(1.0).and_then(jump), down.trace(1.0).and_then(jump)))
+}
