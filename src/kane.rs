@@ -220,9 +220,9 @@ impl Kane {
             f_out: DVector::zeros(n),
             parent,
         };
-        let zeros = vec![0.0; n];
+        let mut zeros = vec![0.0; n];
         k.evaluate(0.0, &zeros, &zeros, false);
-        k.factor()?;
+        k.factor_solve(&mut zeros)?;
         Ok(k)
     }
 
@@ -299,14 +299,11 @@ impl Kane {
         let n = if N == 0 { self.n } else { N };
         let (q, u) = x.split_at(n);
         self.evaluate_n::<N>(t, q, u, true);
-        self.factor_n::<N>()?;
         let (qd, ud) = xdot.split_at_mut(n);
-        let ud = &mut ud[..n];
         for (qd, st) in qd.iter_mut().zip(&self.state[..n]) {
             *qd = st.qdot;
         }
-        ud.copy_from_slice(&self.f[..n]);
-        self.solve_n::<N>(ud);
+        self.factor_solve_n::<N>(ud)?;
         Ok(())
     }
 
@@ -342,9 +339,20 @@ impl Kane {
     /// small mechanisms that dominate torsional work.
     #[inline(always)]
     fn evaluate_n<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+        // NOTE: the choice of speeds as a literal too removes the tests on it and the joint-rate
+        // composites from the absolute-speed loops (~30 instructions per CPVA call).
+        if self.absolute {
+            self.evaluate_speeds::<N, true>(t, q, u, forcing);
+        } else {
+            self.evaluate_speeds::<N, false>(t, q, u, forcing);
+        }
+    }
+
+    #[inline(always)]
+    fn evaluate_speeds<const N: usize, const ABSOLUTE: bool>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         let n = if N == 0 { self.n } else { N };
         let (q, u) = (&q[..n], &u[..n]);
-        let (absolute, world, g) = (self.absolute, self.world, self.gravity);
+        let (absolute, world, g) = (ABSOLUTE, self.world, self.gravity);
         let nodes = &self.nodes[..n];
         let st = &mut self.state[..n];
         let m = &mut self.m[..n * n];
@@ -354,21 +362,23 @@ impl Kane {
         for j in 0..n {
             let nd = &nodes[j];
             let root = nd.parent == GROUND_PARENT;
-            let (mut b, w_p, acc_p) = if root {
-                let (s, c) = if world { q[j].sin_cos() } else { (0.0, 1.0) };
-                (BodyState { c, s, origin: nd.at, ..BodyState::default() }, 0.0, Vec2::zeros())
+            // NOTE: the record is written field by field in place (not built and copied), so
+            // fields this choice of speeds does not use are not stored (measured: −25
+            // instructions per CPVA call).
+            let (done, rest) = st.split_at_mut(j);
+            let b = &mut rest[0];
+            let (w_p, acc_p) = if root {
+                (b.s, b.c) = if world { q[j].sin_cos() } else { (0.0, 1.0) };
+                (b.origin, b.d) = (nd.at, Vec2::zeros());
+                (0.0, Vec2::zeros())
             } else {
-                let p = &st[nd.parent];
+                let p = &done[nd.parent];
                 let (s, c) = q[j].sin_cos();
-                let d = rotate_cs(p.c, p.s, nd.at);
-                let b = BodyState {
-                    c: p.c * c - p.s * s,
-                    s: p.s * c + p.c * s,
-                    origin: p.origin + d,
-                    d,
-                    ..BodyState::default()
-                };
-                (b, p.omega, p.acc_o)
+                b.c = p.c * c - p.s * s;
+                b.s = p.s * c + p.c * s;
+                b.d = rotate_cs(p.c, p.s, nd.at);
+                b.origin = p.origin + b.d;
+                (p.omega, p.acc_o)
             };
             let arm = rotate_cs(b.c, b.s, nd.com_local);
             if !absolute {
@@ -385,19 +395,22 @@ impl Kane {
                 let fi = nd.mass * (g - acc_c);
                 b.force = fi;
                 b.moment = cross2(arm, fi) - nd.c_ground * b.omega;
-                for pfc in &self.point_forces[nd.forces.0..nd.forces.1] {
-                    let force = match pfc.frame {
-                        ForceFrame::World => pfc.force,
-                        ForceFrame::Body => rotate_cs(b.c, b.s, pfc.force),
-                    };
-                    b.force += force;
-                    b.moment += cross2(rotate_cs(b.c, b.s, pfc.at), force);
+                // NOTE: tested first so that the common body without point forces skips the
+                // slice's range checks.
+                if nd.forces.1 > nd.forces.0 {
+                    for pfc in &self.point_forces[nd.forces.0..nd.forces.1] {
+                        let force = match pfc.frame {
+                            ForceFrame::World => pfc.force,
+                            ForceFrame::Body => rotate_cs(b.c, b.s, pfc.force),
+                        };
+                        b.force += force;
+                        b.moment += cross2(rotate_cs(b.c, b.s, pfc.at), force);
+                    }
                 }
                 // Joint torque (spring, damper; the excitations are added below): +τ on the
                 // child, −τ on the parent.
                 b.tau = -nd.k_spring * (q[j] - nd.q_free) - nd.c_joint * qd;
             }
-            st[j] = b;
         }
         if forcing {
             for jt in &self.torques {
@@ -448,36 +461,41 @@ impl Kane {
         }
     }
 
-    /// Factors `M = L D Lᵀ` (L unit lower triangular, row-major in `l`; `d_inv` = D⁻¹).
+    /// Factors `M = L D Lᵀ` (L unit lower triangular, row-major in `l`; `d_inv` = D⁻¹) and
+    /// solves `M x = F` into `x`.
     ///
     /// NOTE: written here rather than calling nalgebra's `Cholesky` so the factorisation works in
     /// place on the preallocated buffer (no allocation per call) and a failure names the speed
     /// (joint) whose pivot vanished. LDLᵀ rather than LLᵀ: no square roots, and one division per
     /// pivot that the solve reuses as a multiplication (n divisions in all, as many as Cramer's
     /// rule in the closed form for n = 2). Its pivots d_j are exactly Cholesky's squared ones.
-    fn factor(&mut self) -> Result<(), EngineError> {
-        with_literal_n!(self.n, self.factor_n())
+    /// The forward substitution runs row by row with the factorisation, so each row of L is used
+    /// while still in registers (the evaluation is latency bound, not flop bound).
+    fn factor_solve(&mut self, x: &mut [f64]) -> Result<(), EngineError> {
+        with_literal_n!(self.n, self.factor_solve_n(x))
     }
 
     #[inline(always)]
-    fn factor_n<const N: usize>(&mut self) -> Result<(), EngineError> {
+    fn factor_solve_n<const N: usize>(&mut self, x: &mut [f64]) -> Result<(), EngineError> {
         let n = if N == 0 { self.n } else { N };
-        let (m, l) = (&self.m[..n * n], &mut self.l[..n * n]);
-        let (d_inv, a) = (&mut self.d_inv[..n], &mut self.row[..n]);
+        let (m, l, f) = (&self.m[..n * n], &mut self.l[..n * n], &self.f[..n]);
+        let (d_inv, a, x) = (&mut self.d_inv[..n], &mut self.row[..n], &mut x[..n]);
         let mut scale = 0.0f64;
         for i in 0..n {
             scale = scale.max(m[i * n + i].abs());
         }
         for i in 0..n {
-            // Row i of M = Σ_k L_ik d_k L_jk: first a_j = L_ij d_j for j < i, then L_ij, d_i.
+            // Row i of M = Σ_k L_ik d_k L_jk: first a_j = L_ij d_j for j < i, then L_ij, d_i;
+            // and y_i = F_i − Σ_j L_ij y_j (L y = F).
             for j in 0..i {
                 a[j] = m[i * n + j] - dot(&a[..j], &l[j * n..j * n + j]);
             }
-            let mut d = m[i * n + i];
+            let (mut d, mut y) = (m[i * n + i], f[i]);
             for j in 0..i {
                 let lij = a[j] * d_inv[j];
                 l[i * n + j] = lij;
                 d -= a[j] * lij;
+                y -= lij * x[j];
             }
             // NaN must fail too, so test for "not greater" rather than "less or equal".
             if d.is_nan() || d <= PIVOT_TOL * scale {
@@ -488,29 +506,20 @@ impl Kane {
                 });
             }
             d_inv[i] = 1.0 / d;
+            x[i] = y;
         }
-        Ok(())
-    }
-
-    /// Solves `L D Lᵀ x = b` in place.
-    #[inline(always)]
-    fn solve_n<const N: usize>(&self, b: &mut [f64]) {
-        let n = if N == 0 { self.n } else { N };
-        let (l, d_inv, b) = (&self.l[..n * n], &self.d_inv[..n], &mut b[..n]);
+        // D z = y, then Lᵀ x = z by rows of L, so the inner loop reads L contiguously.
         for i in 0..n {
-            b[i] -= dot(&l[i * n..i * n + i], &b[..i]);
+            x[i] *= d_inv[i];
         }
-        for i in 0..n {
-            b[i] *= d_inv[i];
-        }
-        // Lᵀ by rows of L, so the inner loop reads L contiguously.
         for i in (0..n).rev() {
-            let (head, tail) = b.split_at_mut(i);
-            let x = tail[0];
-            for (bk, lik) in head.iter_mut().zip(&l[i * n..i * n + i]) {
-                *bk -= lik * x;
+            let (head, tail) = x.split_at_mut(i);
+            let xi = tail[0];
+            for (xk, lik) in head.iter_mut().zip(&l[i * n..i * n + i]) {
+                *xk -= lik * xi;
             }
         }
+        Ok(())
     }
 
     fn copy_out(&mut self) {

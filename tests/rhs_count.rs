@@ -7,7 +7,8 @@
 //! ```
 //!
 //! `RHS_MODE` is `generic` (Kane on examples/cpva.ron), `closed` (eq. (7) with the same
-//! excitation), `chainN` (a planar chain, joint rates) or `none` (the loop alone, to subtract);
+//! excitation), `none` (the loop alone, to subtract) or `time` (both, timed in alternating
+//! chunks of 10⁴ calls, best chunk of each; run without valgrind, with `--nocapture`);
 //! `RHS_CALLS` sets the number of calls (default 10⁶). See BENCHMARKS.md.
 
 use kanedyn::cpva::CpvaParams;
@@ -43,6 +44,31 @@ fn count() {
                 cf.rhs1(torque, black_box(&x), &mut xdot);
                 acc += black_box(xdot[2]);
             }
+        }
+        "time" => {
+            // Alternating chunks, the fastest of each kind: robust against other jobs' load.
+            let (mut best_g, mut best_c) = (f64::INFINITY, f64::INFINITY);
+            for _ in 0..calls / 10_000 {
+                let start = std::time::Instant::now();
+                for _ in 0..10_000 {
+                    kane.rhs(black_box(t), black_box(&x), &mut xdot).unwrap();
+                    acc += black_box(xdot[2]);
+                }
+                best_g = best_g.min(start.elapsed().as_secs_f64() / 1e4);
+                let start = std::time::Instant::now();
+                for _ in 0..10_000 {
+                    let torque = excitation.torque(black_box(t));
+                    cf.rhs1(torque, black_box(&x), &mut xdot);
+                    acc += black_box(xdot[2]);
+                }
+                best_c = best_c.min(start.elapsed().as_secs_f64() / 1e4);
+            }
+            println!(
+                "generic {:.1} ns, closed form {:.1} ns, ratio {:.2}",
+                best_g * 1e9,
+                best_c * 1e9,
+                best_g / best_c
+            );
         }
         "none" => {
             for _ in 0..calls {
