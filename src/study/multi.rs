@@ -24,6 +24,8 @@ pub struct Steady {
     pub time_s: f64,
     /// Largest |q| of the joints other than the spin joint over the last window, rad.
     pub max_relative_angle: f64,
+    /// Total mean-speed error removed after the ramp-in, rad/s (see the NOTE in `steady`).
+    pub speed_correction: f64,
     /// The simulation's statistics and outcome.
     pub sim: sim::SimInfo,
 }
@@ -340,14 +342,45 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     let mut info = sim::SimInfo::default();
     let mut last: Option<(Vec<f64>, f64)> = None;
     let order = spec.order;
+    let mut speed_correction = 0.0;
     loop {
         let t_next = if t < first { first } else { (t + spec.window_s).min(spec.max_time_s) };
         let chunk = sim::simulate(&mut kane, &x, t, t_next, &study.spec.integration, &mut rec, &bar);
         info.absorb(&chunk);
         x = chunk.x_end.clone();
         t = chunk.t_end;
-        if chunk.error.is_some() || rec.accel.len() < 2 * win {
+        let at_end = t >= spec.max_time_s - 1e-9;
+        if chunk.error.is_some() {
             break;
+        }
+        // NOTE: the ramp-in leaves the mean speed off Ω (3.8e-2 rad/s at 1000 rpm, measured), and
+        // that rigid spin-speed mode decays only with J/c_r ≈ 730 s: the amplitudes then creep by
+        // ~1e-4 per window, which passes a two-window test while sitting 1.3 % off the periodic
+        // steady state (harmonic balance shows it). So the measured mean-speed error of the last
+        // window is removed as a rigid rotation of the spinning subtree (W·e_spin·δ), and two
+        // fresh windows are required after each correction.
+        if rec.spin_rate.len() >= win && !at_end {
+            let tail = &rec.spin_rate[rec.spin_rate.len() - win..];
+            let delta = tail.iter().sum::<f64>() / win as f64 - omega;
+            if delta.abs() > 1e-7 * omega {
+                let n = mech.ndof();
+                let mut dq = vec![0.0; n];
+                dq[spin] = -delta;
+                let mut du = vec![0.0; n];
+                mech.speeds.u_from_qdot(&mech.parents(), &dq, &mut du);
+                for (xi, d) in x[n..].iter_mut().zip(&du) {
+                    *xi += d;
+                }
+                speed_correction += delta;
+                rec.keep_last(0);
+                continue;
+            }
+        }
+        if rec.accel.len() < 2 * win {
+            if at_end {
+                break;
+            }
+            continue;
         }
         let tail = &rec.accel[rec.accel.len() - 2 * win..];
         let traces = sim::track(tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
@@ -355,7 +388,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         let a_last: Vec<f64> = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
         let change = a_prev.iter().zip(&a_last).map(|(p, l)| ((l - p) / l).abs()).fold(0.0, f64::max);
         last = Some((a_last, change));
-        if change <= spec.steady_tol || t >= spec.max_time_s - 1e-9 {
+        if change <= spec.steady_tol || at_end {
             break;
         }
         // Keep memory bounded: only the last two windows are ever analysed.
@@ -363,7 +396,14 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     }
     bar.finish_and_clear();
     let (amplitudes, change) = last.unwrap_or((vec![f64::NAN; spec.multiples.len()], f64::NAN));
-    Ok(Steady { amplitudes, change, time_s: t, max_relative_angle: rec.max_relative_angle_recent(win), sim: info })
+    Ok(Steady {
+        amplitudes,
+        change,
+        time_s: t,
+        max_relative_angle: rec.max_relative_angle_recent(win),
+        speed_correction,
+        sim: info,
+    })
 }
 
 fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
@@ -383,8 +423,9 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         }
     }
     if spec.time_domain {
-        head += " last-two-window change | max abs relative angle (rad) | simulated (s) |";
-        rule += "---|---|---|";
+        head +=
+            " last-two-window change | max abs relative angle (rad) | simulated (s) | mean-speed correction (rad/s) |";
+        rule += "---|---|---|---|";
     }
     let _ = writeln!(md, "{head}\n{rule}");
     for s in &r.speeds {
@@ -402,11 +443,12 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         if let Some(resp) = &s.response {
             let _ = write!(
                 row,
-                " {:.1e}{} | {:.4} | {:.0} |",
+                " {:.1e}{} | {:.4} | {:.0} | {:.2e} |",
                 resp.change,
                 s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {:.1e})", l.change)),
                 resp.max_relative_angle,
-                resp.time_s
+                resp.time_s,
+                resp.speed_correction
             );
         }
         let _ = writeln!(md, "{row}");

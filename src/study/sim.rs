@@ -97,6 +97,8 @@ pub(crate) struct Recorder {
     last_t: f64,
     /// Response angular acceleration, rad/s², one per sample.
     pub accel: Vec<f64>,
+    /// Spin joint rate q̇_spin (the spin body's angular velocity), rad/s, one per sample.
+    pub spin_rate: Vec<f64>,
     /// Per sample, the largest |q| of the non-spin joints, rad.
     rel: Vec<f64>,
     /// Largest |q| of the non-spin joints over the whole run, rad.
@@ -123,6 +125,7 @@ impl Recorder {
             qdd: vec![0.0; n],
             last_t: f64::NEG_INFINITY,
             accel: Vec::new(),
+            spin_rate: Vec::new(),
             rel: Vec::new(),
             max_relative_angle: 0.0,
             series,
@@ -144,6 +147,7 @@ impl Recorder {
         self.accel.push(acc);
         let rel = (0..n).filter(|&k| k != self.spin).map(|k| q[k].abs()).fold(0.0, f64::max);
         self.rel.push(rel);
+        self.spin_rate.push(xd[self.spin]);
         self.max_relative_angle = self.max_relative_angle.max(rel);
         if let Some(ts) = &mut self.series {
             let angle: f64 = self.path.iter().map(|&k| q[k]).sum();
@@ -158,7 +162,7 @@ impl Recorder {
 
     /// Drops all but the last `keep` samples of the acceleration and angle records.
     pub(crate) fn keep_last(&mut self, keep: usize) {
-        for v in [&mut self.accel, &mut self.rel] {
+        for v in [&mut self.accel, &mut self.rel, &mut self.spin_rate] {
             if v.len() > keep {
                 v.drain(..v.len() - keep);
             }
