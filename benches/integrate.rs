@@ -54,5 +54,30 @@ fn sweep(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sweep);
+/// End to end through the study runner: reading the files, integrating, order tracking, writing
+/// CSV/SVG/Markdown. `paper_study` is the whole of `examples/cpva_paper.ron` on the global rayon
+/// pool (as many threads as cores: 2 here).
+fn study(c: &mut Criterion) {
+    use kanedyn::study::{RunOptions, Study, run};
+    let out = std::env::temp_dir().join("kanedyn_bench_out");
+    let opts = RunOptions { out: Some(out.clone()), progress: false };
+    let mut g = c.benchmark_group("study");
+    g.sample_size(10);
+    g.bench_function("sweep_240s_end_to_end", |b| {
+        b.iter(|| {
+            let s = Study::from_file(std::path::Path::new("benches/studies/sweep40_up.ron")).unwrap();
+            black_box(run(&s, &opts).unwrap().sweeps.len())
+        })
+    });
+    g.bench_function("paper_study", |b| {
+        b.iter(|| {
+            let s = Study::from_file(std::path::Path::new("examples/cpva_paper.ron")).unwrap();
+            black_box(run(&s, &opts).unwrap().files.len())
+        })
+    });
+    g.finish();
+    std::fs::remove_dir_all(&out).ok();
+}
+
+criterion_group!(benches, sweep, study);
 criterion_main!(benches);
