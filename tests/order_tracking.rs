@@ -242,3 +242,77 @@ fn timing() {
     }
     println!("STFT 953 windows: {best_s:.2} ms; angle domain 993 blocks: {best_a:.2} ms");
 }
+
+/// The two methods on a simulated sweep (not a synthetic signal): the canonical CPVA, 40 N·m, n
+/// from 2.9 to 3.3 over 240 s at 1000 rpm (the paper's sweep), rotor acceleration and angle from the generic engine.
+/// The STFT uses Ω nominal, the angle domain the simulated θ(t); the rotor speed ripples by
+/// ~1e-4 of Ω, so both see the same lines. Both windows are ~2 s long (32 revs = 1.92 s).
+/// The first 20 s are skipped: the start transient (pendulum free motion, decay time ~6 s) still
+/// beats with the tiny second order there. Between n_t and the end of the ripple after n_r
+/// (3.05 < n < 3.25) the amplitude changes by up to tens of per cent within one window, and the
+/// two windows (2 s in time, 32 revolutions in angle) weigh that change differently: 10 % is
+/// asserted there (4 % measured). Elsewhere, where the amplitude also changes by less than 20 %
+/// per 0.01 of order, they must agree to 0.5 %, the bound.
+#[test]
+fn both_methods_agree_on_a_simulated_sweep() {
+    use kanedyn::cpva::CpvaParams;
+    use kanedyn::excitation::{Excitation, Harmonic};
+    use kanedyn::integrate::{IntegrateOptions, integrate};
+    use kanedyn::kane::Kane;
+    let w = rpm_to_rad_s(1000.0);
+    let order = Order::Sweep { from: 2.9, to: 3.3, duration_s: 240.0 };
+    let exc = Excitation {
+        mean: 5e-3 * w,
+        rpm: 1000.0,
+        order,
+        harmonics: vec![Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.0 }],
+        ramp_s: 2.0,
+    };
+    let mech = CpvaParams::canonical().mechanism(Some(exc)).unwrap();
+    let mut kane = Kane::new(&mech).unwrap();
+    let opts = IntegrateOptions { sample_derivatives: true, ..IntegrateOptions::default() };
+    let (mut acc, mut theta) = (Vec::new(), Vec::new());
+    integrate(|t, x, d| kane.rhs(t, x, d), &[0.0, 0.0, w, w], 0.0, 240.0, &opts, |s| {
+        acc.push(s.xdot.unwrap()[2]);
+        theta.push(s.x[0]);
+    })
+    .unwrap();
+    let fs = 2000.0;
+    let at = |t: f64| order.at(t);
+    let stft = stft_order_traces(&acc, fs, w, &at, &[1.0, 2.0], &StftOptions::default()).unwrap();
+    let ang = angle_domain_order_traces(&acc, &theta, fs, &at, &[1.0, 2.0], &AngleOptions::default()).unwrap();
+    let (mut worst_smooth, mut compared) = (0.0f64, 0);
+    for (s, a) in stft.iter().zip(&ang) {
+        for i in 0..a.len() {
+            let (n, amp) = (a.order[i], a.amplitude[i]);
+            if a.time_s[i] < 20.0 || a.time_s[i] > 237.0 {
+                continue;
+            }
+            let Some(ref_amp) = s.amplitude_at_order(n) else { continue };
+            // Time and angle differ by the rotor's angle ripple δθ ≈ 7e-5 rad here, which moves
+            // ~n·δθ/2 ≈ 1e-4 of the main order onto its neighbours in one domain and not in the
+            // other; so compare only lines at least 3 % of the main order (at 40 N·m the second
+            // order is 1e-3 of the main order for most of the sweep).
+            let main = stft[0].amplitude_at_order(n).unwrap_or(f64::INFINITY);
+            if ref_amp < 0.03 * main {
+                continue;
+            }
+            let rel = (amp - ref_amp).abs() / ref_amp;
+            assert!(rel < 0.1, "m = {}, n = {n}: angle {amp} vs STFT {ref_amp}", s.multiple);
+            // Smoothness of the true amplitude around n, judged on the STFT trace itself.
+            let (lo, hi) = (s.amplitude_at_order(n - 0.005), s.amplitude_at_order(n + 0.005));
+            // Away from the notch at n_t, the resonance at n_r and the ripple after the jump
+            // (n in 3.05..3.25), where the amplitude changes fast within a window.
+            if let (Some(lo), Some(hi)) = (lo, hi)
+                && (hi / lo).ln().abs() < 0.2f64.ln_1p()
+                && !(3.05..3.25).contains(&n)
+            {
+                worst_smooth = worst_smooth.max(rel);
+                compared += 1;
+            }
+        }
+    }
+    eprintln!("smooth windows: {compared}, worst {worst_smooth:e}");
+    assert!(compared > 300, "only {compared} smooth windows compared");
+    assert!(worst_smooth < 0.005, "smooth regions differ by {worst_smooth}");
+}
