@@ -272,10 +272,17 @@ fn both_methods_agree_on_a_simulated_sweep() {
     let mut kane = Kane::new(&mech).unwrap();
     let opts = IntegrateOptions { sample_derivatives: true, ..IntegrateOptions::default() };
     let (mut acc, mut theta) = (Vec::new(), Vec::new());
-    integrate(|t, x, d| kane.rhs(t, x, d), &[0.0, 0.0, w, w], 0.0, 240.0, &opts, |s| {
-        acc.push(s.xdot.unwrap()[2]);
-        theta.push(s.x[0]);
-    })
+    integrate(
+        |t, x, d| kane.rhs(t, x, d),
+        &[0.0, 0.0, w, w],
+        0.0,
+        240.0,
+        &opts,
+        |s| {
+            acc.push(s.xdot.unwrap()[2]);
+            theta.push(s.x[0]);
+        },
+    )
     .unwrap();
     let fs = 2000.0;
     let at = |t: f64| order.at(t);
