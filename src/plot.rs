@@ -6,6 +6,7 @@
 //! and drawn by the SVG viewer.
 
 use crate::error::{Error, Result};
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -153,29 +154,35 @@ fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shi
     let ((x0, x1), (y0, y1)) = data_range(panel);
     let mut builder = ChartBuilder::on(area);
     builder.caption(&panel.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+    // The two branches differ only in the y coordinate type; everything drawn is generic over it.
     if panel.log_y {
         let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?;
-        chart
-            .configure_mesh()
-            .x_desc(&panel.x_label)
-            .y_desc(&panel.y_label)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()?;
-        draw_series(&mut chart, panel, y0, y1)?;
-        finish(&mut chart)
+        fill(&mut chart, panel, y0, y1)
     } else {
         let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-        chart
-            .configure_mesh()
-            .x_desc(&panel.x_label)
-            .y_desc(&panel.y_label)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()?;
-        draw_series(&mut chart, panel, y0, y1)?;
-        finish(&mut chart)
+        fill(&mut chart, panel, y0, y1)
     }
+}
+
+fn fill<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    panel: &Panel,
+    y0: f64,
+    y1: f64,
+) -> DynResult
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    chart
+        .configure_mesh()
+        .x_desc(&panel.x_label)
+        .y_desc(&panel.y_label)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
+        .draw()?;
+    draw_series(chart, panel, y0, y1)?;
+    finish(chart)
 }
 
 fn draw_series<'a, X, Y>(
