@@ -83,9 +83,23 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     } else {
         1.0
     };
-    let free = LinearModel::new(mech, &study.spec.spin_joint, omega, None)
-        .and_then(|m| m.modes(Spin::Free, Damping::Undamped))
-        .map_err(lin(mech))?;
+    let model = LinearModel::new(mech, &study.spec.spin_joint, omega, None).map_err(lin(mech))?;
+    let free = model.modes(Spin::Free, Damping::Undamped).map_err(lin(mech))?;
+    // The modal table of the mechanism as built: eigen-orders, damping ratios and the joint that
+    // dominates each mode, with the spin held (absorber alone) and free (coupled).
+    let mut modal_md =
+        String::from("| spin | damping | eigen-order | damping ratio | dominant joint |\n|---|---|---|---|---|\n");
+    for (spin, sname) in [(Spin::Held, "held"), (Spin::Free, "free")] {
+        for (damping, dname) in [(Damping::Undamped, "undamped"), (Damping::Damped, "damped")] {
+            for m in &model.modes(spin, damping).map_err(lin(mech))?.modes {
+                let _ = writeln!(
+                    modal_md,
+                    "| {sname} | {dname} | {:.10} | {:.3e} | `{}` |",
+                    m.order, m.damping_ratio, m.label
+                );
+            }
+        }
+    }
     let free_orders: Vec<(f64, String)> = free.modes.iter().map(|m| (m.order, m.label.clone())).collect();
     let rspec = ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
@@ -188,6 +202,7 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     for (o, l) in &free_orders {
         let _ = writeln!(md, "- free undamped eigen-order {o:.10} (mode `{l}`)");
     }
+    let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
     let _ = writeln!(
         md,
         "\n| variant | min ratio | at n | at n/n_t | max ratio | at n | at n/n_t | first n > n_t with ratio > 1 | n/n_t | high-order asymptote |"
