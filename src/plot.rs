@@ -181,20 +181,6 @@ where
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
         .draw()?;
-    draw_series(chart, panel, y0, y1)?;
-    finish(chart)
-}
-
-fn draw_series<'a, X, Y>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
-    panel: &Panel,
-    y0: f64,
-    y1: f64,
-) -> DynResult
-where
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
     for (x, label) in &panel.markers {
         chart.draw_series(DashedLineSeries::new(vec![(*x, y0), (*x, y1)], 3, 4, BLACK.mix(0.4).stroke_width(1)))?;
         chart.draw_series(std::iter::once(Text::new(label.clone(), (*x, y1), ("sans-serif", 13).into_font())))?;
@@ -219,14 +205,6 @@ where
             anno.label(&s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(2)));
         }
     }
-    Ok(())
-}
-
-fn finish<'a, X, Y>(chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>) -> DynResult
-where
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))

@@ -154,8 +154,8 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
             let mut labelled = [false; 2];
             let mut markers: Vec<(f64, String)> = Vec::new();
             for br in branches.iter().filter(|b| b.amplitude == amp) {
-                for (k, m) in spec.multiples.iter().enumerate() {
-                    push_segments(&mut series, br, k, &super::sweep::order_name(*m), k == 0, &mut labelled);
+                for k in 0..spec.multiples.len() {
+                    push_segments(&mut series, br, k, k == 0, &mut labelled);
                 }
                 markers.extend(br.folds.iter().map(|&f| (f, "fold".to_string())));
             }
@@ -226,14 +226,7 @@ fn list(v: &[f64]) -> String {
 
 /// Splits a branch into runs of equal stability, solid when stable, dashed when not; only the
 /// first stable and first unstable segment of the main order get a legend entry.
-fn push_segments(
-    series: &mut Vec<Series>,
-    br: &HbmBranch,
-    k: usize,
-    name: &str,
-    legend: bool,
-    labelled: &mut [bool; 2],
-) {
+fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: bool, labelled: &mut [bool; 2]) {
     let mut i = 0;
     while i < br.order.len() {
         let s = br.stable[i] != Some(false);
@@ -258,7 +251,6 @@ fn push_segments(
         if legend {
             labelled[idx] = true;
         }
-        let _ = name;
         i = j + 1;
     }
 }
