@@ -1,15 +1,14 @@
 //! The numeric Kane engine: `M(q) u̇ = F(q, u, t)` and `ẋ = [W⁻¹u; M⁻¹F]` for any revolute tree.
 //!
-//! Per evaluation, in tree order (parents first):
-//! 1. forward kinematics: body rotations, joint points `o_k`, centres of mass `r_j`;
-//! 2. speeds: `q̇ = W⁻¹u`, absolute angular velocities ω_j;
-//! 3. bias accelerations at `u̇ = 0`: with W constant, `q̈ = 0`, every angular acceleration is zero
-//!    and each point only has its centripetal terms, `a(o_child) = a(o_parent) − ω_parent²(o_child −
-//!    o_parent)`, `a⁰_j = a(o_j) − ω_j²(r_j − o_j)`;
-//! 4. Kane's partial velocities of body j: for each joint k on its path, `∂ω_j/∂q̇_k = 1`,
-//!    `∂v_j/∂q̇_k = ẑ × (r_j − o_k)`, mapped to the speeds by W⁻¹ (a 3×d Jacobian, d = depth);
-//! 5. `M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}`,
-//!    `F_r = Σ_j (F_j − m_j a⁰_j)·v_{j,r} + T_j ω_{j,r}` plus the joint torques `τ_k ∂q̇_k/∂u_r`.
+//! The algorithm is DESIGN.md's: forward kinematics, partial velocities from the tree paths
+//! (`∂ω_j/∂q̇_k = 1`, `∂v_j/∂q̇_k = ẑ × (r_j − o_k)` for each joint k on body j's path, mapped to
+//! the speeds by W⁻¹), centripetal bias accelerations at `u̇ = 0` (W is constant for both speed
+//! choices, so `q̈ = 0`), and Kane's sums `M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}`,
+//! `F_r = Σ_j (F_j − m_j a⁰_j)·v_{j,r} + T_j ω_{j,r}` plus the joint torques `τ_k ∂q̇_k/∂u_r`.
+//! The sums are not formed body by body but regrouped, exactly, into fewer operations: by subtree
+//! (composite bodies) for joint rates, by pairs of speeds with coefficients precomputed from the
+//! constant partial-velocity vectors for absolute angular velocities (see [`Kane::evaluate`]).
+//! The tests rebuild M and F body by body from [`Kane::partial_velocities`].
 //!
 //! Every vector is expressed in one basis per subtree. When no load needs the world orientation
 //! (no gravity, no world-frame force), that basis is the root body's own frame: the root angle is
@@ -89,6 +88,9 @@ struct BodyState {
     /// Cosine and sine of the body's angle.
     c: f64,
     s: f64,
+    /// Cosine and sine of the joint angle q_j (absolute speeds only).
+    jc: f64,
+    js: f64,
     /// Joint point o_j.
     origin: Vec2,
     /// `o_j − o_parent` (zero for a root).
@@ -100,8 +102,7 @@ struct BodyState {
     /// Joint rates only: first moment S = Σ m (r − o) and inertia J = Σ I + m |r − o|².
     first: Vec2,
     inertia: f64,
-    /// Resultant force of the subtree and its moment about o (applied minus inertial; with
-    /// absolute speeds the moment takes each child subtree's force at the child's joint).
+    /// Resultant force of the subtree and its moment about o (applied minus inertial).
     force: Vec2,
     moment: f64,
     /// Joint rate q̇_j and joint torque τ_j (spring, damper, excitation).
@@ -122,6 +123,10 @@ pub struct Kane {
     nodes: Vec<Node>,
     point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
+    /// Absolute speeds: the constant coefficients `(α, β)` of every ancestor pair (k, j), in the
+    /// order the forward pass walks them (j ascending, then k from j's parent up to the root); see
+    /// [`Kane::evaluate_absolute`].
+    pairs: Vec<(f64, f64)>,
     // Work buffers.
     state: Vec<BodyState>,
     qdot: Vec<f64>,
@@ -200,8 +205,22 @@ impl Kane {
                 nodes[p].first_abs += mass * at;
             }
         }
+        // Absolute speeds: for an ancestor k of body j (c: k's child on the path), every body of
+        // j's subtree moves with u_k like a point at c's joint, so `M_kj = (R_k at_c)·(R_j S'_j)`
+        // with both vectors constant in their own frames: with Δ = θ_j − θ_k,
+        // `M_kj = α cos Δ − β sin Δ`, α = at_c·S'_j, β = at_c × S'_j.
+        let mut pairs = Vec::new();
+        for j in 0..n {
+            let (mut c, mut k) = (j, parent[j]);
+            while let Some(kk) = k {
+                let (at, first) = (nodes[c].at, nodes[j].first_abs);
+                pairs.push((at.dot(&first), cross2(at, first)));
+                (c, k) = (kk, parent[kk]);
+            }
+        }
         let mut k = Kane {
             mech: mech.clone(),
+            pairs,
             n,
             speeds: mech.speeds,
             absolute: mech.speeds == Speeds::AbsoluteAngularVelocities,
@@ -311,25 +330,13 @@ impl Kane {
     /// Evaluates M (and F, q̇ when `forcing`; only then are `u` and `t` read) into the buffers.
     ///
     /// Kane's sums `M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}` and
-    /// `F_r = Σ_j f_j·v_{j,r} + T_j ω_{j,r}` run over the bodies j below speed r, and grouping the
-    /// bodies by subtree turns them into composite sums, accumulated child → parent in one
-    /// backward pass (cost O(n·depth) instead of O(Σ depth²)). With d_c = o_c − o_parent(c):
-    ///
-    /// - Joint rates (u = q̇): `v_{j,k} = ẑ × (r_j − o_k)`, `ω_{j,k} = 1`, so for l on the path to
-    ///   k, `M_kl = J_k + S_k·(o_k − o_l)` (J_k, S_k: the subtree's inertia and first moment about
-    ///   o_k) and `F_k = τ_k +` the subtree's moment about o_k.
-    /// - Absolute angular velocities (u_k = ω_k): `q̇_k = u_k − u_parent(k)`, so a body i below k
-    ///   has `ω_{i,k} = δ_ik` and `v_{i,k} = ẑ × (r_k − o_k)` for i = k but `ẑ × d_c` for i in
-    ///   the subtree of k's child c: each child subtree moves with u_k like a point mass at its
-    ///   joint. Hence `M_kk = I_k + m_k |r_k − o_k|² + Σ_c M_c |d_c|²` is constant,
-    ///   `M_kl = S'_k · d_c` (c: l's child on the path to k; S'_k = m_k (r_k − o_k) + Σ_c M_c d_c,
-    ///   constant in body k's frame), and `F_k = τ_k − Σ_c τ_c + (r_k − o_k) × f_k + T_k +
-    ///   Σ_c d_c × F_c` (F_c: the child subtree's resultant force). This is `W⁻ᵀ M_q̇ W⁻¹` and
-    ///   `W⁻ᵀ F_q̇` assembled directly.
-    ///
-    /// `partial_velocities` exposes the per-body v_{j,r}, and the tests rebuild M and F from them
-    /// body by body. Only entries (k, l) with one an ancestor of the other are written: the others
-    /// are zero for a tree and stay as allocated.
+    /// `F_r = Σ_j f_j·v_{j,r} + T_j ω_{j,r}` over the bodies j below speed r are regrouped so
+    /// that no per-body partial velocity is stored: by subtree for joint rates
+    /// ([`Kane::evaluate_rates`]), by pairs of speeds for absolute angular velocities
+    /// ([`Kane::evaluate_absolute`], where every partial velocity is a constant vector in one
+    /// body's frame). `partial_velocities` exposes the per-body v_{j,r}, and the tests rebuild M
+    /// and F from them body by body. Only entries (k, l) with one an ancestor of the other are
+    /// written: the others are zero for a tree and stay as allocated.
     fn evaluate(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         with_literal_n!(self.n, self.evaluate_n(t, q, u, forcing))
     }
@@ -340,21 +347,137 @@ impl Kane {
     /// small mechanisms that dominate torsional work.
     #[inline(always)]
     fn evaluate_n<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
-        // NOTE: the choice of speeds as a literal too removes the tests on it and the joint-rate
-        // composites from the absolute-speed loops (measured with the point-force test below:
-        // 761 → 730 instructions per CPVA call).
+        // NOTE: one test of the speed choice per call, outside the loops (measured: 761 → 730
+        // instructions per CPVA call against testing it inside).
         if self.absolute {
-            self.evaluate_speeds::<N, true>(t, q, u, forcing);
+            self.evaluate_absolute::<N>(t, q, u, forcing);
         } else {
-            self.evaluate_speeds::<N, false>(t, q, u, forcing);
+            self.evaluate_rates::<N>(t, q, u, forcing);
         }
     }
 
+    /// [`Kane::evaluate`] for absolute angular velocities, in pair-coefficient form.
+    ///
+    /// Kane's sums regrouped by pairs of speeds: with u_k = ω_k, a body i below k has
+    /// `ω_{i,k} = δ_ik` and `v_{i,k} = ẑ × R_k r_ik` with r_ik constant in body k's frame (the
+    /// centre of mass offset for i = k, the joint offset `at_c` of k's child c towards i
+    /// otherwise). So every term of `M_rs = Σ_i m_i v_{i,r}·v_{i,s} + I_i ω_{i,r} ω_{i,s}` is a
+    /// constant vector pair turned by the relative angle of two bodies:
+    ///
+    /// - `M_kk` is constant (`diag_abs`), and for k an ancestor of j (Δ = θ_j − θ_k)
+    ///   `M_kj = α cos Δ − β sin Δ`, with `α = at_c·S'_j`, `β = at_c × S'_j` precomputed
+    ///   (S'_j: first moment of j's subtree as seen by u_j, constant in j's frame);
+    /// - at u̇ = 0 the bias accelerations are purely centripetal, `a⁰_i = −Σ_l ω_l² R_l r_il`, so
+    ///   the inertia forces `−Σ_i m_i a⁰_i·v_{i,r}` of the same pair are `±ω² ∂M_kj/∂θ_k`:
+    ///   `F_k += ω_j² D`, `F_j −= ω_k² D` with `D = α sin Δ + β cos Δ`;
+    /// - gravity adds `(R_k S'_k) × g` to F_k; a joint torque τ_j adds to F_j and subtracts from
+    ///   F_parent (q̇_j = u_j − u_parent); a point force f at P on body b adds `(R_k r) × f` to
+    ///   every F_k on b's path (r = P − o_b for k = b, `at_c` above).
+    ///
+    /// Δ is composed along the walk from the joint angles' sines and cosines, so each body costs
+    /// one `sin_cos` (none for a root in its own frame) and each pair a few multiplications.
+    ///
+    /// NOTE: this replaced a composite-body recursion (forward pass of poses and centripetal
+    /// accelerations, backward pass of subtree forces and moments): the same sums, but about
+    /// 40 % fewer instructions per CPVA call (tests/rhs_count.rs, callgrind), because the
+    /// accelerations, forces and moments about joint points are never formed.
     #[inline(always)]
-    fn evaluate_speeds<const N: usize, const ABSOLUTE: bool>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    fn evaluate_absolute<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         let n = if N == 0 { self.n } else { N };
         let (q, u) = (&q[..n], &u[..n]);
-        let (absolute, world, g) = (ABSOLUTE, self.world, self.gravity);
+        let (world, g) = (self.world, self.gravity);
+        let gravity = world && g != Vec2::zeros();
+        let nodes = &self.nodes[..n];
+        let st = &mut self.state[..n];
+        let m = &mut self.m[..n * n];
+        let f = &mut self.f[..n];
+        let mut pairs = self.pairs.iter();
+        for j in 0..n {
+            let nd = &nodes[j];
+            let root = nd.parent == GROUND_PARENT;
+            let (js, jc) = if root && !world { (0.0, 1.0) } else { q[j].sin_cos() };
+            let (c, s) = if root {
+                (jc, js)
+            } else {
+                let p = &st[nd.parent];
+                (p.c * jc - p.s * js, p.s * jc + p.c * js)
+            };
+            let b = &mut st[j];
+            (b.c, b.s, b.jc, b.js) = (c, s, jc, js);
+            m[j * n + j] = nd.diag_abs;
+            let w = u[j];
+            if forcing {
+                let qd = if root { w } else { w - u[nd.parent] };
+                b.qdot = qd;
+                let tau = -nd.k_spring * (q[j] - nd.q_free) - nd.c_joint * qd;
+                f[j] = tau - nd.c_ground * w;
+                if !root {
+                    f[nd.parent] -= tau;
+                }
+                if gravity {
+                    f[j] += cross2(rotate_cs(c, s, nd.first_abs), g);
+                }
+            }
+            // Ancestors k of j, nearest first, with (rc, rs) the cosine and sine of θ_j − θ_k.
+            let (mut rc, mut rs, mut k) = (jc, js, nd.parent);
+            while k != GROUND_PARENT {
+                // NOTE: one pair per step of this walk, in the order `build` pushed them.
+                let &(alpha, beta) = pairs.next().unwrap_or(&(0.0, 0.0));
+                let v = alpha * rc - beta * rs;
+                m[k * n + j] = v;
+                m[j * n + k] = v;
+                if forcing {
+                    let d = alpha * rs + beta * rc;
+                    f[k] += w * w * d;
+                    f[j] -= u[k] * u[k] * d;
+                }
+                let next = nodes[k].parent;
+                if next != GROUND_PARENT {
+                    let a = &st[k];
+                    (rc, rs) = (a.jc * rc - a.js * rs, a.js * rc + a.jc * rs);
+                }
+                k = next;
+            }
+        }
+        if !forcing {
+            return;
+        }
+        for pfc in &self.point_forces {
+            let b = &st[pfc.body];
+            let force = match pfc.frame {
+                ForceFrame::World => pfc.force,
+                ForceFrame::Body => rotate_cs(b.c, b.s, pfc.force),
+            };
+            f[pfc.body] += cross2(rotate_cs(b.c, b.s, pfc.at), force);
+            let (mut c, mut k) = (pfc.body, nodes[pfc.body].parent);
+            while k != GROUND_PARENT {
+                let a = &st[k];
+                f[k] += cross2(rotate_cs(a.c, a.s, nodes[c].at), force);
+                (c, k) = (k, nodes[k].parent);
+            }
+        }
+        for jt in &self.torques {
+            let tau = jt.excitation.torque(t);
+            f[jt.joint] += tau;
+            let p = nodes[jt.joint].parent;
+            if p != GROUND_PARENT {
+                f[p] -= tau;
+            }
+        }
+    }
+
+    /// [`Kane::evaluate`] for joint rates (u = q̇), by composite bodies.
+    ///
+    /// With `v_{j,k} = ẑ × (r_j − o_k)` and `ω_{j,k} = 1` for every joint k on body j's path,
+    /// grouping Kane's sums by subtree gives, for l on the path to k,
+    /// `M_kl = J_k + S_k·(o_k − o_l)` (J_k, S_k: the subtree's inertia and first moment about o_k)
+    /// and `F_k = τ_k +` the subtree's resultant moment about o_k (applied minus inertial), all
+    /// accumulated child → parent in one backward pass: O(n·depth) instead of O(Σ depth²).
+    #[inline(always)]
+    fn evaluate_rates<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+        let n = if N == 0 { self.n } else { N };
+        let (q, u) = (&q[..n], &u[..n]);
+        let (world, g) = (self.world, self.gravity);
         let nodes = &self.nodes[..n];
         let st = &mut self.state[..n];
         let m = &mut self.m[..n * n];
@@ -365,8 +488,8 @@ impl Kane {
             let nd = &nodes[j];
             let root = nd.parent == GROUND_PARENT;
             // NOTE: the record is written field by field in place (not built and copied), so
-            // fields this choice of speeds does not use are not stored (measured: 730 → 711
-            // instructions per CPVA call).
+            // fields that are not needed are not stored (measured: 730 → 711 instructions per
+            // CPVA call when both speed choices shared this pass).
             let (done, rest) = st.split_at_mut(j);
             let b = &mut rest[0];
             let (w_p, acc_p) = if root {
@@ -383,14 +506,12 @@ impl Kane {
                 (p.omega, p.acc_o)
             };
             let arm = rotate_cs(b.c, b.s, nd.com_local);
-            if !absolute {
-                b.first = nd.mass * arm;
-                b.inertia = nd.j_own;
-            }
+            b.first = nd.mass * arm;
+            b.inertia = nd.j_own;
             if forcing {
-                let qd = if absolute && !root { u[j] - u[nd.parent] } else { u[j] };
+                let qd = u[j];
                 b.qdot = qd;
-                b.omega = if absolute { u[j] } else { w_p + qd };
+                b.omega = w_p + qd;
                 b.acc_o = acc_p - w_p * w_p * b.d;
                 let acc_c = b.acc_o - b.omega * b.omega * arm;
                 // Applied force at the centre of mass minus the inertia force m a⁰, and torque.
@@ -409,8 +530,7 @@ impl Kane {
                         b.moment += cross2(rotate_cs(b.c, b.s, pfc.at), force);
                     }
                 }
-                // Joint torque (spring, damper; the excitations are added below): +τ on the
-                // child, −τ on the parent.
+                // Joint torque (spring, damper; the excitations are added below).
                 b.tau = -nd.k_spring * (q[j] - nd.q_free) - nd.c_joint * qd;
             }
         }
@@ -425,40 +545,23 @@ impl Kane {
             if forcing {
                 f[j] = b.moment + b.tau;
             }
-            if absolute {
-                m[j * n + j] = nd.diag_abs;
-                let s_abs = rotate_cs(b.c, b.s, nd.first_abs);
-                let (mut c, mut l) = (j, nd.parent);
-                while l != GROUND_PARENT {
-                    let v = s_abs.dot(&st[c].d);
-                    m[j * n + l] = v;
-                    m[l * n + j] = v;
-                    (c, l) = (l, nodes[l].parent);
-                }
-            } else {
-                m[j * n + j] = b.inertia;
-                let mut l = nd.parent;
-                while l != GROUND_PARENT {
-                    let v = b.inertia + b.first.dot(&(b.origin - st[l].origin));
-                    m[j * n + l] = v;
-                    m[l * n + j] = v;
-                    l = nodes[l].parent;
-                }
+            m[j * n + j] = b.inertia;
+            let mut l = nd.parent;
+            while l != GROUND_PARENT {
+                let v = b.inertia + b.first.dot(&(b.origin - st[l].origin));
+                m[j * n + l] = v;
+                m[l * n + j] = v;
+                l = nodes[l].parent;
             }
             let p = nd.parent;
             if p != GROUND_PARENT {
                 let d = b.d;
                 let bp = &mut st[p];
                 bp.force += b.force;
-                if absolute {
-                    // In absolute speeds the joint torque τ_j enters F_j and, with −, F_parent.
-                    bp.moment += cross2(d, b.force) - b.tau;
-                } else {
-                    bp.moment += b.moment + cross2(d, b.force);
-                    let mass = nd.subtree_mass;
-                    bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
-                    bp.first += b.first + mass * d;
-                }
+                bp.moment += b.moment + cross2(d, b.force);
+                let mass = nd.subtree_mass;
+                bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
+                bp.first += b.first + mass * d;
             }
         }
     }
@@ -535,11 +638,34 @@ impl Kane {
         }
     }
 
+    /// Forward kinematics only: each body's rotation, joint point o_j and `o_j − o_parent`, in the
+    /// evaluator's basis (the absolute-speed evaluation never needs the points).
+    fn pose(&mut self, q: &[f64]) {
+        for j in 0..self.n {
+            let nd = self.nodes[j];
+            let (s, c) = if nd.parent == GROUND_PARENT && !self.world { (0.0, 1.0) } else { q[j].sin_cos() };
+            let b = if nd.parent == GROUND_PARENT {
+                BodyState { c, s, origin: nd.at, ..BodyState::default() }
+            } else {
+                let p = self.state[nd.parent];
+                let d = rotate_cs(p.c, p.s, nd.at);
+                BodyState {
+                    c: p.c * c - p.s * s,
+                    s: p.s * c + p.c * s,
+                    origin: p.origin + d,
+                    d,
+                    ..BodyState::default()
+                }
+            };
+            self.state[j] = b;
+        }
+    }
+
     /// Kane's partial velocities of body `j` at `q`, in the evaluator's basis (world frame for an
     /// evaluator from [`Kane::new_world_frame`]): `(v_{j,r}, ω_{j,r})` for r = 0..n. Allocates;
     /// for tests and reports.
     pub fn partial_velocities(&mut self, q: &[f64], j: usize) -> (Vec<Vec2>, Vec<f64>) {
-        self.evaluate(0.0, q, q, false);
+        self.pose(q);
         let mut v = vec![Vec2::zeros(); self.n];
         let mut w = vec![0.0; self.n];
         let path = self.mech.path_to(j);
