@@ -67,7 +67,7 @@ impl Hbm {
         if !self.samples_at.as_ref().is_some_and(same) {
             self.assemble(&x, order, true);
         }
-        let nt = self.grid.nt;
+        let nt = self.aft.nt;
         let nn = n * n;
         let w0 = sol.base_frequency;
         let period = 2.0 * PI / w0;
