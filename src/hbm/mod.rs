@@ -76,7 +76,7 @@ mod continuation;
 mod stability;
 
 pub use continuation::{
-    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationOptions, Fold, FoldKind,
+    Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationOptions, Fold, FoldKind, Parameter,
     continue_in_order,
 };
 pub use stability::Stability;
@@ -166,6 +166,8 @@ pub struct HbmSolution {
     pub order: f64,
     /// Mean speed Ω, rad/s.
     pub omega: f64,
+    /// Torque scale s: the oscillating excitation amplitudes are s·T_k (1: as given).
+    pub torque_scale: f64,
     /// Base frequency ω₀ of the Fourier series, rad/s (nΩ for a single order).
     pub base_frequency: f64,
     /// Number of harmonics H.
@@ -312,6 +314,22 @@ impl HbmSolution {
     }
 }
 
+/// Where the residual is evaluated: excitation order n, mean speed Ω (rad/s), torque scale s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct At {
+    pub order: f64,
+    pub omega: f64,
+    pub scale: f64,
+}
+
+/// The parameter whose derivative ∂R̂/∂p the Jacobian assembly also forms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Free {
+    Order,
+    Speed,
+    Scale,
+}
+
 /// One excitation term in normalised time: `amplitude · sin(index·τ + phase)` (tabulated at the
 /// samples in [`Hbm::new`]).
 #[derive(Debug, Clone, Copy)]
@@ -452,6 +470,8 @@ pub struct Hbm {
     n: usize,
     spin: usize,
     omega: f64,
+    /// Torque scale s of the fixed-parameter solves.
+    scale: f64,
     /// ω₀ = ratio · n · Ω.
     ratio: f64,
     t_scale: f64,
@@ -476,13 +496,14 @@ pub struct Hbm {
     /// Per-sample `[A | B | C]` (3n² each, row-major blocks) of the last Jacobian assembly, and
     /// the point (unknowns, order) it belongs to: the stability analysis reuses them.
     samples: Vec<f64>,
-    samples_at: Option<(Vec<f64>, f64)>,
+    samples_at: Option<(Vec<f64>, At)>,
     /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples
     /// (row-major N_s × N_t).
     interp: Vec<f64>,
     rhat: DVector<f64>,
     jac: DMatrix<f64>,
-    gn: DVector<f64>,
+    /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
+    gp: DVector<f64>,
 }
 
 impl Hbm {
@@ -603,6 +624,7 @@ impl Hbm {
             n,
             spin: spin_joint,
             omega,
+            scale: 1.0,
             ratio,
             t_scale,
             opts,
@@ -625,7 +647,7 @@ impl Hbm {
             interp: interpolation_matrix(nt, opts.stability_samples),
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
-            gn: DVector::zeros(n * nb),
+            gp: DVector::zeros(n * nb),
         })
     }
 
@@ -655,26 +677,54 @@ impl Hbm {
         self.n * self.nb
     }
 
-    /// Base frequency ω₀ at order n, rad/s.
+    /// Base frequency ω₀ at order n and the current mean speed, rad/s.
     pub fn base_frequency(&self, order: f64) -> f64 {
         self.ratio * order * self.omega
     }
 
-    /// Mean speed Ω, rad/s.
+    /// Mean speed Ω of the fixed-parameter solves, rad/s.
     pub fn omega(&self) -> f64 {
         self.omega
     }
 
-    /// Residual R̂ (and with `jacobian`, its Jacobian and ∂R̂/∂n) at unknowns x and order n, into
-    /// the work buffers.
-    fn assemble(&mut self, x: &[f64], order: f64, jacobian: bool) {
+    /// Sets the mean speed Ω (rad/s) of the fixed-parameter solves ([`Hbm::solve`]).
+    pub fn set_speed(&mut self, omega: f64) -> Result<(), HbmError> {
+        if !(omega.is_finite() && omega > 0.0) {
+            return Err(HbmError::Invalid(format!("mean speed must be positive and finite, got {omega} rad/s")));
+        }
+        self.omega = omega;
+        Ok(())
+    }
+
+    /// Torque scale s of the fixed-parameter solves (the excitation amplitudes are s·T_k).
+    pub fn torque_scale(&self) -> f64 {
+        self.scale
+    }
+
+    /// Sets the torque scale s (dimensionless, finite) of the fixed-parameter solves.
+    pub fn set_torque_scale(&mut self, scale: f64) -> Result<(), HbmError> {
+        if !scale.is_finite() {
+            return Err(HbmError::Invalid(format!("torque scale must be finite, got {scale}")));
+        }
+        self.scale = scale;
+        Ok(())
+    }
+
+    /// The current fixed parameters at order n.
+    fn at(&self, order: f64) -> At {
+        At { order, omega: self.omega, scale: self.scale }
+    }
+
+    /// Residual R̂ (and with `jacobian` = Some(p), its Jacobian and ∂R̂/∂p) at unknowns x and
+    /// parameters `at`, into the work buffers.
+    fn assemble(&mut self, x: &[f64], at: &At, jacobian: Option<Free>) {
         let (n, nb, nt, spin) = (self.n, self.nb, self.aft.nt, self.spin);
-        let w0 = self.base_frequency(order);
+        let At { order, omega, scale } = *at;
+        let w0 = self.ratio * order * omega;
         let tm = x[spin * nb] * self.t_scale;
         self.rhat.fill(0.0);
-        if jacobian {
+        if jacobian.is_some() {
             self.jac.fill(0.0);
-            self.gn.fill(0.0);
         }
         // Synthesis of p, ṗ, p̈ at every sample by inverse real FFTs.
         for k in 0..n {
@@ -692,10 +742,10 @@ impl Hbm {
                 self.qd[k] = self.qdt[k * nt + j];
                 self.qdd[k] = self.qddt[k * nt + j];
             }
-            self.q[spin] += self.omega * t;
-            self.qd[spin] += self.omega;
-            let torque = tm + self.exc[j];
-            if jacobian {
+            self.q[spin] += omega * t;
+            self.qd[spin] += omega;
+            let torque = tm + scale * self.exc[j];
+            if jacobian.is_some() {
                 self.ev.linearize(
                     t,
                     &mut self.q,
@@ -712,36 +762,42 @@ impl Hbm {
             for i in 0..n {
                 self.rt[i * nt + j] = self.lin.r[i];
             }
-            if !jacobian {
-                continue;
-            }
+            let Some(free) = jacobian else { continue };
             let lin = &self.lin;
             let nn = n * n;
             let store = &mut self.samples[j * 3 * nn..(j + 1) * 3 * nn];
             store[..nn].copy_from_slice(&lin.a);
             store[nn..2 * nn].copy_from_slice(&lin.b);
             store[2 * nn..].copy_from_slice(&lin.c);
-            // ∂R/∂n: in normalised time, q̇ (periodic part) ∝ ω₀ and q̈ ∝ ω₀², ω₀ ∝ n.
+            // ∂R/∂p at fixed unknowns. In normalised time the periodic part of q̇ is ∝ ω₀ and q̈
+            // ∝ ω₀², ω₀ ∝ nΩ; Ω also sets the mean spin rate; the spin angle Ωt = τ/(ratio·n) is
+            // cyclic (its column of A is zero); s multiplies the oscillating torque only.
             for i in 0..n {
-                let mut s = 0.0;
-                for k in 0..n {
-                    let qd_per = if k == spin { self.qd[k] - self.omega } else { self.qd[k] };
-                    s += lin.b[i * n + k] * qd_per + 2.0 * lin.c[i * n + k] * self.qdd[k];
-                }
-                self.dpt[i * nt + j] = s / order;
+                let dr = match free {
+                    Free::Scale => -self.ev.g[i] * self.exc[j],
+                    Free::Order | Free::Speed => {
+                        let mut s = 0.0;
+                        for k in 0..n {
+                            let qd_per = if k == spin { self.qd[k] - omega } else { self.qd[k] };
+                            s += lin.b[i * n + k] * qd_per + 2.0 * lin.c[i * n + k] * self.qdd[k];
+                        }
+                        if free == Free::Order { s / order } else { s / omega + lin.b[i * n + spin] }
+                    }
+                };
+                self.dpt[i * nt + j] = dr;
             }
         }
         // Projection of the residual samples by forward real FFTs.
         for i in 0..n {
             let rows = i * nt..(i + 1) * nt;
             self.aft.project(&self.rt[rows.clone()], &mut self.rhat.as_mut_slice()[i * nb..(i + 1) * nb]);
-            if jacobian {
-                self.aft.project(&self.dpt[rows], &mut self.gn.as_mut_slice()[i * nb..(i + 1) * nb]);
+            if jacobian.is_some() {
+                self.aft.project(&self.dpt[rows], &mut self.gp.as_mut_slice()[i * nb..(i + 1) * nb]);
             }
         }
-        if jacobian {
+        if jacobian.is_some() {
             self.spectral_jacobian(w0);
-            self.samples_at = Some((x.to_vec(), order));
+            self.samples_at = Some((x.to_vec(), *at));
             // The mean-torque unknown enters the spin torque only: mean row, −g_i T_scale.
             for i in 0..n {
                 self.jac[(i * nb, spin * nb)] = -self.ev.g[i] * self.t_scale;
@@ -830,17 +886,19 @@ impl Hbm {
         x
     }
 
-    /// The solution record for unknowns x at order n (fills the residual norm and the harmonic
+    /// The solution record for unknowns x at `at` (fills the residual norm and the harmonic
     /// check; no stability).
-    fn solution_from(&mut self, x: &[f64], order: f64, iterations: usize) -> HbmSolution {
-        self.assemble(x, order, false);
+    fn solution_from(&mut self, x: &[f64], at: &At, iterations: usize) -> HbmSolution {
+        let order = at.order;
+        self.assemble(x, at, None);
         let residual = self.rhat.amax();
         let mut coefficients = x.to_vec();
         coefficients[self.spin * self.nb] = 0.0;
         let mut sol = HbmSolution {
             order,
-            omega: self.omega,
-            base_frequency: self.base_frequency(order),
+            omega: at.omega,
+            torque_scale: at.scale,
+            base_frequency: self.ratio * order * at.omega,
             harmonics: self.opts.harmonics,
             spin: self.spin,
             coefficients,
@@ -864,10 +922,16 @@ impl Hbm {
         if !(order.is_finite() && order > 0.0) {
             return Err(HbmError::Invalid(format!("excitation order must be positive and finite, got {order}")));
         }
+        self.solve_at(&self.at(order), guess)
+    }
+
+    /// Newton's method at fixed parameters.
+    fn solve_at(&mut self, at: &At, guess: Option<&HbmSolution>) -> Result<HbmSolution, HbmError> {
+        let order = at.order;
         let mut x = self.unknowns_from(guess);
         let mut step = f64::INFINITY;
         for it in 1..=self.opts.max_iter {
-            self.assemble(&x, order, true);
+            self.assemble(&x, at, Some(Free::Order));
             let dx = self.jac.clone().lu().solve(&self.rhat).ok_or(HbmError::Singular { order })?;
             step = dx.amax();
             if !step.is_finite() {
@@ -877,7 +941,7 @@ impl Hbm {
                 *xi -= d;
             }
             if step <= self.opts.tol {
-                return Ok(self.solution_from(&x, order, it));
+                return Ok(self.solution_from(&x, at, it));
             }
         }
         Err(HbmError::NoConvergence { order, iterations: self.opts.max_iter, step })
@@ -973,9 +1037,10 @@ mod tests {
         for (i, v) in x.iter_mut().enumerate() {
             *v += 1e-3 * ((i as f64) * 0.7).sin();
         }
-        let order = 3.05;
-        hbm.assemble(&x, order, true);
-        let (jac, gn) = (hbm.jac.clone(), hbm.gn.clone());
+        // Off the defaults (Ω = 1000 rpm, s = 1) so that every term of ∂R/∂p is exercised.
+        let at = At { order: 3.05, omega: 0.9 * hbm.omega(), scale: 1.3 };
+        hbm.assemble(&x, &at, Some(Free::Order));
+        let jac = hbm.jac.clone();
         let m = x.len();
         let mut worst = 0.0f64;
         let scale = jac.amax();
@@ -983,20 +1048,35 @@ mod tests {
             let h = 1e-6;
             let mut xp = x.clone();
             xp[c] += h;
-            hbm.assemble(&xp, order, false);
+            hbm.assemble(&xp, &at, None);
             let rp = hbm.rhat.clone();
             xp[c] -= 2.0 * h;
-            hbm.assemble(&xp, order, false);
+            hbm.assemble(&xp, &at, None);
             let col = (rp - &hbm.rhat) / (2.0 * h);
             worst = worst.max((col - jac.column(c)).amax() / scale);
         }
         assert!(worst < 1e-6, "Jacobian columns differ by {worst:e} (relative to max entry)");
-        let h = 1e-6;
-        hbm.assemble(&x, order + h, false);
-        let rp = hbm.rhat.clone();
-        hbm.assemble(&x, order - h, false);
-        let dn = (rp - &hbm.rhat) / (2.0 * h);
-        let err = (&dn - &gn).amax() / dn.amax();
-        assert!(err < 1e-6, "∂R/∂n differs by {err:e}");
+        // ∂R̂/∂p for the order, the mean speed (rad/s) and the torque scale, each against a
+        // central difference with a relative step of 1e-6.
+        type Shift = fn(&mut At, f64);
+        let cases: [(Free, Shift, f64); 3] = [
+            (Free::Order, |a, d| a.order += d, at.order),
+            (Free::Speed, |a, d| a.omega += d, at.omega),
+            (Free::Scale, |a, d| a.scale += d, at.scale),
+        ];
+        for (free, shift, value) in cases {
+            hbm.assemble(&x, &at, Some(free));
+            let gp = hbm.gp.clone();
+            let h = 1e-6 * value;
+            let (mut ap, mut am) = (at, at);
+            shift(&mut ap, h);
+            shift(&mut am, -h);
+            hbm.assemble(&x, &ap, None);
+            let rp = hbm.rhat.clone();
+            hbm.assemble(&x, &am, None);
+            let dp = (rp - &hbm.rhat) / (2.0 * h);
+            let err = (&dp - &gp).amax() / dp.amax();
+            assert!(err < 1e-6, "∂R/∂p for {free:?} (N_t = {time_samples}) differs by {err:e}");
+        }
     }
 }

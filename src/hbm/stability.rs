@@ -61,11 +61,12 @@ impl Hbm {
         // Per-sample derivatives at this solution (reused when the last Jacobian was assembled
         // there, as in the continuation), interpolated to the N_s stability samples.
         let x = self.unknowns_from(Some(sol));
-        let same = |(xs, o): &(Vec<f64>, f64)| {
-            *o == order && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
+        let at = super::At { order, omega: sol.omega, scale: sol.torque_scale };
+        let same = |(xs, o): &(Vec<f64>, super::At)| {
+            *o == at && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
         };
         if !self.samples_at.as_ref().is_some_and(same) {
-            self.assemble(&x, order, true);
+            self.assemble(&x, &at, Some(super::Free::Order));
         }
         let nt = self.aft.nt;
         let nn = n * n;
