@@ -106,7 +106,7 @@ fn rk4(kane: &mut Kane, x: &mut [f64], t0: f64, h: f64, steps: usize, mut sample
 fn excited_kane(harmonics: &[Harmonic], sol: &HbmSolution) -> Kane {
     let exc = Excitation {
         mean: sol.mean_torque,
-        rpm: RPM,
+        rpm: sol.omega * 30.0 / PI,
         order: Order::Fixed(sol.order),
         harmonics: harmonics.to_vec(),
         ramp_s: 0.0,
@@ -489,4 +489,86 @@ fn torque_and_speed_continuations_find_the_order_folds() {
     // Both converge to 1e-10 on the step (Newton converges quadratically, so the error is far
     // smaller); 1e-9 rad (N·m for the mean torque) is the bound asked for.
     assert!(worst < 1e-9, "speed branch and fixed-speed solves differ by {worst:e}");
+}
+
+/// The multi-order load case at 600 rpm (paper section 4.2, Table 1, Fig. 5: n = 3,
+/// T_n = 670 N·m, T_2n = 430 N·m, α_2n = −0.32 rad) has a single periodic state: the
+/// low-amplitude (absorbing) branch ends at a fold before the Table 1 torques are reached, so the
+/// response must sit on the upper branch — the paper's "jump" at 600 rpm. Shown three ways, each
+/// continuing from the low-amplitude end: in the torque scale s (both torques × s) at 600 rpm,
+/// in the speed with the 600 rpm torques held, and in the order at 600 rpm; then the one state
+/// against time integration.
+#[test]
+fn multi_order_600_rpm_has_only_the_upper_state() {
+    let h = vec![
+        Harmonic { multiple: 1.0, amplitude: 670.0, phase: 0.0 },
+        Harmonic { multiple: 2.0, amplitude: 430.0, phase: -0.32 },
+    ];
+    let mech = CpvaParams::canonical().mechanism(None).unwrap();
+    let kane = Kane::new(&mech).unwrap();
+    let copts = ContinuationOptions::default();
+    let w600 = rpm_to_rad_s(600.0);
+    let mut hbm = Hbm::new(&kane, 0, w600, &h, HbmOptions::default()).unwrap();
+    // Torque: the low branch rises to a fold at s* < 1, the unstable middle branch returns to
+    // small s and turns onto the upper branch, which alone reaches s = 1.
+    let bt = hbm.continue_in(Parameter::TorqueScale { order: 3.0 }, 0.01, 1.5, None, &copts).unwrap();
+    assert_eq!(bt.end, BranchEnd::ReachedTarget);
+    assert_eq!(bt.folds.len(), 2, "{:?}", bt.folds);
+    let s_fold = bt.folds[0].parameter;
+    assert_eq!(bt.folds[0].kind, FoldKind::Maximum);
+    assert!(s_fold < 0.95 && bt.folds[1].parameter < s_fold, "folds {:?}", bt.folds);
+    // Speed with the 600 rpm torques: coming down from 900 rpm, the low branch turns back above
+    // 600 rpm.
+    let bs = hbm.continue_in(Parameter::Speed { order: 3.0 }, rpm_to_rad_s(900.0), w600, None, &copts).unwrap();
+    let f_speed = bs.folds.first().unwrap_or_else(|| panic!("no speed fold: {:?}", bs.end));
+    assert_eq!(f_speed.kind, FoldKind::Minimum);
+    let rpm_fold = f_speed.parameter * 30.0 / PI;
+    assert!(rpm_fold > 610.0, "speed fold at {rpm_fold} rpm");
+    // The two folds are one point of the fold curve: at the fold speed, the torque continuation
+    // from small torque must turn at s = 1 (same argument and tolerance as for the 40 N·m folds).
+    let mut at_fold = Hbm::new(&kane, 0, f_speed.parameter, &h, HbmOptions::default()).unwrap();
+    let bf = at_fold.continue_in(Parameter::TorqueScale { order: 3.0 }, 0.01, 1.5, None, &copts).unwrap();
+    assert!((bf.folds[0].parameter - 1.0).abs() < 1e-7, "torque fold at {rpm_fold} rpm: s = {}", bf.folds[0].parameter);
+    // Order at 600 rpm: the branch from low orders turns back below n = 3.
+    let bo = hbm.continue_in(Parameter::Order, 2.6, 3.4, None, &copts).unwrap();
+    let f_order = bo.folds.first().unwrap();
+    assert_eq!(f_order.kind, FoldKind::Maximum);
+    assert!(f_order.order < 3.0, "order fold {}", f_order.order);
+    println!(
+        "600 rpm, n = 3: low branch ends at s = {s_fold:.5} (T_n = {:.1}, T_2n = {:.1} N·m), at {rpm_fold:.2} rpm with the \
+         600 rpm torques, at n = {:.5} at 600 rpm",
+        670.0 * s_fold,
+        430.0 * s_fold,
+        f_order.order
+    );
+    // Every sheet of every branch gives the same single state at the Table 1 torques.
+    let mut states: Vec<HbmSolution> = Vec::new();
+    let cands: Vec<HbmSolution> = bt
+        .guesses_at(1.0)
+        .into_iter()
+        .chain(bo.guesses_at(3.0))
+        .chain(hbm.continue_in(Parameter::Order, 3.4, 2.6, None, &copts).unwrap().guesses_at(3.0))
+        .cloned()
+        .collect();
+    for g in &cands {
+        let sol = hbm.solve(3.0, Some(g)).unwrap();
+        if !states.iter().any(|o| (o.order_acceleration(0, 1.0) / sol.order_acceleration(0, 1.0) - 1.0).abs() < 1e-8) {
+            states.push(sol);
+        }
+    }
+    assert_eq!(
+        states.len(),
+        1,
+        "states at 600 rpm: {:?}",
+        states.iter().map(|s| s.order_acceleration(0, 1.0)).collect::<Vec<_>>()
+    );
+    let mut sol = states.pop().unwrap();
+    sol.stability = Some(hbm.stability(&sol).unwrap());
+    assert!(sol.stability.as_ref().unwrap().stable);
+    // Time integration from the HBM state with a 1e-3 perturbation of the pendulum angle.
+    let tc = time_check(&hbm, &h, &sol, 1e-3, 60, 20);
+    let (a1, a2) = (sol.order_acceleration(0, 1.0), sol.order_acceleration(0, 2.0));
+    let e = (tc.main / a1 - 1.0).abs().max((tc.second / a2 - 1.0).abs());
+    println!("600 rpm upper state: HBM {a1:.4} {a2:.4} rad/s², time {:.4} {:.4}: {e:.1e}", tc.main, tc.second);
+    assert!(e < 5e-3, "600 rpm: HBM vs time integration {e:e}");
 }
