@@ -106,3 +106,57 @@ pub(super) fn cos_sin(spec: &[Complex<f64>], nt: usize, m: isize) -> (f64, f64) 
         (z.re, z.im)
     }
 }
+
+/// Trigonometric interpolation by FFT: the band-limited periodic function through N_t samples
+/// (given by their normalised half spectrum; for even N_t the Nyquist term is a pure cosine)
+/// evaluated at N_s equally spaced instants by one inverse real FFT of length N_s (components
+/// above N_s/2, when N_s < N_t, fold onto the bins they alias to).
+#[derive(Clone)]
+pub(super) struct Upsampler {
+    ns: usize,
+    inv: Arc<dyn ComplexToReal<f64>>,
+    spec: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl std::fmt::Debug for Upsampler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Upsampler").field("ns", &self.ns).finish()
+    }
+}
+
+impl Upsampler {
+    /// Plans for `ns` output samples (even, ≥ 2).
+    pub fn new(ns: usize) -> Self {
+        let inv = RealFftPlanner::<f64>::new().plan_fft_inverse(ns);
+        let scratch = vec![Complex::default(); inv.get_scratch_len()];
+        Self { ns, inv, spec: vec![Complex::default(); ns / 2 + 1], scratch }
+    }
+
+    /// Values at the N_s instants of the interpolant of `nt` samples with normalised half
+    /// spectrum `f` (as from [`Aft::spectrum`]), into `out`.
+    pub fn run(&mut self, f: &[Complex<f64>], nt: usize, out: &mut [f64]) {
+        let ns = self.ns;
+        self.spec.fill(Complex::default());
+        for (h, &fh) in f.iter().enumerate().take(nt / 2 + 1) {
+            if h == 0 {
+                self.spec[0] += fh.re;
+                continue;
+            }
+            // The real term 2 Re(c e^{ihτ}); the Nyquist term of an even N_t is F cos(hτ).
+            let c = if 2 * h == nt { fh * 0.5 } else { fh };
+            let r = h % ns;
+            if r == 0 {
+                self.spec[0] += 2.0 * c.re;
+            } else if 2 * r == ns {
+                self.spec[r] += 2.0 * c.re;
+            } else if 2 * r < ns {
+                self.spec[r] += c;
+            } else {
+                self.spec[ns - r] += c.conj();
+            }
+        }
+        let r = self.inv.process_with_scratch(&mut self.spec, out, &mut self.scratch);
+        debug_assert!(r.is_ok(), "inverse FFT: {r:?}");
+    }
+}

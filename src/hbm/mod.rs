@@ -497,9 +497,8 @@ pub struct Hbm {
     /// the point (unknowns, order) it belongs to: the stability analysis reuses them.
     samples: Vec<f64>,
     samples_at: Option<(Vec<f64>, At)>,
-    /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples
-    /// (row-major N_s × N_t).
-    interp: Vec<f64>,
+    /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples.
+    upsampler: aft::Upsampler,
     rhat: DVector<f64>,
     jac: DMatrix<f64>,
     /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
@@ -644,7 +643,7 @@ impl Hbm {
             lin: SampleLin::new(n),
             samples: vec![0.0; nt * 3 * n * n],
             samples_at: None,
-            interp: interpolation_matrix(nt, opts.stability_samples),
+            upsampler: aft::Upsampler::new(opts.stability_samples.max(2)),
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
             gp: DVector::zeros(n * nb),
@@ -958,28 +957,6 @@ impl Hbm {
         x.extend_from_slice(&u);
         x
     }
-}
-
-/// The matrix (row-major `ns × nt`) that maps values at `nt` equally spaced samples of a period
-/// to `ns` equally spaced samples by trigonometric interpolation (the band-limited periodic
-/// function through the samples; for even `nt` the Nyquist term is a pure cosine).
-fn interpolation_matrix(nt: usize, ns: usize) -> Vec<f64> {
-    let mut m = vec![0.0; ns * nt];
-    for i in 0..ns {
-        let ti = 2.0 * PI * i as f64 / ns as f64;
-        for j in 0..nt {
-            let tj = 2.0 * PI * j as f64 / nt as f64;
-            let mut w = 1.0;
-            for h in 1..nt.div_ceil(2) {
-                w += 2.0 * (h as f64 * (ti - tj)).cos();
-            }
-            if nt.is_multiple_of(2) {
-                w += (nt as f64 / 2.0 * ti).cos() * (nt as f64 / 2.0 * tj).cos();
-            }
-            m[i * nt + j] = w / nt as f64;
-        }
-    }
-    m
 }
 
 fn gcd(a: u64, b: u64) -> u64 {
