@@ -405,14 +405,19 @@ fn branch_timing() {
     for &torque in &[40.0, 500.0] {
         let mut best = f64::INFINITY;
         let mut pts = 0;
+        let mut newton = 0;
         for _ in 0..5 {
             let mut hbm = cpva_hbm(&single(torque), HbmOptions::default());
             let t0 = Instant::now();
             let b = hbm.continue_in_order(2.9, 3.3, None, &ContinuationOptions::default()).unwrap();
             best = best.min(t0.elapsed().as_secs_f64());
             pts = b.points.len();
+            newton = b.newton_iterations;
         }
-        println!("{torque} N·m: branch 2.9 → 3.3 with {pts} points in {:.1} ms (best of 5)", best * 1e3);
+        println!(
+            "{torque} N·m: branch 2.9 → 3.3 with {pts} points in {:.1} ms (best of 5), {newton} corrector iterations",
+            best * 1e3
+        );
     }
 }
 

@@ -12,7 +12,8 @@
 //! orientation), normalised.
 //!
 //! The corrector is a Newton–chord iteration: it reuses the bordered matrix factorised at the
-//! previous point (its Jacobian is needed there anyway for the tangent), so an iteration costs
+//! previous point (its Jacobian is needed there anyway for the tangent; bordered by the new
+//! tangent through a rank-one update of the tangent's factorisation), so an iteration costs
 //! one residual; when an iteration contracts by less than half, the Jacobian is refreshed at the
 //! current iterate (at most 3 times). With light damping the Jacobian changes quickly along the
 //! branch near resonance, so about one refresh per point is typical.
@@ -261,6 +262,29 @@ impl Branch {
     }
 }
 
+type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
+
+/// A factorised bordered matrix for the chord iterations. The matrix bordered by the new tangent
+/// t differs from the one factorised for computing t (bordered by the previous tangent t₀) in
+/// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
+/// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
+/// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
+struct Chord {
+    lu: Lu,
+    update: Option<(DVector<f64>, DVector<f64>, f64)>,
+}
+
+impl Chord {
+    fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
+        let mut y = self.lu.solve(r)?;
+        if let Some((z, d, denom)) = &self.update {
+            let f = d.dot(&y) / denom;
+            y.axpy(-f, z, 1.0);
+        }
+        Some(y)
+    }
+}
+
 /// Unit tangent and state carried along the branch.
 struct Cursor {
     y: DVector<f64>,
@@ -280,15 +304,23 @@ impl Hbm {
 
     /// Unit tangent from the buffers' Jacobian, oriented by `row` (previous tangent).
     fn tangent(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
+        Ok(self.tangent_chord(su, row, order)?.0)
+    }
+
+    /// Like [`Hbm::tangent`], also returning the chord matrix bordered by the new tangent.
+    fn tangent_chord(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<(DVector<f64>, Chord), HbmError> {
         let m = self.unknowns();
         let mut rhs = DVector::zeros(m + 1);
         rhs[m] = 1.0;
-        let t = self.bordered(su, row).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
-        let norm = t.norm();
+        let lu = self.bordered(su, row).lu();
+        let z = lu.solve(&rhs).ok_or(HbmError::Singular { order })?;
+        let norm = z.norm();
         if !norm.is_finite() || norm == 0.0 {
             return Err(HbmError::NonFinite { order });
         }
-        Ok(t / norm)
+        let t = &z / norm;
+        let d = &t - row;
+        Ok((t, Chord { lu, update: Some((z, d, norm)) }))
     }
 
     /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
@@ -334,7 +366,7 @@ impl Hbm {
     fn correct_chord(
         &mut self,
         su: &Setup,
-        lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        chord: &Chord,
         pred: &DVector<f64>,
         t: &DVector<f64>,
         max_iter: usize,
@@ -345,7 +377,7 @@ impl Hbm {
         let mut x = vec![0.0; m];
         let mut rhs = DVector::zeros(m + 1);
         let mut last = f64::INFINITY;
-        let mut fresh: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
+        let mut fresh: Option<Chord> = None;
         let mut refreshes = 0;
         for it in 1..=max_iter {
             let at = su.at(y[m]);
@@ -357,11 +389,11 @@ impl Hbm {
             self.assemble(&x, &at, None);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
-            let mut dy = fresh.as_ref().unwrap_or(lu).solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let mut dy = fresh.as_ref().unwrap_or(chord).solve(&rhs).ok_or(HbmError::Singular { order })?;
             let mut step = dy.amax();
             if it > 1 && step > 0.5 * last && refreshes < max_refresh {
                 self.assemble(&x, &at, Some(su.param.free()));
-                let f = self.bordered(su, t).lu();
+                let f = Chord { lu: self.bordered(su, t).lu(), update: None };
                 dy = f.solve(&rhs).ok_or(HbmError::Singular { order })?;
                 step = dy.amax();
                 fresh = Some(f);
@@ -523,7 +555,7 @@ impl Hbm {
         e_l[m] = 1.0;
         let t0 = self.tangent(&su, &e_l, order)? * dir;
         let mut cur = Cursor { y: y0, t: t0 };
-        let mut lu = self.bordered(&su, &cur.t).lu();
+        let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
         let mut points = vec![self.branch_point(&su, &cur.y, cur.t[m], 0.0, sol0.iterations, copts.stability)?];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
@@ -536,7 +568,8 @@ impl Hbm {
                 break BranchEnd::StepTooSmall;
             }
             let pred = &cur.y + &cur.t * ds;
-            let (y, iters, refreshes) = match self.correct_chord(&su, &lu, &pred, &cur.t, copts.corrector_iter, 3) {
+            let (y, iters, refreshes) = match self.correct_chord(&su, &chord_m, &pred, &cur.t, copts.corrector_iter, 3)
+            {
                 Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
@@ -547,8 +580,8 @@ impl Hbm {
             // The Jacobian at the new point gives its tangent and the next chord matrix.
             let at = su.at(y[m]);
             self.assemble(&y.as_slice()[..m], &at, Some(free));
-            let t = match self.tangent(&su, &cur.t, at.order) {
-                Ok(t) => t,
+            let (t, next_chord) = match self.tangent_chord(&su, &cur.t, at.order) {
+                Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
                     continue;
@@ -558,7 +591,6 @@ impl Hbm {
                 ds *= 0.5;
                 continue;
             }
-            let next_lu = self.bordered(&su, &t).lu();
             let chord = (&y - &cur.y).norm();
             let (l_new, l_old) = (y[m], cur.y[m]);
             // Leaving the range: finish exactly at its end by a solve at fixed parameter.
@@ -617,7 +649,7 @@ impl Hbm {
             s += chord;
             points.push(self.branch_point(&su, &y, t[m], s, iters, copts.stability)?);
             cur = Cursor { y, t };
-            lu = next_lu;
+            chord_m = next_chord;
             if iters <= 7 && refreshes <= 1 {
                 ds = (ds * 1.5).min(copts.ds_max);
             } else if iters >= 10 || refreshes >= 3 {

@@ -489,6 +489,8 @@ pub struct Hbm {
     /// One coefficient series (N_t) and the half spectra of the 3n² series of `samples`.
     series: Vec<f64>,
     spectra: Vec<Complex<f64>>,
+    /// `(C_m, S_m)`, m = −2H..=2H, of each of those series.
+    unfolded: Vec<(f64, f64)>,
     q: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
@@ -497,6 +499,8 @@ pub struct Hbm {
     /// the point (unknowns, order) it belongs to: the stability analysis reuses them.
     samples: Vec<f64>,
     samples_at: Option<(Vec<f64>, At)>,
+    /// The point (unknowns, parameters) of the residual in `rhat`.
+    rhat_at: Option<(Vec<f64>, At)>,
     /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples.
     upsampler: aft::Upsampler,
     rhat: DVector<f64>,
@@ -637,12 +641,14 @@ impl Hbm {
             dpt: vec![0.0; n * nt],
             series: vec![0.0; nt],
             spectra: vec![Complex::default(); 3 * n * n * (nt / 2 + 1)],
+            unfolded: vec![(0.0, 0.0); 3 * n * n * (4 * opts.harmonics + 1)],
             q: vec![0.0; n],
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
             lin: SampleLin::new(n),
             samples: vec![0.0; nt * 3 * n * n],
             samples_at: None,
+            rhat_at: None,
             upsampler: aft::Upsampler::new(opts.stability_samples.max(2)),
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
@@ -719,6 +725,13 @@ impl Hbm {
     fn assemble(&mut self, x: &[f64], at: &At, jacobian: Option<Free>) {
         let (n, nb, nt, spin) = (self.n, self.nb, self.aft.nt, self.spin);
         let At { order, omega, scale } = *at;
+        match &mut self.rhat_at {
+            Some((xs, a)) => {
+                xs.copy_from_slice(x);
+                *a = *at;
+            }
+            None => self.rhat_at = Some((x.to_vec(), *at)),
+        }
         let w0 = self.ratio * order * omega;
         let tm = x[spin * nb] * self.t_scale;
         self.rhat.fill(0.0);
@@ -819,11 +832,20 @@ impl Hbm {
             }
             self.aft.spectrum(&self.series, &mut self.spectra[sidx * half..(sidx + 1) * half]);
         }
+        // (C_m, S_m) for m = −2H..=2H per series, unfolded once so that the entries below are
+        // plain lookups.
+        let width = 4 * hh + 1;
+        for sidx in 0..3 * nn {
+            let spec = &self.spectra[sidx * half..(sidx + 1) * half];
+            for (u, v) in self.unfolded[sidx * width..(sidx + 1) * width].iter_mut().enumerate() {
+                *v = aft::cos_sin(spec, nt, u as isize - 2 * hh as isize);
+            }
+        }
         let dim = n * nb;
         let w2 = w0 * w0;
-        let spectra = &self.spectra;
+        let unfolded = &self.unfolded;
         let jac = self.jac.as_mut_slice();
-        let cs = |s: usize, m: isize| aft::cos_sin(&spectra[s * half..(s + 1) * half], nt, m);
+        let cs = |s: usize, m: isize| unfolded[s * width + (m + 2 * hh as isize) as usize];
         for i in 0..n {
             for k in 0..n {
                 let (alpha, beta, gamma) = (i * n + k, nn + i * n + k, 2 * nn + i * n + k);
@@ -889,7 +911,11 @@ impl Hbm {
     /// check; no stability).
     fn solution_from(&mut self, x: &[f64], at: &At, iterations: usize) -> HbmSolution {
         let order = at.order;
-        self.assemble(x, at, None);
+        // The residual is already in the buffer when the last assembly was at this very point
+        // (as after the continuation's Jacobian at an accepted point).
+        if !self.rhat_at.as_ref().is_some_and(|(xs, a)| a == at && xs.as_slice() == x) {
+            self.assemble(x, at, None);
+        }
         let residual = self.rhat.amax();
         let mut coefficients = x.to_vec();
         coefficients[self.spin * self.nb] = 0.0;
