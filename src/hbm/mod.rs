@@ -1,7 +1,7 @@
 //! Harmonic balance (HBM) for periodic steady states under order excitation, with pseudo-arclength
-//! continuation in the excitation order and Floquet stability: the faster route to the steady
-//! responses that the paper obtains by long time integration (sections 4 and 5; its conclusion
-//! names harmonic balance as the method to come).
+//! continuation in the excitation order, the mean speed or the torque amplitude, and Floquet
+//! stability: the faster route to the steady responses that the paper obtains by long time
+//! integration (sections 4 and 5; its conclusion names harmonic balance as the method to come).
 //!
 //! # Formulation
 //!
@@ -62,7 +62,10 @@
 //! A unit test checks the assembled Jacobian and ∂R̂/∂n against central differences of the
 //! whole residual (agreement to 1e-6 of the largest entry). The derivative with respect to the
 //! order n, needed by the continuation, follows exactly from the same B and C, because in
-//! normalised time n enters only through `d/dt = ω₀ d/dτ`.
+//! normalised time n enters only through `d/dt = ω₀ d/dτ`. Likewise for the mean speed
+//! (`∂R/∂Ω = B (q̇_per/Ω + e_s) + 2 C q̈/Ω`: Ω also sets the mean spin rate, while the spin angle
+//! Ωt = τ/(ratio·n) is cyclic) and the torque scale s (`∂R/∂s = −g T_osc(τ)`, the torque enters
+//! linearly); the unit test checks all three against differences of the residual.
 //!
 //! # Harmonic count
 //!
