@@ -119,3 +119,64 @@ fn cli_run_writes_outputs_and_fails_cleanly_on_bad_input() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("examples/cpva.ron") && !err.contains("panicked"), "{err}");
 }
+
+/// The `parameter` of a `HarmonicBalance` entry: continued in the torque amplitude and in the
+/// mean speed at the 40 N·m up-sweep fold order n* = 3.1740911 (1000 rpm, tests/hbm.rs), each
+/// must turn at that point, i.e. at 40 N·m and at 1000 rpm. n* is given to 8 digits, so the
+/// folds move along the fold curve by ~|dT/dn|·5e-8 (|dT/dn| ~ 10³ N·m here): 1e-3 relative.
+#[test]
+fn harmonic_balance_in_speed_and_torque() {
+    let text = r#"Study(
+    name: "hbmp",
+    mechanism: "MECH",
+    lock: ["pivot"],
+    analyses: [
+        HarmonicBalance(name: "torque", rpm: 1000.0, parameter: Torque(order: 3.1740911, min: 1.0, max: 120.0)),
+        HarmonicBalance(name: "speed", amplitudes: [40.0],
+                        parameter: Speed(order: 3.1740911, rpm_min: 600.0, rpm_max: 1600.0)),
+    ],
+)
+"#;
+    let mech = std::fs::canonicalize("examples/cpva.ron").unwrap();
+    let dir = out_dir("hbm_param");
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join("s.ron");
+    std::fs::write(&p, text.replace("MECH", mech.to_str().unwrap())).unwrap();
+    let study = Study::from_file(&p).unwrap();
+    let r = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
+    for f in &r.files {
+        assert!(f.exists(), "{} not written", f.display());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    let near = |folds: Vec<f64>, target: f64| folds.into_iter().any(|f| (f / target - 1.0).abs() < 1e-3);
+    let torque: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude.is_nan()).flat_map(|b| b.folds.clone()).collect();
+    assert!(near(torque.clone(), 40.0), "torque folds {torque:?}");
+    let speed: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude == 40.0).flat_map(|b| b.folds.clone()).collect();
+    assert!(near(speed.clone(), 1000.0), "speed folds {speed:?}");
+    // Wrong combinations name the field.
+    let bad = [
+        (
+            "amps",
+            "HarmonicBalance(name: \"h\", rpm: 1000.0, amplitudes: [1.0], parameter: Torque(order: 3.0, min: 1.0, max: 2.0))",
+            "amplitudes",
+        ),
+        (
+            "rpm",
+            "HarmonicBalance(name: \"h\", rpm: 1000.0, amplitudes: [1.0], parameter: Speed(order: 3.0, rpm_min: 500.0, rpm_max: 900.0))",
+            "rpm",
+        ),
+        (
+            "range",
+            "HarmonicBalance(name: \"h\", amplitudes: [1.0], parameter: Speed(order: 3.0, rpm_min: 900.0, rpm_max: 500.0))",
+            "parameter",
+        ),
+        ("orders", "HarmonicBalance(name: \"h\", rpm: 1000.0, amplitudes: [1.0])", "order_min"),
+    ];
+    for (name, entry, field) in bad {
+        let msg = study_error(name, &GOOD.replace(
+            "OrderSweep(name: \"a\", rpm: 1000.0, order_min: 2.9, order_max: 3.3, duration_s: 20.0, amplitudes: [40.0]),",
+            &format!("{entry},"),
+        ));
+        assert!(msg.contains(&format!("analyses[0].{field}")), "{name}: {msg}");
+    }
+}

@@ -1,14 +1,19 @@
-//! Pseudo-arclength continuation of harmonic-balance solutions in the excitation order n.
+//! Pseudo-arclength continuation of harmonic-balance solutions in a parameter p: the excitation
+//! order n, the mean speed Ω (at fixed n) or the torque scale s (at fixed n; every oscillating
+//! amplitude T_k becomes s·T_k), see [`Parameter`].
 //!
-//! The branch is the curve `R̂(x, n) = 0` in the space `y = (x, n)` of the Fourier unknowns (rad;
-//! the scaled mean torque) and the order. From a point y with unit tangent t, the predictor is
+//! The branch is the curve `R̂(x, λ) = 0` in the space `y = (x, λ)` of the Fourier unknowns (rad;
+//! the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s, the
+//! starting speed for Ω, so that arclength steps mean the same for each). ∂R̂/∂p is exact (see
+//! the module docs of [`crate::hbm`]). From a point y with unit tangent t, the predictor is
 //! `y + Δs t` and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` by Newton's
-//! method on the bordered Jacobian `[[∂R̂/∂x, ∂R̂/∂n], [tᵀ]]`, which stays regular through turning
+//! method on the bordered Jacobian `[[∂R̂/∂x, ∂R̂/∂λ], [tᵀ]]`, which stays regular through turning
 //! points. The new tangent solves `[[∂R̂/∂x, ∂R̂/∂n], [t_oldᵀ]] t = [0, 1]` (so it keeps the
 //! orientation), normalised.
 //!
 //! The corrector is a Newton–chord iteration: it reuses the bordered matrix factorised at the
-//! previous point (its Jacobian is needed there anyway for the tangent), so an iteration costs
+//! previous point (its Jacobian is needed there anyway for the tangent; bordered by the new
+//! tangent through a rank-one update of the tangent's factorisation), so an iteration costs
 //! one residual; when an iteration contracts by less than half, the Jacobian is refreshed at the
 //! current iterate (at most 3 times). With light damping the Jacobian changes quickly along the
 //! branch near resonance, so about one refresh per point is typical.
@@ -18,20 +23,85 @@
 //! tangent that turned by more than `acos(min_cos)`, halves the step and retries (the turning
 //! guard keeps the corrector from jumping to a neighbouring branch near a fold).
 //!
-//! Folds are the points where `dn/ds` changes sign: there the branch turns back in n and a sweep
-//! jumps, so the fold orders are the jump orders of the paper's up- and down-sweeps (Figs. 3, 4).
-//! Each detected fold is refined by a secant search on `dn/ds = 0` along the arclength.
+//! Folds are the points where `dλ/ds` changes sign: there the branch turns back in p and a sweep
+//! in p jumps, so the fold orders of an order branch are the jump orders of the paper's up- and
+//! down-sweeps (Figs. 3, 4). Each detected fold is refined by a secant search on `dλ/ds = 0`
+//! along the arclength.
 
-use super::{Hbm, HbmError, HbmOptions, HbmSolution};
+use super::{At, Free, Hbm, HbmError, HbmOptions, HbmSolution};
 use crate::excitation::Harmonic;
 use crate::kane::Kane;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
+/// The parameter continued along a branch; the others keep the values of the [`Hbm`] problem
+/// ([`Hbm::omega`], [`Hbm::torque_scale`]) unless the variant fixes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Parameter {
+    /// The excitation order n (dimensionless).
+    Order,
+    /// The mean speed Ω in rad/s, at the fixed excitation order `order`.
+    Speed {
+        /// Excitation order n held fixed.
+        order: f64,
+    },
+    /// The torque scale s (dimensionless; the oscillating amplitudes are s·T_k), at the fixed
+    /// excitation order `order`.
+    TorqueScale {
+        /// Excitation order n held fixed.
+        order: f64,
+    },
+}
+
+impl Parameter {
+    fn free(self) -> Free {
+        match self {
+            Parameter::Order => Free::Order,
+            Parameter::Speed { .. } => Free::Speed,
+            Parameter::TorqueScale { .. } => Free::Scale,
+        }
+    }
+}
+
+/// A continuation's parameter, its scale and the values held fixed.
+#[derive(Debug, Clone, Copy)]
+struct Setup {
+    param: Parameter,
+    p_ref: f64,
+    base: At,
+}
+
+impl Setup {
+    /// The residual's parameters at scaled parameter λ.
+    fn at(&self, lambda: f64) -> At {
+        let mut at = self.base;
+        match self.param {
+            Parameter::Order => at.order = lambda,
+            Parameter::Speed { .. } => at.omega = lambda * self.p_ref,
+            Parameter::TorqueScale { .. } => at.scale = lambda,
+        }
+        at
+    }
+
+    /// λ of a solution.
+    fn lambda(&self, sol: &HbmSolution) -> f64 {
+        match self.param {
+            Parameter::Order => sol.order,
+            Parameter::Speed { .. } => sol.omega / self.p_ref,
+            Parameter::TorqueScale { .. } => sol.torque_scale,
+        }
+    }
+
+    /// A scaled parameter the residual can be evaluated at.
+    fn valid(&self, lambda: f64) -> bool {
+        lambda.is_finite() && (lambda > 0.0 || matches!(self.param, Parameter::TorqueScale { .. }))
+    }
+}
+
 /// Settings of the continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContinuationOptions {
-    /// Initial arclength step (in the norm of (coefficients in rad, order)).
+    /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ)).
     pub ds: f64,
     /// Smallest step before giving up.
     pub ds_min: f64,
@@ -45,7 +115,7 @@ pub struct ContinuationOptions {
     pub min_cos: f64,
     /// Compute the Floquet stability of every point.
     pub stability: bool,
-    /// Refine each fold to `|dn/ds| < 1e-6` by a secant search.
+    /// Refine each fold to `|dλ/ds| < 1e-6` by a secant search.
     pub refine_folds: bool,
 }
 
@@ -69,9 +139,14 @@ impl Default for ContinuationOptions {
 pub struct BranchPoint {
     /// Excitation order n.
     pub order: f64,
+    /// Value of the continued parameter: the order n, the mean speed Ω (rad/s) or the torque
+    /// scale s.
+    pub parameter: f64,
     /// Arclength from the first point (chord sum).
     pub arclength: f64,
-    /// dn/ds: the order component of the unit tangent (its sign change marks a fold).
+    /// dλ/ds: the parameter component of the unit tangent (its sign change marks a fold).
+    pub slope: f64,
+    /// dn/ds on an order branch (equal to `slope`), 0 on the others (the order is fixed).
     pub order_slope: f64,
     /// Amplitude of the spin body's angular acceleration at the main order n, rad/s².
     pub accel_main: f64,
@@ -88,17 +163,20 @@ pub struct BranchPoint {
 /// Direction of the turn at a fold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum FoldKind {
-    /// The branch reaches its largest order and turns back (an up-sweep jumps here).
-    OrderMaximum,
-    /// The branch reaches its smallest order and turns back (a down-sweep jumps here).
-    OrderMinimum,
+    /// The branch reaches its largest parameter value and turns back (an up-sweep jumps here).
+    Maximum,
+    /// The branch reaches its smallest parameter value and turns back (a down-sweep jumps here).
+    Minimum,
 }
 
-/// A turning point of the branch in the order.
+/// A turning point of the branch in the continued parameter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fold {
-    /// Order at the fold (refined when [`ContinuationOptions::refine_folds`]).
+    /// Order at the fold (refined when [`ContinuationOptions::refine_folds`]; the fixed order
+    /// when another parameter is continued).
     pub order: f64,
+    /// Value of the continued parameter at the fold (n, Ω in rad/s, or s).
+    pub parameter: f64,
     /// Which way the branch turns.
     pub kind: FoldKind,
     /// Index of the branch point just before the fold.
@@ -127,6 +205,8 @@ pub struct Bifurcation {
     pub after: usize,
     /// Order, interpolated where the largest multiplier modulus crosses 1.
     pub order: f64,
+    /// The continued parameter, interpolated the same way.
+    pub parameter: f64,
     /// The kind, by the argument of the critical multiplier on the unstable side.
     pub kind: BifurcationKind,
     /// True when the branch becomes stable at this change (in the direction of the branch).
@@ -136,9 +216,9 @@ pub struct Bifurcation {
 /// Why the continuation stopped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BranchEnd {
-    /// Reached the target order (the last point is at it exactly).
+    /// Reached the target value (the last point is at it exactly).
     ReachedTarget,
-    /// Turned back and left the range at the starting order (the last point is at it).
+    /// Turned back and left the range at the starting value (the last point is at it).
     LeftRange,
     /// Hit [`ContinuationOptions::max_points`].
     MaxPoints,
@@ -149,9 +229,11 @@ pub enum BranchEnd {
 /// A solution branch.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Branch {
+    /// The continued parameter.
+    pub parameter: Parameter,
     /// The points in the order of the arclength.
     pub points: Vec<BranchPoint>,
-    /// Turning points in n.
+    /// Turning points in the parameter.
     pub folds: Vec<Fold>,
     /// Stability changes (when stability was computed).
     pub bifurcations: Vec<Bifurcation>,
@@ -162,22 +244,44 @@ pub struct Branch {
 }
 
 impl Branch {
-    /// Starting guesses at order n: for each segment of the branch that crosses n, the solution
-    /// at its nearer end (pass it to [`Hbm::solve`] at n; one per sheet of an S-shaped branch).
-    pub fn guesses_at(&self, order: f64) -> Vec<&HbmSolution> {
+    /// Starting guesses at parameter value p (the order n of an order branch): for each segment
+    /// of the branch that crosses p, the solution at its nearer end (pass it to [`Hbm::solve`]
+    /// there; one per sheet of an S-shaped branch).
+    pub fn guesses_at(&self, value: f64) -> Vec<&HbmSolution> {
         self.points
             .windows(2)
-            .filter(|w| (w[0].order - order) * (w[1].order - order) <= 0.0)
-            .map(
-                |w| {
-                    if (w[0].order - order).abs() <= (w[1].order - order).abs() {
-                        &w[0].solution
-                    } else {
-                        &w[1].solution
-                    }
-                },
-            )
+            .filter(|w| (w[0].parameter - value) * (w[1].parameter - value) <= 0.0)
+            .map(|w| {
+                if (w[0].parameter - value).abs() <= (w[1].parameter - value).abs() {
+                    &w[0].solution
+                } else {
+                    &w[1].solution
+                }
+            })
             .collect()
+    }
+}
+
+type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
+
+/// A factorised bordered matrix for the chord iterations. The matrix bordered by the new tangent
+/// t differs from the one factorised for computing t (bordered by the previous tangent t₀) in
+/// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
+/// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
+/// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
+struct Chord {
+    lu: Lu,
+    update: Option<(DVector<f64>, DVector<f64>, f64)>,
+}
+
+impl Chord {
+    fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
+        let mut y = self.lu.solve(r)?;
+        if let Some((z, d, denom)) = &self.update {
+            let f = d.dot(&y) / denom;
+            y.axpy(-f, z, 1.0);
+        }
+        Some(y)
     }
 }
 
@@ -188,32 +292,41 @@ struct Cursor {
 }
 
 impl Hbm {
-    /// The bordered matrix `[[J, ∂R̂/∂n], [rowᵀ]]` from the work buffers.
-    fn bordered(&self, row: &DVector<f64>) -> DMatrix<f64> {
+    /// The bordered matrix `[[J, ∂R̂/∂λ], [rowᵀ]]` from the work buffers (∂R̂/∂λ = p_ref ∂R̂/∂p).
+    fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
         let m = self.unknowns();
         let mut b = DMatrix::zeros(m + 1, m + 1);
         b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
-        b.view_mut((0, m), (m, 1)).copy_from(&self.gn);
+        b.view_mut((0, m), (m, 1)).copy_from(&(&self.gp * su.p_ref));
         b.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
         b
     }
 
     /// Unit tangent from the buffers' Jacobian, oriented by `row` (previous tangent).
-    fn tangent(&self, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
+    fn tangent(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
+        Ok(self.tangent_chord(su, row, order)?.0)
+    }
+
+    /// Like [`Hbm::tangent`], also returning the chord matrix bordered by the new tangent.
+    fn tangent_chord(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<(DVector<f64>, Chord), HbmError> {
         let m = self.unknowns();
         let mut rhs = DVector::zeros(m + 1);
         rhs[m] = 1.0;
-        let t = self.bordered(row).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
-        let norm = t.norm();
+        let lu = self.bordered(su, row).lu();
+        let z = lu.solve(&rhs).ok_or(HbmError::Singular { order })?;
+        let norm = z.norm();
         if !norm.is_finite() || norm == 0.0 {
             return Err(HbmError::NonFinite { order });
         }
-        Ok(t / norm)
+        let t = &z / norm;
+        let d = &t - row;
+        Ok((t, Chord { lu, update: Some((z, d, norm)) }))
     }
 
     /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
     fn correct(
         &mut self,
+        su: &Setup,
         pred: &DVector<f64>,
         t: &DVector<f64>,
         max_iter: usize,
@@ -222,16 +335,17 @@ impl Hbm {
         let mut y = pred.clone();
         let mut step = f64::INFINITY;
         for it in 1..=max_iter {
-            let order = y[m];
-            if !(order.is_finite() && order > 0.0) {
+            let at = su.at(y[m]);
+            let order = at.order;
+            if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
             let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-            self.assemble(&x, order, true);
+            self.assemble(&x, &at, Some(su.param.free()));
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
-            let dy = self.bordered(t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let dy = self.bordered(su, t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
             step = dy.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });
@@ -241,7 +355,7 @@ impl Hbm {
                 return Ok((y, it));
             }
         }
-        Err(HbmError::NoConvergence { order: y[m], iterations: max_iter, step })
+        Err(HbmError::NoConvergence { order: su.at(y[m]).order, iterations: max_iter, step })
     }
 
     /// Newton–chord corrector: like [`Hbm::correct`], but it iterates with the bordered matrix
@@ -251,7 +365,8 @@ impl Hbm {
     /// iterations and the refreshes.
     fn correct_chord(
         &mut self,
-        lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+        su: &Setup,
+        chord: &Chord,
         pred: &DVector<f64>,
         t: &DVector<f64>,
         max_iter: usize,
@@ -262,22 +377,23 @@ impl Hbm {
         let mut x = vec![0.0; m];
         let mut rhs = DVector::zeros(m + 1);
         let mut last = f64::INFINITY;
-        let mut fresh: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
+        let mut fresh: Option<Chord> = None;
         let mut refreshes = 0;
         for it in 1..=max_iter {
-            let order = y[m];
-            if !(order.is_finite() && order > 0.0) {
+            let at = su.at(y[m]);
+            let order = at.order;
+            if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
             x.copy_from_slice(&y.as_slice()[..m]);
-            self.assemble(&x, order, false);
+            self.assemble(&x, &at, None);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
-            let mut dy = fresh.as_ref().unwrap_or(lu).solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let mut dy = fresh.as_ref().unwrap_or(chord).solve(&rhs).ok_or(HbmError::Singular { order })?;
             let mut step = dy.amax();
             if it > 1 && step > 0.5 * last && refreshes < max_refresh {
-                self.assemble(&x, order, true);
-                let f = self.bordered(t).lu();
+                self.assemble(&x, &at, Some(su.param.free()));
+                let f = Chord { lu: self.bordered(su, t).lu(), update: None };
                 dy = f.solve(&rhs).ok_or(HbmError::Singular { order })?;
                 step = dy.amax();
                 fresh = Some(f);
@@ -294,11 +410,12 @@ impl Hbm {
             }
             last = step;
         }
-        Err(HbmError::NoConvergence { order: y[m], iterations: max_iter, step: last })
+        Err(HbmError::NoConvergence { order: su.at(y[m]).order, iterations: max_iter, step: last })
     }
 
     fn branch_point(
         &mut self,
+        su: &Setup,
         y: &DVector<f64>,
         slope: f64,
         s: f64,
@@ -307,14 +424,16 @@ impl Hbm {
     ) -> Result<BranchPoint, HbmError> {
         let m = self.unknowns();
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-        let mut sol = self.solution_from(&x, y[m], iterations);
+        let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
         if stability && self.opts.stability_samples > 0 {
             sol.stability = Some(self.stability(&sol)?);
         }
         Ok(BranchPoint {
             order: sol.order,
+            parameter: y[m] * su.p_ref,
             arclength: s,
-            order_slope: slope,
+            slope,
+            order_slope: if su.param == Parameter::Order { slope } else { 0.0 },
             accel_main: sol.order_acceleration(self.spin, 1.0),
             accel_second: sol.order_acceleration(self.spin, 2.0),
             pendulum_amplitude: sol.max_peak_amplitude(),
@@ -323,17 +442,24 @@ impl Hbm {
         })
     }
 
-    fn y_of(&self, sol: &HbmSolution) -> DVector<f64> {
+    fn y_of(&self, su: &Setup, sol: &HbmSolution) -> DVector<f64> {
         let m = self.unknowns();
         let x = self.unknowns_from(Some(sol));
         let mut y = DVector::zeros(m + 1);
         y.rows_mut(0, m).copy_from_slice(&x);
-        y[m] = sol.order;
+        y[m] = su.lambda(sol);
         y
     }
 
-    /// Secant search for `dn/ds = 0` between a (dn/ds > 0 side or < 0) and b along a's tangent.
-    fn refine_fold(&mut self, a: &Cursor, chord: f64, slope_b: f64, iterations: &mut usize) -> Option<DVector<f64>> {
+    /// Secant search for `dλ/ds = 0` between a (dλ/ds > 0 side or < 0) and b along a's tangent.
+    fn refine_fold(
+        &mut self,
+        su: &Setup,
+        a: &Cursor,
+        chord: f64,
+        slope_b: f64,
+        iterations: &mut usize,
+    ) -> Option<DVector<f64>> {
         let m = self.unknowns();
         let (mut s0, mut f0) = (0.0, a.t[m]);
         let (mut s1, mut f1) = (chord, slope_b);
@@ -345,9 +471,9 @@ impl Hbm {
             // Regula falsi (bracketing keeps it inside the segment).
             let s = s1 - f1 * (s1 - s0) / (f1 - f0);
             let pred = &a.y + &a.t * s;
-            let (y, it) = self.correct(&pred, &a.t, self.opts.max_iter).ok()?;
+            let (y, it) = self.correct(su, &pred, &a.t, self.opts.max_iter).ok()?;
             *iterations += it;
-            let f = self.tangent(&a.t, y[m]).ok()?[m];
+            let f = self.tangent(su, &a.t, su.at(y[m]).order).ok()?[m];
             best = Some(y);
             if f.abs() < 1e-6 {
                 break;
@@ -363,10 +489,8 @@ impl Hbm {
         best
     }
 
-    /// Continues the periodic solution from order `n_from` towards `n_to` (see the module docs
-    /// of the `continuation` submodule), starting from `guess` or from the rigid rotation. The
-    /// branch may turn back at folds; it ends on reaching `n_to`, on leaving the range at
-    /// `n_from`, or when the step control gives up (the points found are kept).
+    /// Continues the periodic solution from order `n_from` towards `n_to` at the problem's mean
+    /// speed and torque scale: [`Hbm::continue_in`] with [`Parameter::Order`].
     pub fn continue_in_order(
         &mut self,
         n_from: f64,
@@ -374,23 +498,65 @@ impl Hbm {
         guess: Option<&HbmSolution>,
         copts: &ContinuationOptions,
     ) -> Result<Branch, HbmError> {
-        if !(n_from.is_finite() && n_to.is_finite() && n_from > 0.0 && n_to > 0.0 && n_from != n_to) {
-            return Err(HbmError::Invalid(format!("order range {n_from} → {n_to} must be positive and non-empty")));
+        self.continue_in(Parameter::Order, n_from, n_to, guess, copts)
+    }
+
+    /// Continues the periodic solution in `parameter` from `from` towards `to` (order n; Ω in
+    /// rad/s; torque scale s), see the module docs of the `continuation` submodule, starting
+    /// from `guess` or from the rigid rotation. The parameters not continued keep the problem's
+    /// values ([`Hbm::omega`], [`Hbm::torque_scale`]) or the variant's fixed order. The branch
+    /// may turn back at folds; it ends on reaching `to`, on leaving the range at `from`, or when
+    /// the step control gives up (the points found are kept).
+    pub fn continue_in(
+        &mut self,
+        parameter: Parameter,
+        from: f64,
+        to: f64,
+        guess: Option<&HbmSolution>,
+        copts: &ContinuationOptions,
+    ) -> Result<Branch, HbmError> {
+        let bad = |m: String| Err(HbmError::Invalid(m));
+        let range_ok = from.is_finite() && to.is_finite() && from != to;
+        let (p_ref, order) = match parameter {
+            Parameter::Order => {
+                if !(range_ok && from > 0.0 && to > 0.0) {
+                    return bad(format!("order range {from} → {to} must be positive and non-empty"));
+                }
+                (1.0, from)
+            }
+            Parameter::Speed { order } => {
+                if !(range_ok && from > 0.0 && to > 0.0) {
+                    return bad(format!("speed range {from} → {to} rad/s must be positive and non-empty"));
+                }
+                (from.abs(), order)
+            }
+            Parameter::TorqueScale { order } => {
+                if !range_ok {
+                    return bad(format!("torque-scale range {from} → {to} must be finite and non-empty"));
+                }
+                (1.0, order)
+            }
+        };
+        if !(order.is_finite() && order > 0.0) {
+            return bad(format!("excitation order must be positive and finite, got {order}"));
         }
+        let su = Setup { param: parameter, p_ref, base: self.at(order) };
+        let free = parameter.free();
+        let (l_from, l_to) = (from / p_ref, to / p_ref);
         let m = self.unknowns();
-        let dir = (n_to - n_from).signum();
+        let dir = (l_to - l_from).signum();
         let mut newton = 0;
-        let sol0 = self.solve(n_from, guess)?;
+        let sol0 = self.solve_at(&su.at(l_from), guess)?;
         newton += sol0.iterations;
-        let y0 = self.y_of(&sol0);
-        // Initial tangent: the row e_n fixes dn = 1, then the sign follows the direction.
-        self.assemble(&y0.as_slice()[..m], n_from, true);
-        let mut e_n = DVector::zeros(m + 1);
-        e_n[m] = 1.0;
-        let t0 = self.tangent(&e_n, n_from)? * dir;
+        let y0 = self.y_of(&su, &sol0);
+        // Initial tangent: the row e_λ fixes dλ = 1, then the sign follows the direction.
+        self.assemble(&y0.as_slice()[..m], &su.at(l_from), Some(free));
+        let mut e_l = DVector::zeros(m + 1);
+        e_l[m] = 1.0;
+        let t0 = self.tangent(&su, &e_l, order)? * dir;
         let mut cur = Cursor { y: y0, t: t0 };
-        let mut lu = self.bordered(&cur.t).lu();
-        let mut points = vec![self.branch_point(&cur.y, cur.t[m], 0.0, sol0.iterations, copts.stability)?];
+        let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
+        let mut points = vec![self.branch_point(&su, &cur.y, cur.t[m], 0.0, sol0.iterations, copts.stability)?];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
         let mut s = 0.0;
@@ -402,7 +568,8 @@ impl Hbm {
                 break BranchEnd::StepTooSmall;
             }
             let pred = &cur.y + &cur.t * ds;
-            let (y, iters, refreshes) = match self.correct_chord(&lu, &pred, &cur.t, copts.corrector_iter, 3) {
+            let (y, iters, refreshes) = match self.correct_chord(&su, &chord_m, &pred, &cur.t, copts.corrector_iter, 3)
+            {
                 Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
@@ -411,9 +578,10 @@ impl Hbm {
             };
             newton += iters;
             // The Jacobian at the new point gives its tangent and the next chord matrix.
-            self.assemble(&y.as_slice()[..m], y[m], true);
-            let t = match self.tangent(&cur.t, y[m]) {
-                Ok(t) => t,
+            let at = su.at(y[m]);
+            self.assemble(&y.as_slice()[..m], &at, Some(free));
+            let (t, next_chord) = match self.tangent_chord(&su, &cur.t, at.order) {
+                Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
                     continue;
@@ -423,37 +591,38 @@ impl Hbm {
                 ds *= 0.5;
                 continue;
             }
-            let next_lu = self.bordered(&t).lu();
             let chord = (&y - &cur.y).norm();
-            let (n_new, n_old) = (y[m], cur.y[m]);
-            // Leaving the range: finish exactly at its end by a solve at fixed order.
-            let past_target = dir * (n_new - n_to) >= 0.0;
-            let past_start = dir * (n_new - n_from) < 0.0;
+            let (l_new, l_old) = (y[m], cur.y[m]);
+            // Leaving the range: finish exactly at its end by a solve at fixed parameter.
+            let past_target = dir * (l_new - l_to) >= 0.0;
+            let past_start = dir * (l_new - l_from) < 0.0;
             if past_target || past_start {
-                let n_end = if past_target { n_to } else { n_from };
-                let frac = (n_end - n_old) / (n_new - n_old);
+                let l_end = if past_target { l_to } else { l_from };
+                let frac = (l_end - l_old) / (l_new - l_old);
                 let y_guess = &cur.y + (&y - &cur.y) * frac;
                 let x_guess: Vec<f64> = y_guess.rows(0, m).iter().copied().collect();
-                let guess_sol = self.solution_from(&x_guess, n_end, 0);
-                let y_end = match self.solve(n_end, Some(&guess_sol)) {
+                let guess_sol = self.solution_from(&x_guess, &su.at(l_end), 0);
+                let y_end = match self.solve_at(&su.at(l_end), Some(&guess_sol)) {
                     Ok(sol) => {
                         newton += sol.iterations;
-                        self.y_of(&sol)
+                        self.y_of(&su, &sol)
                     }
                     Err(_) => y.clone(),
                 };
                 s += (&y_end - &cur.y).norm();
-                points.push(self.branch_point(&y_end, t[m], s, iters, copts.stability)?);
+                points.push(self.branch_point(&su, &y_end, t[m], s, iters, copts.stability)?);
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
             }
             if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
-                let kind = if cur.t[m] > 0.0 { FoldKind::OrderMaximum } else { FoldKind::OrderMinimum };
-                let refined = if copts.refine_folds { self.refine_fold(&cur, chord, t[m], &mut newton) } else { None };
+                let kind = if cur.t[m] > 0.0 { FoldKind::Maximum } else { FoldKind::Minimum };
+                let refined =
+                    if copts.refine_folds { self.refine_fold(&su, &cur, chord, t[m], &mut newton) } else { None };
                 let fold = match refined {
                     Some(yf) => {
-                        let p = self.branch_point(&yf, 0.0, 0.0, 0, false)?;
+                        let p = self.branch_point(&su, &yf, 0.0, 0.0, 0, false)?;
                         Fold {
                             order: p.order,
+                            parameter: p.parameter,
                             kind,
                             after: points.len() - 1,
                             accel_main: p.accel_main,
@@ -461,11 +630,13 @@ impl Hbm {
                         }
                     }
                     None => {
-                        // dn/ds linear over the chord: the fold where it vanishes.
+                        // dλ/ds linear over the chord: the fold where it vanishes.
                         let f = cur.t[m] / (cur.t[m] - t[m]);
+                        let lf = l_old + 0.5 * cur.t[m] * f * chord;
                         let last = points.last();
                         Fold {
-                            order: n_old + 0.5 * cur.t[m] * f * chord,
+                            order: su.at(lf).order,
+                            parameter: lf * p_ref,
                             kind,
                             after: points.len() - 1,
                             accel_main: last.map_or(0.0, |p| p.accel_main),
@@ -476,9 +647,9 @@ impl Hbm {
                 folds.push(fold);
             }
             s += chord;
-            points.push(self.branch_point(&y, t[m], s, iters, copts.stability)?);
+            points.push(self.branch_point(&su, &y, t[m], s, iters, copts.stability)?);
             cur = Cursor { y, t };
-            lu = next_lu;
+            chord_m = next_chord;
             if iters <= 7 && refreshes <= 1 {
                 ds = (ds * 1.5).min(copts.ds_max);
             } else if iters >= 10 || refreshes >= 3 {
@@ -486,7 +657,7 @@ impl Hbm {
             }
         };
         let bifurcations = bifurcations(&points);
-        Ok(Branch { points, folds, bifurcations, end, newton_iterations: newton })
+        Ok(Branch { parameter, points, folds, bifurcations, end, newton_iterations: newton })
     }
 }
 
@@ -515,6 +686,7 @@ fn bifurcations(points: &[BranchPoint]) -> Vec<Bifurcation> {
         out.push(Bifurcation {
             after: i,
             order: w[0].order + f * (w[1].order - w[0].order),
+            parameter: w[0].parameter + f * (w[1].parameter - w[0].parameter),
             kind,
             gains_stability: b.stable,
         });

@@ -4,10 +4,11 @@
 //! `C δq̈ + B δq̇ + A δq = 0` with the per-sample derivatives A, B, C of the harmonic balance
 //! (`C = M W` is invertible). In the state `z = (δq, δq̇)` they read `ż = 𝒜(t) z`,
 //! `𝒜 = [[0, I], [−C⁻¹A, −C⁻¹B]]`. A, B, C are those of the last Jacobian of the harmonic balance
-//! at the solution (N_t samples; no new engine calls when the continuation just assembled it),
-//! carried to N_s equally spaced instants of the period T = 2π/ω₀ by trigonometric
-//! interpolation (they are smooth periodic functions, band-limited to far below N_t/2 on the
-//! branches checked), and the monodromy matrix Φ(T) is integrated by the classical fourth-order
+//! at the solution (N_t samples; no new engine calls when the continuation just assembled it);
+//! `K = C⁻¹A` and `L = C⁻¹B` are formed at those samples and carried to N_s equally spaced
+//! instants of the period T = 2π/ω₀ by trigonometric interpolation, one FFT pair per entry
+//! (they are smooth periodic functions, band-limited to far below N_t/2 on the branches
+//! checked), and the monodromy matrix Φ(T) is integrated by the classical fourth-order
 //! Runge–Kutta method with step 2T/N_s, whose stages fall exactly on the samples (t, t + h/2,
 //! t + h). Measured on the canonical CPVA, the multipliers do not move by 1e-8 when H, N_t, N_s
 //! or the difference step change, and agree with a monodromy matrix differenced from time
@@ -61,47 +62,66 @@ impl Hbm {
         // Per-sample derivatives at this solution (reused when the last Jacobian was assembled
         // there, as in the continuation), interpolated to the N_s stability samples.
         let x = self.unknowns_from(Some(sol));
-        let same = |(xs, o): &(Vec<f64>, f64)| {
-            *o == order && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
+        let at = super::At { order, omega: sol.omega, scale: sol.torque_scale };
+        let same = |(xs, o): &(Vec<f64>, super::At)| {
+            *o == at && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
         };
         if !self.samples_at.as_ref().is_some_and(same) {
-            self.assemble(&x, order, true);
+            self.assemble(&x, &at, Some(super::Free::Order));
         }
-        let nt = self.grid.nt;
+        let nt = self.aft.nt;
         let nn = n * n;
         let w0 = sol.base_frequency;
         let period = 2.0 * PI / w0;
-        // 𝒜 at every stability sample, row-major d×d, in one flat buffer.
-        let dd = d * d;
-        let mut sys = vec![0.0; ns * dd];
-        let mut abc = vec![0.0; 3 * nn];
-        let mut ck = vec![0.0; n * 2 * n];
-        for j in 0..ns {
-            abc.iter_mut().for_each(|v| *v = 0.0);
-            for (l, &wl) in self.interp[j * nt..(j + 1) * nt].iter().enumerate() {
-                for (v, &sv) in abc.iter_mut().zip(&self.samples[l * 3 * nn..(l + 1) * 3 * nn]) {
-                    *v += wl * sv;
-                }
-            }
-            // [K | L] = C⁻¹ [A | B].
+        // [K | L] = C⁻¹ [A | B] at the N_t samples, stored as 2n² series of N_t values (entry
+        // (i, c) of the n × 2n block is series i·2n + c).
+        let m2 = 2 * nn;
+        let mut kl = vec![0.0; m2 * nt];
+        let mut ck = vec![0.0; m2];
+        let mut c = vec![0.0; nn];
+        for j in 0..nt {
+            let abc = &self.samples[j * 3 * nn..(j + 1) * 3 * nn];
             for i in 0..n {
                 for k in 0..n {
                     ck[i * 2 * n + k] = abc[i * n + k];
                     ck[i * 2 * n + n + k] = abc[nn + i * n + k];
                 }
             }
-            let mut c = abc[2 * nn..].to_vec();
+            c.copy_from_slice(&abc[2 * nn..]);
             if !solve_in_place(&mut c, &mut ck, n, 2 * n) {
                 return Err(HbmError::Singular { order });
             }
-            let a = &mut sys[j * dd..(j + 1) * dd];
-            for i in 0..n {
-                a[i * d + n + i] = 1.0;
-                for k in 0..2 * n {
-                    a[(n + i) * d + k] = -ck[i * 2 * n + k];
-                }
+            for (e, &v) in ck.iter().enumerate() {
+                kl[e * nt + j] = v;
             }
         }
+        // Each series interpolated to the N_s stability instants (one forward FFT of N_t and one
+        // inverse of N_s), then regrouped per instant: sys[j] = [K | L] at instant j.
+        let mut spec = vec![Default::default(); self.aft.half_len()];
+        let mut up = vec![0.0; ns];
+        let mut sys = vec![0.0; ns * m2];
+        for e in 0..m2 {
+            self.aft.spectrum(&kl[e * nt..(e + 1) * nt], &mut spec);
+            self.upsampler.run(&spec, nt, &mut up);
+            for (j, &v) in up.iter().enumerate() {
+                sys[j * m2 + e] = v;
+            }
+        }
+        // ż = 𝒜 z with 𝒜 = [[0, I], [−K, −L]]: the top half of 𝒜Φ is Φ's bottom half.
+        let deriv = |kl: &[f64], phi: &[f64], out: &mut [f64]| {
+            out[..n * d].copy_from_slice(&phi[n * d..]);
+            for i in 0..n {
+                let row = &kl[i * 2 * n..(i + 1) * 2 * n];
+                for col in 0..d {
+                    let mut acc = 0.0;
+                    for (k, &rk) in row.iter().enumerate() {
+                        acc += rk * phi[k * d + col];
+                    }
+                    out[(n + i) * d + col] = -acc;
+                }
+            }
+        };
+        let dd = d * d;
         let h = 2.0 * period / ns as f64;
         let mut phi = vec![0.0; dd];
         for i in 0..d {
@@ -110,17 +130,17 @@ impl Hbm {
         let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
             (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
         for step in 0..ns / 2 {
-            let a0 = &sys[2 * step * dd..(2 * step + 1) * dd];
-            let a1 = &sys[(2 * step + 1) * dd..(2 * step + 2) * dd];
+            let a0 = &sys[2 * step * m2..(2 * step + 1) * m2];
+            let a1 = &sys[(2 * step + 1) * m2..(2 * step + 2) * m2];
             let i2 = (2 * step + 2) % ns;
-            let a2 = &sys[i2 * dd..(i2 + 1) * dd];
-            matmul(a0, &phi, &mut k1, d);
+            let a2 = &sys[i2 * m2..(i2 + 1) * m2];
+            deriv(a0, &phi, &mut k1);
             axpy(&phi, &k1, 0.5 * h, &mut tmp);
-            matmul(a1, &tmp, &mut k2, d);
+            deriv(a1, &tmp, &mut k2);
             axpy(&phi, &k2, 0.5 * h, &mut tmp);
-            matmul(a1, &tmp, &mut k3, d);
+            deriv(a1, &tmp, &mut k3);
             axpy(&phi, &k3, h, &mut tmp);
-            matmul(a2, &tmp, &mut k4, d);
+            deriv(a2, &tmp, &mut k4);
             for i in 0..dd {
                 phi[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }
@@ -134,19 +154,6 @@ impl Hbm {
         multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
         let max_modulus = multipliers.first().map_or(0.0, |m| m.norm());
         Ok(Stability { multipliers, max_modulus, stable: max_modulus < 1.0 })
-    }
-}
-
-/// `out = a b` for row-major d×d matrices.
-fn matmul(a: &[f64], b: &[f64], out: &mut [f64], d: usize) {
-    for i in 0..d {
-        for j in 0..d {
-            let mut s = 0.0;
-            for k in 0..d {
-                s += a[i * d + k] * b[k * d + j];
-            }
-            out[i * d + j] = s;
-        }
     }
 }
 

@@ -1,11 +1,12 @@
 //! Harmonic balance in a study: branches of periodic steady states continued in the excitation
-//! order, stable and unstable, with their folds, drawn over the time-domain sweeps.
+//! order (or the mean speed, or the torque amplitude), stable and unstable, with their folds,
+//! drawn over the time-domain sweeps.
 
 use super::sweep::SweepRun;
-use super::{Direction, HbmSpec, Study, write_csv};
+use super::{Direction, HbmParameter, HbmSpec, Study, write_csv};
 use crate::error::{Error, Result};
 use crate::excitation::{Harmonic, rpm_to_rad_s};
-use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution};
+use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use std::fmt::Write as _;
@@ -14,17 +15,19 @@ use std::path::{Path, PathBuf};
 /// One branch of one amplitude.
 #[derive(Debug, Clone)]
 pub struct HbmBranch {
-    /// Torque amplitude T_n, N·m.
+    /// Torque amplitude T_n, N·m (NaN on a torque branch).
     pub amplitude: f64,
     /// Orders of the branch points, in continuation order.
     pub order: Vec<f64>,
+    /// The continued parameter at the branch points: the order, the speed in rpm, or T_n in N·m.
+    pub parameter: Vec<f64>,
     /// Response-body acceleration amplitude per reported multiple (outer index), rad/s².
     pub accel: Vec<Vec<f64>>,
     /// Largest peak |relative angle| of the non-spin joints, rad.
     pub relative_angle: Vec<f64>,
     /// Floquet stability per point (None: not computed).
     pub stable: Vec<Option<bool>>,
-    /// Fold (turning-point) orders.
+    /// Fold (turning-point) values of the continued parameter (orders on an order branch).
     pub folds: Vec<f64>,
     /// Other bifurcations: (order, kind) in words.
     pub bifurcations: Vec<(f64, String)>,
@@ -32,7 +35,7 @@ pub struct HbmBranch {
     pub wall_s: f64,
     /// How the branch ended, in words.
     pub end: String,
-    /// The order the continuation started from.
+    /// The parameter value the continuation started from.
     pub from: f64,
 }
 
@@ -71,29 +74,82 @@ pub(crate) fn branch(
     from: f64,
     to: f64,
 ) -> Result<(Hbm, Branch, f64)> {
+    branch_in(study, omega, harmonics, h, Parameter::Order, from, to)
+}
+
+/// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
+/// torque scale) for the excitation `harmonics` at mean speed `omega` (rad/s).
+pub(crate) fn branch_in(
+    study: &Study,
+    omega: f64,
+    harmonics: &[Harmonic],
+    h: usize,
+    parameter: Parameter,
+    from: f64,
+    to: f64,
+) -> Result<(Hbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
     let mut hbm = Hbm::new(&kane, study.spin, omega, harmonics, opts).map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
-    let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).map_err(hbm_error(study))?;
+    let b = hbm.continue_in(parameter, from, to, None, &ContinuationOptions::default()).map_err(hbm_error(study))?;
     Ok((hbm, b, start.elapsed().as_secs_f64()))
 }
 
+/// The continued parameter's range in the spec's units (order, rpm, N·m), the conversion of a
+/// branch's parameter values to those units, the axis label and the CSV column name.
+struct Axis {
+    range: (f64, f64),
+    to_unit: f64,
+    label: &'static str,
+    column: &'static str,
+}
+
+fn axis(spec: &HbmSpec) -> Axis {
+    match spec.parameter {
+        HbmParameter::Order => {
+            Axis { range: (spec.order_min, spec.order_max), to_unit: 1.0, label: "excitation order n", column: "order" }
+        }
+        HbmParameter::Speed { rpm_min, rpm_max, .. } => Axis {
+            range: (rpm_min, rpm_max),
+            to_unit: 1.0 / rpm_to_rad_s(1.0),
+            label: "mean speed, rpm",
+            column: "rpm",
+        },
+        HbmParameter::Torque { min, max, .. } => {
+            Axis { range: (min, max), to_unit: 1.0, label: "torque amplitude T_n, N·m", column: "torque_Nm" }
+        }
+    }
+}
+
 pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path) -> Result<Output> {
-    let omega = rpm_to_rad_s(spec.rpm);
     let path = study.mechanism.path_to(study.body);
+    let ax = axis(spec);
+    // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
+    let (cases, parameter, omega, scale): (Vec<f64>, Parameter, f64, f64) = match spec.parameter {
+        HbmParameter::Order => (spec.amplitudes.clone(), Parameter::Order, rpm_to_rad_s(spec.rpm), 1.0),
+        HbmParameter::Speed { order, rpm_min, .. } => {
+            (spec.amplitudes.clone(), Parameter::Speed { order }, rpm_to_rad_s(rpm_min), rpm_to_rad_s(1.0))
+        }
+        HbmParameter::Torque { order, .. } => {
+            (vec![f64::NAN], Parameter::TorqueScale { order }, rpm_to_rad_s(spec.rpm), 1.0)
+        }
+    };
     let mut branches = Vec::new();
-    for &amp in &spec.amplitudes {
-        let harmonics = [Harmonic { multiple: 1.0, amplitude: amp, phase: 0.0 }];
-        // From above, the continuation follows the branch that comes down from high orders; from
-        // below, the one that comes up from low orders. Where the response is S-shaped and a fold
+    for &amp in &cases {
+        let harmonics = [Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }];
+        // From above, the continuation follows the branch that comes down from high values; from
+        // below, the one that comes up from low values. Where the response is S-shaped and a fold
         // lies outside the range, each reaches sheets the other cannot.
-        for (from, to) in [(spec.order_max, spec.order_min), (spec.order_min, spec.order_max)] {
-            let (_, b, wall_s) = branch(study, omega, &harmonics, spec.harmonics, from, to)?;
+        let (lo, hi) = ax.range;
+        for (from, to) in [(hi, lo), (lo, hi)] {
+            let (_, b, wall_s) =
+                branch_in(study, omega, &harmonics, spec.harmonics, parameter, from * scale, to * scale)?;
             let p = &b.points;
             branches.push(HbmBranch {
                 amplitude: amp,
                 order: p.iter().map(|x| x.order).collect(),
+                parameter: p.iter().map(|x| x.parameter * ax.to_unit).collect(),
                 accel: spec
                     .multiples
                     .iter()
@@ -101,8 +157,12 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
                     .collect(),
                 relative_angle: p.iter().map(|x| relative_peak(&x.solution, study.spin)).collect(),
                 stable: p.iter().map(|x| x.stable).collect(),
-                folds: b.folds.iter().map(|f| f.order).collect(),
-                bifurcations: b.bifurcations.iter().map(|x| (x.order, format!("{:?}", x.kind))).collect(),
+                folds: b.folds.iter().map(|f| f.parameter * ax.to_unit).collect(),
+                bifurcations: b
+                    .bifurcations
+                    .iter()
+                    .map(|x| (x.parameter * ax.to_unit, format!("{:?}", x.kind)))
+                    .collect(),
                 wall_s,
                 end: format!("{:?}", b.end),
                 from,
@@ -112,8 +172,8 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
 
     let mut files = Vec::new();
     for br in &branches {
-        let mut header = vec!["order".to_string()];
-        let mut cols = vec![br.order.clone()];
+        let mut header = vec![ax.column.to_string()];
+        let mut cols = vec![br.parameter.clone()];
         for (k, m) in spec.multiples.iter().enumerate() {
             header.push(format!("accel_{m}x_rad_s2"));
             cols.push(br.accel[k].clone());
@@ -122,8 +182,12 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         cols.push(br.relative_angle.clone());
         header.push("stable".into());
         cols.push(br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect());
-        let dir_tag = if br.from > spec.order_min { "from_above" } else { "from_below" };
-        let csv = dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, br.amplitude));
+        let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
+        let csv = if br.amplitude.is_nan() {
+            dir.join(format!("{}_{dir_tag}.csv", spec.name))
+        } else {
+            dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, br.amplitude))
+        };
         let h: Vec<&str> = header.iter().map(String::as_str).collect();
         let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
         write_csv(&csv, &h, &c)?;
@@ -134,8 +198,8 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
         None => Vec::new(),
     };
-    let panels: Vec<Panel> = spec
-        .amplitudes
+    let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
+    let panels: Vec<Panel> = cases
         .iter()
         .map(|&amp| {
             let mut series = Vec::new();
@@ -153,7 +217,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
             }
             let mut labelled = [false; 2];
             let mut markers: Vec<(f64, String)> = Vec::new();
-            for br in branches.iter().filter(|b| b.amplitude == amp) {
+            for br in branches.iter().filter(|b| same(b.amplitude, amp)) {
                 for k in 0..spec.multiples.len() {
                     push_segments(&mut series, br, k, k == 0, &mut labelled);
                 }
@@ -161,12 +225,17 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
             }
             markers.sort_by(|a, b| a.0.total_cmp(&b.0));
             markers.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-3);
+            let title = match spec.parameter {
+                HbmParameter::Order => format!("Harmonic balance, T_n = {amp} N·m, {} rpm", spec.rpm),
+                HbmParameter::Speed { order, .. } => format!("Harmonic balance, T_n = {amp} N·m, n = {order}"),
+                HbmParameter::Torque { order, .. } => format!("Harmonic balance, n = {order}, {} rpm", spec.rpm),
+            };
             Panel {
-                title: format!("Harmonic balance, T_n = {amp} N·m, {} rpm", spec.rpm),
-                x_label: "excitation order n".into(),
+                title,
+                x_label: ax.label.into(),
                 y_label: format!("{} angular acceleration, rad/s²", study.spec.response_body),
                 log_y: true,
-                x_range: Some((spec.order_min, spec.order_max)),
+                x_range: Some(ax.range),
                 markers,
                 series,
                 ..Panel::default()
@@ -178,14 +247,22 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
     files.push(svg);
 
     let mut md = String::new();
+    let head = match spec.parameter {
+        HbmParameter::Order => {
+            format!("{} rpm, n from {} down to {} and back", spec.rpm, spec.order_max, spec.order_min)
+        }
+        HbmParameter::Speed { order, rpm_min, rpm_max } => {
+            format!("n = {order}, speed from {rpm_max} down to {rpm_min} rpm and back")
+        }
+        HbmParameter::Torque { order, min, max } => {
+            format!("n = {order}, {} rpm, T_n from {max} down to {min} N·m and back", spec.rpm)
+        }
+    };
+    let _ = writeln!(md, "## Harmonic balance `{}`: {head}, H = {}\n", spec.name, spec.harmonics);
     let _ = writeln!(
         md,
-        "## Harmonic balance `{}`: {} rpm, n from {} down to {}, H = {}\n",
-        spec.name, spec.rpm, spec.order_max, spec.order_min, spec.harmonics
-    );
-    let _ = writeln!(
-        md,
-        "| T_n (N·m) | continued from n | points | stable / unstable | fold orders | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |"
+        "| T_n (N·m) | continued from ({}) | points | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |",
+        ax.column
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
     // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
@@ -198,7 +275,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         let _ = writeln!(
             md,
             "| {} | {} | {} | {stable} / {unstable} | {} | {} | {} | {:.1} | {} |",
-            br.amplitude,
+            if br.amplitude.is_nan() { "continued".to_string() } else { br.amplitude.to_string() },
             br.from,
             br.order.len(),
             list(&br.folds),
@@ -243,7 +320,7 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
             } else {
                 format!("HBM, {}", if s { "stable" } else { "unstable" })
             },
-            x: br.order[i..=end].to_vec(),
+            x: br.parameter[i..=end].to_vec(),
             y: br.accel[k][i..=end].to_vec(),
             color: k,
             style: if s { LineStyle::Solid } else { LineStyle::Dashed },

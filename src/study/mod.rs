@@ -250,14 +250,49 @@ fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
                 &l.name
             }
             AnalysisSpec::HarmonicBalance(h) => {
-                if !pos(h.rpm) {
+                let order_range = !(h.order_min == 0.0 && h.order_max == 0.0);
+                let (needs_rpm, needs_orders, needs_amplitudes) = match h.parameter {
+                    HbmParameter::Order => (true, true, true),
+                    HbmParameter::Speed { order, rpm_min, rpm_max } => {
+                        if !(pos(order) && pos(rpm_min) && pos(rpm_max) && rpm_min < rpm_max) {
+                            return Err(src.error(
+                                &format!("{path}.parameter"),
+                                "Speed needs order > 0 and 0 < rpm_min < rpm_max",
+                            ));
+                        }
+                        (false, false, true)
+                    }
+                    HbmParameter::Torque { order, min, max } => {
+                        if !(pos(order) && pos(min) && pos(max) && min < max) {
+                            return Err(src.error(
+                                &format!("{path}.parameter"),
+                                "Torque needs order > 0 and 0 < min < max (N·m)",
+                            ));
+                        }
+                        (true, false, false)
+                    }
+                };
+                let what = "a Speed or Torque continuation takes its range from `parameter`";
+                if needs_rpm && !pos(h.rpm) {
                     return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
                 }
-                if !(pos(h.order_min) && pos(h.order_max) && h.order_min < h.order_max) {
+                if !needs_rpm && h.rpm != 0.0 {
+                    return Err(src.error(&format!("{path}.rpm"), format!("{what}: leave `rpm` out")));
+                }
+                if needs_orders && !(pos(h.order_min) && pos(h.order_max) && h.order_min < h.order_max) {
                     return Err(src.error(&format!("{path}.order_min"), "need 0 < order_min < order_max"));
                 }
-                if h.amplitudes.is_empty() || h.amplitudes.iter().any(|a| !a.is_finite()) {
+                if !needs_orders && order_range {
+                    return Err(src.error(&format!("{path}.order_min"), format!("{what}: leave the order range out")));
+                }
+                if !needs_orders && h.overlay.is_some() {
+                    return Err(src.error(&format!("{path}.overlay"), "sweeps can only be overlaid on order branches"));
+                }
+                if needs_amplitudes && (h.amplitudes.is_empty() || h.amplitudes.iter().any(|a| !a.is_finite())) {
                     return Err(src.error(&format!("{path}.amplitudes"), "give at least one finite amplitude (N·m)"));
+                }
+                if !needs_amplitudes && !h.amplitudes.is_empty() {
+                    return Err(src.error(&format!("{path}.amplitudes"), format!("{what}: leave `amplitudes` out")));
                 }
                 if h.harmonics == 0 || h.harmonics > 64 {
                     return Err(src.error(&format!("{path}.harmonics"), "need 1 to 64 harmonics"));

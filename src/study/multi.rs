@@ -45,6 +45,11 @@ pub struct SpeedResult {
     pub linear_locked: Option<Vec<f64>>,
     /// Every periodic steady state found by harmonic balance at this speed.
     pub hbm: Vec<HbmState>,
+    /// The torque scale s < 1 (every harmonic's amplitude times s) at which the low-amplitude
+    /// branch, continued up from s = 0.01 at this speed and order, turns back at a fold: with
+    /// the full torques (s = 1) that state no longer exists. None when it reaches s = 1 (or
+    /// harmonic balance was not asked for).
+    pub hbm_lower_fold: Option<f64>,
 }
 
 /// One periodic steady state by harmonic balance.
@@ -138,13 +143,15 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
             linear: linear.get(i).cloned(),
             linear_locked: linear_locked.get(i).cloned(),
             hbm: Vec::new(),
+            hbm_lower_fold: None,
         })
         .collect();
     let mut speeds = speeds;
     if spec.hbm {
-        let states: Vec<Result<Vec<HbmState>>> = spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
+        let states: Vec<Result<(Vec<HbmState>, Option<f64>)>> =
+            spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
         for (s, st) in speeds.iter_mut().zip(states) {
-            s.hbm = st?;
+            (s.hbm, s.hbm_lower_fold) = st?;
         }
     }
     let result =
@@ -250,7 +257,9 @@ fn fmt_mult(m: f64) -> String {
 /// `order + 0.4` down to `order − 0.4` and back up (a branch crosses the operating order once per
 /// sheet of an S-shaped response, and each direction reaches the sheets connected to its start),
 /// and each crossing is solved exactly at the order.
-fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<Vec<HbmState>> {
+/// The harmonic-balance states at one speed, and where the low-amplitude branch ends in torque
+/// scale if below 1 (see [`SpeedResult::hbm_lower_fold`]).
+fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Option<f64>)> {
     let omega = rpm_to_rad_s(p.rpm);
     let path = study.mechanism.path_to(study.body);
     let mut out: Vec<HbmState> = Vec::new();
@@ -272,7 +281,11 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
         }
     }
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
-    Ok(out)
+    // Both torques scaled together from nearly nothing (the linear response) up to the table's.
+    let param = crate::hbm::Parameter::TorqueScale { order: spec.order };
+    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, 10, param, 0.01, 1.0)?;
+    let fold = up.folds.first().filter(|f| f.kind == crate::hbm::FoldKind::Maximum).map(|f| f.parameter);
+    Ok((out, fold))
 }
 
 /// Amplitudes indexed `[speed][multiple]`, rad/s².
@@ -456,8 +469,11 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     md.push('\n');
     if spec.hbm {
         let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
-        let _ = writeln!(md, "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM |");
-        let _ = writeln!(md, "|---|---|---|");
+        let _ = writeln!(
+            md,
+            "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM | low-amplitude branch |"
+        );
+        let _ = writeln!(md, "|---|---|---|---|");
         for s in &r.speeds {
             let states: Vec<String> = s
                 .hbm
@@ -473,9 +489,18 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
                 })
                 .collect();
             let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{:.2e} relative", d));
-            let _ = writeln!(md, "| {} | {} | {m} |", s.rpm, states.join(" "));
+            let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
+                format!("ends at {:.4} × the torques (fold): only the upper state remains", f)
+            });
+            let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
         }
         md.push('\n');
+        let _ = writeln!(
+            md,
+            "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
+             at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
+             and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
+        );
     }
     md
 }

@@ -102,20 +102,26 @@ pub enum AnalysisSpec {
     HarmonicBalance(HbmSpec),
 }
 
-/// Harmonic balance of a single-order excitation `T_n sin(nΩt)`, continued in n from `order_max`
-/// down to `order_min` (so an S-shaped branch is traced whole), for each amplitude.
+/// Harmonic balance of a single-order excitation `T_n sin(nΩt)`, continued in the excitation
+/// order (the default), the mean speed or the torque amplitude, from each end of the range (so
+/// an S-shaped branch is traced whole).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HbmSpec {
     /// Name (file prefix).
     pub name: String,
-    /// Mean speed, rpm.
+    /// Mean speed, rpm (not given for a `Speed` continuation).
+    #[serde(default)]
     pub rpm: f64,
-    /// Lower end of the order range.
+    /// Lower end of the order range (an `Order` continuation only).
+    #[serde(default)]
     pub order_min: f64,
-    /// Upper end of the order range.
+    /// Upper end of the order range (an `Order` continuation only).
+    #[serde(default)]
     pub order_max: f64,
-    /// Torque amplitudes T_n, N·m.
+    /// Torque amplitudes T_n, N·m, one pair of branches each (not given for a `Torque`
+    /// continuation).
+    #[serde(default)]
     pub amplitudes: Vec<f64>,
     /// Harmonics of nΩ kept (default 10).
     #[serde(default = "default_harmonics")]
@@ -123,9 +129,41 @@ pub struct HbmSpec {
     /// Harmonic multiples reported (default 1 and 2).
     #[serde(default = "default_multiples")]
     pub multiples: Vec<f64>,
-    /// Name of an `OrderSweep` of the same study whose traces are drawn under the branches.
+    /// Name of an `OrderSweep` of the same study whose traces are drawn under the branches (an
+    /// `Order` continuation only).
     #[serde(default)]
     pub overlay: Option<String>,
+    /// The continued parameter (default `Order`).
+    #[serde(default)]
+    pub parameter: HbmParameter,
+}
+
+/// What a `HarmonicBalance` analysis continues.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum HbmParameter {
+    /// The excitation order, over `order_min`..`order_max` at `rpm`, per amplitude.
+    #[default]
+    Order,
+    /// The mean speed over `rpm_min`..`rpm_max` (rpm) at the fixed excitation order `order`, per
+    /// amplitude.
+    Speed {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Lower end of the speed range, rpm.
+        rpm_min: f64,
+        /// Upper end of the speed range, rpm.
+        rpm_max: f64,
+    },
+    /// The torque amplitude T_n over `min`..`max` (N·m) at the fixed excitation order `order`
+    /// and `rpm`.
+    Torque {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Lower end of the amplitude range, N·m.
+        min: f64,
+        /// Upper end of the amplitude range, N·m.
+        max: f64,
+    },
 }
 
 fn default_harmonics() -> usize {
