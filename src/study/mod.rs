@@ -251,24 +251,22 @@ fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
             }
             AnalysisSpec::HarmonicBalance(h) => {
                 let order_range = !(h.order_min == 0.0 && h.order_max == 0.0);
+                // A continuation range: a positive order and 0 < min < max.
+                let range_ok = |order: f64, min: f64, max: f64, message: &str| {
+                    if pos(order) && pos(min) && pos(max) && min < max {
+                        Ok(())
+                    } else {
+                        Err(src.error(&format!("{path}.parameter"), message))
+                    }
+                };
                 let (needs_rpm, needs_orders, needs_amplitudes) = match h.parameter {
                     HbmParameter::Order => (true, true, true),
                     HbmParameter::Speed { order, rpm_min, rpm_max } => {
-                        if !(pos(order) && pos(rpm_min) && pos(rpm_max) && rpm_min < rpm_max) {
-                            return Err(src.error(
-                                &format!("{path}.parameter"),
-                                "Speed needs order > 0 and 0 < rpm_min < rpm_max",
-                            ));
-                        }
+                        range_ok(order, rpm_min, rpm_max, "Speed needs order > 0 and 0 < rpm_min < rpm_max")?;
                         (false, false, true)
                     }
                     HbmParameter::Torque { order, min, max } => {
-                        if !(pos(order) && pos(min) && pos(max) && min < max) {
-                            return Err(src.error(
-                                &format!("{path}.parameter"),
-                                "Torque needs order > 0 and 0 < min < max (N·m)",
-                            ));
-                        }
+                        range_ok(order, min, max, "Torque needs order > 0 and 0 < min < max (N·m)")?;
                         (true, false, false)
                     }
                 };
