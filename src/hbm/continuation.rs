@@ -158,6 +158,15 @@ pub struct BranchPoint {
     pub stable: Option<bool>,
     /// The full solution.
     pub solution: HbmSolution,
+    /// Derivatives along the branch (per unit of `arclength`) of the solution's Fourier
+    /// coefficients (layout of [`HbmSolution::coefficients`], rad), of its mean torque (N·m) and
+    /// of the continued parameter (its units): the branch tangent, for [`Branch::interpolate`].
+    /// Empty when not known (a refined fold).
+    pub d_coefficients: Vec<f64>,
+    /// See `d_coefficients`: d T_m / ds, N·m.
+    pub d_mean_torque: f64,
+    /// See `d_coefficients`: d parameter / ds.
+    pub d_parameter: f64,
 }
 
 /// Direction of the turn at a fold.
@@ -259,6 +268,58 @@ impl Branch {
                 }
             })
             .collect()
+    }
+
+    /// The state at fraction `sigma` ∈ [0, 1] of the segment from point `i` to point `i + 1`, by
+    /// cubic Hermite interpolation in arclength of the Fourier coefficients, the mean torque and
+    /// the parameter, with the branch tangents as end slopes. The error is fourth order in the
+    /// step, so a few interpolated states per segment draw a branch smoothly where the amplitudes
+    /// change fast between the solved points (near an antiresonance, where a harmonic's
+    /// coefficients pass close to zero, its amplitude has a sharp minimum). Not a solution of the
+    /// equations: `residual` is NaN, `stability` None, `iterations` 0. Falls back to linear
+    /// interpolation when a tangent is unknown. None when `i + 1` is not a point.
+    pub fn interpolate(&self, i: usize, sigma: f64) -> Option<HbmSolution> {
+        let (a, b) = (self.points.get(i)?, self.points.get(i + 1)?);
+        let h = b.arclength - a.arclength;
+        let s = sigma.clamp(0.0, 1.0);
+        let (s2, s3) = (s * s, s * s * s);
+        // Hermite basis: values at the ends, slopes (per unit σ, i.e. h·d/ds) at the ends.
+        let (h00, h10, h01, h11) = (2.0 * s3 - 3.0 * s2 + 1.0, s3 - 2.0 * s2 + s, 3.0 * s2 - 2.0 * s3, s3 - s2);
+        let hermite = h > 0.0
+            && a.d_coefficients.len() == a.solution.coefficients.len()
+            && b.d_coefficients.len() == a.d_coefficients.len();
+        let mix = |y0: f64, y1: f64, d0: f64, d1: f64| {
+            if hermite { h00 * y0 + h10 * h * d0 + h01 * y1 + h11 * h * d1 } else { y0 + s * (y1 - y0) }
+        };
+        let (ca, cb) = (&a.solution.coefficients, &b.solution.coefficients);
+        if ca.len() != cb.len() {
+            return None;
+        }
+        let coefficients = (0..ca.len())
+            .map(|j| {
+                let (d0, d1) = if hermite { (a.d_coefficients[j], b.d_coefficients[j]) } else { (0.0, 0.0) };
+                mix(ca[j], cb[j], d0, d1)
+            })
+            .collect();
+        let p = mix(a.parameter, b.parameter, a.d_parameter, b.d_parameter);
+        let mut sol = HbmSolution {
+            coefficients,
+            mean_torque: mix(a.solution.mean_torque, b.solution.mean_torque, a.d_mean_torque, b.d_mean_torque),
+            iterations: 0,
+            residual: f64::NAN,
+            stability: None,
+            ..a.solution.clone()
+        };
+        match self.parameter {
+            Parameter::Order => sol.order = p,
+            Parameter::Speed { .. } => sol.omega = p,
+            Parameter::TorqueScale { .. } => sol.torque_scale = p,
+        }
+        // ω₀ is a fixed multiple of nΩ.
+        sol.base_frequency = a.solution.base_frequency / (a.solution.order * a.solution.omega) * sol.order * sol.omega;
+        sol.top_harmonic_ratio = sol.harmonic_ratio();
+        sol.needs_more_harmonics = a.solution.needs_more_harmonics || b.solution.needs_more_harmonics;
+        Some(sol)
     }
 }
 
@@ -437,12 +498,20 @@ impl Hbm {
         &mut self,
         su: &Setup,
         y: &DVector<f64>,
-        slope: f64,
+        tangent: Option<&DVector<f64>>,
         s: f64,
         iterations: usize,
         stability: bool,
     ) -> Result<BranchPoint, HbmError> {
         let m = self.unknowns();
+        let slope = tangent.map_or(0.0, |t| t[m]);
+        let (mut d_coefficients, mut d_mean_torque) = (Vec::new(), 0.0);
+        if let Some(t) = tangent {
+            d_coefficients = t.as_slice()[..m].to_vec();
+            let gauge = self.spin * self.nb;
+            d_mean_torque = d_coefficients[gauge] * self.t_scale;
+            d_coefficients[gauge] = 0.0;
+        }
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
         let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
         if stability && self.opts.stability_samples > 0 {
@@ -459,6 +528,9 @@ impl Hbm {
             pendulum_amplitude: sol.max_peak_amplitude(),
             stable: sol.stability.as_ref().map(|st| st.stable),
             solution: sol,
+            d_coefficients,
+            d_mean_torque,
+            d_parameter: slope * su.p_ref,
         })
     }
 
@@ -601,7 +673,7 @@ impl Hbm {
         let t0 = self.tangent(&su, &e_l, order)? * dir;
         let mut cur = Cursor { y: y0, t: t0 };
         let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
-        let mut points = vec![self.branch_point(&su, &cur.y, cur.t[m], 0.0, sol0.iterations, copts.stability)?];
+        let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, sol0.iterations, copts.stability)?];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
         let mut s = 0.0;
@@ -662,7 +734,11 @@ impl Hbm {
                     Err(_) => y.clone(),
                 };
                 s += (&y_end - &cur.y).norm();
-                points.push(self.branch_point(&su, &y_end, t[m], s, iters, copts.stability)?);
+                // The tangent at the end point itself (for the dense output); the Jacobian is
+                // the one the stability analysis needs there anyway.
+                self.assemble(&y_end.as_slice()[..m], &su.at(y_end[m]), Some(free));
+                let t_end = self.tangent(&su, &t, su.at(y_end[m]).order).unwrap_or(t);
+                points.push(self.branch_point(&su, &y_end, Some(&t_end), s, iters, copts.stability)?);
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
             }
             if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
@@ -671,7 +747,7 @@ impl Hbm {
                     if copts.refine_folds { self.refine_fold(&su, &cur, chord, t[m], &mut newton) } else { None };
                 let fold = match refined {
                     Some(yf) => {
-                        let p = self.branch_point(&su, &yf, 0.0, 0.0, 0, false)?;
+                        let p = self.branch_point(&su, &yf, None, 0.0, 0, false)?;
                         Fold {
                             order: p.order,
                             parameter: p.parameter,
@@ -699,7 +775,7 @@ impl Hbm {
                 folds.push(fold);
             }
             s += chord;
-            points.push(self.branch_point(&su, &y, t[m], s, iters, copts.stability)?);
+            points.push(self.branch_point(&su, &y, Some(&t), s, iters, copts.stability)?);
             prev = Some((std::mem::replace(&mut cur.t, t.clone()), chord));
             cur = Cursor { y, t };
             chord_m = next_chord;

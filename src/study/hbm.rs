@@ -37,7 +37,21 @@ pub struct HbmBranch {
     pub end: String,
     /// The parameter value the continuation started from.
     pub from: f64,
+    /// The drawn curve: the branch points with [`CURVE_SUBDIVISION`] − 1 Hermite-interpolated
+    /// states ([`Branch::interpolate`]) between each two, in the parameter's units.
+    pub curve_parameter: Vec<f64>,
+    /// Acceleration amplitudes along the drawn curve, per reported multiple, rad/s².
+    pub curve_accel: Vec<Vec<f64>>,
+    /// Stability along the drawn curve (an interpolated state takes its nearer point's).
+    pub curve_stable: Vec<Option<bool>>,
 }
+
+/// Parts per branch segment in the drawn curve. The step control follows the whole unknown
+/// vector, dominated by the pendulum coefficients, so across an antiresonance of the rotor the
+/// solved points lie far apart on the rotor's amplitude curve (in the 40 N·m case the straight
+/// line between two points misses the solved mid-state by 28 % of the amplitude, the Hermite
+/// mid-state by 1.2 %, `tests/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
+pub const CURVE_SUBDIVISION: usize = 8;
 
 pub(crate) struct Output {
     pub markdown: String,
@@ -146,7 +160,32 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
             let (_, b, wall_s) =
                 branch_in(study, omega, &harmonics, spec.harmonics, parameter, from * scale, to * scale)?;
             let p = &b.points;
+            let mut curve: Vec<(HbmSolution, Option<bool>)> = Vec::new();
+            for i in 0..p.len() {
+                curve.push((p[i].solution.clone(), p[i].stable));
+                if i + 1 == p.len() {
+                    break;
+                }
+                for j in 1..CURVE_SUBDIVISION {
+                    let sigma = j as f64 / CURVE_SUBDIVISION as f64;
+                    if let Some(sol) = b.interpolate(i, sigma) {
+                        curve.push((sol, if sigma < 0.5 { p[i].stable } else { p[i + 1].stable }));
+                    }
+                }
+            }
+            let param_of = |sol: &HbmSolution| match parameter {
+                Parameter::Order => sol.order,
+                Parameter::Speed { .. } => sol.omega,
+                Parameter::TorqueScale { .. } => sol.torque_scale,
+            };
             branches.push(HbmBranch {
+                curve_parameter: curve.iter().map(|(sol, _)| param_of(sol) * ax.to_unit).collect(),
+                curve_accel: spec
+                    .multiples
+                    .iter()
+                    .map(|&m| curve.iter().map(|(sol, _)| body_accel(sol, &path, m)).collect())
+                    .collect(),
+                curve_stable: curve.iter().map(|(_, st)| *st).collect(),
                 amplitude: amp,
                 order: p.iter().map(|x| x.order).collect(),
                 parameter: p.iter().map(|x| x.parameter * ax.to_unit).collect(),
@@ -301,18 +340,19 @@ fn list(v: &[f64]) -> String {
     if v.is_empty() { "none".into() } else { v.iter().map(|x| format!("{x:.5}")).collect::<Vec<_>>().join(", ") }
 }
 
-/// Splits a branch into runs of equal stability, solid when stable, dashed when not; only the
-/// first stable and first unstable segment of the main order get a legend entry.
+/// Splits a branch's drawn curve into runs of equal stability, solid when stable, dashed when
+/// not; only the first stable and first unstable segment of the main order get a legend entry.
 fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: bool, labelled: &mut [bool; 2]) {
+    let len = br.curve_parameter.len();
     let mut i = 0;
-    while i < br.order.len() {
-        let s = br.stable[i] != Some(false);
+    while i < len {
+        let s = br.curve_stable[i] != Some(false);
         let mut j = i;
-        while j + 1 < br.order.len() && (br.stable[j + 1] != Some(false)) == s {
+        while j + 1 < len && (br.curve_stable[j + 1] != Some(false)) == s {
             j += 1;
         }
         // Overlap one point so the segments join.
-        let end = (j + 1).min(br.order.len() - 1);
+        let end = (j + 1).min(len - 1);
         let idx = usize::from(!s);
         series.push(Series {
             label: if labelled[idx] || !legend {
@@ -320,8 +360,8 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
             } else {
                 format!("HBM, {}", if s { "stable" } else { "unstable" })
             },
-            x: br.parameter[i..=end].to_vec(),
-            y: br.accel[k][i..=end].to_vec(),
+            x: br.curve_parameter[i..=end].to_vec(),
+            y: br.curve_accel[k][i..=end].to_vec(),
             color: k,
             style: if s { LineStyle::Solid } else { LineStyle::Dashed },
         });
