@@ -142,9 +142,10 @@ pub struct HbmOptions {
     /// Central-difference step for the per-sample derivatives: rad for angles, and relative
     /// (times max(1, |q̇|)) for rates.
     pub fd_step: f64,
-    /// Samples per period N_s for the Floquet monodromy (even, ≥ 8; 0 disables stability): RK4
-    /// with step 2T/N_s (T = 2π/ω₀) on the variational equations, whose coefficients are
-    /// interpolated from the N_t samples of the harmonic balance.
+    /// Samples per period N_s for the Floquet monodromy (a multiple of 4, ≥ 8; 0 disables
+    /// stability): RK4 with steps 2T/N_s and 4T/N_s (T = 2π/ω₀), Richardson-extrapolated, on the
+    /// variational equations, whose coefficients are interpolated from the N_t samples of the
+    /// harmonic balance.
     pub stability_samples: usize,
 }
 
@@ -563,8 +564,11 @@ impl Hbm {
         if nt < 2 * opts.harmonics + 1 {
             return bad(format!("{nt} time samples cannot resolve {} harmonics (need ≥ 2H + 1)", opts.harmonics));
         }
-        if opts.stability_samples != 0 && (opts.stability_samples < 8 || !opts.stability_samples.is_multiple_of(2)) {
-            return bad(format!("stability_samples must be even and ≥ 8 (or 0), got {}", opts.stability_samples));
+        if opts.stability_samples != 0 && (opts.stability_samples < 8 || !opts.stability_samples.is_multiple_of(4)) {
+            return bad(format!(
+                "stability_samples must be a multiple of 4 and ≥ 8 (or 0), got {}",
+                opts.stability_samples
+            ));
         }
         // Base frequency: the multiples as fractions k_i/d with a common denominator d ≤ 12.
         let mut ratio = 1.0;
