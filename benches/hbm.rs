@@ -1,5 +1,5 @@
-//! Harmonic balance: one full branch 2.9 → 3.3 of the canonical CPVA at 40 N·m, 1000 rpm, with
-//! Floquet stability at every point.
+//! Harmonic balance: the full branch of the canonical CPVA at 40 N·m, 1000 rpm, continued from
+//! below (2.9 → 3.3) and from above (3.3 → 2.9), with Floquet stability at every point.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kanedyn::cpva::CpvaParams;
@@ -18,6 +18,12 @@ fn branch(c: &mut Criterion) {
         b.iter(|| {
             let mut p = hbm.clone();
             black_box(p.continue_in_order(2.9, 3.3, None, &copts).expect("branch"))
+        })
+    });
+    c.bench_function("hbm/branch_40_from_above", |b| {
+        b.iter(|| {
+            let mut p = hbm.clone();
+            black_box(p.continue_in_order(3.3, 2.9, None, &copts).expect("branch"))
         })
     });
 }

@@ -46,6 +46,15 @@ fn numeric_m_and_f_equal_eq7_for_1_2_4_pendulums() {
             worst = worst.max(em).max(ef);
             assert!(em <= 1e-12, "N = {n_pend}: M differs by {em:e} (relative) at q = {q:?}");
             assert!(ef <= 1e-12, "N = {n_pend}: F differs by {ef:e} (relative) at q = {q:?}, u = {u:?}");
+            // The slice accessor (row-major) gives the same numbers.
+            let (mr, fr) = kane.mass_matrix_and_forcing_rows(0.0, &q, &u);
+            let k = n_pend + 1;
+            for r in 0..k {
+                assert!((fr[r] - f_cf[r]).abs() <= 1e-12 * f_cf.amax());
+                for c in 0..k {
+                    assert!((mr[r * k + c] - m_cf[(r, c)]).abs() <= 1e-12 * max_abs(&m_cf));
+                }
+            }
         }
     }
     println!("largest relative difference to eq. (7): {worst:e}");

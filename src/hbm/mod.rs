@@ -391,11 +391,11 @@ impl Evaluator {
         let n = self.n;
         self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
         self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
-        let (m, f) = self.kane.mass_matrix_and_forcing(t, q, &self.u);
+        let (m, f) = self.kane.mass_matrix_and_forcing_rows(t, q, &self.u);
         for i in 0..n {
             let mut s = -f[i] - self.g[i] * torque;
             for j in 0..n {
-                s += m[(i, j)] * self.ud[j];
+                s += m[i * n + j] * self.ud[j];
             }
             r[i] = s;
         }
@@ -404,7 +404,7 @@ impl Evaluator {
                 for k in 0..n {
                     let mut s = 0.0;
                     for j in 0..n {
-                        s += m[(i, j)] * self.w[j * n + k];
+                        s += m[i * n + j] * self.w[j * n + k];
                     }
                     mw[i * n + k] = s;
                 }
