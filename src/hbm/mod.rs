@@ -358,6 +358,9 @@ struct Evaluator {
     ud: Vec<f64>,
     rp: Vec<f64>,
     rm: Vec<f64>,
+    /// ∂R/∂u and M (row-major) from the engine's closed-form derivatives.
+    rp_du: Vec<f64>,
+    rp_m: Vec<f64>,
 }
 
 /// Per-sample linearisation: R, and row-major `A = ∂R/∂q`, `B = ∂R/∂q̇`, `C = ∂R/∂q̈`.
@@ -427,6 +430,28 @@ impl Evaluator {
         lin: &mut SampleLin,
     ) {
         let n = self.n;
+        // Closed-form derivatives where the engine has them (absolute speeds, no gravity or
+        // point forces): one evaluation instead of 1 + 2(n − 1) + 2n (measured: −20 % of the
+        // instructions of a CPVA branch).
+        self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
+        self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
+        let (du, m) = (&mut self.rp_du, &mut self.rp_m);
+        if self.kane.residual_jacobian(t, q, &self.u, &self.ud, &mut lin.r, &mut lin.a, du, m) {
+            for i in 0..n {
+                lin.r[i] -= self.g[i] * torque;
+                lin.a[i * n + spin] = 0.0;
+                for k in 0..n {
+                    let (mut b, mut c) = (0.0, 0.0);
+                    for j in 0..n {
+                        b += du[i * n + j] * self.w[j * n + k];
+                        c += m[i * n + j] * self.w[j * n + k];
+                    }
+                    lin.b[i * n + k] = b;
+                    lin.c[i * n + k] = c;
+                }
+            }
+            return;
+        }
         let (mut rp, mut rm) = (std::mem::take(&mut self.rp), std::mem::take(&mut self.rm));
         self.residual(t, q, qd, qdd, torque, &mut lin.r, Some(&mut lin.c));
         for k in 0..n {
@@ -622,6 +647,8 @@ impl Hbm {
             ud: vec![0.0; n],
             rp: vec![0.0; n],
             rm: vec![0.0; n],
+            rp_du: vec![0.0; n * n],
+            rp_m: vec![0.0; n * n],
         };
         let exc = (0..nt)
             .map(|j| {
@@ -1022,8 +1049,9 @@ mod tests {
     use crate::cpva::CpvaParams;
     use crate::excitation::rpm_to_rad_s;
 
-    fn problem(amplitude: f64, time_samples: usize) -> Hbm {
-        let mech = CpvaParams::canonical().mechanism(None).unwrap();
+    fn problem(amplitude: f64, time_samples: usize, speeds: crate::speeds::Speeds) -> Hbm {
+        let mut mech = CpvaParams::canonical().mechanism(None).unwrap();
+        mech.speeds = speeds;
         let kane = Kane::new(&mech).unwrap();
         let h = [Harmonic { multiple: 1.0, amplitude, phase: 0.0 }];
         Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, HbmOptions { time_samples, ..HbmOptions::default() }).unwrap()
@@ -1031,16 +1059,19 @@ mod tests {
 
     /// The assembled Jacobian and ∂R̂/∂n against central differences of the whole residual, for
     /// the default even N_t = 44 and an odd one (45) and the minimum 2H + 1 = 21, where the
-    /// products' frequencies h ± l wrap around the spectrum.
+    /// products' frequencies h ± l wrap around the spectrum; with absolute speeds (the engine's
+    /// closed-form per-sample derivatives) and with joint rates (per-sample central differences).
     #[test]
     fn jacobian_matches_differenced_residual() {
-        for nt in [0, 45, 21] {
-            jacobian_check(nt);
+        for speeds in [crate::speeds::Speeds::AbsoluteAngularVelocities, crate::speeds::Speeds::JointRates] {
+            for nt in [0, 45, 21] {
+                jacobian_check(nt, speeds);
+            }
         }
     }
 
-    fn jacobian_check(time_samples: usize) {
-        let mut hbm = problem(40.0, time_samples);
+    fn jacobian_check(time_samples: usize, speeds: crate::speeds::Speeds) {
+        let mut hbm = problem(40.0, time_samples, speeds);
         let sol = hbm.solve(3.05, None).unwrap();
         let mut x = hbm.unknowns_from(Some(&sol));
         // Move off the solution so that the residual is not zero.

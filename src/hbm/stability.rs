@@ -109,49 +109,8 @@ impl Hbm {
                 sys[j * m2 + e] = v;
             }
         }
-        // ż = 𝒜 z with 𝒜 = [[0, I], [−K, −L]]: the top half of 𝒜Φ is Φ's bottom half.
-        let deriv = |kl: &[f64], phi: &[f64], out: &mut [f64]| {
-            out[..n * d].copy_from_slice(&phi[n * d..]);
-            for i in 0..n {
-                let row = &kl[i * 2 * n..(i + 1) * 2 * n];
-                for col in 0..d {
-                    let mut acc = 0.0;
-                    for (k, &rk) in row.iter().enumerate() {
-                        acc += rk * phi[k * d + col];
-                    }
-                    out[(n + i) * d + col] = -acc;
-                }
-            }
-        };
-        let dd = d * d;
-        // RK4 over the period with step 2T/N_s·stride: its stages use every stride-th instant.
-        let monodromy = |stride: usize| {
-            let h = 2.0 * stride as f64 * period / ns as f64;
-            let mut phi = vec![0.0; dd];
-            for i in 0..d {
-                phi[i * d + i] = 1.0;
-            }
-            let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
-                (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
-            let at = |j: usize| &sys[(j % ns) * m2..(j % ns + 1) * m2];
-            for step in 0..ns / (2 * stride) {
-                let j = 2 * stride * step;
-                let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
-                deriv(a0, &phi, &mut k1);
-                axpy(&phi, &k1, 0.5 * h, &mut tmp);
-                deriv(a1, &tmp, &mut k2);
-                axpy(&phi, &k2, 0.5 * h, &mut tmp);
-                deriv(a1, &tmp, &mut k3);
-                axpy(&phi, &k3, h, &mut tmp);
-                deriv(a2, &tmp, &mut k4);
-                for i in 0..dd {
-                    phi[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-                }
-            }
-            phi
-        };
         // Richardson extrapolation of the two step sizes removes RK4's h⁴ error term.
-        let (fine, coarse) = (monodromy(1), monodromy(2));
+        let (fine, coarse) = (monodromy(&sys, n, ns, 1, period), monodromy(&sys, n, ns, 2, period));
         let phi: Vec<f64> = fine.iter().zip(&coarse).map(|(f, c)| (16.0 * f - c) / 15.0).collect();
         let phi = DMatrix::from_row_slice(d, d, &phi);
         if phi.iter().any(|v| !v.is_finite()) {
@@ -163,6 +122,139 @@ impl Hbm {
         let max_modulus = multipliers.first().map_or(0.0, |m| m.norm());
         Ok(Stability { multipliers, max_modulus, stable: max_modulus < 1.0 })
     }
+}
+
+/// Φ(T), row-major 2n × 2n, of `ż = 𝒜 z`, `𝒜 = [[0, I], [−K, −L]]`, by RK4 with step
+/// 2T·stride/N_s; `sys` holds `[K | L]` (n rows of 2n, row-major) at the N_s instants, and the
+/// stages use every stride-th instant. Small systems go through fixed-size arrays, padded with
+/// decoupled states up to the next supported size: the generic slice loop spends most of its
+/// time on loop and bounds overhead at 4 × 4 (measured: 570 k instructions per stability
+/// analysis of the single-pendulum CPVA with slices, see `BENCHMARKS.md` for after).
+fn monodromy(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64) -> Vec<f64> {
+    match 2 * n {
+        d if d <= 4 => monodromy_fixed::<4>(sys, n, ns, stride, period),
+        d if d <= 6 => monodromy_fixed::<6>(sys, n, ns, stride, period),
+        d if d <= 8 => monodromy_fixed::<8>(sys, n, ns, stride, period),
+        d if d <= 12 => monodromy_fixed::<12>(sys, n, ns, stride, period),
+        _ => monodromy_slices(sys, n, ns, stride, period),
+    }
+}
+
+/// [`monodromy`] with D × D arrays (D ≥ 2n, even): coordinate k < n of the system is state k,
+/// its rate state D/2 + k; the other states have zero coefficients and do not couple.
+fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64) -> Vec<f64> {
+    let (nh, d) = (D / 2, 2 * n);
+    let map = |k: usize| if k < n { k } else { nh + k - n };
+    // Padded [K | L]: nh rows of D per instant.
+    let mut kl = vec![[0.0f64; D]; ns * nh];
+    for j in 0..ns {
+        for i in 0..n {
+            for k in 0..d {
+                kl[j * nh + i][map(k)] = sys[j * n * d + i * d + k];
+            }
+        }
+    }
+    let deriv = |kl: &[[f64; D]], phi: &[[f64; D]; D], out: &mut [[f64; D]; D]| {
+        for i in 0..nh {
+            out[i] = phi[nh + i];
+            let mut o = [0.0; D];
+            for (r, p) in kl[i].iter().zip(phi) {
+                for c in 0..D {
+                    o[c] -= r * p[c];
+                }
+            }
+            out[nh + i] = o;
+        }
+    };
+    let axpy = |x: &[[f64; D]; D], y: &[[f64; D]; D], s: f64, out: &mut [[f64; D]; D]| {
+        for r in 0..D {
+            for c in 0..D {
+                out[r][c] = x[r][c] + s * y[r][c];
+            }
+        }
+    };
+    let h = 2.0 * stride as f64 * period / ns as f64;
+    let mut phi = [[0.0; D]; D];
+    for (i, row) in phi.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
+        ([[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D]);
+    let at = |j: usize| {
+        let j = if j >= ns { j - ns } else { j };
+        &kl[j * nh..(j + 1) * nh]
+    };
+    for step in 0..ns / (2 * stride) {
+        let j = 2 * stride * step;
+        let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
+        deriv(a0, &phi, &mut k1);
+        axpy(&phi, &k1, 0.5 * h, &mut tmp);
+        deriv(a1, &tmp, &mut k2);
+        axpy(&phi, &k2, 0.5 * h, &mut tmp);
+        deriv(a1, &tmp, &mut k3);
+        axpy(&phi, &k3, h, &mut tmp);
+        deriv(a2, &tmp, &mut k4);
+        let h6 = h / 6.0;
+        for r in 0..D {
+            for c in 0..D {
+                phi[r][c] += h6 * (k1[r][c] + 2.0 * k2[r][c] + 2.0 * k3[r][c] + k4[r][c]);
+            }
+        }
+    }
+    let mut out = vec![0.0; d * d];
+    for r in 0..d {
+        for c in 0..d {
+            out[r * d + c] = phi[map(r)][map(c)];
+        }
+    }
+    out
+}
+
+/// [`monodromy`] on row-major slices, any size.
+fn monodromy_slices(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64) -> Vec<f64> {
+    let (d, m2) = (2 * n, 2 * n * n);
+    let dd = d * d;
+    // The top half of 𝒜Φ is Φ's bottom half, the bottom half −[K | L]Φ, accumulated row by row
+    // of Φ so the inner loop runs over contiguous memory.
+    let deriv = |kl: &[f64], phi: &[f64], out: &mut [f64]| {
+        let (top, bottom) = out.split_at_mut(n * d);
+        top.copy_from_slice(&phi[n * d..]);
+        for (row, o) in kl.chunks_exact(d).zip(bottom.chunks_exact_mut(d)) {
+            o.fill(0.0);
+            for (&r, p) in row.iter().zip(phi.chunks_exact(d)) {
+                for (oc, &pc) in o.iter_mut().zip(p) {
+                    *oc -= r * pc;
+                }
+            }
+        }
+    };
+    let h = 2.0 * stride as f64 * period / ns as f64;
+    let mut phi = vec![0.0; dd];
+    for i in 0..d {
+        phi[i * d + i] = 1.0;
+    }
+    let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
+        (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
+    let at = |j: usize| {
+        let j = if j >= ns { j - ns } else { j };
+        &sys[j * m2..(j + 1) * m2]
+    };
+    for step in 0..ns / (2 * stride) {
+        let j = 2 * stride * step;
+        let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
+        deriv(a0, &phi, &mut k1);
+        axpy(&phi, &k1, 0.5 * h, &mut tmp);
+        deriv(a1, &tmp, &mut k2);
+        axpy(&phi, &k2, 0.5 * h, &mut tmp);
+        deriv(a1, &tmp, &mut k3);
+        axpy(&phi, &k3, h, &mut tmp);
+        deriv(a2, &tmp, &mut k4);
+        let h6 = h / 6.0;
+        for ((((p, &a), &b), &c), &e) in phi.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
+            *p += h6 * (a + 2.0 * b + 2.0 * c + e);
+        }
+    }
+    phi
 }
 
 /// `out = x + s y`.
@@ -213,4 +305,27 @@ fn solve_in_place(c: &mut [f64], r: &mut [f64], n: usize, m: usize) -> bool {
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fixed-size (and padded) monodromy equals the slice version on arbitrary coefficients.
+    #[test]
+    fn fixed_size_monodromy_equals_the_slice_version() {
+        for n in 1..=6 {
+            let (ns, d) = (16, 2 * n);
+            // A deterministic, non-symmetric, time-varying [K | L].
+            let sys: Vec<f64> =
+                (0..ns * n * d).map(|i| ((i * 7919 % 97) as f64 / 97.0 - 0.5) * (1.0 + (i % 5) as f64)).collect();
+            for stride in [1, 2] {
+                let a = monodromy(&sys, n, ns, stride, 0.7);
+                let b = monodromy_slices(&sys, n, ns, stride, 0.7);
+                let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let e = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+                assert!(e <= 1e-13 * scale, "n = {n}, stride {stride}: {e:e} of {scale:e}");
+            }
+        }
+    }
 }
