@@ -313,7 +313,7 @@ fn residual_jacobian_equals_central_differences() {
         let (q, u) = random_state(&mech, &mut rng);
         let ud: Vec<f64> = (0..n).map(|_| rng.random_range(-50.0..50.0)).collect();
         assert!(kane.residual_jacobian(0.3, &q, &u, &ud, &mut r, &mut a, &mut b, &mut m));
-        let mut res = |kane: &mut Kane, q: &[f64], u: &[f64]| -> Vec<f64> {
+        let res = |kane: &mut Kane, q: &[f64], u: &[f64]| -> Vec<f64> {
             let (mm, f) = kane.mass_matrix_and_forcing_rows(0.3, q, u);
             (0..n).map(|i| (0..n).map(|j| mm[i * n + j] * ud[j]).sum::<f64>() - f[i]).collect()
         };
