@@ -109,9 +109,7 @@ impl Hbm {
                 sys[j * m2 + e] = v;
             }
         }
-        // Richardson extrapolation of the two step sizes removes RK4's h⁴ error term.
-        let (fine, coarse) = (monodromy(&sys, n, ns, 1, period), monodromy(&sys, n, ns, 2, period));
-        let phi: Vec<f64> = fine.iter().zip(&coarse).map(|(f, c)| (16.0 * f - c) / 15.0).collect();
+        let phi = monodromy(&sys, n, ns, period);
         let phi = DMatrix::from_row_slice(d, d, &phi);
         if phi.iter().any(|v| !v.is_finite()) {
             return Err(HbmError::NonFinite { order });
@@ -124,25 +122,28 @@ impl Hbm {
     }
 }
 
-/// Φ(T), row-major 2n × 2n, of `ż = 𝒜 z`, `𝒜 = [[0, I], [−K, −L]]`, by RK4 with step
-/// 2T·stride/N_s; `sys` holds `[K | L]` (n rows of 2n, row-major) at the N_s instants, and the
-/// stages use every stride-th instant. Small systems go through fixed-size arrays, padded with
+/// Φ(T), row-major 2n × 2n, of `ż = 𝒜 z`, `𝒜 = [[0, I], [−K, −L]]`, by RK4 with steps
+/// 2T/N_s and 4T/N_s, Richardson-extrapolated (which removes RK4's h⁴ error term); `sys` holds
+/// `[K | L]` (n rows of 2n, row-major) at the N_s instants, and the stages use every (or every
+/// other) instant. Small systems go through fixed-size arrays, padded with
 /// decoupled states up to the next supported size: the generic slice loop spends most of its
 /// time on loop and bounds overhead at 4 × 4 (measured: 570 k instructions per stability
 /// analysis of the single-pendulum CPVA with slices, see `BENCHMARKS.md` for after).
-fn monodromy(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64) -> Vec<f64> {
-    match 2 * n {
-        d if d <= 4 => monodromy_fixed::<4>(sys, n, ns, stride, period),
-        d if d <= 6 => monodromy_fixed::<6>(sys, n, ns, stride, period),
-        d if d <= 8 => monodromy_fixed::<8>(sys, n, ns, stride, period),
-        d if d <= 12 => monodromy_fixed::<12>(sys, n, ns, stride, period),
-        _ => monodromy_slices(sys, n, ns, stride, period),
-    }
+fn monodromy(sys: &[f64], n: usize, ns: usize, period: f64) -> Vec<f64> {
+    let (fine, coarse) = match 2 * n {
+        d if d <= 4 => monodromy_fixed::<4>(sys, n, ns, period),
+        d if d <= 6 => monodromy_fixed::<6>(sys, n, ns, period),
+        d if d <= 8 => monodromy_fixed::<8>(sys, n, ns, period),
+        d if d <= 12 => monodromy_fixed::<12>(sys, n, ns, period),
+        _ => (monodromy_slices(sys, n, ns, 1, period), monodromy_slices(sys, n, ns, 2, period)),
+    };
+    fine.iter().zip(&coarse).map(|(f, c)| (16.0 * f - c) / 15.0).collect()
 }
 
 /// [`monodromy`] with D × D arrays (D ≥ 2n, even): coordinate k < n of the system is state k,
-/// its rate state D/2 + k; the other states have zero coefficients and do not couple.
-fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64) -> Vec<f64> {
+/// its rate state D/2 + k; the other states have zero coefficients and do not couple. Returns
+/// Φ for the steps 2T/N_s and 4T/N_s.
+fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, period: f64) -> (Vec<f64>, Vec<f64>) {
     let (nh, d) = (D / 2, 2 * n);
     let map = |k: usize| if k < n { k } else { nh + k - n };
     // Padded [K | L]: nh rows of D per instant.
@@ -173,41 +174,44 @@ fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, stride: usi
             }
         }
     };
-    let h = 2.0 * stride as f64 * period / ns as f64;
-    let mut phi = [[0.0; D]; D];
-    for (i, row) in phi.iter_mut().enumerate() {
-        row[i] = 1.0;
-    }
-    let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
-        ([[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D]);
-    let at = |j: usize| {
-        let j = if j >= ns { j - ns } else { j };
-        &kl[j * nh..(j + 1) * nh]
-    };
-    for step in 0..ns / (2 * stride) {
-        let j = 2 * stride * step;
-        let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
-        deriv(a0, &phi, &mut k1);
-        axpy(&phi, &k1, 0.5 * h, &mut tmp);
-        deriv(a1, &tmp, &mut k2);
-        axpy(&phi, &k2, 0.5 * h, &mut tmp);
-        deriv(a1, &tmp, &mut k3);
-        axpy(&phi, &k3, h, &mut tmp);
-        deriv(a2, &tmp, &mut k4);
-        let h6 = h / 6.0;
-        for r in 0..D {
-            for c in 0..D {
-                phi[r][c] += h6 * (k1[r][c] + 2.0 * k2[r][c] + 2.0 * k3[r][c] + k4[r][c]);
+    let rk4 = |stride: usize| {
+        let h = 2.0 * stride as f64 * period / ns as f64;
+        let mut phi = [[0.0; D]; D];
+        for (i, row) in phi.iter_mut().enumerate() {
+            row[i] = 1.0;
+        }
+        let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
+            ([[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D]);
+        let at = |j: usize| {
+            let j = if j >= ns { j - ns } else { j };
+            &kl[j * nh..(j + 1) * nh]
+        };
+        for step in 0..ns / (2 * stride) {
+            let j = 2 * stride * step;
+            let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
+            deriv(a0, &phi, &mut k1);
+            axpy(&phi, &k1, 0.5 * h, &mut tmp);
+            deriv(a1, &tmp, &mut k2);
+            axpy(&phi, &k2, 0.5 * h, &mut tmp);
+            deriv(a1, &tmp, &mut k3);
+            axpy(&phi, &k3, h, &mut tmp);
+            deriv(a2, &tmp, &mut k4);
+            let h6 = h / 6.0;
+            for r in 0..D {
+                for c in 0..D {
+                    phi[r][c] += h6 * (k1[r][c] + 2.0 * k2[r][c] + 2.0 * k3[r][c] + k4[r][c]);
+                }
             }
         }
-    }
-    let mut out = vec![0.0; d * d];
-    for r in 0..d {
-        for c in 0..d {
-            out[r * d + c] = phi[map(r)][map(c)];
+        let mut out = vec![0.0; d * d];
+        for r in 0..d {
+            for c in 0..d {
+                out[r * d + c] = phi[map(r)][map(c)];
+            }
         }
-    }
-    out
+        out
+    };
+    (rk4(1), rk4(2))
 }
 
 /// [`monodromy`] on row-major slices, any size.
@@ -319,12 +323,13 @@ mod tests {
             // A deterministic, non-symmetric, time-varying [K | L].
             let sys: Vec<f64> =
                 (0..ns * n * d).map(|i| ((i * 7919 % 97) as f64 / 97.0 - 0.5) * (1.0 + (i % 5) as f64)).collect();
-            for stride in [1, 2] {
-                let a = monodromy(&sys, n, ns, stride, 0.7);
-                let b = monodromy_slices(&sys, n, ns, stride, 0.7);
+            {
+                let a = monodromy(&sys, n, ns, 0.7);
+                let (f, c) = (monodromy_slices(&sys, n, ns, 1, 0.7), monodromy_slices(&sys, n, ns, 2, 0.7));
+                let b: Vec<f64> = f.iter().zip(&c).map(|(f, c)| (16.0 * f - c) / 15.0).collect();
                 let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 let e = a.iter().zip(&b).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
-                assert!(e <= 1e-13 * scale, "n = {n}, stride {stride}: {e:e} of {scale:e}");
+                assert!(e <= 1e-13 * scale, "n = {n}: {e:e} of {scale:e}");
             }
         }
     }
