@@ -28,7 +28,7 @@
 //! down-sweeps (Figs. 3, 4). Each detected fold is refined by a secant search on `dλ/ds = 0`
 //! along the arclength.
 
-use super::{At, Free, Hbm, HbmError, HbmOptions, HbmSolution};
+use super::{At, Free, Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::excitation::Harmonic;
 use crate::kane::Kane;
 use nalgebra::{DMatrix, DVector};
@@ -207,7 +207,7 @@ pub enum BifurcationKind {
     NeimarkSacker,
 }
 
-/// A change of stability between two successive branch points.
+/// A crossing of the unit circle by Floquet multipliers between two successive branch points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bifurcation {
     /// Index of the point before the change.
@@ -220,6 +220,8 @@ pub struct Bifurcation {
     pub kind: BifurcationKind,
     /// True when the branch becomes stable at this change (in the direction of the branch).
     pub gains_stability: bool,
+    /// Number of multipliers outside the unit circle after the change (0: stable).
+    pub unstable_after: usize,
 }
 
 /// Why the continuation stopped.
@@ -244,7 +246,7 @@ pub struct Branch {
     pub points: Vec<BranchPoint>,
     /// Turning points in the parameter.
     pub folds: Vec<Fold>,
-    /// Stability changes (when stability was computed).
+    /// Multiplier crossings of the unit circle (when stability was computed).
     pub bifurcations: Vec<Bifurcation>,
     /// Why the continuation stopped.
     pub end: BranchEnd,
@@ -790,38 +792,54 @@ impl Hbm {
     }
 }
 
-/// Stability changes between successive points.
+/// Multiplier crossings of the unit circle between successive points: wherever the number of
+/// multipliers outside it changes, so a second crossing on an already unstable branch (say a
+/// symmetry-breaking one on the middle sheet of N pendulums) is reported too, not only the
+/// changes of the stable/unstable verdict.
 ///
-/// A real multiplier through +1 in the step that holds a fold is the fold itself (the Jacobian
-/// of the periodic problem is singular there, so the monodromy has the eigenvalue 1): it takes
-/// the fold's refined location. Elsewhere the location is interpolated where the largest
-/// modulus crosses 1, linearly between the two points.
+/// The crossing multiplier is, on the side with more multipliers outside, the outside one
+/// nearest the circle; its argument gives the kind (0: +1, π: −1, else a complex pair). A real
+/// multiplier through +1 in the step that holds a fold is the fold itself (the Jacobian of the
+/// periodic problem is singular there, so the monodromy has the eigenvalue 1): it takes the
+/// fold's refined location. Elsewhere the location is interpolated linearly where the modulus
+/// of the crossing multiplier (matched across the step by distance) passes 1.
 fn bifurcations(points: &[BranchPoint], folds: &[Fold]) -> Vec<Bifurcation> {
+    let outside = |st: &Stability| st.multipliers.iter().filter(|m| m.norm() > 1.0).count();
     let mut out = Vec::new();
     for (i, w) in points.windows(2).enumerate() {
         let (Some(a), Some(b)) = (&w[0].solution.stability, &w[1].solution.stability) else { continue };
-        if a.stable == b.stable {
+        let (na, nb) = (outside(a), outside(b));
+        if na == nb {
             continue;
         }
-        let unstable = if a.stable { b } else { a };
-        let kind = match unstable.critical() {
-            Some(mu) if mu.im.abs() < 1e-9 * mu.norm().max(1.0) || mu.arg().abs() < 0.02 => {
-                if mu.re > 0.0 {
-                    BifurcationKind::PlusOne
-                } else {
-                    BifurcationKind::PeriodDoubling
-                }
-            }
-            Some(mu) if (mu.arg().abs() - PI).abs() < 0.02 => BifurcationKind::PeriodDoubling,
-            _ => BifurcationKind::NeimarkSacker,
+        let (more, fewer) = if na > nb { (a, b) } else { (b, a) };
+        let Some(mu) = more.multipliers.iter().filter(|m| m.norm() > 1.0).min_by(|x, y| x.norm().total_cmp(&y.norm()))
+        else {
+            continue;
         };
-        let (ma, mb) = (a.max_modulus, b.max_modulus);
+        let kind = if mu.im.abs() < 1e-9 * mu.norm() || mu.arg().abs() < 0.02 {
+            if mu.re > 0.0 { BifurcationKind::PlusOne } else { BifurcationKind::PeriodDoubling }
+        } else if (mu.arg().abs() - PI).abs() < 0.02 {
+            BifurcationKind::PeriodDoubling
+        } else {
+            BifurcationKind::NeimarkSacker
+        };
+        let partner = fewer.multipliers.iter().min_by(|x, y| (*x - mu).norm().total_cmp(&(*y - mu).norm()));
+        let (m_more, m_fewer) = (mu.norm(), partner.map_or(1.0, |p| p.norm()));
+        let (ma, mb) = if na > nb { (m_more, m_fewer) } else { (m_fewer, m_more) };
         let f = if mb != ma { ((1.0 - ma) / (mb - ma)).clamp(0.0, 1.0) } else { 0.5 };
         let (order, parameter) = match folds.iter().find(|fd| fd.after == i) {
             Some(fd) if kind == BifurcationKind::PlusOne => (fd.order, fd.parameter),
             _ => (w[0].order + f * (w[1].order - w[0].order), w[0].parameter + f * (w[1].parameter - w[0].parameter)),
         };
-        out.push(Bifurcation { after: i, order, parameter, kind, gains_stability: b.stable });
+        out.push(Bifurcation {
+            after: i,
+            order,
+            parameter,
+            kind,
+            gains_stability: b.stable && !a.stable,
+            unstable_after: nb,
+        });
     }
     out
 }
@@ -840,4 +858,96 @@ pub fn continue_in_order(
     copts: &ContinuationOptions,
 ) -> Result<Branch, HbmError> {
     Hbm::new(kane, spin_joint, omega, harmonics, options)?.continue_in_order(n_from, n_to, None, copts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Complex;
+
+    /// A branch point at order n with the given multipliers (the rest of the solution is inert).
+    fn point(n: f64, multipliers: &[Complex<f64>]) -> BranchPoint {
+        let max_modulus = multipliers.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        let stability = Stability { multipliers: multipliers.to_vec(), max_modulus, stable: max_modulus < 1.0 };
+        let solution = HbmSolution {
+            order: n,
+            omega: 100.0,
+            torque_scale: 1.0,
+            base_frequency: 100.0 * n,
+            harmonics: 1,
+            spin: 0,
+            coefficients: vec![0.0; 3],
+            mean_torque: 0.0,
+            iterations: 0,
+            residual: 0.0,
+            top_harmonic_ratio: 0.0,
+            needs_more_harmonics: false,
+            stability: Some(stability),
+        };
+        BranchPoint {
+            order: n,
+            parameter: n,
+            arclength: n,
+            slope: 1.0,
+            order_slope: 1.0,
+            accel_main: 0.0,
+            accel_second: 0.0,
+            pendulum_amplitude: 0.0,
+            stable: Some(max_modulus < 1.0),
+            solution,
+            d_coefficients: Vec::new(),
+            d_mean_torque: 0.0,
+            d_parameter: 0.0,
+        }
+    }
+
+    /// Each kind of crossing, placed where the crossing multiplier's modulus passes 1, and a
+    /// second real multiplier through +1 on an already unstable stretch (no verdict change,
+    /// still reported); a +1 crossing in a step with a fold takes the fold's location.
+    #[test]
+    fn crossings_are_classified_located_and_counted() {
+        let c = |re: f64, im: f64| Complex::new(re, im);
+        let r = |m: f64| c(m, 0.0);
+        let pol = |m: f64, a: f64| Complex::from_polar(m, a);
+        let points = vec![
+            point(3.00, &[r(0.9), r(0.5)]),
+            point(3.01, &[r(1.1), r(0.5)]),  // +1 crossing at 3.005
+            point(3.02, &[r(1.3), r(0.95)]), // none
+            point(3.03, &[r(1.3), r(1.05)]), // second +1 crossing at 3.025, still unstable
+            point(3.04, &[r(0.8), r(0.7)]),  // both back inside: one report, stable after
+            point(3.05, &[r(-0.96), r(0.2)]),
+            point(3.06, &[r(-1.04), r(0.2)]), // period doubling at 3.055
+            point(3.07, &[pol(0.98, 1.0), pol(0.98, -1.0)]),
+            point(3.08, &[pol(1.02, 1.1), pol(1.02, -1.1)]), // −1 back inside, then Neimark–Sacker at 3.075
+        ];
+        let b = bifurcations(&points, &[]);
+        let kinds: Vec<_> = b.iter().map(|x| (x.after, x.kind, x.unstable_after)).collect();
+        assert_eq!(
+            kinds,
+            vec![
+                (0, BifurcationKind::PlusOne, 1),
+                (2, BifurcationKind::PlusOne, 2),
+                (3, BifurcationKind::PlusOne, 0),
+                (5, BifurcationKind::PeriodDoubling, 1),
+                (6, BifurcationKind::PeriodDoubling, 0),
+                (7, BifurcationKind::NeimarkSacker, 2),
+            ]
+        );
+        for (x, at) in b.iter().zip([3.005, 3.025, f64::NAN, 3.055, f64::NAN, 3.075]) {
+            if at.is_finite() {
+                assert!((x.order - at).abs() < 1e-12, "{:?} at {} not {at}", x.kind, x.order);
+            }
+        }
+        assert!(b[2].gains_stability && !b[0].gains_stability && !b[1].gains_stability);
+        // With a fold in the first step, the +1 crossing sits at the fold.
+        let fold = Fold {
+            order: 3.0071,
+            parameter: 3.0071,
+            kind: FoldKind::Maximum,
+            after: 0,
+            accel_main: 0.0,
+            pendulum_amplitude: 0.0,
+        };
+        assert_eq!(bifurcations(&points, &[fold])[0].order, 3.0071);
+    }
 }
