@@ -649,3 +649,28 @@ fn floquet_multipliers_converge_in_the_step() {
     println!("multipliers N_s = 256 vs 2048: worst {worst:.2e}");
     assert!(worst < 1e-6, "{worst:e}");
 }
+
+/// Two synchronous pendulums (half the mass each) at 40 N·m: the unison branch is the
+/// one-pendulum branch (same folds to 1e-8), and the extra, antisymmetric multipliers stay
+/// inside the unit circle over 2.9–3.3: the only crossings are the two folds (no symmetry
+/// breaking of the unison response in the paper's range; with 2 pendulums the monodromy is
+/// 6 × 6, so this also runs the padded fixed-size integration).
+#[test]
+fn two_pendulums_keep_unison_between_the_folds() {
+    let p2 = CpvaParams::canonical().with_pendulums(2);
+    let kane2 = Kane::new(&p2.mechanism(None).unwrap()).unwrap();
+    let mut hbm2 = Hbm::new(&kane2, 0, omega(), &single(40.0), HbmOptions::default()).unwrap();
+    let b2 = hbm2.continue_in_order(2.9, 3.3, None, &ContinuationOptions::default()).unwrap();
+    let (_, b1) = branch(40.0, 2.9, 3.3);
+    assert_eq!(b2.folds.len(), 2);
+    for (f1, f2) in b1.folds.iter().zip(&b2.folds) {
+        assert!((f1.order - f2.order).abs() < 1e-8, "folds {} vs {}", f1.order, f2.order);
+    }
+    let kinds: Vec<_> = b2.bifurcations.iter().map(|b| (b.kind, b.unstable_after)).collect();
+    assert_eq!(kinds, vec![(BifurcationKind::PlusOne, 1), (BifurcationKind::PlusOne, 0)]);
+    for (f, bif) in b2.folds.iter().zip(&b2.bifurcations) {
+        assert_eq!(f.after, bif.after);
+    }
+    // Five physical multipliers with two pendulums (2·3 − 1), three with one.
+    assert!(b2.points.iter().all(|p| p.solution.stability.as_ref().unwrap().multipliers.len() == 5));
+}
