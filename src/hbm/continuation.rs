@@ -6,27 +6,31 @@
 //! the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s, the
 //! starting speed for Ω, so that arclength steps mean the same for each). ∂R̂/∂p is exact (see
 //! the module docs of [`crate::hbm`]). From a point y with unit tangent t, the predictor is
-//! `y + Δs t` and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` by Newton's
-//! method on the bordered Jacobian `[[∂R̂/∂x, ∂R̂/∂λ], [tᵀ]]`, which stays regular through turning
-//! points. The new tangent solves `[[∂R̂/∂x, ∂R̂/∂n], [t_oldᵀ]] t = [0, 1]` (so it keeps the
-//! orientation), normalised.
+//! `y + Δs t + ½ Δs² κ` with the curvature κ estimated from the change of the tangent over the
+//! last step, and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` on the
+//! bordered Jacobian `[[∂R̂/∂x, ∂R̂/∂λ], [tᵀ]]`, which stays regular through turning points. The
+//! new tangent solves `[[∂R̂/∂x, ∂R̂/∂n], [t_oldᵀ]] t = [0, 1]` (so it keeps the orientation),
+//! normalised.
 //!
-//! The corrector is a Newton–chord iteration: it reuses the bordered matrix factorised at the
-//! previous point (its Jacobian is needed there anyway for the tangent; bordered by the new
-//! tangent through a rank-one update of the tangent's factorisation), so an iteration costs
-//! one residual; when an iteration contracts by less than half, the Jacobian is refreshed at the
-//! current iterate (at most 3 times). With light damping the Jacobian changes quickly along the
-//! branch near resonance, so about one refresh per point is typical.
+//! The corrector is a Newton–chord iteration with Broyden updates: it starts from the bordered
+//! matrix factorised at the previous point (its Jacobian is needed there anyway for the tangent
+//! and the stability; bordered by the new tangent through a rank-one update of the tangent's
+//! factorisation) and improves it by good-Broyden rank-one updates kept as step vectors, so an
+//! iteration costs one residual; when a step contracts by less than half, the Jacobian is
+//! refreshed at the current iterate (at most 3 times) and the updates restart. With light damping
+//! the Jacobian changes quickly along the branch near resonance, so about one refresh per point
+//! is typical there.
 //!
 //! Step control: the step grows by 1.5 after a corrector of at most 7 iterations with at most
 //! one refresh, and shrinks by 0.7 after 10 iterations or 3 refreshes; a failed corrector, or a
 //! tangent that turned by more than `acos(min_cos)`, halves the step and retries (the turning
-//! guard keeps the corrector from jumping to a neighbouring branch near a fold).
+//! guard keeps the corrector from jumping to a neighbouring branch near a fold). Between the
+//! points, [`Branch::interpolate`] gives cubic Hermite states from the stored tangents.
 //!
 //! Folds are the points where `dλ/ds` changes sign: there the branch turns back in p and a sweep
 //! in p jumps, so the fold orders of an order branch are the jump orders of the paper's up- and
-//! down-sweeps (Figs. 3, 4). Each detected fold is refined by a secant search on `dλ/ds = 0`
-//! along the arclength.
+//! down-sweeps (Figs. 3, 4). Each detected fold is refined by a bracketing secant search
+//! (Illinois) on `dλ/ds = 0` along the arclength.
 
 use super::{At, Free, Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::excitation::Harmonic;
@@ -427,7 +431,8 @@ impl Hbm {
     /// Broyden rank-one updates of the inverse, kept as the step vectors only (Kelley, *Iterative
     /// Methods for Linear and Nonlinear Equations*, SIAM 1995, §7.3): superlinear instead of linear
     /// convergence for O(m) work per stored step (on the 40 N·m branch 2.9 → 3.3: 887 → 642
-    /// corrector iterations, and 105 → 73 points as the step control sees fewer iterations). When a step contracts by less than half, the Jacobian is refreshed at the
+    /// corrector iterations, and 105 → 73 points as the step control sees fewer iterations).
+    /// When a step contracts by less than half, the Jacobian is refreshed at the
     /// current iterate (at most `max_refresh` times) and the updates restart from it. Returns the
     /// point, the iterations and the refreshes.
     fn correct_chord(
