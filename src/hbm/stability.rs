@@ -167,42 +167,16 @@ fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, period: f64
             out[nh + i] = o;
         }
     };
-    let axpy = |x: &[[f64; D]; D], y: &[[f64; D]; D], s: f64, out: &mut [[f64; D]; D]| {
-        for r in 0..D {
-            for c in 0..D {
-                out[r][c] = x[r][c] + s * y[r][c];
-            }
-        }
+    let at = |j: usize| {
+        let j = if j >= ns { j - ns } else { j };
+        &kl[j * nh..(j + 1) * nh]
     };
     let rk4 = |stride: usize| {
-        let h = 2.0 * stride as f64 * period / ns as f64;
         let mut phi = [[0.0; D]; D];
         for (i, row) in phi.iter_mut().enumerate() {
             row[i] = 1.0;
         }
-        let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
-            ([[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D], [[0.0; D]; D]);
-        let at = |j: usize| {
-            let j = if j >= ns { j - ns } else { j };
-            &kl[j * nh..(j + 1) * nh]
-        };
-        for step in 0..ns / (2 * stride) {
-            let j = 2 * stride * step;
-            let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
-            deriv(a0, &phi, &mut k1);
-            axpy(&phi, &k1, 0.5 * h, &mut tmp);
-            deriv(a1, &tmp, &mut k2);
-            axpy(&phi, &k2, 0.5 * h, &mut tmp);
-            deriv(a1, &tmp, &mut k3);
-            axpy(&phi, &k3, h, &mut tmp);
-            deriv(a2, &tmp, &mut k4);
-            let h6 = h / 6.0;
-            for r in 0..D {
-                for c in 0..D {
-                    phi[r][c] += h6 * (k1[r][c] + 2.0 * k2[r][c] + 2.0 * k3[r][c] + k4[r][c]);
-                }
-            }
-        }
+        let phi = rk4_period(phi, ns, stride, period, at, deriv);
         let mut out = vec![0.0; d * d];
         for r in 0..d {
             for c in 0..d {
@@ -220,7 +194,7 @@ fn monodromy_slices(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64
     let dd = d * d;
     // The top half of 𝒜Φ is Φ's bottom half, the bottom half −[K | L]Φ, accumulated row by row
     // of Φ so the inner loop runs over contiguous memory.
-    let deriv = |kl: &[f64], phi: &[f64], out: &mut [f64]| {
+    let deriv = |kl: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
         let (top, bottom) = out.split_at_mut(n * d);
         top.copy_from_slice(&phi[n * d..]);
         for (row, o) in kl.chunks_exact(d).zip(bottom.chunks_exact_mut(d)) {
@@ -232,31 +206,77 @@ fn monodromy_slices(sys: &[f64], n: usize, ns: usize, stride: usize, period: f64
             }
         }
     };
-    let h = 2.0 * stride as f64 * period / ns as f64;
     let mut phi = vec![0.0; dd];
     for i in 0..d {
         phi[i * d + i] = 1.0;
     }
-    let (mut k1, mut k2, mut k3, mut k4, mut tmp) =
-        (vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd], vec![0.0; dd]);
     let at = |j: usize| {
         let j = if j >= ns { j - ns } else { j };
         &sys[j * m2..(j + 1) * m2]
     };
+    rk4_period(phi, ns, stride, period, at, deriv)
+}
+
+/// A monodromy matrix in one of the two storages: fixed-size rows or a flat row-major vector.
+trait Phi: Clone {
+    /// `out = x + s y`.
+    fn axpy(x: &Self, y: &Self, s: f64, out: &mut Self);
+    /// `self += h/6 (k1 + 2 k2 + 2 k3 + k4)`.
+    fn rk4_update(&mut self, k: [&Self; 4], h: f64);
+}
+
+impl<const D: usize> Phi for [[f64; D]; D] {
+    fn axpy(x: &Self, y: &Self, s: f64, out: &mut Self) {
+        for r in 0..D {
+            for c in 0..D {
+                out[r][c] = x[r][c] + s * y[r][c];
+            }
+        }
+    }
+    fn rk4_update(&mut self, [k1, k2, k3, k4]: [&Self; 4], h: f64) {
+        for r in 0..D {
+            for c in 0..D {
+                self[r][c] += h / 6.0 * (k1[r][c] + 2.0 * k2[r][c] + 2.0 * k3[r][c] + k4[r][c]);
+            }
+        }
+    }
+}
+
+impl Phi for Vec<f64> {
+    fn axpy(x: &Self, y: &Self, s: f64, out: &mut Self) {
+        axpy(x, y, s, out);
+    }
+    fn rk4_update(&mut self, [k1, k2, k3, k4]: [&Self; 4], h: f64) {
+        for ((((p, &a), &b), &c), &e) in self.iter_mut().zip(k1).zip(k2).zip(k3).zip(k4) {
+            *p += h / 6.0 * (a + 2.0 * b + 2.0 * c + e);
+        }
+    }
+}
+
+/// RK4 for `Φ' = 𝒜(t) Φ` over one period T from `phi`, with step 2T·stride/N_s: the stages of a
+/// step from instant j read the coefficients `at(j)`, `at(j + stride)` (twice) and
+/// `at(j + 2 stride)`; `deriv(coefficients, Φ, out)` writes 𝒜Φ.
+fn rk4_period<'a, T: Phi, C: ?Sized + 'a>(
+    mut phi: T,
+    ns: usize,
+    stride: usize,
+    period: f64,
+    at: impl Fn(usize) -> &'a C,
+    deriv: impl Fn(&C, &T, &mut T),
+) -> T {
+    let h = 2.0 * stride as f64 * period / ns as f64;
+    let (mut k1, mut k2, mut k3, mut k4, mut tmp) = (phi.clone(), phi.clone(), phi.clone(), phi.clone(), phi.clone());
     for step in 0..ns / (2 * stride) {
         let j = 2 * stride * step;
         let (a0, a1, a2) = (at(j), at(j + stride), at(j + 2 * stride));
         deriv(a0, &phi, &mut k1);
-        axpy(&phi, &k1, 0.5 * h, &mut tmp);
+        T::axpy(&phi, &k1, 0.5 * h, &mut tmp);
         deriv(a1, &tmp, &mut k2);
-        axpy(&phi, &k2, 0.5 * h, &mut tmp);
+        T::axpy(&phi, &k2, 0.5 * h, &mut tmp);
         deriv(a1, &tmp, &mut k3);
-        axpy(&phi, &k3, h, &mut tmp);
+        T::axpy(&phi, &k3, h, &mut tmp);
         deriv(a2, &tmp, &mut k4);
-        let h6 = h / 6.0;
-        for ((((p, &a), &b), &c), &e) in phi.iter_mut().zip(&k1).zip(&k2).zip(&k3).zip(&k4) {
-            *p += h6 * (a + 2.0 * b + 2.0 * c + e);
-        }
+        phi.rk4_update([&k1, &k2, &k3, &k4], h);
     }
     phi
 }
