@@ -155,13 +155,91 @@ fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shi
     let mut builder = ChartBuilder::on(area);
     builder.caption(&panel.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
     // The two branches differ only in the y coordinate type; everything drawn is generic over it.
+    let (w, h) = area.dim_in_pixel();
+    let corner = legend_corner(panel, ((x0, x1), (y0, y1)), legend_size(panel, w, h));
     if panel.log_y {
         let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?;
-        fill(&mut chart, panel, y0, y1)
+        fill(&mut chart, panel, y0, y1, corner)
     } else {
         let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-        fill(&mut chart, panel, y0, y1)
+        fill(&mut chart, panel, y0, y1, corner)
     }
+}
+
+/// The legend box as fractions of the plotting area (width, height), estimated from the label
+/// lengths and the entry count for a panel of w × h pixels (the fonts' sizes, the label and
+/// caption areas of [`draw_panel`]).
+fn legend_size(panel: &Panel, w: u32, h: u32) -> (f64, f64) {
+    let labels: Vec<&Series> = panel.series.iter().filter(|s| !s.label.is_empty()).collect();
+    let chars = labels.iter().map(|s| s.label.chars().count()).max().unwrap_or(0) as f64;
+    let (plot_w, plot_h) = ((w as f64 - 100.0).max(1.0), (h as f64 - 100.0).max(1.0));
+    ((7.0 * chars + 45.0) / plot_w, (22.0 * labels.len() as f64 + 16.0) / plot_h)
+}
+
+/// The place for the legend (the four corners, then the middles of the four edges) where the
+/// least curve length falls under its box (`size`: fractions of the plotting area), upper right
+/// first on ties: the legend used to sit upper right always and hid the rising resonance curves
+/// there.
+fn legend_corner(
+    panel: &Panel,
+    ((x0, x1), (y0, y1)): ((f64, f64), (f64, f64)),
+    size: (f64, f64),
+) -> SeriesLabelPosition {
+    use SeriesLabelPosition as P;
+    let fy = |y: f64| if panel.log_y { (y / y0).ln() / (y1 / y0).ln() } else { (y - y0) / (y1 - y0) };
+    // Where the box sits along each axis: 0 at the low end, 1 centred, 2 at the high end.
+    let places = [
+        (P::UpperRight, 2, 2),
+        (P::UpperLeft, 0, 2),
+        (P::LowerRight, 2, 0),
+        (P::LowerLeft, 0, 0),
+        (P::UpperMiddle, 1, 2),
+        (P::LowerMiddle, 1, 0),
+        (P::MiddleRight, 2, 1),
+        (P::MiddleLeft, 0, 1),
+    ];
+    let inside = |t: f64, at: u8, len: f64| match at {
+        0 => t <= len,
+        1 => (t - 0.5).abs() <= 0.5 * len,
+        _ => t >= 1.0 - len,
+    };
+    // Coverage: the length of drawn curve under the box (plot-area units), so a dense sampled
+    // trace weighs no more than a sparse line across the same place.
+    let covered = |ax: u8, ay: u8| {
+        let under = |u: f64, v: f64| {
+            (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) && inside(u, ax, size.0) && inside(v, ay, size.1)
+        };
+        let mut length = 0.0;
+        for s in &panel.series {
+            let pts: Vec<(f64, f64)> =
+                s.x.iter()
+                    .copied()
+                    .zip(s.y.iter().copied())
+                    .filter(keep(panel.log_y))
+                    .map(|(x, y)| ((x - x0) / (x1 - x0), fy(y)))
+                    .collect();
+            for w in pts.windows(2) {
+                let ((u0, v0), (u1, v1)) = (w[0], w[1]);
+                let len = (u1 - u0).hypot(v1 - v0);
+                let k = (len / 0.01).ceil().clamp(1.0, 1000.0) as usize;
+                for i in 0..k {
+                    let t = (i as f64 + 0.5) / k as f64;
+                    if under(u0 + t * (u1 - u0), v0 + t * (v1 - v0)) {
+                        length += len / k as f64;
+                    }
+                }
+            }
+        }
+        length
+    };
+    let mut best = (f64::INFINITY, P::UpperRight);
+    for (pos, ax, ay) in places {
+        let c = covered(ax, ay);
+        if c < best.0 {
+            best = (c, pos);
+        }
+    }
+    best.1
 }
 
 fn fill<'a, X, Y>(
@@ -169,6 +247,7 @@ fn fill<'a, X, Y>(
     panel: &Panel,
     y0: f64,
     y1: f64,
+    corner: SeriesLabelPosition,
 ) -> DynResult
 where
     X: Ranged<ValueType = f64> + ValueFormatter<f64>,
@@ -209,7 +288,7 @@ where
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.3))
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .draw()?;
     Ok(())
 }
@@ -250,6 +329,26 @@ mod tests {
         assert!(text.starts_with("<svg"));
         assert!(text.contains("order n") && text.contains("Dashed") && text.contains("n_t"));
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// A curve rising into the upper right sends the legend to the empty upper left; with every
+    /// corner free the legend stays upper right.
+    #[test]
+    fn legend_avoids_the_curves() {
+        let x: Vec<f64> = (0..100).map(|i| i as f64 / 99.0).collect();
+        let rising = Series {
+            label: "a".into(),
+            x: x.clone(),
+            y: x.iter().map(|v| v * v).collect(),
+            color: 0,
+            style: LineStyle::Solid,
+        };
+        let panel = Panel { series: vec![rising], ..Panel::default() };
+        let ranges = ((0.0, 1.0), (0.0, 1.0));
+        assert!(matches!(legend_corner(&panel, ranges, (0.3, 0.2)), SeriesLabelPosition::UpperLeft));
+        let flat = Series { label: "b".into(), x: x.clone(), y: vec![0.5; 100], color: 1, style: LineStyle::Dashed };
+        let panel = Panel { series: vec![flat], ..Panel::default() };
+        assert!(matches!(legend_corner(&panel, ranges, (0.3, 0.2)), SeriesLabelPosition::UpperRight));
     }
 
     #[test]
