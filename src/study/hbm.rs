@@ -27,6 +27,9 @@ pub struct HbmBranch {
     pub relative_angle: Vec<f64>,
     /// Floquet stability per point (None: not computed).
     pub stable: Vec<Option<bool>>,
+    /// Largest Floquet multiplier modulus per point (NaN: not computed): the stability margin,
+    /// how far below 1 a stable point sits.
+    pub max_multiplier: Vec<f64>,
     /// Fold (turning-point) values of the continued parameter (orders on an order branch).
     pub folds: Vec<f64>,
     /// Other bifurcations: (order, kind) in words.
@@ -196,6 +199,10 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
                     .collect(),
                 relative_angle: p.iter().map(|x| relative_peak(&x.solution, study.spin)).collect(),
                 stable: p.iter().map(|x| x.stable).collect(),
+                max_multiplier: p
+                    .iter()
+                    .map(|x| x.solution.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus))
+                    .collect(),
                 folds: b.folds.iter().map(|f| f.parameter * ax.to_unit).collect(),
                 bifurcations: b
                     .bifurcations
@@ -221,6 +228,8 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         cols.push(br.relative_angle.clone());
         header.push("stable".into());
         cols.push(br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect());
+        header.push("max_floquet_modulus".into());
+        cols.push(br.max_multiplier.clone());
         let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
         let csv = if br.amplitude.is_nan() {
             dir.join(format!("{}_{dir_tag}.csv", spec.name))
