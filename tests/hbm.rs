@@ -674,3 +674,77 @@ fn two_pendulums_keep_unison_between_the_folds() {
     // Five physical multipliers with two pendulums (2·3 − 1), three with one.
     assert!(b2.points.iter().all(|p| p.solution.stability.as_ref().unwrap().multipliers.len() == 5));
 }
+/// Symmetry breaking of the unison response, found by the multipliers and confirmed by time
+/// integration. With two synchronous pendulums at 500 N·m the lower branch loses stability
+/// inside 2.9–3.3 by a real multiplier through +1 *before* its fold (one pendulum at the same
+/// torque stays stable there up to the fold): the pendulums' antisymmetric motion, which the
+/// unison solution does not excite, grows. Time integration from the HBM state with an
+/// antisymmetric perturbation of 1e-7 rad (φ₁ + ε, φ₂ − ε) shows φ₁ − φ₂ growing by the largest
+/// multiplier per period inside the interval, and decaying outside it. The growth is read from
+/// the period ends 150–250: the other antisymmetric multipliers have moduli up to ≈ 0.99, so
+/// their share has fallen to ~1e-2 by then and moves the 100-period mean by ~1e-4; RK4 with 200
+/// steps per period and the remaining nonlinearity (φ₁ − φ₂ stays below 1e-4 rad) add less. Bound
+/// 1e-3 relative to μ (measured difference printed).
+#[test]
+fn two_pendulums_break_unison_between_the_multiplier_crossings() {
+    let torque = 500.0;
+    let p2 = CpvaParams::canonical().with_pendulums(2);
+    let kane2 = Kane::new(&p2.mechanism(None).unwrap()).unwrap();
+    let mut hbm2 = Hbm::new(&kane2, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
+    // Crossings are seen between successive points, and the unstable interval is only ~0.02
+    // wide in n: the default step (up to 0.1 in the unknowns' norm) can step over it, so the
+    // step is capped here (ContinuationOptions::ds_max).
+    let copts = ContinuationOptions { ds_max: 0.02, ..ContinuationOptions::default() };
+    let b2 = hbm2.continue_in_order(2.9, 3.3, None, &copts).unwrap();
+    let (_, b1) = branch(torque, 2.9, 3.3);
+    assert!(b1.bifurcations.iter().all(|x| b1.folds.iter().any(|f| f.after == x.after)), "{:?}", b1.bifurcations);
+    let fold = b2.folds[0].order;
+    let off_fold: Vec<_> = b2.bifurcations.iter().filter(|x| !b2.folds.iter().any(|f| f.after == x.after)).collect();
+    assert_eq!(off_fold.len(), 2, "{:?}", b2.bifurcations);
+    assert!(off_fold.iter().all(|x| x.kind == BifurcationKind::PlusOne));
+    let (n_lose, n_regain) = (off_fold[0].order, off_fold[1].order);
+    assert!(off_fold[0].unstable_after == 1 && off_fold[1].unstable_after == 0);
+    assert!(2.9 < n_lose && n_lose < n_regain && n_regain < fold, "{n_lose} {n_regain} {fold}");
+    println!("unison lost at n = {n_lose:.5}, regained at {n_regain:.5}, fold at {fold:.5}");
+
+    for (n, inside) in [(0.5 * (n_lose + n_regain), true), (n_lose - 0.03, false)] {
+        let guess = b2.guesses_at(n)[0].clone();
+        let mut sol = hbm2.solve(n, Some(&guess)).unwrap();
+        sol.stability = Some(hbm2.stability(&sol).unwrap());
+        let mu = sol.stability.as_ref().unwrap().max_modulus;
+        let exc = Excitation {
+            mean: sol.mean_torque,
+            rpm: RPM,
+            order: Order::Fixed(n),
+            harmonics: single(torque),
+            ramp_s: 0.0,
+        };
+        let mut kane = Kane::new(&p2.mechanism(Some(exc)).unwrap()).unwrap();
+        let mut x = hbm2.state_at(&sol, 0.0);
+        let eps = 1e-7;
+        x[1] += eps;
+        x[2] -= eps;
+        let period = 2.0 * PI / sol.base_frequency;
+        let h = period / STEPS as f64;
+        let mut ends = Vec::new();
+        let mut step = 0;
+        rk4(&mut kane, &mut x, 0.0, h, 251 * STEPS, |_, x, _| {
+            if step % STEPS == 0 {
+                ends.push((x[1] - x[2]).abs());
+            }
+            step += 1;
+        });
+        let growth = (ends[250] / ends[150]).powf(1.0 / 100.0);
+        println!(
+            "n = {n:.5}: largest multiplier {mu:.6}, φ₁ − φ₂ grows by {growth:.6} per period ({:.1e} off), reaches {:.1e} rad",
+            (growth / mu - 1.0).abs(),
+            ends[250]
+        );
+        if inside {
+            assert!(mu > 1.0 && growth > 1.0, "inside: μ {mu}, growth {growth}");
+            assert!((growth / mu - 1.0).abs() < 1e-3, "growth {growth} vs μ {mu}");
+        } else {
+            assert!(mu < 1.0 && growth < 1.0, "outside: μ {mu}, growth {growth}");
+        }
+    }
+}
