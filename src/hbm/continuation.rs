@@ -122,7 +122,8 @@ pub struct ContinuationOptions {
     pub min_cos: f64,
     /// Compute the Floquet stability of every point.
     pub stability: bool,
-    /// Refine each fold to `|dλ/ds| < 1e-6` by a secant search.
+    /// Refine each fold to `|dλ/ds| < 1e-6` by a secant search, and locate each other multiplier
+    /// crossing by bisection.
     pub refine_folds: bool,
 }
 
@@ -219,9 +220,11 @@ pub enum BifurcationKind {
 pub struct Bifurcation {
     /// Index of the point before the change.
     pub after: usize,
-    /// Order, interpolated where the largest multiplier modulus crosses 1.
+    /// Order at the crossing: the fold's at a fold; otherwise located by bisection along the
+    /// segment (with [`ContinuationOptions::refine_folds`]), else interpolated where the
+    /// crossing multiplier's modulus passes 1.
     pub order: f64,
-    /// The continued parameter, interpolated the same way.
+    /// The continued parameter at the crossing, found the same way.
     pub parameter: f64,
     /// The kind, by the argument of the critical multiplier on the unstable side.
     pub kind: BifurcationKind,
@@ -796,7 +799,50 @@ impl Hbm {
             }
         };
         let bifurcations = bifurcations(&points, &folds);
-        Ok(Branch { parameter, points, folds, bifurcations, end, newton_iterations: newton })
+        let mut branch = Branch { parameter, points, folds, bifurcations, end, newton_iterations: newton };
+        if copts.refine_folds {
+            self.refine_crossings(&su, &mut branch);
+        }
+        Ok(branch)
+    }
+
+    /// Locates each crossing that is not a fold by bisection along its segment: states from
+    /// [`Branch::interpolate`] as guesses, solved at the fixed parameter (the segment holds no
+    /// fold, so the parameter is monotone along it and the solve is regular), the count of
+    /// multipliers outside the unit circle deciding the side, 30 halvings (the segment to 1e-9).
+    /// A crossing whose bisection fails keeps its interpolated location.
+    fn refine_crossings(&mut self, su: &Setup, branch: &mut Branch) {
+        let outside = |st: &Stability| st.multipliers.iter().filter(|m| m.norm() > 1.0).count();
+        for k in 0..branch.bifurcations.len() {
+            let i = branch.bifurcations[k].after;
+            if branch.folds.iter().any(|f| f.after == i) {
+                continue;
+            }
+            let Some(before) = branch.points[i].solution.stability.as_ref().map(outside) else { continue };
+            let (mut lo, mut hi) = (0.0, 1.0);
+            let mut found = None;
+            for _ in 0..30 {
+                let mid = 0.5 * (lo + hi);
+                let Some(guess) = branch.interpolate(i, mid) else { break };
+                let lambda = match su.param {
+                    Parameter::Order => guess.order,
+                    Parameter::Speed { .. } => guess.omega,
+                    Parameter::TorqueScale { .. } => guess.torque_scale,
+                } / su.p_ref;
+                let Ok(sol) = self.solve_at(&su.at(lambda), Some(&guess)) else { break };
+                let Ok(st) = self.stability(&sol) else { break };
+                if outside(&st) == before {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+                found = Some((sol.order, lambda * su.p_ref));
+            }
+            if let Some((order, parameter)) = found {
+                let b = &mut branch.bifurcations[k];
+                (b.order, b.parameter) = (order, parameter);
+            }
+        }
     }
 }
 
