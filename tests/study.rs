@@ -134,6 +134,8 @@ fn harmonic_balance_in_speed_and_torque() {
         HarmonicBalance(name: "torque", rpm: 1000.0, parameter: Torque(order: 3.1740911, min: 1.0, max: 120.0)),
         HarmonicBalance(name: "speed", amplitudes: [40.0],
                         parameter: Speed(order: 3.1740911, rpm_min: 600.0, rpm_max: 1600.0)),
+        HarmonicBalance(name: "fine", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [40.0], max_step: 0.02),
+        HarmonicBalance(name: "coarse", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [40.0]),
     ],
 )
 "#;
@@ -153,6 +155,14 @@ fn harmonic_balance_in_speed_and_torque() {
     assert!(near(torque.clone(), 40.0), "torque folds {torque:?}");
     let speed: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude == 40.0).flat_map(|b| b.folds.clone()).collect();
     assert!(near(speed.clone(), 1000.0), "speed folds {speed:?}");
+    // max_step caps the step: more points, the same folds (refined to the same fold either way).
+    let (fine, coarse): (Vec<_>, Vec<_>) =
+        r.hbm.iter().filter(|b| b.amplitude == 40.0 && b.parameter == b.order).partition(|b| b.order.len() > 80);
+    assert!(!fine.is_empty() && !coarse.is_empty(), "{:?}", r.hbm.iter().map(|b| b.order.len()).collect::<Vec<_>>());
+    assert_eq!((fine[0].folds.len(), coarse[0].folds.len()), (2, 2));
+    for (f, c) in fine[0].folds.iter().zip(&coarse[0].folds) {
+        assert!((f - c).abs() < 1e-6, "folds {f} vs {c}");
+    }
     // Wrong combinations name the field.
     let bad = [
         (
@@ -171,6 +181,11 @@ fn harmonic_balance_in_speed_and_torque() {
             "parameter",
         ),
         ("orders", "HarmonicBalance(name: \"h\", rpm: 1000.0, amplitudes: [1.0])", "order_min"),
+        (
+            "step",
+            "HarmonicBalance(name: \"h\", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [1.0], max_step: -0.1)",
+            "max_step",
+        ),
     ];
     for (name, entry, field) in bad {
         let msg = study_error(name, &GOOD.replace(

@@ -91,11 +91,13 @@ pub(crate) fn branch(
     from: f64,
     to: f64,
 ) -> Result<(Hbm, Branch, f64)> {
-    branch_in(study, omega, harmonics, h, Parameter::Order, from, to)
+    branch_in(study, omega, harmonics, h, Parameter::Order, from, to, None)
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
-/// torque scale) for the excitation `harmonics` at mean speed `omega` (rad/s).
+/// torque scale) for the excitation `harmonics` at mean speed `omega` (rad/s), with the largest
+/// step `max_step` (None: the default).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn branch_in(
     study: &Study,
     omega: f64,
@@ -104,12 +106,16 @@ pub(crate) fn branch_in(
     parameter: Parameter,
     from: f64,
     to: f64,
+    max_step: Option<f64>,
 ) -> Result<(Hbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
     let mut hbm = Hbm::new(&kane, study.spin, omega, harmonics, opts).map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
-    let b = hbm.continue_in(parameter, from, to, None, &ContinuationOptions::default()).map_err(hbm_error(study))?;
+    let defaults = ContinuationOptions::default();
+    let ds_max = max_step.unwrap_or(defaults.ds_max);
+    let copts = ContinuationOptions { ds_max, ds: defaults.ds.min(ds_max), ..defaults };
+    let b = hbm.continue_in(parameter, from, to, None, &copts).map_err(hbm_error(study))?;
     Ok((hbm, b, start.elapsed().as_secs_f64()))
 }
 
@@ -160,8 +166,16 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         // lies outside the range, each reaches sheets the other cannot.
         let (lo, hi) = ax.range;
         for (from, to) in [(hi, lo), (lo, hi)] {
-            let (_, b, wall_s) =
-                branch_in(study, omega, &harmonics, spec.harmonics, parameter, from * scale, to * scale)?;
+            let (_, b, wall_s) = branch_in(
+                study,
+                omega,
+                &harmonics,
+                spec.harmonics,
+                parameter,
+                from * scale,
+                to * scale,
+                spec.max_step,
+            )?;
             let p = &b.points;
             let mut curve: Vec<(HbmSolution, Option<bool>)> = Vec::new();
             for i in 0..p.len() {

@@ -295,6 +295,9 @@ fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
                 if h.harmonics == 0 || h.harmonics > 64 {
                     return Err(src.error(&format!("{path}.harmonics"), "need 1 to 64 harmonics"));
                 }
+                if h.max_step.is_some_and(|d| !(d.is_finite() && d >= 1e-6)) {
+                    return Err(src.error(&format!("{path}.max_step"), "must be finite and at least 1e-6"));
+                }
                 check_common(src, &path, &h.multiples, 0.0, None)?;
                 if let Some(o) = &h.overlay {
                     let earlier =

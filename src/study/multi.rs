@@ -283,7 +283,7 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
     // Both torques scaled together from nearly nothing (the linear response) up to the table's.
     let param = crate::hbm::Parameter::TorqueScale { order: spec.order };
-    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, 10, param, 0.01, 1.0)?;
+    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, 10, param, 0.01, 1.0, None)?;
     let fold = up.folds.first().filter(|f| f.kind == crate::hbm::FoldKind::Maximum).map(|f| f.parameter);
     Ok((out, fold))
 }

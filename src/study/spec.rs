@@ -136,6 +136,11 @@ pub struct HbmSpec {
     /// The continued parameter (default `Order`).
     #[serde(default)]
     pub parameter: HbmParameter,
+    /// Largest arclength step of the continuation (default 0.1, in the norm of the Fourier
+    /// unknowns in rad and the scaled parameter). Stability changes are found between points, so
+    /// lower it to resolve short unstable stretches (see `ContinuationOptions::ds_max`).
+    #[serde(default)]
+    pub max_step: Option<f64>,
 }
 
 /// What a `HarmonicBalance` analysis continues.
