@@ -304,6 +304,13 @@ impl Kane {
         (&self.m, &self.f)
     }
 
+    /// True when [`Kane::residual_jacobian`] applies: absolute angular velocities, no gravity, no
+    /// point forces.
+    pub fn has_residual_jacobian(&self) -> bool {
+        let gravity = self.world && self.gravity != Vec2::zeros();
+        self.absolute && !gravity && self.point_forces.is_empty()
+    }
+
     /// The residual `r = M(q) u̇ − F(q, u, t)` with its exact derivatives `∂r/∂q` and `∂r/∂u`
     /// (row-major n × n), and M (row-major) into `m_out`, for absolute angular velocities
     /// without gravity or point forces: there every q-dependence is a pair term of
@@ -325,11 +332,10 @@ impl Kane {
         dr_du: &mut [f64],
         m_out: &mut [f64],
     ) -> bool {
-        let n = self.n;
-        let gravity = self.world && self.gravity != Vec2::zeros();
-        if !self.absolute || gravity || !self.point_forces.is_empty() {
+        if !self.has_residual_jacobian() {
             return false;
         }
+        let n = self.n;
         self.evaluate(t, q, u, true);
         let (m, f) = (&self.m[..n * n], &self.f[..n]);
         m_out[..n * n].copy_from_slice(m);
@@ -368,7 +374,8 @@ impl Kane {
             while k != GROUND_PARENT {
                 let (alpha, beta) = pairs[pair];
                 pair += 1;
-                let v = alpha * rc - beta * rs;
+                // M_kj as `evaluate` wrote it; D, its Δ-derivative up to sign.
+                let v = m[k * n + j];
                 let d = alpha * rs + beta * rc;
                 // r_k = … + M_kj u̇_j − ω_j² D, r_j = … + M_kj u̇_k + ω_k² D.
                 let (wk, gk, gj) = (u[k], -d * udot[j] - w * w * v, -d * udot[k] + u[k] * u[k] * v);

@@ -203,21 +203,27 @@ fn legend_corner(
         1 => (t - 0.5).abs() <= 0.5 * len,
         _ => t >= 1.0 - len,
     };
-    // Coverage: the length of drawn curve under the box (plot-area units), so a dense sampled
-    // trace weighs no more than a sparse line across the same place.
+    // The curves in plot-area units (0..1 on both axes).
+    let curves: Vec<Vec<(f64, f64)>> = panel
+        .series
+        .iter()
+        .map(|s| {
+            s.x.iter()
+                .copied()
+                .zip(s.y.iter().copied())
+                .filter(keep(panel.log_y))
+                .map(|(x, y)| ((x - x0) / (x1 - x0), fy(y)))
+                .collect()
+        })
+        .collect();
+    // Coverage: the length of drawn curve under the box, so a dense sampled trace weighs no more
+    // than a sparse line across the same place.
     let covered = |ax: u8, ay: u8| {
         let under = |u: f64, v: f64| {
             (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) && inside(u, ax, size.0) && inside(v, ay, size.1)
         };
         let mut length = 0.0;
-        for s in &panel.series {
-            let pts: Vec<(f64, f64)> =
-                s.x.iter()
-                    .copied()
-                    .zip(s.y.iter().copied())
-                    .filter(keep(panel.log_y))
-                    .map(|(x, y)| ((x - x0) / (x1 - x0), fy(y)))
-                    .collect();
+        for pts in &curves {
             for w in pts.windows(2) {
                 let ((u0, v0), (u1, v1)) = (w[0], w[1]);
                 let len = (u1 - u0).hypot(v1 - v0);

@@ -58,6 +58,16 @@ pub enum Parameter {
 }
 
 impl Parameter {
+    /// The value of this parameter in a solution: its order n, mean speed Ω (rad/s) or torque
+    /// scale s.
+    pub fn value(self, sol: &HbmSolution) -> f64 {
+        match self {
+            Parameter::Order => sol.order,
+            Parameter::Speed { .. } => sol.omega,
+            Parameter::TorqueScale { .. } => sol.torque_scale,
+        }
+    }
+
     fn free(self) -> Free {
         match self {
             Parameter::Order => Free::Order,
@@ -789,8 +799,7 @@ impl Hbm {
             }
             s += chord;
             points.push(self.branch_point(&su, &y, Some(&t), s, iters, copts.stability)?);
-            prev = Some((std::mem::replace(&mut cur.t, t.clone()), chord));
-            cur = Cursor { y, t };
+            prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;
             if iters <= 7 && refreshes <= 1 {
                 ds = (ds * 1.5).min(copts.ds_max);
@@ -812,26 +821,21 @@ impl Hbm {
     /// multipliers outside the unit circle deciding the side, 30 halvings (the segment to 1e-9).
     /// A crossing whose bisection fails keeps its interpolated location.
     fn refine_crossings(&mut self, su: &Setup, branch: &mut Branch) {
-        let outside = |st: &Stability| st.multipliers.iter().filter(|m| m.norm() > 1.0).count();
         for k in 0..branch.bifurcations.len() {
             let i = branch.bifurcations[k].after;
             if branch.folds.iter().any(|f| f.after == i) {
                 continue;
             }
-            let Some(before) = branch.points[i].solution.stability.as_ref().map(outside) else { continue };
+            let Some(before) = branch.points[i].solution.stability.as_ref().map(Stability::outside) else { continue };
             let (mut lo, mut hi) = (0.0, 1.0);
             let mut found = None;
             for _ in 0..30 {
                 let mid = 0.5 * (lo + hi);
                 let Some(guess) = branch.interpolate(i, mid) else { break };
-                let lambda = match su.param {
-                    Parameter::Order => guess.order,
-                    Parameter::Speed { .. } => guess.omega,
-                    Parameter::TorqueScale { .. } => guess.torque_scale,
-                } / su.p_ref;
+                let lambda = su.param.value(&guess) / su.p_ref;
                 let Ok(sol) = self.solve_at(&su.at(lambda), Some(&guess)) else { break };
                 let Ok(st) = self.stability(&sol) else { break };
-                if outside(&st) == before {
+                if st.outside() == before {
                     lo = mid;
                 } else {
                     hi = mid;
@@ -858,11 +862,10 @@ impl Hbm {
 /// fold's refined location. Elsewhere the location is interpolated linearly where the modulus
 /// of the crossing multiplier (matched across the step by distance) passes 1.
 fn bifurcations(points: &[BranchPoint], folds: &[Fold]) -> Vec<Bifurcation> {
-    let outside = |st: &Stability| st.multipliers.iter().filter(|m| m.norm() > 1.0).count();
     let mut out = Vec::new();
     for (i, w) in points.windows(2).enumerate() {
         let (Some(a), Some(b)) = (&w[0].solution.stability, &w[1].solution.stability) else { continue };
-        let (na, nb) = (outside(a), outside(b));
+        let (na, nb) = (a.outside(), b.outside());
         if na == nb {
             continue;
         }

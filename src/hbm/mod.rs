@@ -366,8 +366,8 @@ struct Evaluator {
     rp: Vec<f64>,
     rm: Vec<f64>,
     /// ∂R/∂u and M (row-major) from the engine's closed-form derivatives.
-    rp_du: Vec<f64>,
-    rp_m: Vec<f64>,
+    dr_du: Vec<f64>,
+    mass: Vec<f64>,
 }
 
 /// Per-sample linearisation: R, and row-major `A = ∂R/∂q`, `B = ∂R/∂q̇`, `C = ∂R/∂q̈`.
@@ -440,10 +440,11 @@ impl Evaluator {
         // Closed-form derivatives where the engine has them (absolute speeds, no gravity or
         // point forces): one evaluation instead of 1 + 2(n − 1) + 2n (measured: −20 % of the
         // instructions of a CPVA branch).
-        self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
-        self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
-        let (du, m) = (&mut self.rp_du, &mut self.rp_m);
-        if self.kane.residual_jacobian(t, q, &self.u, &self.ud, &mut lin.r, &mut lin.a, du, m) {
+        if self.kane.has_residual_jacobian() {
+            self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
+            self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
+            let (du, m) = (&mut self.dr_du, &mut self.mass);
+            self.kane.residual_jacobian(t, q, &self.u, &self.ud, &mut lin.r, &mut lin.a, du, m);
             for i in 0..n {
                 lin.r[i] -= self.g[i] * torque;
                 lin.a[i * n + spin] = 0.0;
@@ -654,8 +655,8 @@ impl Hbm {
             ud: vec![0.0; n],
             rp: vec![0.0; n],
             rm: vec![0.0; n],
-            rp_du: vec![0.0; n * n],
-            rp_m: vec![0.0; n * n],
+            dr_du: vec![0.0; n * n],
+            mass: vec![0.0; n * n],
         };
         let exc = (0..nt)
             .map(|j| {

@@ -177,32 +177,31 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
                 spec.max_step,
             )?;
             let p = &b.points;
-            let mut curve: Vec<(HbmSolution, Option<bool>)> = Vec::new();
+            let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
+            let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
+            let mut add = |sol: &HbmSolution, stable: Option<bool>| {
+                curve_parameter.push(parameter.value(sol) * ax.to_unit);
+                for (acc, &m) in curve_accel.iter_mut().zip(&spec.multiples) {
+                    acc.push(body_accel(sol, &path, m));
+                }
+                curve_stable.push(stable);
+            };
             for i in 0..p.len() {
-                curve.push((p[i].solution.clone(), p[i].stable));
+                add(&p[i].solution, p[i].stable);
                 if i + 1 == p.len() {
                     break;
                 }
                 for j in 1..CURVE_SUBDIVISION {
                     let sigma = j as f64 / CURVE_SUBDIVISION as f64;
                     if let Some(sol) = b.interpolate(i, sigma) {
-                        curve.push((sol, if sigma < 0.5 { p[i].stable } else { p[i + 1].stable }));
+                        add(&sol, if sigma < 0.5 { p[i].stable } else { p[i + 1].stable });
                     }
                 }
             }
-            let param_of = |sol: &HbmSolution| match parameter {
-                Parameter::Order => sol.order,
-                Parameter::Speed { .. } => sol.omega,
-                Parameter::TorqueScale { .. } => sol.torque_scale,
-            };
             branches.push(HbmBranch {
-                curve_parameter: curve.iter().map(|(sol, _)| param_of(sol) * ax.to_unit).collect(),
-                curve_accel: spec
-                    .multiples
-                    .iter()
-                    .map(|&m| curve.iter().map(|(sol, _)| body_accel(sol, &path, m)).collect())
-                    .collect(),
-                curve_stable: curve.iter().map(|(_, st)| *st).collect(),
+                curve_parameter,
+                curve_accel,
+                curve_stable,
                 amplitude: amp,
                 order: p.iter().map(|x| x.order).collect(),
                 parameter: p.iter().map(|x| x.parameter * ax.to_unit).collect(),
