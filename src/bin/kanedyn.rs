@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use kanedyn::excitation::Excitation;
 use kanedyn::kane::Kane;
 use kanedyn::mechanism::Mechanism;
-use kanedyn::study::{RunOptions, Study};
+use kanedyn::study::{Limits, LoadOptions, RunOptions, Study};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -19,10 +19,14 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Validate a mechanism file and print its degrees of freedom, bodies, joints and total mass.
+    /// Validate a mechanism file and print its degrees of freedom, bodies, joints and total mass;
+    /// or validate a study file without running it and print its plan (runs, samples, memory,
+    /// output size and CPU time per analysis).
     Check {
-        /// Mechanism file (RON).
+        /// Mechanism or study file (RON).
         file: PathBuf,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
     /// Print M, F, q̇ and u̇ at one state as JSON (numbers round-trip exactly).
     Eom {
@@ -49,18 +53,60 @@ enum Command {
         /// Output root folder.
         #[arg(long, default_value = "out")]
         out: PathBuf,
-        /// Number of worker threads (default: all cores).
+        /// Number of worker threads (default: all cores; at most 4 per core).
         #[arg(long)]
         threads: Option<usize>,
+        #[command(flatten)]
+        limits: LimitArgs,
     },
 }
+
+/// The limits a study's estimated work is checked against at load (see the README's "Limits
+/// and errors"); raise one on purpose when a study really needs more.
+#[derive(clap::Args, Debug, Clone)]
+struct LimitArgs {
+    /// Largest estimated memory of a study, MB.
+    #[arg(long, value_name = "MB", default_value_t = 2048.0)]
+    max_memory_mb: f64,
+    /// Largest estimated size of a study's output files, MB.
+    #[arg(long, value_name = "MB", default_value_t = 2048.0)]
+    max_output_mb: f64,
+    /// Largest estimated CPU time of a study, hours.
+    #[arg(long, value_name = "HOURS", default_value_t = 12.0)]
+    max_cpu_hours: f64,
+}
+
+impl LimitArgs {
+    fn options(&self) -> Result<LoadOptions> {
+        for (name, v) in [
+            ("--max-memory-mb", self.max_memory_mb),
+            ("--max-output-mb", self.max_output_mb),
+            ("--max-cpu-hours", self.max_cpu_hours),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{name} must be a finite, positive number, got {v}");
+            }
+        }
+        let mb = 1024.0 * 1024.0;
+        Ok(LoadOptions {
+            limits: Limits {
+                max_memory_bytes: self.max_memory_mb * mb,
+                max_output_bytes: self.max_output_mb * mb,
+                max_cpu_s: self.max_cpu_hours * 3600.0,
+            },
+        })
+    }
+}
+
+/// Most worker threads per core: more only adds memory and scheduling.
+const THREADS_PER_CORE: usize = 4;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Check { file } => check(&file),
+        Command::Check { file, limits } => check_file(&file, &limits),
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
-        Command::Run { study, out, threads } => run(&study, &out, threads),
+        Command::Run { study, out, threads, limits } => run(&study, &out, threads, &limits),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -69,6 +115,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `check` on a study (its text begins with `Study(`) prints the plan; on anything else it
+/// checks a mechanism.
+fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
+    let src = kanedyn::io::Source::read(file)?;
+    if !src.text.lines().any(|l| l.trim_start().starts_with("Study(")) {
+        return check(file);
+    }
+    let study = Study::from_source(src, &limits.options()?)?;
+    let plan = study.plan();
+    println!("study `{}` ({}): OK", study.spec.name, file.display());
+    println!(
+        "mechanism `{}`: {} degrees of freedom; outputs go to <out>/{}/",
+        study.mechanism.name,
+        study.mechanism.ndof(),
+        study.spec.name
+    );
+    println!("plan (coarse upper-bound estimates):\n{plan}");
+    Ok(())
 }
 
 fn check(file: &Path) -> Result<()> {
@@ -176,12 +242,19 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
     Ok(())
 }
 
-fn run(file: &Path, out: &Path, threads: Option<usize>) -> Result<()> {
+fn run(file: &Path, out: &Path, threads: Option<usize>, limits: &LimitArgs) -> Result<()> {
     if let Some(n) = threads {
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        let cap = THREADS_PER_CORE * cores;
+        if n > cap {
+            eprintln!(
+                "note: --threads {n} lowered to {cap} ({THREADS_PER_CORE} per core on this {cores}-core machine)"
+            );
+        }
         // Only fails when a pool already exists, which cannot happen this early in main.
-        rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global().ok();
+        rayon::ThreadPoolBuilder::new().num_threads(n.clamp(1, cap)).build_global().ok();
     }
-    let study = Study::from_file(file)?;
+    let study = Study::from_file_with(file, &limits.options()?)?;
     let start = std::time::Instant::now();
     let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: true })?;
     println!("{}", report.summary);

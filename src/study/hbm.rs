@@ -59,6 +59,7 @@ pub const CURVE_SUBDIVISION: usize = 8;
 pub(crate) struct Output {
     pub markdown: String,
     pub files: Vec<PathBuf>,
+    pub failures: Vec<String>,
     pub branches: Vec<HbmBranch>,
 }
 
@@ -159,6 +160,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         }
     };
     let mut branches = Vec::new();
+    let mut failures = Vec::new();
     for &amp in &cases {
         let harmonics = [Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }];
         // From above, the continuation follows the branch that comes down from high values; from
@@ -166,16 +168,16 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         // lies outside the range, each reaches sheets the other cannot.
         let (lo, hi) = ax.range;
         for (from, to) in [(hi, lo), (lo, hi)] {
-            let (_, b, wall_s) = branch_in(
-                study,
-                omega,
-                &harmonics,
-                spec.harmonics,
-                parameter,
-                from * scale,
-                to * scale,
-                spec.max_step,
-            )?;
+            let solved =
+                branch_in(study, omega, &harmonics, spec.harmonics, parameter, from * scale, to * scale, spec.max_step);
+            let (_, b, wall_s) = match solved {
+                Ok(x) => x,
+                Err(e) => {
+                    let what = if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") };
+                    failures.push(format!("{}{what}, continued from {from}: {e}", spec.name));
+                    continue;
+                }
+            };
             let p = &b.points;
             let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
             let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
@@ -231,6 +233,12 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
 
     let mut files = Vec::new();
     for br in &branches {
+        if br.accel.iter().flatten().chain(&br.relative_angle).any(|v| !v.is_finite()) {
+            failures.push(format!(
+                "{} branch from {}: a solution is not finite (left empty in the CSV)",
+                spec.name, br.from
+            ));
+        }
         let mut header = vec![ax.column.to_string()];
         let mut cols = vec![br.parameter.clone()];
         for (k, m) in spec.multiples.iter().enumerate() {
@@ -355,7 +363,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         );
     }
     md.push('\n');
-    Ok(Output { markdown: md, files, branches })
+    Ok(Output { markdown: md, files, failures, branches })
 }
 
 fn list(v: &[f64]) -> String {

@@ -13,6 +13,13 @@ use std::path::{Path, PathBuf};
 pub(crate) struct Output {
     pub markdown: String,
     pub files: Vec<PathBuf>,
+    pub failures: Vec<String>,
+}
+
+/// A variant label as a file-name part: characters other than letters, digits, `.` and `-`
+/// become `_`.
+pub(crate) fn slug(label: &str) -> String {
+    label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
 }
 
 /// Linear results of one variant, for tests and reports.
@@ -114,11 +121,13 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     let variants = if spec.variants.is_empty() { &default_variant[..] } else { &spec.variants[..] };
     let mut results = Vec::new();
     let mut files = Vec::new();
+    let mut failures = Vec::new();
     for v in variants {
         let m = with_dampers(mech, &v.dampers);
         let resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
         let pts = resp.sweep(&orders).map_err(lin(&m))?;
-        let ratio: Vec<f64> = pts.iter().map(|p| p.ratio).collect();
+        let locked_max = pts.iter().map(|p| p.locked.abs()).fold(0.0, f64::max);
+        let ratio: Vec<f64> = pts.iter().map(|p| super::ratio(p.response, p.locked, locked_max)).collect();
         // Extremes refined by the linear module's golden-section search around the grid's.
         let ext = resp.extremes(orders[0], orders[steps - 1], steps).map_err(lin(&m))?;
         let crossing = match n_t {
@@ -128,9 +137,13 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
             _ => None,
         };
         let asymptote = resp.asymptote().map_err(lin(&m))?;
-        let slug: String =
-            v.label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect();
-        let path = dir.join(format!("{}_{slug}.csv", spec.name));
+        let path = dir.join(format!("{}_{}.csv", spec.name, slug(&v.label)));
+        if let Some(i) = pts.iter().position(|p| !(p.response.is_finite() && p.locked.is_finite())) {
+            failures.push(format!(
+                "{} variant `{}`: the response is not finite at order {} (left empty in the CSV)",
+                spec.name, v.label, orders[i]
+            ));
+        }
         let rel: Vec<f64> = orders.iter().map(|n| n / scale).collect();
         let resp_abs: Vec<f64> = pts.iter().map(|p| p.response).collect();
         let locked_abs: Vec<f64> = pts.iter().map(|p| p.locked).collect();
@@ -227,7 +240,7 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     }
     md.push('\n');
     let result = LinearResult { name: spec.name.clone(), n_t, free_orders, variants: results };
-    Ok((Output { markdown: md, files }, result))
+    Ok((Output { markdown: md, files, failures }, result))
 }
 
 pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Result<Output> {
@@ -238,6 +251,18 @@ pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Re
     let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
     let c = campbell(mech, &study.spec.spin_joint, &rpm, &spec.orders, spin, damping, None).map_err(lin(mech))?;
+    let mut failures = Vec::new();
+    for (k, t) in c.tracks.iter().enumerate() {
+        if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {
+            failures.push(format!(
+                "{} mode {} (`{}`): the frequency is not finite at {} rpm (left empty)",
+                spec.name,
+                k + 1,
+                t.label,
+                c.rpm[i]
+            ));
+        }
+    }
     let mut header = vec!["rpm".to_string()];
     let mut cols: Vec<Vec<f64>> = vec![c.rpm.clone()];
     for (k, t) in c.tracks.iter().enumerate() {
@@ -322,5 +347,5 @@ pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Re
         );
     }
     md.push('\n');
-    Ok(Output { markdown: md, files: vec![csv, svg] })
+    Ok(Output { markdown: md, files: vec![csv, svg], failures })
 }

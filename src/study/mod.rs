@@ -9,14 +9,18 @@
 pub mod hbm;
 mod linear;
 mod multi;
+mod output;
+pub mod plan;
 mod sim;
 pub mod spec;
 pub mod sweep;
+pub mod validate;
 
 use crate::error::{Error, Result};
 use crate::io::Source;
 use crate::kane::Kane;
 use crate::mechanism::Mechanism;
+pub use plan::{AnalysisPlan, Limits, Plan};
 pub use spec::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -38,6 +42,15 @@ pub struct Study {
     pub body: usize,
     /// Index of the response body in the locked twin.
     pub locked_body: Option<usize>,
+    /// The study file's text, to name the line of an analysis that fails at run time.
+    pub source: Source,
+}
+
+/// How a study is loaded: the limits its estimated work is checked against.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// Limits on memory, output size and CPU time.
+    pub limits: Limits,
 }
 
 /// What a study produced: the Markdown summary and the files written.
@@ -64,12 +77,26 @@ pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;
 
 impl Study {
-    /// Reads a study file and its mechanism, resolving every name; errors name the file, the
+    /// Reads a study file and its mechanism with the default [`LoadOptions`], resolving every
+    /// name and checking every field and the estimated work; errors name the file, the
     /// line:column and the field.
     pub fn from_file(path: &Path) -> Result<Self> {
-        let src = Source::read(path)?;
+        Self::from_file_with(path, &LoadOptions::default())
+    }
+
+    /// [`Study::from_file`] with explicit options.
+    pub fn from_file_with(path: &Path, opts: &LoadOptions) -> Result<Self> {
+        Self::from_source(Source::read(path)?, opts)
+    }
+
+    /// Parses and validates a study from its text; its mechanism is read relative to
+    /// `src.file`'s folder.
+    pub fn from_source(src: Source, opts: &LoadOptions) -> Result<Self> {
         let spec: StudySpec = src.parse()?;
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        if let Err(m) = validate::check_file_name(&spec.name) {
+            return Err(src.error("name", format!("{m} (the study name is its output folder)")));
+        }
+        let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
         let mech_path = base.join(&spec.mechanism);
         let mechanism = Mechanism::from_file(&mech_path).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
@@ -108,8 +135,13 @@ impl Study {
             })?),
             None => None,
         };
-        check_spec(&spec, &mechanism, &src)?;
-        Ok(Study { spec, file: path.to_path_buf(), mechanism, locked, spin, body, locked_body })
+        validate::check(&spec, &mechanism, spin, &src)?;
+        let file = src.file.clone();
+        let study = Study { spec, file, mechanism, locked, spin, body, locked_body, source: src };
+        if let Some((k, driver, message)) = study.plan().exceeds(&opts.limits) {
+            return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
+        }
+        Ok(study)
     }
 
     /// Mean torque that holds the spin joint's subtree in rigid rotation at `omega` (rad/s): the
@@ -145,205 +177,6 @@ impl Study {
     }
 }
 
-fn check_spec(spec: &StudySpec, mech: &Mechanism, src: &Source) -> Result<()> {
-    let pos = |v: f64| v.is_finite() && v > 0.0;
-    let i = spec.integration;
-    if !pos(i.rtol) || !pos(i.atol) {
-        return Err(src.error("integration", "rtol and atol must be finite and positive"));
-    }
-    if !pos(i.sample_hz) {
-        return Err(src.error("integration.sample_hz", "sample rate must be finite and positive (Hz)"));
-    }
-    let o = spec.order_tracking;
-    if !pos(o.window_s) || !pos(o.hop_s) {
-        return Err(src.error("order_tracking", "window_s and hop_s must be finite and positive (s)"));
-    }
-    if spec.analyses.is_empty() {
-        return Err(src.error("analyses", "no analyses: nothing to run"));
-    }
-    let mut names = std::collections::HashSet::new();
-    for (k, a) in spec.analyses.iter().enumerate() {
-        let path = format!("analyses[{k}]");
-        let name = match a {
-            AnalysisSpec::OrderSweep(s) => {
-                if !pos(s.rpm) {
-                    return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
-                }
-                if !(pos(s.order_min) && pos(s.order_max) && s.order_min < s.order_max) {
-                    return Err(src.error(&format!("{path}.order_min"), "need 0 < order_min < order_max"));
-                }
-                if !pos(s.duration_s) {
-                    return Err(src.error(&format!("{path}.duration_s"), "duration must be positive (s)"));
-                }
-                if s.duration_s < 2.0 * o.window_s {
-                    return Err(src.error(
-                        &format!("{path}.duration_s"),
-                        format!("a sweep shorter than two tracking windows ({} s) gives no trace", 2.0 * o.window_s),
-                    ));
-                }
-                if s.amplitudes.is_empty() || s.amplitudes.iter().any(|a| !a.is_finite()) {
-                    return Err(src.error(&format!("{path}.amplitudes"), "give at least one finite amplitude (N·m)"));
-                }
-                check_common(src, &path, &s.multiples, s.ramp_s, s.mean_torque)?;
-                &s.name
-            }
-            AnalysisSpec::MultiOrder(m) => {
-                if !pos(m.order) {
-                    return Err(src.error(&format!("{path}.order"), "order must be finite and positive"));
-                }
-                if m.speeds.is_empty() {
-                    return Err(src.error(&format!("{path}.speeds"), "give at least one operating speed"));
-                }
-                for (j, p) in m.speeds.iter().enumerate() {
-                    if !pos(p.rpm) {
-                        return Err(src.error(&format!("{path}.speeds[{j}].rpm"), "speed must be positive (rpm)"));
-                    }
-                    for (h, hm) in p.harmonics.iter().enumerate() {
-                        if !(pos(hm.multiple) && hm.amplitude.is_finite() && hm.phase.is_finite()) {
-                            return Err(src.error(
-                                &format!("{path}.speeds[{j}].harmonics[{h}]"),
-                                "multiple must be positive, amplitude and phase finite",
-                            ));
-                        }
-                    }
-                }
-                if !pos(m.window_s)
-                    || !pos(m.steady_tol)
-                    || m.max_time_s.is_nan()
-                    || m.max_time_s < m.ramp_s + 2.0 * m.window_s
-                {
-                    return Err(src.error(
-                        &format!("{path}.max_time_s"),
-                        "need positive window_s and steady_tol, and max_time_s ≥ ramp_s + 2·window_s",
-                    ));
-                }
-                check_common(src, &path, &m.multiples, m.ramp_s, m.mean_torque)?;
-                &m.name
-            }
-            AnalysisSpec::LinearResponse(l) => {
-                if !pos(l.rpm) {
-                    return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
-                }
-                if !(pos(l.from) && l.to.is_finite() && l.from < l.to) {
-                    return Err(src.error(&format!("{path}.from"), "need 0 < from < to"));
-                }
-                if l.points < 2 {
-                    return Err(src.error(&format!("{path}.points"), "need at least 2 points"));
-                }
-                if l.relative && spec.lock.is_empty() {
-                    return Err(src.error(
-                        &format!("{path}.relative"),
-                        "orders relative to n_t need a locked joint (`lock`) to define the tuning order",
-                    ));
-                }
-                for (j, v) in l.variants.iter().enumerate() {
-                    for (d, (joint, c)) in v.dampers.iter().enumerate() {
-                        let at = format!("{path}.variants[{j}].dampers[{d}]");
-                        if mech.joint_index(joint).is_none() {
-                            return Err(src.error(&at, format!("unknown joint `{joint}`")));
-                        }
-                        if !(c.is_finite() && *c >= 0.0) {
-                            return Err(src.error(&at, format!("damping must be finite and non-negative, got {c}")));
-                        }
-                    }
-                }
-                &l.name
-            }
-            AnalysisSpec::HarmonicBalance(h) => {
-                let order_range = !(h.order_min == 0.0 && h.order_max == 0.0);
-                // A continuation range: a positive order and 0 < min < max.
-                let range_ok = |order: f64, min: f64, max: f64, message: &str| {
-                    if pos(order) && pos(min) && pos(max) && min < max {
-                        Ok(())
-                    } else {
-                        Err(src.error(&format!("{path}.parameter"), message))
-                    }
-                };
-                let (needs_rpm, needs_orders, needs_amplitudes) = match h.parameter {
-                    HbmParameter::Order => (true, true, true),
-                    HbmParameter::Speed { order, rpm_min, rpm_max } => {
-                        range_ok(order, rpm_min, rpm_max, "Speed needs order > 0 and 0 < rpm_min < rpm_max")?;
-                        (false, false, true)
-                    }
-                    HbmParameter::Torque { order, min, max } => {
-                        range_ok(order, min, max, "Torque needs order > 0 and 0 < min < max (N·m)")?;
-                        (true, false, false)
-                    }
-                };
-                let what = "a Speed or Torque continuation takes its range from `parameter`";
-                if needs_rpm && !pos(h.rpm) {
-                    return Err(src.error(&format!("{path}.rpm"), "speed must be finite and positive (rpm)"));
-                }
-                if !needs_rpm && h.rpm != 0.0 {
-                    return Err(src.error(&format!("{path}.rpm"), format!("{what}: leave `rpm` out")));
-                }
-                if needs_orders && !(pos(h.order_min) && pos(h.order_max) && h.order_min < h.order_max) {
-                    return Err(src.error(&format!("{path}.order_min"), "need 0 < order_min < order_max"));
-                }
-                if !needs_orders && order_range {
-                    return Err(src.error(&format!("{path}.order_min"), format!("{what}: leave the order range out")));
-                }
-                if !needs_orders && h.overlay.is_some() {
-                    return Err(src.error(&format!("{path}.overlay"), "sweeps can only be overlaid on order branches"));
-                }
-                if needs_amplitudes && (h.amplitudes.is_empty() || h.amplitudes.iter().any(|a| !a.is_finite())) {
-                    return Err(src.error(&format!("{path}.amplitudes"), "give at least one finite amplitude (N·m)"));
-                }
-                if !needs_amplitudes && !h.amplitudes.is_empty() {
-                    return Err(src.error(&format!("{path}.amplitudes"), format!("{what}: leave `amplitudes` out")));
-                }
-                if h.harmonics == 0 || h.harmonics > 64 {
-                    return Err(src.error(&format!("{path}.harmonics"), "need 1 to 64 harmonics"));
-                }
-                if h.max_step.is_some_and(|d| !(d.is_finite() && d >= 1e-6)) {
-                    return Err(src.error(&format!("{path}.max_step"), "must be finite and at least 1e-6"));
-                }
-                check_common(src, &path, &h.multiples, 0.0, None)?;
-                if let Some(o) = &h.overlay {
-                    let earlier =
-                        spec.analyses[..k].iter().any(|a| matches!(a, AnalysisSpec::OrderSweep(s) if &s.name == o));
-                    if !earlier {
-                        return Err(src.error(
-                            &format!("{path}.overlay"),
-                            format!("no OrderSweep named `{o}` before this analysis"),
-                        ));
-                    }
-                }
-                &h.name
-            }
-            AnalysisSpec::Campbell(c) => {
-                if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
-                    return Err(src.error(&format!("{path}.rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
-                }
-                if c.points < 2 || c.orders.iter().any(|o| !pos(*o)) {
-                    return Err(src.error(&format!("{path}.points"), "need ≥ 2 points and positive orders"));
-                }
-                &c.name
-            }
-        };
-        if !names.insert(name.clone()) {
-            return Err(src.error(&format!("{path}.name"), format!("duplicate analysis name `{name}`")));
-        }
-        if name.is_empty() || name.contains(['/', '\\']) {
-            return Err(src.error(&format!("{path}.name"), "name must be non-empty and contain no path separator"));
-        }
-    }
-    Ok(())
-}
-
-fn check_common(src: &Source, path: &str, multiples: &[f64], ramp_s: f64, mean: Option<f64>) -> Result<()> {
-    if multiples.is_empty() || multiples.iter().any(|m| !(m.is_finite() && *m > 0.0)) {
-        return Err(src.error(&format!("{path}.multiples"), "give positive harmonic multiples (1 = main order)"));
-    }
-    if !(ramp_s.is_finite() && ramp_s >= 0.0) {
-        return Err(src.error(&format!("{path}.ramp_s"), "ramp must be a finite, non-negative duration (s)"));
-    }
-    if mean.is_some_and(|m| !m.is_finite()) {
-        return Err(src.error(&format!("{path}.mean_torque"), "mean torque must be finite (N·m)"));
-    }
-    Ok(())
-}
-
 /// Options of [`run`].
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
@@ -353,12 +186,20 @@ pub struct RunOptions {
     pub progress: bool,
 }
 
-/// Runs every analysis of the study, writes the outputs and returns the summary. A failing run
-/// (e.g. an integration error) does not stop the others: its partial output is written and the
-/// failure is listed in the summary and in [`StudyReport::failures`].
+/// Runs every analysis of the study, writes the outputs and returns the summary.
+///
+/// One failure never costs the others their results: an analysis (or one run of it) that fails
+/// or panics is listed under "Failures" in the summary and in [`StudyReport::failures`] with its
+/// file:line:column, its partial output is kept, and the remaining analyses still run. The
+/// outputs are written into a temporary folder that replaces `<out>/<name>/` only at the end
+/// (see `output`), and `summary.md` is always written.
+///
+/// # Errors
+/// Only when the output folder cannot be prepared or moved into place, or another run holds it.
 pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
-    let dir = opts.out.clone().unwrap_or_else(|| PathBuf::from("out")).join(&study.spec.name);
-    std::fs::create_dir_all(&dir).map_err(|e| Error::Io { file: dir.clone(), action: "cannot create", source: e })?;
+    let root = opts.out.clone().unwrap_or_else(|| PathBuf::from("out"));
+    let out = output::OutputDir::begin(&root, &study.spec.name)?;
+    let dir = out.dir().to_path_buf();
     let progress = sim::Progress::new(opts.progress);
     let mut report = StudyReport::default();
     let mut md = String::new();
@@ -376,41 +217,41 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
             format!("; locked twin with {} locked", study.spec.lock.join(", "))
         }
     );
-    for a in &study.spec.analyses {
-        match a {
-            AnalysisSpec::OrderSweep(s) => {
-                let out = sweep::run(study, s, &dir, &progress)?;
-                md += &out.markdown;
-                report.files.extend(out.files);
-                report.failures.extend(out.failures);
-                report.sweeps.extend(out.runs);
+    let mut sections = String::new();
+    for (k, a) in study.spec.analyses.iter().enumerate() {
+        let where_ = study.source.locate(&format!("analyses[{k}]"));
+        let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_analysis(study, a, &dir, &progress, &mut report)
+        }));
+        let failure = match attempt {
+            Ok(Ok(section)) => {
+                sections += &section;
+                continue;
             }
-            AnalysisSpec::MultiOrder(m) => {
-                let out = multi::run(study, m, &dir, &progress)?;
-                md += &out.markdown;
-                report.files.extend(out.files);
-                report.failures.extend(out.failures);
-                report.multi.push(out.result);
+            Ok(Err(e)) => e.to_string(),
+            Err(panic) => {
+                let what = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                format!("internal error (please report): {what}")
             }
-            AnalysisSpec::LinearResponse(l) => {
-                let (out, result) = linear::run_response(study, l, &dir)?;
-                md += &out.markdown;
-                report.files.extend(out.files);
-                report.linear.push(result);
-            }
-            AnalysisSpec::Campbell(c) => {
-                let out = linear::run_campbell(study, c, &dir)?;
-                md += &out.markdown;
-                report.files.extend(out.files);
-            }
-            AnalysisSpec::HarmonicBalance(h) => {
-                let out = hbm::run(study, h, &report.sweeps, &dir)?;
-                md += &out.markdown;
-                report.files.extend(out.files);
-                report.hbm.extend(out.branches);
-            }
-        }
+        };
+        let _ = writeln!(sections, "## {} `{}`\n\nFailed: {failure}\n", a.kind(), a.name());
+        report.failures.push(format!("{} `{}` ({where_}): {failure}", a.kind(), a.name()));
     }
+    if report.failures.is_empty() {
+        md += "Status: complete.\n\n";
+    } else {
+        let _ = writeln!(
+            md,
+            "**Status: partial results** — {} failure(s), listed under Failures at the end; the other \
+             results are complete.\n",
+            report.failures.len()
+        );
+    }
+    md += &sections;
     if !report.failures.is_empty() {
         let _ = writeln!(md, "## Failures\n");
         for f in &report.failures {
@@ -422,7 +263,75 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     write_file(&path, &md)?;
     report.files.push(path);
     report.summary = md;
+    let target = out.target().to_path_buf();
+    let final_dir = out.finish()?;
+    for f in &mut report.files {
+        if let Ok(rel) = f.strip_prefix(&dir) {
+            *f = final_dir.join(rel);
+        }
+    }
+    debug_assert_eq!(final_dir, target, "internal: output folder moved elsewhere");
     Ok(report)
+}
+
+/// Runs one analysis, adding its files, failures and results to `report`; returns its section of
+/// the summary.
+fn run_analysis(
+    study: &Study,
+    a: &AnalysisSpec,
+    dir: &Path,
+    progress: &sim::Progress,
+    report: &mut StudyReport,
+) -> Result<String> {
+    Ok(match a {
+        AnalysisSpec::OrderSweep(s) => {
+            let out = sweep::run(study, s, dir, progress)?;
+            report.files.extend(out.files);
+            report.failures.extend(out.failures);
+            report.sweeps.extend(out.runs);
+            out.markdown
+        }
+        AnalysisSpec::MultiOrder(m) => {
+            let out = multi::run(study, m, dir, progress)?;
+            report.files.extend(out.files);
+            report.failures.extend(out.failures);
+            report.multi.push(out.result);
+            out.markdown
+        }
+        AnalysisSpec::LinearResponse(l) => {
+            let (out, result) = linear::run_response(study, l, dir)?;
+            report.files.extend(out.files);
+            report.failures.extend(out.failures);
+            report.linear.push(result);
+            out.markdown
+        }
+        AnalysisSpec::Campbell(c) => {
+            let out = linear::run_campbell(study, c, dir)?;
+            report.files.extend(out.files);
+            report.failures.extend(out.failures);
+            out.markdown
+        }
+        AnalysisSpec::HarmonicBalance(h) => {
+            let out = hbm::run(study, h, &report.sweeps, dir)?;
+            report.files.extend(out.files);
+            report.failures.extend(out.failures);
+            report.hbm.extend(out.branches);
+            out.markdown
+        }
+    })
+}
+
+/// `a / reference`, or NaN ("undefined", an empty CSV cell) when the reference is zero or below
+/// `1e-5 · scale`: a locked (linear) twin answers only at the lines it is excited at, and its
+/// other traces are numerical noise of ~1e-6 of its largest, whose ratios would read as huge
+/// amplifications.
+pub(crate) fn ratio(a: f64, reference: f64, scale: f64) -> f64 {
+    if reference.abs() > 1e-5 * scale.abs() && reference != 0.0 { a / reference } else { f64::NAN }
+}
+
+/// A number for a summary table, or `undefined` when it is not finite.
+pub(crate) fn cell(v: f64, precision: usize) -> String {
+    if v.is_finite() { format!("{v:.precision$}") } else { "undefined".into() }
 }
 
 /// Writes a text file, naming it on failure.
@@ -430,7 +339,8 @@ pub(crate) fn write_file(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
 }
 
-/// Writes a CSV file with a header row and columns of equal length.
+/// Writes a CSV file with a header row and columns of equal length; non-finite values are written
+/// as empty cells.
 pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<()> {
     let io = |e: csv::Error| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e.into() };
     let mut w = csv::Writer::from_path(path).map_err(io)?;
@@ -439,7 +349,9 @@ pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Res
     let mut rec = Vec::with_capacity(columns.len());
     for r in 0..rows {
         rec.clear();
-        rec.extend(columns.iter().map(|c| c[r].to_string()));
+        // A value that does not exist or apply (a ratio to a zero reference, a trace that does
+        // not reach this order) is NaN in memory and an empty cell on disk, never `NaN`/`inf`.
+        rec.extend(columns.iter().map(|c| if c[r].is_finite() { c[r].to_string() } else { String::new() }));
         w.write_record(&rec).map_err(io)?;
     }
     w.flush().map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })

@@ -4,7 +4,7 @@
 
 use super::sim::{self, Progress};
 use super::sweep::order_name;
-use super::{MultiOrderSpec, Study, write_csv};
+use super::{MultiOrderSpec, Study, cell, write_csv};
 use crate::error::Result;
 use crate::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -120,17 +120,29 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
     }
     let done: Vec<Result<Steady>> =
         jobs.par_iter().map(|&(i, locked)| steady(study, spec, i, locked, progress)).collect();
+    let mut failures = Vec::new();
     let mut response: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
     let mut locked: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
     for (&(i, l), r) in jobs.iter().zip(done) {
-        let s = r?;
-        if l {
-            locked[i] = Some(s);
-        } else {
-            response[i] = Some(s);
+        match r {
+            Ok(s) if l => locked[i] = Some(s),
+            Ok(s) => response[i] = Some(s),
+            Err(e) => failures.push(format!(
+                "{} at {} rpm{}: {e}",
+                spec.name,
+                spec.speeds[i].rpm,
+                if l { " locked" } else { "" }
+            )),
         }
     }
-    let (linear, linear_locked) = if spec.linear { linear_amplitudes(study, spec)? } else { (Vec::new(), Vec::new()) };
+    let (linear, linear_locked) = if spec.linear {
+        linear_amplitudes(study, spec).unwrap_or_else(|e| {
+            failures.push(format!("{} linear response: {e}", spec.name));
+            (Vec::new(), Vec::new())
+        })
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let speeds: Vec<SpeedResult> = spec
         .speeds
         .iter()
@@ -151,20 +163,35 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
         let states: Vec<Result<(Vec<HbmState>, Option<f64>)>> =
             spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
         for (s, st) in speeds.iter_mut().zip(states) {
-            (s.hbm, s.hbm_lower_fold) = st?;
+            match st {
+                Ok(st) => (s.hbm, s.hbm_lower_fold) = st,
+                Err(e) => failures.push(format!("{} harmonic balance at {} rpm: {e}", spec.name, s.rpm)),
+            }
         }
     }
     let result =
         MultiOrderResult { name: spec.name.clone(), order: spec.order, multiples: spec.multiples.clone(), speeds };
 
-    let mut failures = Vec::new();
     for s in &result.speeds {
         for (what, st) in [("", s.response.as_ref()), (" locked", s.locked.as_ref())] {
-            if let Some(e) = st.and_then(|st| st.sim.error.as_ref()) {
+            let Some(st) = st else { continue };
+            if let Some(e) = &st.sim.error {
                 failures.push(format!("{} at {} rpm{what}: {e}", spec.name, s.rpm));
+            } else if st.amplitudes.iter().any(|a| !a.is_finite()) {
+                failures.push(format!(
+                    "{} at {} rpm{what}: the steady amplitudes are not finite (left empty)",
+                    spec.name, s.rpm
+                ));
             }
         }
+        let lin = s.linear.iter().chain(&s.linear_locked).flatten();
+        if lin.clone().any(|a| !a.is_finite()) {
+            failures.push(format!("{} at {} rpm: the linear amplitudes are not finite (left empty)", spec.name, s.rpm));
+        }
     }
+    // The locked twin's largest amplitude per speed: the scale below which its lines are noise.
+    let locked_scale =
+        |s: &SpeedResult| s.locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max));
 
     // CSV: one row per speed.
     let mut header = vec!["rpm".to_string()];
@@ -180,7 +207,7 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
                 header.push(format!("locked_{tag}x_rad_s2"));
                 cols.push(col(&|s| s.locked_amplitude(k)));
                 header.push(format!("ratio_{tag}x"));
-                cols.push(col(&|s| s.amplitude(k) / s.locked_amplitude(k)));
+                cols.push(col(&|s| super::ratio(s.amplitude(k), s.locked_amplitude(k), locked_scale(s))));
             }
         }
         if spec.linear {
@@ -396,7 +423,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
             continue;
         }
         let tail = &rec.accel[rec.accel.len() - 2 * win..];
-        let traces = sim::track(tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
+        let traces = sim::track(&mech.name, tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
         let a_prev: Vec<f64> = traces.iter().map(|tr| tr.amplitude[0]).collect();
         let a_last: Vec<f64> = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
         let change = a_prev.iter().zip(&a_last).map(|(p, l)| ((l - p) / l).abs()).fold(0.0, f64::max);
@@ -446,11 +473,13 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         for k in 0..spec.multiples.len() {
             if spec.time_domain {
                 let (a, l) = (s.amplitude(k), s.locked_amplitude(k));
-                let _ = write!(row, " {a:.4} | {l:.4} | {:.3} |", a / l);
+                let scale = s.locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max));
+                let _ = write!(row, " {} | {} | {} |", cell(a, 4), cell(l, 4), cell(super::ratio(a, l, scale), 3));
             }
             if spec.linear {
                 let (a, l) = (s.linear_amplitude(k, false), s.linear_amplitude(k, true));
-                let _ = write!(row, " {a:.4} | {:.3} |", a / l);
+                let scale = s.linear_locked.as_ref().map_or(0.0, |l| l.iter().copied().fold(0.0, f64::max));
+                let _ = write!(row, " {} | {} |", cell(a, 4), cell(super::ratio(a, l, scale), 3));
             }
         }
         if let Some(resp) = &s.response {

@@ -243,8 +243,11 @@ pub(crate) fn simulate(
     }
 }
 
-/// Order traces of a sampled response by the STFT of DESIGN.md.
+/// Order traces of a sampled response by the STFT of DESIGN.md; `mechanism` names the model in
+/// an error (the study validates the bands at load, so one is an internal inconsistency).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
+    mechanism: &str,
     signal: &[f64],
     fs: f64,
     omega: f64,
@@ -258,5 +261,5 @@ pub(crate) fn track(
         return Ok(multiples.iter().map(|&m| OrderTrace { multiple: m, ..OrderTrace::default() }).collect());
     }
     stft_order_traces(signal, fs, omega, order_at, multiples, &opts)
-        .map_err(|e| Error::Model { mechanism: "order tracking".into(), message: e.to_string() })
+        .map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
 }

@@ -102,6 +102,30 @@ pub enum AnalysisSpec {
     HarmonicBalance(HbmSpec),
 }
 
+impl AnalysisSpec {
+    /// The analysis name (its file prefix).
+    pub fn name(&self) -> &str {
+        match self {
+            AnalysisSpec::OrderSweep(s) => &s.name,
+            AnalysisSpec::MultiOrder(m) => &m.name,
+            AnalysisSpec::LinearResponse(l) => &l.name,
+            AnalysisSpec::Campbell(c) => &c.name,
+            AnalysisSpec::HarmonicBalance(h) => &h.name,
+        }
+    }
+
+    /// The analysis kind as written in the study file (`OrderSweep`, …).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            AnalysisSpec::OrderSweep(_) => "OrderSweep",
+            AnalysisSpec::MultiOrder(_) => "MultiOrder",
+            AnalysisSpec::LinearResponse(_) => "LinearResponse",
+            AnalysisSpec::Campbell(_) => "Campbell",
+            AnalysisSpec::HarmonicBalance(_) => "HarmonicBalance",
+        }
+    }
+}
+
 /// Harmonic balance of a single-order excitation `T_n sin(nΩt)`, continued in the excitation
 /// order (the default), the mean speed or the torque amplitude, from each end of the range (so
 /// an S-shaped branch is traced whole).

@@ -37,12 +37,17 @@ impl SweepRun {
     }
 
     fn label(&self) -> String {
-        let dir = match self.direction {
-            Direction::Up => "up",
-            Direction::Down => "down",
-        };
-        format!("{}_{}Nm_{}{}", self.analysis, fmt_num(self.amplitude), dir, if self.locked { "_locked" } else { "" })
+        job_label(&self.analysis, self.amplitude, self.direction, self.locked)
     }
+}
+
+/// The file label of a run: `<analysis>_<amplitude>Nm_<up|down>[_locked]`.
+fn job_label(analysis: &str, amplitude: f64, direction: Direction, locked: bool) -> String {
+    let dir = match direction {
+        Direction::Up => "up",
+        Direction::Down => "down",
+    };
+    format!("{analysis}_{}Nm_{dir}{}", fmt_num(amplitude), if locked { "_locked" } else { "" })
 }
 
 fn fmt_num(v: f64) -> String {
@@ -79,15 +84,29 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
     let results: Vec<Result<SweepRun>> =
         jobs.par_iter().map(|job| run_one(study, spec, omega, job, progress)).collect();
     let mut runs = Vec::with_capacity(results.len());
-    for r in results {
-        runs.push(r?);
-    }
-
     let mut files = Vec::new();
     let mut failures = Vec::new();
+    for (job, r) in jobs.iter().zip(results) {
+        match r {
+            Ok(run) => runs.push(run),
+            Err(e) => {
+                failures.push(format!("{}: {e}", job_label(&spec.name, job.amplitude, job.direction, job.locked)))
+            }
+        }
+    }
     for r in &runs {
         if let Some(e) = &r.sim.error {
             failures.push(format!("{}: {e}", r.label()));
+        }
+        if let Some((t, i)) =
+            r.traces.iter().find_map(|t| t.amplitude.iter().position(|a| !a.is_finite()).map(|i| (t, i)))
+        {
+            failures.push(format!(
+                "{}: the {} trace is not finite at t = {} s (left empty in the CSV)",
+                r.label(),
+                order_name(t.multiple),
+                t.time_s[i]
+            ));
         }
         if let Some(ts) = &r.sim.time_series
             && spec.write_time_series
@@ -110,12 +129,13 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
             cols.push(t.amplitude.clone());
         }
         if let Some(l) = locked {
+            let scale = l.traces.iter().flat_map(|t| t.amplitude.iter().copied()).fold(0.0, f64::max);
             for t in &r.traces {
                 let lt = l.trace(t.multiple);
                 let ref_amp: Vec<f64> = t.order.iter().map(|&n| lt.map_or(f64::NAN, |lt| at_order(lt, n))).collect();
                 header.push(format!("locked_{}x_rad_s2", fmt_num(t.multiple)));
                 header.push(format!("ratio_{}x", fmt_num(t.multiple)));
-                let ratio = t.amplitude.iter().zip(&ref_amp).map(|(a, b)| a / b).collect();
+                let ratio = t.amplitude.iter().zip(&ref_amp).map(|(a, b)| super::ratio(*a, *b, scale)).collect();
                 cols.push(ref_amp);
                 cols.push(ratio);
             }
@@ -214,6 +234,7 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
     bar.finish_and_clear();
     let order = excitation.order;
     let traces = sim::track(
+        &mech.name,
         &rec.accel,
         study.spec.integration.sample_hz,
         omega,

@@ -1,0 +1,302 @@
+//! The plan of a study: for each analysis, its runs, samples, memory, output size and CPU time,
+//! estimated from the files alone, and the limits they are checked against before any work.
+//!
+//! The estimates are deliberately coarse upper bounds (a factor of a few), built from how the
+//! analyses spend their effort:
+//! - a time-domain run keeps 3 signals per sample (24 B), plus `4 + DOF` columns when its time
+//!   series is written, and takes about [`STEPS_PER_PERIOD`] DOP853 steps (12 right-hand sides
+//!   each) per period of its highest excitation line, scaled by `(1e-9/rtol)^(1/8)` (an 8th-order
+//!   method), plus one right-hand side per sample;
+//! - a right-hand side costs about `RHS_BASE_S + RHS_PER_DOF2_S·DOF²`;
+//! - a multi-order speed runs at most `max_time_s`;
+//! - a harmonic-balance branch has at most `ContinuationOptions::max_points` points, each a few
+//!   Newton steps on `DOF·(2H + 1)` unknowns with `4(H + 1)` time samples, and a Floquet
+//!   monodromy;
+//! - a linear point solves one complex `DOF`-system, a Campbell point one eigenproblem.
+
+use super::{AnalysisSpec, HbmParameter, Study};
+use std::fmt;
+
+/// DOP853 steps per period of the highest excitation line, for the estimate (the paper's sweeps
+/// take 9 to 17).
+pub const STEPS_PER_PERIOD: f64 = 20.0;
+/// Fixed cost of one right-hand side, s.
+const RHS_BASE_S: f64 = 40e-9;
+/// Cost of one right-hand side per squared degree of freedom, s.
+const RHS_PER_DOF2_S: f64 = 15e-9;
+/// Bytes per CSV cell (a shortest round-trip f64 and a comma).
+const CSV_CELL_BYTES: f64 = 22.0;
+
+/// Upper bounds on what a study may ask for, checked when it is loaded. Each can be raised on
+/// the command line (`kanedyn run --max-memory-mb …`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Largest estimated memory of the whole study's results and signals, bytes (`--max-memory-mb`).
+    pub max_memory_bytes: f64,
+    /// Largest estimated size of the files written, bytes (`--max-output-mb`).
+    pub max_output_bytes: f64,
+    /// Largest estimated CPU time of the whole study, s (`--max-cpu-hours`).
+    pub max_cpu_s: f64,
+}
+
+impl Default for Limits {
+    /// 2 GiB of memory, 2 GiB of files, 12 CPU hours: a night's run on a shared machine.
+    fn default() -> Self {
+        Self { max_memory_bytes: 2.0 * GIB, max_output_bytes: 2.0 * GIB, max_cpu_s: 12.0 * 3600.0 }
+    }
+}
+
+const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
+const MIB: f64 = 1024.0 * 1024.0;
+
+/// The estimate of one analysis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalysisPlan {
+    /// The analysis name.
+    pub name: String,
+    /// Its kind (`OrderSweep`, …).
+    pub kind: &'static str,
+    /// Index in the study's `analyses`.
+    pub index: usize,
+    /// Independent runs, branches or variants.
+    pub runs: usize,
+    /// Samples (time points, orders, speeds or branch points) of its longest run.
+    pub samples_per_run: f64,
+    /// Estimated memory held, bytes.
+    pub memory_bytes: f64,
+    /// Estimated size of its files, bytes.
+    pub output_bytes: f64,
+    /// Estimated CPU time, s.
+    pub cpu_s: f64,
+    /// The field that drives the estimate most (for messages).
+    pub driver: &'static str,
+}
+
+/// The plan of a whole study.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// One entry per analysis, in file order.
+    pub analyses: Vec<AnalysisPlan>,
+}
+
+impl Plan {
+    /// Total estimated memory, bytes.
+    pub fn memory_bytes(&self) -> f64 {
+        self.analyses.iter().map(|a| a.memory_bytes).sum()
+    }
+    /// Total estimated output size, bytes.
+    pub fn output_bytes(&self) -> f64 {
+        self.analyses.iter().map(|a| a.output_bytes).sum()
+    }
+    /// Total estimated CPU time, s.
+    pub fn cpu_s(&self) -> f64 {
+        self.analyses.iter().map(|a| a.cpu_s).sum()
+    }
+
+    /// The first limit the plan exceeds: the analysis index, its driving field and the message.
+    pub fn exceeds(&self, limits: &Limits) -> Option<(usize, &'static str, String)> {
+        let biggest = |f: fn(&AnalysisPlan) -> f64| {
+            self.analyses.iter().max_by(|a, b| f(a).total_cmp(&f(b))).map(|a| (a.index, a.driver, a.name.clone()))
+        };
+        let checks: [LimitCheck; 3] = [
+            (self.memory_bytes(), limits.max_memory_bytes, "memory", "--max-memory-mb", |a| a.memory_bytes, mb),
+            (self.output_bytes(), limits.max_output_bytes, "output files", "--max-output-mb", |a| a.output_bytes, mb),
+            (self.cpu_s(), limits.max_cpu_s, "CPU time", "--max-cpu-hours", |a| a.cpu_s, hours),
+        ];
+        for (value, limit, what, flag, per, show) in checks {
+            // NaN compares false: treat a non-finite estimate as exceeding.
+            if value.is_nan() || value > limit {
+                let (index, driver, name) = biggest(per)?;
+                return Some((
+                    index,
+                    driver,
+                    format!(
+                        "the study needs an estimated {} of {what} (analysis `{name}` the most), over the limit of {}; \
+                         reduce this field, or raise the limit on purpose with `kanedyn run {flag} …`",
+                        show(value),
+                        show(limit)
+                    ),
+                ));
+            }
+        }
+        None
+    }
+}
+
+/// A total, its limit, what it measures, the flag raising it, the per-analysis share, and how
+/// to print it.
+type LimitCheck = (f64, f64, &'static str, &'static str, fn(&AnalysisPlan) -> f64, fn(f64) -> String);
+
+fn mb(b: f64) -> String {
+    format!("{:.1} MB", b / MIB)
+}
+fn hours(s: f64) -> String {
+    if s < 120.0 { format!("{s:.2} s") } else { format!("{:.2} h", s / 3600.0) }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "| analysis | kind | runs | samples per run | memory | output | CPU time |")?;
+        writeln!(f, "|---|---|---|---|---|---|---|")?;
+        for a in &self.analyses {
+            writeln!(
+                f,
+                "| {} | {} | {} | {:.3e} | {} | {} | {} |",
+                a.name,
+                a.kind,
+                a.runs,
+                a.samples_per_run,
+                mb(a.memory_bytes),
+                mb(a.output_bytes),
+                hours(a.cpu_s)
+            )?;
+        }
+        writeln!(
+            f,
+            "| total | | {} | | {} | {} | {} |",
+            self.analyses.iter().map(|a| a.runs).sum::<usize>(),
+            mb(self.memory_bytes()),
+            mb(self.output_bytes()),
+            hours(self.cpu_s())
+        )
+    }
+}
+
+/// Cost of one right-hand side of a mechanism with `n` degrees of freedom, s.
+fn rhs_s(n: f64) -> f64 {
+    RHS_BASE_S + RHS_PER_DOF2_S * n * n
+}
+
+/// Estimated CPU time of one time-domain run over `duration_s` whose highest excitation line is
+/// at `f_hz`, sampled at `fs`, capped by the integrator's step limit.
+fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
+    let i = study.spec.integration;
+    let n = study.mechanism.ndof() as f64;
+    let steps = (duration_s * STEPS_PER_PERIOD * f_hz.max(1.0) * (1e-9 / i.rtol).powf(0.125)).min(i.max_steps as f64);
+    (12.0 * steps + duration_s * i.sample_hz) * rhs_s(n)
+}
+
+impl Study {
+    /// The estimated work of every analysis (see the module docs of `plan` for the model).
+    pub fn plan(&self) -> Plan {
+        let spec = &self.spec;
+        let fs = spec.integration.sample_hz;
+        let n = self.mechanism.ndof() as f64;
+        let locked = usize::from(self.locked.is_some());
+        let analyses = spec
+            .analyses
+            .iter()
+            .enumerate()
+            .map(|(index, a)| {
+                let (kind, name) = (a.kind(), a.name().to_string());
+                let base = AnalysisPlan {
+                    name,
+                    kind,
+                    index,
+                    runs: 0,
+                    samples_per_run: 0.0,
+                    memory_bytes: 0.0,
+                    output_bytes: 0.0,
+                    cpu_s: 0.0,
+                    driver: "",
+                };
+                match a {
+                    AnalysisSpec::OrderSweep(s) => {
+                        let runs = s.amplitudes.len() * (s.directions.len() + locked);
+                        let samples = s.duration_s * fs + 1.0;
+                        let windows = s.duration_s / spec.order_tracking.hop_s + 1.0;
+                        let series_cols = if s.write_time_series { 4.0 + n } else { 0.0 };
+                        let f = s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * s.rpm / 60.0;
+                        let r = runs as f64;
+                        AnalysisPlan {
+                            runs,
+                            samples_per_run: samples,
+                            memory_bytes: r * samples * 8.0 * (3.0 + series_cols)
+                                + r * windows * 32.0 * s.multiples.len() as f64,
+                            output_bytes: r * samples * series_cols * CSV_CELL_BYTES
+                                + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
+                            cpu_s: r * time_run_s(self, s.duration_s, f),
+                            driver: if s.write_time_series { "write_time_series" } else { "duration_s" },
+                            ..base
+                        }
+                    }
+                    AnalysisSpec::MultiOrder(m) => {
+                        let td = usize::from(m.time_domain);
+                        let runs = m.speeds.len() * td * (1 + locked);
+                        // Two windows are kept per run (the steadiness test).
+                        let samples = 2.0 * m.window_s * fs + 1.0;
+                        let top = m
+                            .speeds
+                            .iter()
+                            .flat_map(|p| p.harmonics.iter().map(move |h| h.multiple * p.rpm))
+                            .fold(0.0, f64::max);
+                        let f = m.order * top / 60.0;
+                        let hbm_s = if m.hbm { m.speeds.len() as f64 * 3.0 * hbm_branch_s(n, 10.0) } else { 0.0 };
+                        AnalysisPlan {
+                            runs,
+                            samples_per_run: samples,
+                            memory_bytes: runs as f64 * samples * 24.0,
+                            output_bytes: m.speeds.len() as f64 * CSV_CELL_BYTES * 16.0 * m.multiples.len() as f64,
+                            cpu_s: runs as f64 * time_run_s(self, m.max_time_s, f) + hbm_s,
+                            driver: "max_time_s",
+                            ..base
+                        }
+                    }
+                    AnalysisSpec::LinearResponse(l) => {
+                        let runs = l.variants.len().max(1);
+                        let p = l.points as f64;
+                        AnalysisPlan {
+                            runs,
+                            samples_per_run: p,
+                            memory_bytes: runs as f64 * p * 8.0 * 8.0,
+                            output_bytes: runs as f64 * p * 5.0 * CSV_CELL_BYTES,
+                            cpu_s: runs as f64 * p * 2.0 * (1e-6 + 20e-9 * n * n * n),
+                            driver: "points",
+                            ..base
+                        }
+                    }
+                    AnalysisSpec::Campbell(c) => {
+                        let p = c.points as f64;
+                        AnalysisPlan {
+                            runs: 1,
+                            samples_per_run: p,
+                            memory_bytes: p * (4.0 * n + c.orders.len() as f64) * 8.0,
+                            output_bytes: p * (2.0 * n + c.orders.len() as f64 + 1.0) * CSV_CELL_BYTES,
+                            cpu_s: p * (5e-6 + 200e-9 * n * n * n),
+                            driver: "points",
+                            ..base
+                        }
+                    }
+                    AnalysisSpec::HarmonicBalance(h) => {
+                        let cases =
+                            if matches!(h.parameter, HbmParameter::Torque { .. }) { 1 } else { h.amplitudes.len() };
+                        let runs = 2 * cases;
+                        let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+                        let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);
+                        AnalysisPlan {
+                            runs,
+                            samples_per_run: points,
+                            memory_bytes: runs as f64 * points * unknowns * 8.0 * 4.0,
+                            output_bytes: runs as f64 * points * (4.0 + h.multiples.len() as f64) * CSV_CELL_BYTES,
+                            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64),
+                            driver: "harmonics",
+                            ..base
+                        }
+                    }
+                }
+            })
+            .collect();
+        Plan { analyses }
+    }
+}
+
+/// Upper bound of one harmonic-balance branch's CPU time: `max_points` points of about 5 Newton
+/// steps, each a dense factorisation of `DOF·(2H+1)` unknowns and `4(H+1)` Jacobian samples,
+/// plus a Floquet monodromy of 256 RK4 steps on `2·DOF` states.
+fn hbm_branch_s(n: f64, h: f64) -> f64 {
+    let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+    let u = n * (2.0 * h + 1.0);
+    let newton = u * u * u / 3.0 * 1e-9 + 4.0 * (h + 1.0) * rhs_s(n) * 2.0 * n;
+    let floquet = 256.0 * 4.0 * 2.0 * n * rhs_s(n) * 2.0 * n;
+    points * (5.0 * newton + floquet)
+}
