@@ -264,7 +264,12 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, limits: &LimitArgs) -> R
     }
     println!("study `{}` finished in {:.2} s", study.spec.name, start.elapsed().as_secs_f64());
     if !report.failures.is_empty() {
-        bail!("{} run(s) failed (partial results written): {}", report.failures.len(), report.failures.join("; "));
+        let summary = report.files.iter().find(|f| f.ends_with("summary.md"));
+        bail!(
+            "{} failure(s): the other results are complete; see the Failures section of {}",
+            report.failures.len(),
+            summary.map_or("summary.md".into(), |p| p.display().to_string())
+        );
     }
     Ok(())
 }

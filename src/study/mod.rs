@@ -220,9 +220,14 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     let mut sections = String::new();
     for (k, a) in study.spec.analyses.iter().enumerate() {
         let where_ = study.source.locate(&format!("analyses[{k}]"));
+        let before = report.failures.len();
         let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             run_analysis(study, a, &dir, &progress, &mut report)
         }));
+        // Failures of single runs name their analysis and where it is in the study file.
+        for f in &mut report.failures[before..] {
+            *f = format!("{} `{}` ({where_}): {f}", a.kind(), a.name());
+        }
         let failure = match attempt {
             Ok(Ok(section)) => {
                 sections += &section;

@@ -141,7 +141,7 @@ impl fmt::Display for Plan {
         for a in &self.analyses {
             writeln!(
                 f,
-                "| {} | {} | {} | {:.3e} | {} | {} | {} |",
+                "| {} | {} | {} | {:.0} | {} | {} | {} |",
                 a.name,
                 a.kind,
                 a.runs,
