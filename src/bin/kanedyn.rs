@@ -65,10 +65,29 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", without_repeats(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by `: `, leaving out a cause whose text is already there.
+///
+/// NOTE: a library error such as "x.ron: cannot read: Permission denied (os error 13)" prints its
+/// OS error and also reports it as its source; anyhow's `{:#}` would print the reason twice.
+fn without_repeats(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out += ": ";
+        }
+        out += &text;
+    }
+    out
 }
 
 fn check(file: &Path) -> Result<()> {
@@ -172,6 +191,17 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
         qdot: xdot[..n].to_vec(),
         udot: xdot[n..].to_vec(),
     };
+    // serde_json writes a non-finite number as `null`, which a reader would take for data.
+    let first_bad =
+        |name: &str, v: &[f64]| v.iter().position(|x| !x.is_finite()).map(|i| format!("{name}[{i}] = {}", v[i]));
+    let bad = (out.mass_matrix.iter().enumerate())
+        .find_map(|(r, row)| first_bad(&format!("M[{r}]"), row))
+        .or_else(|| first_bad("F", &out.forcing))
+        .or_else(|| first_bad("q̇", &out.qdot))
+        .or_else(|| first_bad("u̇", &out.udot));
+    if let Some(what) = bad {
+        bail!("the equations of motion overflow at this state: {what} (values too large for f64?)");
+    }
     println!("{}", serde_json::to_string(&out)?);
     Ok(())
 }
