@@ -163,10 +163,29 @@ impl BodySpec {
                 }
             }
             let com = self.com.map_or(Vec2::zeros(), |(x, y)| Vec2::new(x, y));
-            return Ok(PlanarInertia::new(self.mass.unwrap_or(0.0), com, self.inertia.unwrap_or(0.0)));
+            let props = PlanarInertia::new(self.mass.unwrap_or(0.0), com, self.inertia.unwrap_or(0.0));
+            if !finite_props(&props) {
+                return Err(src.error(
+                    &format!("{path}.com"),
+                    format!(
+                        "the moment of inertia about the joint, inertia + mass·|com|² = {:e} + {:e}·{:e} kg·m², \
+                         overflows; are the units kg and m?",
+                        props.i_com,
+                        props.mass,
+                        com.norm_squared()
+                    ),
+                ));
+            }
+            return Ok(props);
         };
         let areal_density = match (self.areal_density, self.density, self.thickness) {
             (Some(a), None, None) => a,
+            (None, Some(rho), Some(t)) if !(rho * t).is_finite() => {
+                return Err(src.error(
+                    &format!("{path}.density"),
+                    format!("density × thickness = {rho:e} kg/m³ × {t:e} m overflows; are the units kg/m³ and m?"),
+                ));
+            }
             (None, Some(rho), Some(t)) => rho * t,
             (None, Some(_), None) => {
                 return Err(src.error(&format!("{path}.density"), "`density` (kg/m³) needs a `thickness` (m)"));
@@ -183,8 +202,35 @@ impl BodySpec {
             // check_conflicts has ruled out areal_density with either of the others.
             _ => return Err(src.error(path, "internal: density forms not exclusive")),
         };
-        shape.mass_properties(areal_density).map_err(|e| src.error(&format!("{path}.shape{}", e.field), e.message))
+        let props = shape
+            .mass_properties(areal_density)
+            .map_err(|e| src.error(&format!("{path}.shape{}", e.field), e.message))?;
+        if !finite_props(&props) {
+            // Each size and the density is finite on its own (checked above); their product is
+            // not. Name the shape when its own area or moment overflows, else the density.
+            let unit_finite = shape.unit_properties().is_ok_and(|u| finite_props(&u));
+            let field = match (unit_finite, self.areal_density.is_some()) {
+                (false, _) => "shape",
+                (true, true) => "areal_density",
+                (true, false) => "density",
+            };
+            return Err(src.error(
+                &format!("{path}.{field}"),
+                format!(
+                    "mass properties overflow: mass {:e} kg, centre of mass ({:e}, {:e}) m, centroidal inertia {:e} \
+                     kg·m² (areal density {areal_density:e} kg/m²); are the sizes in m and the density in kg/m² or kg/m³?",
+                    props.mass, props.com.x, props.com.y, props.i_com
+                ),
+            ));
+        }
+        Ok(props)
     }
+}
+
+/// Whether mass, centre of mass, centroidal inertia and the inertia about the body origin (the
+/// inboard joint, which is what enters the mass matrix) are all finite.
+fn finite_props(p: &PlanarInertia) -> bool {
+    [p.mass, p.com.x, p.com.y, p.i_com, p.about(Vec2::zeros())].iter().all(|v| v.is_finite())
 }
 
 /// A resolved body of a mechanism.

@@ -3,7 +3,7 @@
 
 use crate::body::{Body, BodySpec};
 use crate::error::{Error, Result};
-use crate::io::Source;
+use crate::io::{ReadPolicy, Source};
 use crate::joint::{Joint, JointKind, JointSpec};
 use crate::loads::{GroundDamper, JointTorque, LoadSpec, Loads, PointForce};
 use crate::math::Vec2;
@@ -58,17 +58,54 @@ pub struct Mechanism {
 }
 
 impl Mechanism {
-    /// Reads and validates a mechanism file.
+    /// Reads and validates a mechanism file; catalog parts may only come from the file's own
+    /// folder tree (see [`ReadPolicy::within`]).
     pub fn from_file(path: &Path) -> Result<Self> {
-        let src = Source::read(path)?;
-        let spec: MechanismSpec = src.parse()?;
-        Self::from_spec(&spec, &src)
+        Self::from_file_with(path, &ReadPolicy::within(&folder_of(path)))
+    }
+
+    /// Reads and validates a mechanism file under `policy` (allowed folders, size and body caps).
+    pub fn from_file_with(path: &Path, policy: &ReadPolicy) -> Result<Self> {
+        let src = Source::read_with(path, policy)?;
+        Self::from_source(&src, policy)
+    }
+
+    /// Parses and validates mechanism text; catalog parts are resolved relative to `src.file`'s
+    /// folder under `policy`, each part file size-capped too.
+    pub fn from_source(src: &Source, policy: &ReadPolicy) -> Result<Self> {
+        let spec: MechanismSpec = src.parse_as("Mechanism")?;
+        Self::from_spec_with(&spec, src, policy)
     }
 
     /// Validates a parsed spec; `src` is the text it came from (for error locations and for
-    /// resolving catalog parts relative to its file).
+    /// resolving catalog parts relative to its file, within its folder tree).
     pub fn from_spec(spec: &MechanismSpec, src: &Source) -> Result<Self> {
-        let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
+        Self::from_spec_with(spec, src, &ReadPolicy::within(&folder_of(&src.file)))
+    }
+
+    /// Validates a parsed spec, reading catalog parts under `policy`.
+    pub fn from_spec_with(spec: &MechanismSpec, src: &Source, policy: &ReadPolicy) -> Result<Self> {
+        // Counts first: everything below is at least linear in them, the tree ordering quadratic.
+        let max = policy.max_bodies;
+        for (field, count, limit) in [
+            ("bodies", spec.bodies.len(), max),
+            ("joints", spec.joints.len(), max),
+            ("loads", spec.loads.len(), max.saturating_mul(10)),
+        ] {
+            if count > limit {
+                return Err(src.error(
+                    field,
+                    format!(
+                        "{count} {field}, more than the limit of {limit} (the body cap is {max}, loads may be ten \
+                         times as many); raise it with `--max-bodies N` if the mechanism is genuine"
+                    ),
+                ));
+            }
+        }
+        if spec.bodies.is_empty() {
+            return Err(src.error("bodies", "no bodies: nothing to simulate"));
+        }
+        let base = folder_of(&src.file);
 
         // Bodies: merge parts, check numbers and names.
         let mut body_specs = Vec::with_capacity(spec.bodies.len());
@@ -77,7 +114,7 @@ impl Mechanism {
             let path = format!("bodies[{i}]");
             b.check_numbers(src, &path)?;
             let merged = match &b.part {
-                Some(part) => resolve_part::<BodySpec>(&base, part, src, &path, 0)?.merged(b),
+                Some(part) => resolve_part::<BodySpec>(&base, part, src, &path, policy, 0)?.merged(b),
                 None => b.clone(),
             };
             let Some(name) = merged.name.clone() else {
@@ -107,7 +144,7 @@ impl Mechanism {
             let path = format!("joints[{k}]");
             j.check_numbers(src, &path)?;
             let merged = match &j.part {
-                Some(part) => resolve_part::<JointSpec>(&base, part, src, &path, 0)?.merged(j),
+                Some(part) => resolve_part::<JointSpec>(&base, part, src, &path, policy, 0)?.merged(j),
                 None => j.clone(),
             };
             let Some(name) = merged.name.clone() else {
@@ -288,14 +325,44 @@ impl Mechanism {
             joints,
             loads,
         };
-        // A tree whose mass matrix is singular at q = 0 cannot be simulated: say which joint.
-        if let Err(e) = crate::kane::Kane::new(&mech) {
-            let joint_name = match &e {
-                Error::Engine(crate::error::EngineError::NotPositiveDefinite { joint, .. }) => Some(joint.clone()),
-                _ => None,
-            };
-            let path = joint_name.and_then(|n| joint_names.get(&n).map(|k| format!("joints[{k}]"))).unwrap_or_default();
-            return Err(src.error(&path, e.to_string()));
+        // A tree whose mass matrix is singular or not finite at q = 0 cannot be simulated: say
+        // which joint (in the file's numbering: coordinate i is joint `order[i]`).
+        let at_coordinate = |i: usize| order.get(i).map_or_else(String::new, |k| format!("joints[{k}]"));
+        let mut kane = match crate::kane::Kane::new(&mech) {
+            Ok(kane) => kane,
+            Err(e) => {
+                let path = match &e {
+                    Error::Engine(crate::error::EngineError::NotPositiveDefinite { dof, .. }) => at_coordinate(*dof),
+                    Error::Engine(crate::error::EngineError::NonFinite { index, .. }) => at_coordinate(*index),
+                    _ => String::new(),
+                };
+                let message = match &e {
+                    // inf ≤ tolerance·inf: an overflow, not a missing inertia.
+                    Error::Engine(crate::error::EngineError::NotPositiveDefinite { pivot, joint, .. })
+                        if !pivot.is_finite() =>
+                    {
+                        format!(
+                            "mass matrix at q = 0 is not finite (pivot {pivot} at joint `{joint}`); a body too heavy \
+                             or too far from its joint for f64 (units kg and m?)"
+                        )
+                    }
+                    _ => e.to_string(),
+                };
+                return Err(src.error(&path, message));
+            }
+        };
+        // The factorisation lets an infinite pivot through (inf > 0), so look at M itself.
+        let m = kane.mass_matrix(&vec![0.0; nb]);
+        if let Some((r, c)) = (0..nb).flat_map(|r| (0..nb).map(move |c| (r, c))).find(|&(r, c)| !m[(r, c)].is_finite())
+        {
+            return Err(src.error(
+                &at_coordinate(r.max(c)),
+                format!(
+                    "mass matrix at q = 0 is not finite: M[{r}][{c}] = {}; a body too heavy or too far from \
+                     its joint for f64 (units kg and m?)",
+                    m[(r, c)]
+                ),
+            ));
         }
         Ok(mech)
     }
@@ -419,12 +486,15 @@ fn known_list<'a>(names: impl Iterator<Item = &'a str>) -> String {
 
 /// A catalog part type: body or joint specs that can refer to further parts.
 trait Part: serde::de::DeserializeOwned + Clone {
+    /// The RON struct name a part file of this kind begins with.
+    const KIND: &'static str;
     fn part(&self) -> Option<&str>;
     fn merged(&self, over: &Self) -> Self;
     fn check_numbers(&self, src: &Source, path: &str) -> Result<()>;
 }
 
 impl Part for BodySpec {
+    const KIND: &'static str = "Body";
     fn part(&self) -> Option<&str> {
         self.part.as_deref()
     }
@@ -437,6 +507,7 @@ impl Part for BodySpec {
 }
 
 impl Part for JointSpec {
+    const KIND: &'static str = "Joint";
     fn part(&self) -> Option<&str> {
         self.part.as_deref()
     }
@@ -448,23 +519,35 @@ impl Part for JointSpec {
     }
 }
 
-/// Loads a catalog part relative to `base`, following its own `part` references.
-fn resolve_part<T: Part>(base: &Path, part: &str, referrer: &Source, path: &str, depth: usize) -> Result<T> {
+/// The folder of `file`, for resolving the names it writes (empty for a bare file name: the
+/// current folder).
+fn folder_of(file: &Path) -> PathBuf {
+    file.parent().map(Path::to_path_buf).unwrap_or_default()
+}
+
+/// Loads a catalog part named `part` in `referrer` (whose folder is `base`) under `policy`,
+/// following its own `part` references.
+fn resolve_part<T: Part>(
+    base: &Path,
+    part: &str,
+    referrer: &Source,
+    path: &str,
+    policy: &ReadPolicy,
+    depth: usize,
+) -> Result<T> {
     if depth >= MAX_PART_DEPTH {
         return Err(referrer.error(
             &format!("{path}.part"),
             format!("parts nest deeper than {MAX_PART_DEPTH} levels (a part naming itself?)"),
         ));
     }
-    let file = base.join(part);
-    let src = Source::read(&file).map_err(|e| referrer.error(&format!("{path}.part"), e.to_string()))?;
-    let spec: T = src.parse()?;
+    let here = format!("{path}.part");
+    let file = policy.resolve(base, part).map_err(|msg| referrer.error(&here, msg))?;
+    let src = Source::read_with(&file, policy).map_err(|e| referrer.error(&here, e.to_string()))?;
+    let spec: T = src.parse_as(T::KIND)?;
     spec.check_numbers(&src, "")?;
     match spec.part() {
-        Some(inner) => {
-            let inner_base = file.parent().map(Path::to_path_buf).unwrap_or_default();
-            Ok(resolve_part::<T>(&inner_base, inner, &src, "", depth + 1)?.merged(&spec))
-        }
+        Some(inner) => Ok(resolve_part::<T>(&folder_of(&file), inner, &src, "", policy, depth + 1)?.merged(&spec)),
         None => Ok(spec),
     }
 }

@@ -111,6 +111,17 @@ fn positive(field: &str, what: &str, v: f64) -> Result<(), ShapeError> {
     if v <= 0.0 {
         return Err(err(format!(".{field}"), format!("{what} must be positive, got {v} m")));
     }
+    not_huge(&format!(".{field}"), what, v)
+}
+
+/// Refuses a length whose fourth power (the scale of a second moment of area) overflows.
+///
+/// NOTE: parry stores the inverse of mass and inertia, so an infinite area comes back as a
+/// zero one: a disc of radius 1e200 would silently weigh nothing.
+fn not_huge(field: &str, what: &str, v: f64) -> Result<(), ShapeError> {
+    if !v.powi(4).is_finite() {
+        return Err(err(field, format!("{what} {v:e} m is too large: its second moment of area (∝ size⁴) overflows")));
+    }
     Ok(())
 }
 
@@ -233,6 +244,7 @@ fn check_convex(points: &[(f64, f64)]) -> Result<(), ShapeError> {
         if !(x.is_finite() && y.is_finite()) {
             return Err(err(format!(".points[{k}]"), "point must be finite"));
         }
+        not_huge(&format!(".points[{k}]"), "coordinate", x.abs().max(y.abs()))?;
     }
     let p = |k: usize| Vec2::new(points[k % n].0, points[k % n].1);
     let mut sign = 0.0;

@@ -22,8 +22,8 @@ fn ron_files(dir: &str) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn every_catalog_part_parses() {
-    let bodies = ron_files("bodies");
-    let joints = ron_files("joints");
+    let bodies = ron_files("examples/bodies");
+    let joints = ron_files("examples/joints");
     assert!(bodies.len() >= 3 && joints.len() >= 2);
     for p in bodies {
         let src = Source::read(&p).unwrap();

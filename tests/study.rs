@@ -58,13 +58,24 @@ fn linear_study_gives_the_closed_forms() {
     assert!(lin.variants[0].max.1 > lin.variants[1].max.1 && lin.variants[1].max.1 > lin.variants[2].max.1);
 }
 
+/// A temp folder holding the example mechanism `cpva.ron` and the catalog parts it names, so a
+/// study written there may name it by relative path (studies may only read inside their tree).
+fn with_mechanism(tag: &str) -> PathBuf {
+    let dir = out_dir(tag);
+    for sub in ["bodies", "joints"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+        for e in std::fs::read_dir(Path::new("examples").join(sub)).unwrap().flatten() {
+            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
+        }
+    }
+    std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
+    dir
+}
+
 fn study_error(name: &str, text: &str) -> String {
-    // The study refers to the example mechanism by absolute path so the temp file can live anywhere.
-    let mech = std::fs::canonicalize("examples/cpva.ron").unwrap();
-    let dir = out_dir(&format!("err_{name}"));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = with_mechanism(&format!("err_{name}"));
     let p = dir.join("s.ron");
-    std::fs::write(&p, text.replace("MECH", mech.to_str().unwrap())).unwrap();
+    std::fs::write(&p, text.replace("MECH", "cpva.ron")).unwrap();
     let e = Study::from_file(&p).err().unwrap_or_else(|| panic!("{name}: expected an error")).to_string();
     std::fs::remove_dir_all(&dir).ok();
     e
@@ -139,11 +150,9 @@ fn harmonic_balance_in_speed_and_torque() {
     ],
 )
 "#;
-    let mech = std::fs::canonicalize("examples/cpva.ron").unwrap();
-    let dir = out_dir("hbm_param");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = with_mechanism("hbm_param");
     let p = dir.join("s.ron");
-    std::fs::write(&p, text.replace("MECH", mech.to_str().unwrap())).unwrap();
+    std::fs::write(&p, text.replace("MECH", "cpva.ron")).unwrap();
     let study = Study::from_file(&p).unwrap();
     let r = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     for f in &r.files {

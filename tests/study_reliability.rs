@@ -405,3 +405,31 @@ fn check_prints_the_plan_of_a_study() {
     assert_eq!(cells[4].parse::<f64>().unwrap(), 40001.0, "{row}");
     assert!(!s.out().exists(), "check must not write outputs");
 }
+
+// ---- Class 6: information leaks through `mechanism:` ----
+
+/// Used to read any absolute path named as the mechanism and echo its first word in the parse
+/// error (`… found `root`` for the password file), and to answer differently for paths that do
+/// and do not exist. Now a path outside the study's folder tree is refused before it is read, with
+/// the same words whether it exists or not; allowed on purpose, a file that is not a mechanism
+/// is still not echoed.
+#[test]
+fn a_mechanism_outside_the_study_tree_is_refused_unread() {
+    let s = Scratch::new("leak");
+    let named = |m: &str| study_with(SWEEP).replace("\"cpva.ron\"", &format!("\"{m}\""));
+    let e_real = load_error(&s, &named("/etc/passwd"));
+    let e_none = load_error(&s, &named("/etc/no_such_file_kanedyn"));
+    assert_located(&e_real, "mechanism");
+    assert!(e_real.contains("--allow-any-path") || e_real.contains("--allow-read"), "{e_real}");
+    assert_eq!(e_real.replace("/etc/passwd", "X"), e_none.replace("/etc/no_such_file_kanedyn", "X"));
+    let e = load_error(&s, &named("../../../../../../etc/passwd"));
+    assert_located(&e, "mechanism");
+    // Allowed on purpose: read, but not echoed.
+    let p = s.study("bad.ron", &named("/etc/passwd"));
+    let opts = kanedyn::study::LoadOptions { allow_any_path: true, ..Default::default() };
+    let e = Study::from_file_with(&p, &opts).expect_err("not a mechanism").to_string();
+    assert!(!e.contains("root") && !e.contains("bin/"), "echoes the file: {e}");
+    // The CLI flag does the same.
+    let o = kanedyn(&["check", p.to_str().unwrap(), "--allow-any-path"]);
+    assert!(!o.status.success() && !text(&o).contains("root:"), "{}", text(&o));
+}

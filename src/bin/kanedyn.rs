@@ -74,6 +74,19 @@ struct LimitArgs {
     /// Largest estimated CPU time of a study, hours.
     #[arg(long, value_name = "HOURS", default_value_t = 12.0)]
     max_cpu_hours: f64,
+    /// Also read mechanisms and parts from this folder (by default only the named file's own
+    /// folder tree); repeatable.
+    #[arg(long, value_name = "DIR")]
+    allow_read: Vec<PathBuf>,
+    /// Read mechanisms and parts from any path, absolute or outside the file's folder tree.
+    #[arg(long)]
+    allow_any_path: bool,
+    /// Largest input file (study, mechanism, part), kB.
+    #[arg(long, value_name = "KB", default_value_t = 1024)]
+    max_file_kb: u64,
+    /// Most bodies in a mechanism.
+    #[arg(long, value_name = "N", default_value_t = kanedyn::io::ReadPolicy::DEFAULT_MAX_BODIES)]
+    max_bodies: usize,
 }
 
 impl LimitArgs {
@@ -94,6 +107,10 @@ impl LimitArgs {
                 max_output_bytes: self.max_output_mb * mb,
                 max_cpu_s: self.max_cpu_hours * 3600.0,
             },
+            allow_read: self.allow_read.clone(),
+            allow_any_path: self.allow_any_path,
+            max_file_bytes: self.max_file_kb.saturating_mul(1024),
+            max_bodies: self.max_bodies,
         })
     }
 }
@@ -111,7 +128,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", without_repeats(&e));
             ExitCode::FAILURE
         }
     }
@@ -120,11 +137,13 @@ fn main() -> ExitCode {
 /// `check` on a study (its text begins with `Study(`) prints the plan; on anything else it
 /// checks a mechanism.
 fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
-    let src = kanedyn::io::Source::read(file)?;
+    let opts = limits.options()?;
+    let capped = kanedyn::io::ReadPolicy::unrestricted().with_max_file_bytes(opts.max_file_bytes);
+    let src = kanedyn::io::Source::read_with(file, &capped)?;
     if !src.text.lines().any(|l| l.trim_start().starts_with("Study(")) {
-        return check(file);
+        return check(file, &opts.policy_for(file));
     }
-    let study = Study::from_source(src, &limits.options()?)?;
+    let study = Study::from_source(src, &opts)?;
     let plan = study.plan();
     println!("study `{}` ({}): OK", study.spec.name, file.display());
     println!(
@@ -137,8 +156,27 @@ fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
     Ok(())
 }
 
-fn check(file: &Path) -> Result<()> {
-    let mech = Mechanism::from_file(file)?;
+/// The error and its causes joined by `: `, leaving out a cause whose text is already there.
+///
+/// NOTE: a library error such as "x.ron: cannot read: Permission denied (os error 13)" prints its
+/// OS error and also reports it as its source; anyhow's `{:#}` would print the reason twice.
+fn without_repeats(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out += ": ";
+        }
+        out += &text;
+    }
+    out
+}
+
+fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
+    let mech = Mechanism::from_file_with(file, policy)?;
     println!("mechanism `{}` ({}): OK", mech.name, file.display());
     println!("degrees of freedom: {}", mech.ndof());
     println!("generalized speeds: {:?}", mech.speeds);
@@ -238,6 +276,17 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
         qdot: xdot[..n].to_vec(),
         udot: xdot[n..].to_vec(),
     };
+    // serde_json writes a non-finite number as `null`, which a reader would take for data.
+    let first_bad =
+        |name: &str, v: &[f64]| v.iter().position(|x| !x.is_finite()).map(|i| format!("{name}[{i}] = {}", v[i]));
+    let bad = (out.mass_matrix.iter().enumerate())
+        .find_map(|(r, row)| first_bad(&format!("M[{r}]"), row))
+        .or_else(|| first_bad("F", &out.forcing))
+        .or_else(|| first_bad("q̇", &out.qdot))
+        .or_else(|| first_bad("u̇", &out.udot));
+    if let Some(what) = bad {
+        bail!("the equations of motion overflow at this state: {what} (values too large for f64?)");
+    }
     println!("{}", serde_json::to_string(&out)?);
     Ok(())
 }

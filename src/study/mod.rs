@@ -17,7 +17,7 @@ pub mod sweep;
 pub mod validate;
 
 use crate::error::{Error, Result};
-use crate::io::Source;
+use crate::io::{ReadPolicy, Source};
 use crate::kane::Kane;
 use crate::mechanism::Mechanism;
 pub use plan::{AnalysisPlan, Limits, Plan};
@@ -46,11 +46,47 @@ pub struct Study {
     pub source: Source,
 }
 
-/// How a study is loaded: the limits its estimated work is checked against.
-#[derive(Debug, Clone, Default)]
+/// How a study is loaded: where its files may come from and the limits its estimated work is
+/// checked against.
+#[derive(Debug, Clone)]
 pub struct LoadOptions {
     /// Limits on memory, output size and CPU time.
     pub limits: Limits,
+    /// Folders besides the study's own folder tree that its mechanism and parts may be read
+    /// from (`--allow-read DIR`).
+    pub allow_read: Vec<PathBuf>,
+    /// Read the mechanism and parts from any path (`--allow-any-path`).
+    pub allow_any_path: bool,
+    /// Largest input file, bytes (`--max-file-kb`).
+    pub max_file_bytes: u64,
+    /// Most bodies in the mechanism (`--max-bodies`).
+    pub max_bodies: usize,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self {
+            limits: Limits::default(),
+            allow_read: Vec::new(),
+            allow_any_path: false,
+            max_file_bytes: ReadPolicy::DEFAULT_MAX_FILE_BYTES,
+            max_bodies: ReadPolicy::DEFAULT_MAX_BODIES,
+        }
+    }
+}
+
+impl LoadOptions {
+    /// The read policy for the files named by the study file `study_file`: its folder tree and
+    /// the allowed folders, or anywhere.
+    pub fn policy_for(&self, study_file: &Path) -> ReadPolicy {
+        let policy = if self.allow_any_path {
+            ReadPolicy::unrestricted()
+        } else {
+            let base = study_file.parent().unwrap_or(Path::new(""));
+            self.allow_read.iter().fold(ReadPolicy::within(base), |p, d| p.allow(d))
+        };
+        policy.with_max_file_bytes(self.max_file_bytes).with_max_bodies(self.max_bodies)
+    }
 }
 
 /// What a study produced: the Markdown summary and the files written.
@@ -86,19 +122,23 @@ impl Study {
 
     /// [`Study::from_file`] with explicit options.
     pub fn from_file_with(path: &Path, opts: &LoadOptions) -> Result<Self> {
-        Self::from_source(Source::read(path)?, opts)
+        Self::from_source(
+            Source::read_with(path, &ReadPolicy::unrestricted().with_max_file_bytes(opts.max_file_bytes))?,
+            opts,
+        )
     }
 
     /// Parses and validates a study from its text; its mechanism is read relative to
     /// `src.file`'s folder.
     pub fn from_source(src: Source, opts: &LoadOptions) -> Result<Self> {
-        let spec: StudySpec = src.parse()?;
+        let spec: StudySpec = src.parse_as("Study")?;
         if let Err(m) = validate::check_file_name(&spec.name) {
             return Err(src.error("name", format!("{m} (the study name is its output folder)")));
         }
+        let policy = opts.policy_for(&src.file);
         let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
-        let mech_path = base.join(&spec.mechanism);
-        let mechanism = Mechanism::from_file(&mech_path).map_err(|e| match e {
+        let mech_path = policy.resolve(&base, &spec.mechanism).map_err(|m| src.error("mechanism", m))?;
+        let mechanism = Mechanism::from_file_with(&mech_path, &policy).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
             other => other,
         })?;
