@@ -373,7 +373,15 @@ struct PanicRecord {
 impl PanicRecord {
     /// Distinct defects: the panic site and the message with its numbers blanked.
     fn key(&self) -> String {
-        let msg: String = self.message.chars().take(80).map(|c| if c.is_ascii_digit() { '#' } else { c }).collect();
+        let mut msg = String::new();
+        for c in self.message.chars().take(80) {
+            // Each run of digits becomes one `#`.
+            if !c.is_ascii_digit() {
+                msg.push(c);
+            } else if !msg.ends_with('#') {
+                msg.push('#');
+            }
+        }
         format!("{} {msg}", self.location)
     }
 
@@ -492,7 +500,7 @@ impl Fuzz {
     }
 
     /// Deletes tokens (and halves long tokens) while the input still panics with the same key;
-    /// bounded to 400 attempts or 10 s.
+    /// bounded to 2000 attempts or 10 s.
     fn shrink(&self, seed: usize, text: &str, key: &str) -> String {
         let start = Instant::now();
         let mut best = text.as_bytes().to_vec();
@@ -501,7 +509,7 @@ impl Fuzz {
             let current = best.clone();
             for candidate in mutate::reductions(&current) {
                 attempts += 1;
-                if attempts > 400 || start.elapsed() > Duration::from_secs(10) {
+                if attempts > 2000 || start.elapsed() > Duration::from_secs(10) {
                     break 'outer;
                 }
                 let Ok(cand) = String::from_utf8(candidate) else { continue };

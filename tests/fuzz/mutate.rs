@@ -348,11 +348,23 @@ fn splice(b: &[u8], start: usize, end: usize, with: &[u8]) -> Vec<u8> {
     v
 }
 
-/// Candidate reductions of a failing input, lazily, largest first: halve an over-long token (a
-/// 10^5-char string or digit string), then delete token ranges of halving sizes down to single
+/// Candidate reductions of a failing input, lazily, largest first: drop comments and spacing
+/// (keeping colons), halve an over-long token (a 10^5-char string or digit string), then delete
+/// token ranges of halving sizes down to single
 /// tokens. The shrinker keeps the first candidate that still fails and starts over.
 pub fn reductions(b: &[u8]) -> impl Iterator<Item = Vec<u8>> + '_ {
     let toks = tokenize(b);
+    // First the comments and blank space between tokens: one line per token's gap at most.
+    let mut bare = Vec::with_capacity(b.len());
+    let mut prev = 0;
+    for t in &toks {
+        if t.start > prev {
+            bare.push(if b[prev..t.start].contains(&b':') { b':' } else { b' ' });
+        }
+        bare.extend_from_slice(&b[t.start..t.end]);
+        prev = t.end;
+    }
+    let bare = (bare.len() < b.len()).then_some(bare);
     let long: Vec<Token> = toks.iter().copied().filter(|t| t.end - t.start > 64).collect();
     let halve = long.into_iter().map(move |t| {
         // Cut the middle half, keeping a string's quotes.
@@ -373,5 +385,5 @@ pub fn reductions(b: &[u8]) -> impl Iterator<Item = Vec<u8>> + '_ {
             splice(b, toks[k].start, toks[last].end, b"")
         })
     });
-    halve.chain(delete)
+    bare.into_iter().chain(halve).chain(delete)
 }
