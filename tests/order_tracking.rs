@@ -323,3 +323,64 @@ fn both_methods_agree_on_a_simulated_sweep() {
     assert!(compared > 300, "only {compared} smooth windows compared");
     assert!(worst_smooth < 0.005, "smooth regions differ by {worst_smooth}");
 }
+
+/// Issue 11: a tracked line, window or block too large to count in integers is refused with an
+/// error (a study `rpm`, `order_max` or `multiple` of ~1e19 reaches these functions unchanged).
+#[test]
+fn overflowing_sizes_are_refused() {
+    let x = vec![0.0; 16];
+    let opts = StftOptions { window_s: 1.0, hop_s: 1.0, half_width_bins: 2 };
+    // Used to: panic "slice index out of range" (debug: "attempt to add with overflow") in
+    // HannSpectrum::band: the line at 1e20 bins saturated `as i64`, `k + half` wrapped negative
+    // and the band was accepted.
+    for (omega, order, multiple) in
+        [(2.0 * PI, 1.0, 1e20), (2.0 * PI, 1e20, 1.0), (1e20, 1.0, 1.0), (1e200, 1e200, 1.0)]
+    {
+        let e = stft_order_traces(&x, 16.0, omega, &|_| order, &[multiple], &opts).unwrap_err();
+        assert!(matches!(e, SignalError::OutOfBand { hi: i64::MAX, last: 7, .. }), "{e}");
+    }
+    // Used to: the same panic in the angle domain (order 1e20 is bin 4e20 of a 4-rev block).
+    let theta: Vec<f64> = (0..64).map(|i| i as f64 * 0.5).collect();
+    let aopts = AngleOptions { samples_per_rev: 4, revs_per_block: 4, hop_revs: 1.0, half_width_bins: 2 };
+    let e = angle_domain_order_traces(&vec![0.0; 64], &theta, 1.0, &|_| 1.0, &[1e20], &aopts).unwrap_err();
+    assert!(matches!(e, SignalError::OutOfBand { unit: "orders", hi: i64::MAX, .. }), "{e}");
+
+    // A 1e12-sample window is refused by the MAX_POINTS cap, whatever the signal length.
+    let big = StftOptions { window_s: 1e12, ..opts };
+    let e = stft_order_traces(&x, 1.0, 1.0, &|_| 1.0, &[1.0], &big).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "window_s", .. }), "{e}");
+    let inf = StftOptions { window_s: 1e300, ..opts };
+    let e = stft_order_traces(&x, 1e300, 1.0, &|_| 1.0, &[1.0], &inf).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "window_s", .. }), "{e}");
+    // A hop of 1e300 s is one window.
+    let long_hop = StftOptions { window_s: 1.0, hop_s: 1e300, half_width_bins: 2 };
+    let t = stft_order_traces(&x, 16.0, 2.0 * PI, &|_| 3.0, &[1.0], &long_hop).unwrap();
+    assert_eq!(t[0].len(), 1);
+
+    // Used to: abort the process ("memory allocation of … bytes failed"): θ spanning 1e12 rad
+    // asked for 6.4e11 resampled points.
+    let e = resample_at_constant_angle(&[0.0, 0.0], &[0.0, 1e12], 1.0, 4).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "samples_per_rev", .. }), "{e}");
+    // Used to: panic "attempt to add with overflow" (debug; release wrapped to an empty result):
+    // the count 6e299 saturated `as usize` and `+ 1` wrapped.
+    let e = resample_at_constant_angle(&[0.0, 0.0], &[0.0, 1e300], 1.0, 4).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "samples_per_rev", .. }), "{e}");
+    // θ from −1e308 to 1e308: the span itself overflows to inf.
+    let e = resample_at_constant_angle(&[0.0, 0.0], &[-1e308, 1e308], 1.0, 4).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "samples_per_rev", .. }), "{e}");
+    // Used to: abort the process: 2^62 points per revolution over 1 rad.
+    let e = resample_at_constant_angle(&[0.0, 0.0], &[0.0, 1.0], 1.0, 1 << 62).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "samples_per_rev", .. }), "{e}");
+
+    // Used to: panic "attempt to multiply with overflow" (debug; release wrapped `R·P` to 2^40
+    // points and reported a short signal): 2^40 points per revolution over 1e-9 rad is 175
+    // points, and R·P = (2^24 + 1)·2^40 overflows.
+    let huge =
+        AngleOptions { samples_per_rev: 1 << 40, revs_per_block: (1 << 24) + 1, hop_revs: 1.0, half_width_bins: 2 };
+    let e = angle_domain_order_traces(&[0.0, 0.0], &[0.0, 1e-9], 1.0, &|_| 1.0, &[1.0], &huge).unwrap_err();
+    assert!(matches!(e, SignalError::InvalidParameter { name: "revs_per_block", .. }), "{e}");
+    // A hop of 1e300 revolutions is one block.
+    let long_hop = AngleOptions { hop_revs: 1e300, ..aopts };
+    let t = angle_domain_order_traces(&vec![0.0; 64], &theta, 1.0, &|_| 1.0, &[1.0], &long_hop).unwrap();
+    assert_eq!(t[0].len(), 1);
+}

@@ -27,6 +27,18 @@ mod stft;
 pub use order::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};
 pub use stft::{StftOptions, stft_order_traces};
 
+/// The most points one analysis window (STFT window, angle-domain block) or one angle-resampled
+/// signal may have: 2²⁶ = 67 108 864 (a 2²⁶-point window costs ~1.5 GB of FFT buffers; a
+/// resampled signal of 2²⁶ points 1 GB). Far above the studies' needs (a 2 s window at 2 kHz is
+/// 4000 samples; 240 s at 1000 rpm and 64 points per revolution is 256 000 points). Larger
+/// requests are refused with [`SignalError::InvalidParameter`] rather than allocated.
+///
+/// # Common mistake
+/// Sample counts are computed in f64 (`window_s·fs_hz`, revolutions·`samples_per_rev`) and
+/// compared with this cap *before* any conversion to an integer: an `as usize` of 1e19 saturates
+/// and the following `+ 1` or `k + half` wraps.
+pub const MAX_POINTS: usize = 1 << 26;
+
 use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use std::f64::consts::PI;
@@ -287,10 +299,20 @@ impl HannSpectrum {
 
     /// The band's centre bin for a line at `bins` (fractional bin position), or the out-of-band
     /// bounds `(lo, hi)` if it does not fit in 1..=last_bin.
+    ///
+    /// NOTE: the test is done in f64, before any conversion: a line at 1e19 bins (a huge rpm,
+    /// order or multiple) saturates `as i64`, and `k + half` then wraps to a negative bin that
+    /// passed the old integer test. Here `k ± half` are exact in f64 (half ≤ 64, the last bin
+    /// < 2²⁵), a NaN fails both comparisons, and the error bounds saturate.
     fn band(&self, bins: f64, half: usize) -> Result<usize, (i64, i64)> {
         let k = bins.round();
-        let (lo, hi) = (k as i64 - half as i64, k as i64 + half as i64);
-        if lo >= 1 && hi <= self.last_bin() as i64 { Ok(k as usize) } else { Err((lo, hi)) }
+        let h = half as f64;
+        if k - h >= 1.0 && k + h <= self.last_bin() as f64 {
+            Ok(k as usize)
+        } else {
+            let k = k as i64; // saturating; only reported
+            Err((k.saturating_sub(half as i64), k.saturating_add(half as i64)))
+        }
     }
 }
 
@@ -390,6 +412,12 @@ mod tests {
         assert_eq!(spec.band(2.4, 2), Err((0, 4)));
         assert_eq!(spec.band(29.0, 2), Ok(29));
         assert_eq!(spec.band(30.0, 2), Err((28, 32)));
+        // Used to: wrap `k + half` past i64::MAX to a negative bin, accept the band and panic on
+        // the slice (a multiple of 1e20).
+        assert_eq!(spec.band(1e20, 2), Err((i64::MAX - 2, i64::MAX)));
+        assert_eq!(spec.band(f64::INFINITY, 2), Err((i64::MAX - 2, i64::MAX)));
+        assert_eq!(spec.band(-1e20, 2), Err((i64::MIN, i64::MIN + 2)));
+        assert_eq!(spec.band(f64::NAN, 2), Err((-2, 2)));
     }
 
     #[test]

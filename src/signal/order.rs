@@ -1,7 +1,7 @@
 //! Angle-domain order tracking: resample at constant rotor-angle increments, then FFT blocks of
 //! whole revolutions, whose bins are orders.
 
-use super::{HannSpectrum, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
+use super::{HannSpectrum, MAX_POINTS, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
 use std::f64::consts::PI;
 
 /// Options of [`angle_domain_order_traces`].
@@ -72,8 +72,9 @@ fn catmull_rom(y: &[f64], i: usize, u: f64) -> (f64, f64) {
 /// error is third order, `h³|f‴|·u(1−u)(1−2u)/6` ≤ 0.016·h³|f‴| (h the sample step).
 ///
 /// # Errors
-/// Length mismatch, fewer than two samples, non-finite θ, θ not strictly increasing, or bad
-/// `fs_hz`/`samples_per_rev`.
+/// Length mismatch, fewer than two samples, non-finite θ, θ not strictly increasing, bad
+/// `fs_hz`/`samples_per_rev`, or more than [`MAX_POINTS`](super::MAX_POINTS) (2²⁶) resampled
+/// points.
 ///
 /// # Common mistake
 /// θ must be the unwrapped rotor angle (growing without bound), not θ mod 2π.
@@ -107,7 +108,17 @@ pub fn resample_at_constant_angle(
     let theta0 = theta_rad[0];
     let dtheta = 2.0 * PI / samples_per_rev as f64;
     let last = theta_rad.len() - 1;
-    let count = ((theta_rad[last] - theta0) / dtheta).floor() as usize + 1;
+    // NOTE: counted in f64 and capped before the conversion: θ spanning 1e300 rad (or a huge
+    // samples_per_rev) would saturate `as usize`, wrap the `+ 1`, or ask for terabytes.
+    let count_f = ((theta_rad[last] - theta0) / dtheta).floor() + 1.0;
+    if !count_f.is_finite() || count_f > MAX_POINTS as f64 {
+        return Err(SignalError::InvalidParameter {
+            name: "samples_per_rev",
+            value: samples_per_rev as f64,
+            reason: "times the revolutions spanned by theta exceeds the cap of 2^26 resampled points (MAX_POINTS)",
+        });
+    }
+    let count = count_f as usize;
     let mut time_s = Vec::with_capacity(count);
     let mut value = Vec::with_capacity(count);
     let mut i = 0;
@@ -159,7 +170,8 @@ pub fn resample_at_constant_angle(
 ///
 /// # Errors
 /// As [`resample_at_constant_angle`], plus: no multiples, bad options, a non-finite sample, fewer
-/// resampled points than one block, a bad order from `order_at`, or a band beyond order
+/// resampled points than one block, a block of more than [`MAX_POINTS`](super::MAX_POINTS)
+/// points, a bad order from `order_at`, or a band beyond order
 /// P/2 − 1 (the message names the multiple, time and order).
 pub fn angle_domain_order_traces(
     signal: &[f64],
@@ -177,7 +189,14 @@ pub fn angle_domain_order_traces(
         return Err(SignalError::InvalidParameter { name: "revs_per_block", value: 0.0, reason: "must be at least 1" });
     }
     let resampled = resample_at_constant_angle(signal, theta_rad, fs_hz, p)?;
-    let m_len = r * p;
+    // Checked: a block of more than MAX_POINTS cannot fit in the (capped) resampled signal.
+    let Some(m_len) = r.checked_mul(p).filter(|&m| m <= MAX_POINTS) else {
+        return Err(SignalError::InvalidParameter {
+            name: "revs_per_block",
+            value: r as f64,
+            reason: "times samples_per_rev exceeds the cap of 2^26 points per block (MAX_POINTS)",
+        });
+    };
     if m_len < 4 * opts.half_width_bins + 8 {
         return Err(SignalError::InvalidParameter {
             name: "revs_per_block",
@@ -189,7 +208,8 @@ pub fn angle_domain_order_traces(
     if values.len() < m_len {
         return Err(SignalError::TooShort { what: "angle-resampled signal", got: values.len(), needed: m_len });
     }
-    let hop = ((hop_revs * p as f64).round() as usize).max(1);
+    // A hop beyond the signal gives one block, as any hop ≥ len − M + 1 does.
+    let hop = (hop_revs * p as f64).round().clamp(1.0, values.len() as f64) as usize;
     let blocks = (values.len() - m_len) / hop + 1;
 
     let mut spec = HannSpectrum::new(m_len);

@@ -1,6 +1,6 @@
 //! Time-domain order tracking by short-time Fourier transform (the study convention of DESIGN.md).
 
-use super::{HannSpectrum, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
+use super::{HannSpectrum, MAX_POINTS, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
 use std::f64::consts::PI;
 
 /// Options of [`stft_order_traces`]. The defaults are the study convention of DESIGN.md.
@@ -39,10 +39,11 @@ impl Default for StftOptions {
 /// see the [module docs](super)).
 ///
 /// # Errors
-/// Non-positive or non-finite `fs_hz`, `omega_rad_s`, `window_s`, `hop_s` or multiple; no
-/// multiples; a non-finite sample; a signal shorter than one window; `order_at` returning a
-/// negative or non-finite order; a band that does not fit between DC and Nyquist (the message
-/// names the multiple, time and frequency).
+/// Non-positive or non-finite `fs_hz`, `omega_rad_s`, `window_s`, `hop_s` or multiple; a window
+/// of more than [`MAX_POINTS`](super::MAX_POINTS) (2²⁶) samples; no multiples; a non-finite
+/// sample; a signal shorter than one window; `order_at` returning a negative or non-finite order;
+/// a band that does not fit between DC and Nyquist, including a line too far out to count in bins
+/// (the message names the multiple, time and frequency).
 ///
 /// # Common mistake
 /// Ω is in rad/s: pass `rpm_to_rad_s(1000.0)`, not 1000.
@@ -59,7 +60,16 @@ pub fn stft_order_traces(
     let window_s = positive("window_s", opts.window_s)?;
     let hop_s = positive("hop_s", opts.hop_s)?;
     check_common(signal, multiples, opts.half_width_bins)?;
-    let n = (window_s * fs).round() as usize;
+    // NOTE: sample counts are compared in f64 before the conversion (see [`MAX_POINTS`]).
+    let n_f = (window_s * fs).round();
+    if n_f > MAX_POINTS as f64 {
+        return Err(SignalError::InvalidParameter {
+            name: "window_s",
+            value: window_s,
+            reason: "times fs_hz exceeds the cap of 2^26 samples per window (MAX_POINTS)",
+        });
+    }
+    let n = n_f as usize;
     let min_n = 4 * opts.half_width_bins + 8;
     if n < min_n {
         return Err(SignalError::InvalidParameter {
@@ -71,7 +81,8 @@ pub fn stft_order_traces(
     if signal.len() < n {
         return Err(SignalError::TooShort { what: "signal", got: signal.len(), needed: n });
     }
-    let hop = ((hop_s * fs).round() as usize).max(1);
+    // A hop beyond the signal gives one window, as any hop ≥ len − N + 1 does.
+    let hop = (hop_s * fs).round().clamp(1.0, signal.len() as f64) as usize;
     let windows = (signal.len() - n) / hop + 1;
 
     let mut spec = HannSpectrum::new(n);
