@@ -86,6 +86,11 @@ pub fn steady_spin_obstacle(mech: &Mechanism, spin: usize) -> Option<String> {
     None
 }
 
+/// A number for a message: plain when moderate, in exponent form when huge or tiny.
+fn g(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) { format!("{v:e}") } else { format!("{v}") }
+}
+
 /// A finite, positive value.
 fn pos(v: f64) -> bool {
     v.is_finite() && v > 0.0
@@ -173,9 +178,9 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                         format!(
                             "the ramp-in ({} s) must end two tracking windows ({} s) before the sweep does ({} s), \
                              or no window sees the full torque",
-                            s.ramp_s,
-                            2.0 * o.window_s,
-                            s.duration_s
+                            g(s.ramp_s),
+                            g(2.0 * o.window_s),
+                            g(s.duration_s)
                         ),
                     ));
                 }
@@ -369,7 +374,7 @@ fn order(src: &Source, path: &str, v: f64) -> Result<()> {
     if pos(v) && v <= MAX_ORDER {
         Ok(())
     } else {
-        Err(src.error(path, format!("must be finite, positive and at most {MAX_ORDER}, got {v}")))
+        Err(src.error(path, format!("must be finite, positive and at most {MAX_ORDER}, got {}", g(v))))
     }
 }
 
@@ -385,7 +390,7 @@ fn torque(src: &Source, path: &str, v: f64) -> Result<()> {
     if v.is_finite() && v.abs() <= MAX_TORQUE_NM {
         Ok(())
     } else {
-        Err(src.error(path, format!("torque must be finite, |T| ≤ {MAX_TORQUE_NM:e} N·m, got {v}")))
+        Err(src.error(path, format!("torque must be finite, |T| ≤ {MAX_TORQUE_NM:e} N·m, got {}", g(v))))
     }
 }
 
