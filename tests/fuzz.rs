@@ -11,7 +11,7 @@
 //! file) and loads the result by the seed file's kind:
 //! - a mechanism through [`load_mechanism`] (parse + `Mechanism::from_spec`), named as its file in
 //!   a temporary copy of the example tree so that relative `part:` paths resolve;
-//! - a study through [`load_study`] (`Study::from_file` on a temporary file in that copy: the
+//! - a study through [`load_study`] (`Study::from_source` in memory, as a file in that copy: the
 //!   study, its mechanism and every check up to the plan);
 //! - a body or joint part through a host mechanism that names it as its `part` ([`load_part`]).
 //!
@@ -57,9 +57,9 @@
 #[path = "fuzz/mutate.rs"]
 mod mutate;
 
-use kanedyn::io::Source;
-use kanedyn::mechanism::{Mechanism, MechanismSpec};
-use kanedyn::study::Study;
+use kanedyn::io::{ReadPolicy, Source};
+use kanedyn::mechanism::Mechanism;
+use kanedyn::study::{LoadOptions, Study};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
@@ -80,17 +80,20 @@ use std::time::{Duration, Instant};
 /// resolve from `path`'s folder).
 fn load_mechanism(path: &Path, text: &str) -> Result<(), String> {
     let src = Source::from_text(&path.to_string_lossy(), text);
-    let spec: MechanismSpec = src.parse().map_err(|e| e.to_string())?;
-    Mechanism::from_spec(&spec, &src).map(drop).map_err(|e| e.to_string())
+    let policy = ReadPolicy::within(path.parent().unwrap_or(Path::new("")));
+    Mechanism::from_source(&src, &policy).map(drop).map_err(|e| e.to_string())
 }
 
-/// Loads and validates study `text` as the file `path` (inside the temporary example tree; its
-/// `mechanism:` resolves from there). For now through a file, which is removed afterwards.
+/// Loads, validates and plans study `text` as the file `path` in memory (inside the temporary
+/// example tree; its `mechanism:` resolves from there under the default read policy and limits).
 fn load_study(path: &Path, text: &str) -> Result<(), String> {
-    std::fs::write(path, text).map_err(|e| format!("fuzz harness: cannot write {}: {e}", path.display()))?;
-    let result = Study::from_file(path).map(drop).map_err(|e| e.to_string());
-    let _ = std::fs::remove_file(path);
-    result
+    let src = Source::from_text(&path.to_string_lossy(), text);
+    let study = Study::from_source(src, &LoadOptions::default()).map_err(|e| e.to_string())?;
+    let plan = study.plan();
+    if plan.exceeds(&LoadOptions::default().limits).is_some() {
+        return Err("fuzz harness: a study over the limits was accepted".into());
+    }
+    Ok(())
 }
 
 /// Loads catalog part `text` (a body or a joint) as file `path` through a minimal host mechanism
