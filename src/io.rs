@@ -343,7 +343,7 @@ fn read_capped(file: &Path, open: &Path, max: u64) -> Result<Vec<u8>> {
     let too_large = |size: String| {
         refuse(format!(
             "file is {size} bytes, more than the limit of {max} bytes (input files are a few kB); \
-             if it is genuine, raise the limit with `ReadPolicy::with_max_file_bytes`"
+             if it is genuine, raise the limit with `--max-file-kb` (library: `ReadPolicy::with_max_file_bytes`)"
         ))
     };
     // Stat before opening: opening a FIFO would block until someone writes to it.

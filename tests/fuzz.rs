@@ -9,7 +9,7 @@
 //! strings replaced by 10^5 characters, `".."`, `"/etc/passwd"`, `"/dev/zero"`, …, a value wrapped
 //! in 1000–100 000 brackets, a list element repeated up to 1000 times, a splice from another
 //! file) and loads the result by the seed file's kind:
-//! - a mechanism through [`load_mechanism`] (parse + `Mechanism::from_spec`), named as its file in
+//! - a mechanism through [`load_mechanism`] (`Mechanism::from_source` under the read policy), named as its file in
 //!   a temporary copy of the example tree so that relative `part:` paths resolve;
 //! - a study through [`load_study`] (`Study::from_source` in memory, as a file in that copy: the
 //!   study, its mechanism and every check up to the plan);
