@@ -202,6 +202,11 @@ fn study_and_analysis_names_cannot_leave_the_output_folder() {
         assert_located(&load_error(&s, &text), "analyses[0].name");
     }
     assert!(!s.0.join("x").exists() && !Path::new("/tmp/x/summary.md").exists());
+    // Used to: an amplitude of 1e-300 made a 300-digit file name, too long to write.
+    let p = s.study("tiny.ron", &study_with(&SWEEP.replace("[40.0]", "[1e-300]")));
+    let report = run(&Study::from_file(&p).unwrap(), &RunOptions { out: Some(s.out()), progress: false }).unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    assert!(s.out().join("s/a_1e-300Nm_up.csv").exists(), "{:?}", report.files);
 }
 
 /// Used to: two runs into the same folder both wrote into it and left a mix of their files.

@@ -255,7 +255,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         let csv = if br.amplitude.is_nan() {
             dir.join(format!("{}_{dir_tag}.csv", spec.name))
         } else {
-            dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, br.amplitude))
+            dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, super::sweep::fmt_num(br.amplitude)))
         };
         let h: Vec<&str> = header.iter().map(String::as_str).collect();
         let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();

@@ -277,7 +277,7 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
 }
 
 fn fmt_mult(m: f64) -> String {
-    if m.fract() == 0.0 { format!("{m:.0}") } else { format!("{m}") }
+    super::sweep::fmt_num(m)
 }
 
 /// All periodic steady states at the operating order: the response is continued in order from

@@ -50,8 +50,16 @@ fn job_label(analysis: &str, amplitude: f64, direction: Direction, locked: bool)
     format!("{analysis}_{}Nm_{dir}{}", fmt_num(amplitude), if locked { "_locked" } else { "" })
 }
 
-fn fmt_num(v: f64) -> String {
-    if v.fract() == 0.0 { format!("{v:.0}") } else { format!("{v}") }
+/// A number for a file name or label: whole numbers plainly, tiny or huge ones in exponent form
+/// (`1e-300` would otherwise print 300 digits and make a file name too long).
+pub(crate) fn fmt_num(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else if v.fract() == 0.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v}")
+    }
 }
 
 /// What [`run`] hands back to the study runner.
