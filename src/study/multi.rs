@@ -78,6 +78,12 @@ impl SpeedResult {
             .min_by(|a, b| a.1.total_cmp(&b.1))
     }
 
+    /// The locked twin's largest tracked amplitude: the scale below which its lines are noise
+    /// (0 when not run).
+    fn locked_scale(&self) -> f64 {
+        self.locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max))
+    }
+
     /// Nonlinear amplitude of multiple k (NaN when not run).
     pub fn amplitude(&self, k: usize) -> f64 {
         self.response.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
@@ -189,9 +195,6 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
             failures.push(format!("{} at {} rpm: the linear amplitudes are not finite (left empty)", spec.name, s.rpm));
         }
     }
-    // The locked twin's largest amplitude per speed: the scale below which its lines are noise.
-    let locked_scale =
-        |s: &SpeedResult| s.locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max));
 
     // CSV: one row per speed.
     let mut header = vec!["rpm".to_string()];
@@ -207,7 +210,7 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
                 header.push(format!("locked_{tag}x_rad_s2"));
                 cols.push(col(&|s| s.locked_amplitude(k)));
                 header.push(format!("ratio_{tag}x"));
-                cols.push(col(&|s| super::ratio(s.amplitude(k), s.locked_amplitude(k), locked_scale(s))));
+                cols.push(col(&|s| super::ratio(s.amplitude(k), s.locked_amplitude(k), s.locked_scale())));
             }
         }
         if spec.linear {
@@ -473,8 +476,13 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         for k in 0..spec.multiples.len() {
             if spec.time_domain {
                 let (a, l) = (s.amplitude(k), s.locked_amplitude(k));
-                let scale = s.locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max));
-                let _ = write!(row, " {} | {} | {} |", cell(a, 4), cell(l, 4), cell(super::ratio(a, l, scale), 3));
+                let _ = write!(
+                    row,
+                    " {} | {} | {} |",
+                    cell(a, 4),
+                    cell(l, 4),
+                    cell(super::ratio(a, l, s.locked_scale()), 3)
+                );
             }
             if spec.linear {
                 let (a, l) = (s.linear_amplitude(k, false), s.linear_amplitude(k, true));

@@ -75,11 +75,6 @@ impl OutputDir {
         &self.temp
     }
 
-    /// The folder the results will have once finished.
-    pub(crate) fn target(&self) -> &Path {
-        &self.target
-    }
-
     /// Moves the finished folder into place (the previous results are removed) and returns its
     /// path. On failure the results stay in the temporary folder, which the error names.
     pub(crate) fn finish(self) -> Result<PathBuf> {

@@ -99,9 +99,7 @@ fn pos(v: f64) -> bool {
 /// Checks one study against its mechanism; the first problem found is returned with its file,
 /// line:column and field path.
 pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Source) -> Result<()> {
-    if let Err(m) = check_file_name(&spec.name) {
-        return Err(src.error("name", format!("{m} (the study name is its output folder)")));
-    }
+    // The study name was checked before its mechanism was read (`Study::from_source`).
     let i = spec.integration;
     if !(i.rtol.is_finite() && (MIN_RTOL..=0.1).contains(&i.rtol)) {
         return Err(src.error("integration.rtol", format!("relative tolerance must lie in {MIN_RTOL:e}..=0.1")));
