@@ -3,9 +3,9 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kanedyn::cpva::CpvaParams;
-use kanedyn::excitation::{Harmonic, rpm_to_rad_s};
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::kane::Kane;
+use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
 use std::hint::black_box;
 
 fn branch(c: &mut Criterion) {

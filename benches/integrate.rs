@@ -5,10 +5,10 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use kanedyn::cpva::CpvaParams;
-use kanedyn::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
-use kanedyn::integrate::{IntegrateOptions, integrate};
 use kanedyn::kane::Kane;
-use kanedyn::probe::{Probe, ProbeKind, simulate};
+use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
+use kanedyn::time::integrate::{IntegrateOptions, integrate};
+use kanedyn::time::probe::{Probe, ProbeKind, simulate};
 use std::hint::black_box;
 
 fn sweep(c: &mut Criterion) {

@@ -3,13 +3,12 @@
 //! allocation-free, both evaluating the same excitation torque), and planar chains of N links.
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use kanedyn::body::BodySpec;
 use kanedyn::cpva::CpvaParams;
-use kanedyn::io::Source;
-use kanedyn::joint::JointSpec;
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::{Mechanism, MechanismSpec};
-use kanedyn::speeds::Speeds;
+use kanedyn::model::body::BodySpec;
+use kanedyn::model::joint::JointSpec;
+use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::model::speeds::Speeds;
 use std::hint::black_box;
 use std::path::Path;
 
@@ -41,7 +40,7 @@ fn chain(n: usize) -> Mechanism {
         joints,
         loads: vec![],
     };
-    Mechanism::from_spec(&spec, &Source::from_text("<bench chain>", "")).unwrap()
+    Mechanism::from_spec(&spec).unwrap()
 }
 
 fn rhs(c: &mut Criterion) {

@@ -8,14 +8,13 @@
 //! Q_i on the radial line when φ_i = 0. With N pendulums the mass, inertia and damping of the
 //! single pendulum of the paper are split evenly, so N synchronous pendulums act as one.
 
-use crate::body::BodySpec;
 use crate::error::Result;
-use crate::excitation::Excitation;
-use crate::io::Source;
-use crate::joint::{JointKind, JointSpec};
-use crate::loads::LoadSpec;
-use crate::mechanism::{GROUND, Mechanism, MechanismSpec};
-use crate::speeds::Speeds;
+use crate::model::body::BodySpec;
+use crate::model::excitation::Excitation;
+use crate::model::joint::{JointKind, JointSpec};
+use crate::model::loads::LoadSpec;
+use crate::model::mechanism::{GROUND, Mechanism, MechanismSpec};
+use crate::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -181,7 +180,7 @@ impl CpvaParams {
 
     /// The generic mechanism (validated like a file).
     pub fn mechanism(&self, excitation: Option<Excitation>) -> Result<Mechanism> {
-        Mechanism::from_spec(&self.spec(excitation), &Source::from_text("<cpva builder>", ""))
+        Mechanism::from_spec(&self.spec(excitation))
     }
 
     /// The closed-form model of these parameters.

@@ -54,11 +54,11 @@
 //! is the reaction torque); the CPVA's pendulum then vibrates at n_t (eq. 15).
 
 use crate::error::Error;
-use crate::excitation::{Excitation, Harmonic, rpm_to_rad_s};
 use crate::kane::Kane;
-use crate::math::Vec2;
-use crate::mechanism::Mechanism;
-use crate::speeds::Speeds;
+use crate::model::excitation::{Excitation, Harmonic, rpm_to_rad_s};
+use crate::model::math::Vec2;
+use crate::model::mechanism::Mechanism;
+use crate::model::speeds::Speeds;
 use nalgebra::{Complex, DMatrix, DVector};
 use std::f64::consts::PI;
 
@@ -547,7 +547,7 @@ impl LinearModel {
         model_mech
             .loads
             .joint_torques
-            .push(crate::loads::JointTorque { joint: s, excitation: Excitation::constant(t_m) });
+            .push(crate::model::loads::JointTorque { joint: s, excitation: Excitation::constant(t_m) });
         Ok(LinearModel {
             mech: model_mech,
             op: OperatingPoint { spin_joint: s, omega: omega_rad_s, q, u, mean_spin_torque: t_m, residual, iterations },

@@ -3,7 +3,7 @@
 //! many `rhs`, `mass_matrix` and `forcing` calls.
 
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::mechanism::Mechanism;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::path::Path;

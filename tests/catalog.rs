@@ -1,12 +1,12 @@
 //! Every catalog part and example mechanism loads, and the example files describe the same
 //! system as the CPVA builder.
 
-use kanedyn::body::BodySpec;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::io::Source;
-use kanedyn::joint::JointSpec;
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::body::BodySpec;
+use kanedyn::model::joint::JointSpec;
+use kanedyn::model::mechanism::Mechanism;
 use std::path::Path;
 
 fn ron_files(dir: &str) -> Vec<std::path::PathBuf> {

@@ -44,13 +44,13 @@ fn eom_prints_round_tripping_json_equal_to_eq7() {
     cf.rhs1(250.0, &[12.5, -0.4, 104.7, -20.0], &mut xd);
     assert!((udot[0] - xd[2]).abs() <= 1e-10 * xd[2].abs() && (udot[1] - xd[3]).abs() <= 1e-10 * xd[3].abs());
     // Printed numbers parse back to the very bits the library computes.
-    let mech = kanedyn::mechanism::Mechanism::from_file(std::path::Path::new(concat!(
+    let mech = kanedyn::model::mechanism::Mechanism::from_file(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/examples/cpva.ron"
     )))
     .unwrap();
     let mut k = kanedyn::kane::Kane::new(&mech).unwrap();
-    k.set_joint_torque(0, kanedyn::excitation::Excitation::constant(250.0));
+    k.set_joint_torque(0, kanedyn::model::excitation::Excitation::constant(250.0));
     let mut xd = [0.0; 4];
     k.rhs(0.0, &[12.5, -0.4, 104.7, -20.0], &mut xd).unwrap();
     assert_eq!(udot[0].to_bits(), xd[2].to_bits());

@@ -2,11 +2,10 @@
 //! synchronous pendulums, and the published formulas (15), (17), (18).
 
 use kanedyn::cpva::{CpvaParams, inertia_ratio, rotor_order, tuning_order};
-use kanedyn::excitation::Excitation;
-use kanedyn::io::Source;
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
-use kanedyn::speeds::Speeds;
+use kanedyn::model::excitation::Excitation;
+use kanedyn::model::mechanism::Mechanism;
+use kanedyn::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -85,10 +84,9 @@ fn joint_rate_speeds_transform_with_w() {
     for n_pend in [1, 2, 4] {
         let p = CpvaParams::canonical().with_pendulums(n_pend);
         let spec_abs = p.spec(Some(Excitation::constant(TORQUE)));
-        let spec_rates = kanedyn::mechanism::MechanismSpec { speeds: Speeds::JointRates, ..spec_abs.clone() };
-        let src = Source::from_text("<test>", "");
-        let abs = Mechanism::from_spec(&spec_abs, &src).unwrap();
-        let rates = Mechanism::from_spec(&spec_rates, &src).unwrap();
+        let spec_rates = kanedyn::model::mechanism::MechanismSpec { speeds: Speeds::JointRates, ..spec_abs.clone() };
+        let abs = Mechanism::from_spec(&spec_abs).unwrap();
+        let rates = Mechanism::from_spec(&spec_rates).unwrap();
         let w = Speeds::AbsoluteAngularVelocities.w_matrix(&abs.parents());
         let mut ka = Kane::new(&abs).unwrap();
         let mut kr = Kane::new(&rates).unwrap();

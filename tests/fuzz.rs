@@ -58,7 +58,7 @@
 mod mutate;
 
 use kanedyn::io::{ReadPolicy, Source};
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::mechanism::Mechanism;
 use kanedyn::study::{LoadOptions, Study};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};

@@ -5,11 +5,11 @@
 //! matrix obtained by differencing time integrations, and the balance of angular momentum.
 
 use kanedyn::cpva::CpvaParams;
-use kanedyn::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use kanedyn::hbm::{
     BifurcationKind, Branch, BranchEnd, ContinuationOptions, FoldKind, Hbm, HbmOptions, HbmSolution, Parameter,
 };
 use kanedyn::kane::Kane;
+use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use nalgebra::{Complex, DMatrix};
 use realfft::RealFftPlanner;
 use std::f64::consts::PI;

@@ -2,7 +2,7 @@
 //! Each test says what used to go wrong.
 
 use kanedyn::io::{ReadPolicy, Source, line_col, locate};
-use kanedyn::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -156,7 +156,7 @@ fn a_file_of_another_kind_is_not_echoed() {
     assert!(!msg.contains("root") && !msg.contains("hunter2"), "{msg}");
     // Comments and attributes may come first; a joint file is not a body file.
     let src = Source::from_text("j.ron", "#![enable(implicit_some)]\n// a joint\nJoint(name: \"j\")");
-    let msg = src.parse_as::<kanedyn::body::BodySpec>("Body").unwrap_err().to_string();
+    let msg = src.parse_as::<kanedyn::model::body::BodySpec>("Body").unwrap_err().to_string();
     assert_mentions(&msg, &["j.ron:3:1", "not a `Body` file"]);
     // The plain `parse` does not quote the first word of a mismatched file either.
     for text in ["Secret(name: \"m\")", "hunter2 x", "12345", "\"hunter2\""] {
@@ -313,7 +313,7 @@ fn deep_nesting_cannot_overflow_the_stack() {
             shape = format!("Compound(parts: [Placed(shape: {shape})])");
         }
         let text = format!("Body(name: \"b\", areal_density: 1.0, shape: {shape})");
-        let msg = Source::from_text("b.ron", &text).parse_as::<kanedyn::body::BodySpec>("Body").unwrap_err();
+        let msg = Source::from_text("b.ron", &text).parse_as::<kanedyn::model::body::BodySpec>("Body").unwrap_err();
         assert!(msg.to_string().contains("recursion limit"), "{msg}");
         let brackets = format!("Mechanism(name: \"m\", bodies: {}", "[".repeat(100_000));
         let src = Source::from_text("m.ron", &brackets);
@@ -346,7 +346,7 @@ fn long_lines_and_long_lists_are_quick() {
         .collect();
     let text = format!("Body(name: \"b\", areal_density: 1.0, shape: ConvexPolygon(points: [{}]))", points.join(","));
     let src = Source::from_text("b.ron", &text);
-    let spec: kanedyn::body::BodySpec = src.parse_as("Body").unwrap();
+    let spec: kanedyn::model::body::BodySpec = src.parse_as("Body").unwrap();
     let _ = spec.check_numbers(&src, "");
     let _ = src.locate("shape.points[99999]");
     assert!(start.elapsed() < Duration::from_secs(1), "took {:?}", start.elapsed());

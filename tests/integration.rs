@@ -3,11 +3,11 @@
 
 use kanedyn::cpva::CpvaParams;
 use kanedyn::error::EngineError;
-use kanedyn::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
-use kanedyn::integrate::{IntegrateError, IntegrateOptions, Sample, integrate};
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
-use kanedyn::probe::{Probe, ProbeKind, simulate};
+use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
+use kanedyn::model::mechanism::Mechanism;
+use kanedyn::time::integrate::{IntegrateError, IntegrateOptions, Sample, integrate};
+use kanedyn::time::probe::{Probe, ProbeKind, simulate};
 use std::path::Path;
 
 /// 1000 rpm, the speed of the paper's order sweeps (section 4.1).

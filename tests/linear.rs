@@ -6,15 +6,14 @@
 //! multi-order response of Table 1 against a hand-written 2-DOF model.
 
 use kanedyn::cpva::{CpvaParams, inertia_ratio, rotor_order, tuning_order};
-use kanedyn::excitation::{Harmonic, rpm_to_rad_s};
-use kanedyn::io::Source;
-use kanedyn::joint::Spring;
 use kanedyn::linear::{
     C64, Damping, LinearError, LinearModel, ModeKind, OrderResponse, ResponseSpec, SpeedCase, Spin, campbell,
     forcing_jacobians, multi_order_response, with_speeds,
 };
-use kanedyn::mechanism::{Mechanism, MechanismSpec};
-use kanedyn::speeds::Speeds;
+use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
+use kanedyn::model::joint::Spring;
+use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::model::speeds::Speeds;
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
@@ -223,7 +222,7 @@ fn relative_equilibrium_off_the_radial_line() {
     let phi_f = 0.3;
     let mut spec = p.spec(None);
     spec.joints[1].spring = Some(Spring { stiffness: ks, free_angle: phi_f });
-    let mech = Mechanism::from_spec(&spec, &Source::from_text("<test>", "")).unwrap();
+    let mech = Mechanism::from_spec(&spec).unwrap();
     let lin = LinearModel::new(&mech, "spin", w, None).unwrap();
     let (mut lo, mut hi) = (0.0, phi_f);
     for _ in 0..200 {
@@ -391,7 +390,7 @@ fn shaft_mechanism(k_shaft: f64) -> Mechanism {
     spec.joints[0].child = Some("hub".into());
     spec.joints.insert(
         1,
-        kanedyn::joint::JointSpec {
+        kanedyn::model::joint::JointSpec {
             name: Some("shaft".into()),
             parent: Some("hub".into()),
             child: Some("rotor".into()),
@@ -399,7 +398,7 @@ fn shaft_mechanism(k_shaft: f64) -> Mechanism {
             ..Default::default()
         },
     );
-    Mechanism::from_spec(&spec, &Source::from_text("<shaft>", "")).unwrap()
+    Mechanism::from_spec(&spec).unwrap()
 }
 
 #[test]
@@ -554,11 +553,11 @@ fn refuses_what_it_cannot_linearise() {
     let p = CpvaParams::canonical();
     let mut spec = p.spec(None);
     spec.gravity = (0.0, -9.81);
-    let g = Mechanism::from_spec(&spec, &Source::from_text("<g>", "")).unwrap();
+    let g = Mechanism::from_spec(&spec).unwrap();
     assert!(matches!(LinearModel::new(&g, "spin", 100.0, None), Err(LinearError::WorldOrientation { .. })));
     let mut spec = p.spec(None);
     spec.joints[0].spring = Some(Spring { stiffness: 1e3, free_angle: 0.0 });
-    let s = Mechanism::from_spec(&spec, &Source::from_text("<s>", "")).unwrap();
+    let s = Mechanism::from_spec(&spec).unwrap();
     let e = LinearModel::new(&s, "spin", 100.0, None).unwrap_err();
     assert!(matches!(e, LinearError::SpinSpring { .. }), "{e}");
     let m = p.mechanism(None).unwrap();
@@ -573,7 +572,7 @@ fn refuses_what_it_cannot_linearise() {
     let mut kane = kanedyn::kane::Kane::new(lin.mechanism()).unwrap();
     let (q, u) = (lin.op.q.clone(), lin.op.u.clone());
     let f0 = kane.forcing(0.0, &q, &u).clone();
-    kane.set_joint_torque(1, kanedyn::excitation::Excitation::constant(1.0));
+    kane.set_joint_torque(1, kanedyn::model::excitation::Excitation::constant(1.0));
     let f1 = kane.forcing(0.0, &q, &u).clone();
     assert!((f1 - f0 - lin.generalized_torque(1)).amax() < 1e-12);
 }

@@ -6,7 +6,7 @@
 //! 2.6e-4 low half a bin off; the sweep moves the line by at most 0.11 Hz (2n) within a 2 s window,
 //! a fifth of a bin; cubic resampling lowers order 6.6 by ~1.8e-4 (rms gain of the interpolant). Each test prints its worst error.
 
-use kanedyn::excitation::{Order, rpm_to_rad_s};
+use kanedyn::model::excitation::{Order, rpm_to_rad_s};
 use kanedyn::signal::{
     AngleOptions, OrderTrace, SignalError, StftOptions, angle_domain_order_traces, resample_at_constant_angle,
     stft_order_traces,
@@ -256,9 +256,9 @@ fn timing() {
 #[test]
 fn both_methods_agree_on_a_simulated_sweep() {
     use kanedyn::cpva::CpvaParams;
-    use kanedyn::excitation::{Excitation, Harmonic};
-    use kanedyn::integrate::{IntegrateOptions, integrate};
     use kanedyn::kane::Kane;
+    use kanedyn::model::excitation::{Excitation, Harmonic};
+    use kanedyn::time::integrate::{IntegrateOptions, integrate};
     let w = rpm_to_rad_s(1000.0);
     let order = Order::Sweep { from: 2.9, to: 3.3, duration_s: 240.0 };
     let exc = Excitation {

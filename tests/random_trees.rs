@@ -3,16 +3,15 @@
 //! an independent route: world-frame velocity recursion, finite differences of positions, and
 //! Lagrange's equations by numeric differentiation of the kinetic and potential energy.
 
-use kanedyn::body::BodySpec;
-use kanedyn::excitation::Excitation;
-use kanedyn::io::Source;
-use kanedyn::joint::{JointSpec, Spring};
 use kanedyn::kane::Kane;
-use kanedyn::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
-use kanedyn::loads::{ForceFrame, LoadSpec};
-use kanedyn::math::{Vec2, rot2};
-use kanedyn::mechanism::{Mechanism, MechanismSpec};
-use kanedyn::speeds::Speeds;
+use kanedyn::kane::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
+use kanedyn::model::body::BodySpec;
+use kanedyn::model::excitation::Excitation;
+use kanedyn::model::joint::{JointSpec, Spring};
+use kanedyn::model::loads::{ForceFrame, LoadSpec};
+use kanedyn::model::math::{Vec2, rot2};
+use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -20,7 +19,7 @@ use rand::{Rng, SeedableRng};
 const TREES: u64 = 60;
 
 fn random_tree(seed: u64) -> Mechanism {
-    Mechanism::from_spec(&random_spec(seed), &Source::from_text("<random tree>", "")).unwrap()
+    Mechanism::from_spec(&random_spec(seed)).unwrap()
 }
 
 fn random_spec(seed: u64) -> MechanismSpec {
@@ -295,7 +294,7 @@ fn residual_jacobian_equals_central_differences() {
     let mut worst = 0.0f64;
     for seed in 0..TREES {
         let mut spec = random_spec(seed);
-        let full = Mechanism::from_spec(&spec, &Source::from_text("<random tree>", "")).unwrap();
+        let full = Mechanism::from_spec(&spec).unwrap();
         let mut kane = Kane::new(&full).unwrap();
         let n = full.ndof();
         let (mut r, mut a, mut b, mut m) = (vec![0.0; n], vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]);
@@ -308,7 +307,7 @@ fn residual_jacobian_equals_central_differences() {
         spec.speeds = Speeds::AbsoluteAngularVelocities;
         spec.gravity = (0.0, 0.0);
         spec.loads.retain(|l| !matches!(l, LoadSpec::PointForce { .. }));
-        let mech = Mechanism::from_spec(&spec, &Source::from_text("<random tree>", "")).unwrap();
+        let mech = Mechanism::from_spec(&spec).unwrap();
         let mut kane = Kane::new(&mech).unwrap();
         let (q, u) = random_state(&mech, &mut rng);
         let ud: Vec<f64> = (0..n).map(|_| rng.random_range(-50.0..50.0)).collect();

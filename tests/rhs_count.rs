@@ -13,7 +13,7 @@
 
 use kanedyn::cpva::CpvaParams;
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::mechanism::Mechanism;
 use std::hint::black_box;
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! Bad input gives a clear error naming the file, the line:column and the field, never a panic.
 
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::mechanism::Mechanism;
 use std::path::{Path, PathBuf};
 
 /// Writes `text` to a fresh file in a per-test temporary folder and returns its path.

@@ -6,12 +6,12 @@
 //! a wrong formula (a factor 2, a missing parallel-axis term) is off by O(1). The largest error
 //! met is printed (`--nocapture`).
 
-use kanedyn::body::BodySpec;
-use kanedyn::inertia::PlanarInertia;
 use kanedyn::io::Source;
-use kanedyn::math::Vec2;
-use kanedyn::mechanism::Mechanism;
-use kanedyn::shape::{PlacedShape, ShapeSpec};
+use kanedyn::model::body::BodySpec;
+use kanedyn::model::inertia::PlanarInertia;
+use kanedyn::model::math::Vec2;
+use kanedyn::model::mechanism::Mechanism;
+use kanedyn::model::shape::{PlacedShape, ShapeSpec};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 

@@ -3,9 +3,9 @@
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{Parser, Subcommand};
-use kanedyn::excitation::Excitation;
 use kanedyn::kane::Kane;
-use kanedyn::mechanism::Mechanism;
+use kanedyn::model::excitation::Excitation;
+use kanedyn::model::mechanism::Mechanism;
 use kanedyn::study::{Limits, LoadOptions, RunOptions, Study};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

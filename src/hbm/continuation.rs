@@ -33,8 +33,8 @@
 //! (Illinois) on `dλ/ds = 0` along the arclength.
 
 use super::{At, Free, Hbm, HbmError, HbmOptions, HbmSolution, Stability};
-use crate::excitation::Harmonic;
 use crate::kane::Kane;
+use crate::model::excitation::Harmonic;
 use nalgebra::{DMatrix, DVector};
 use std::f64::consts::PI;
 

@@ -84,9 +84,9 @@ pub use continuation::{
 };
 pub use stability::Stability;
 
-use crate::excitation::{Excitation, Harmonic};
 use crate::kane::Kane;
-use crate::speeds::Speeds;
+use crate::model::excitation::{Excitation, Harmonic};
+use crate::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex;
 use std::f64::consts::PI;
@@ -1055,9 +1055,9 @@ pub fn solve_periodic(
 mod tests {
     use super::*;
     use crate::cpva::CpvaParams;
-    use crate::excitation::rpm_to_rad_s;
+    use crate::model::excitation::rpm_to_rad_s;
 
-    fn problem(amplitude: f64, time_samples: usize, speeds: crate::speeds::Speeds) -> Hbm {
+    fn problem(amplitude: f64, time_samples: usize, speeds: crate::model::speeds::Speeds) -> Hbm {
         let mut mech = CpvaParams::canonical().mechanism(None).unwrap();
         mech.speeds = speeds;
         let kane = Kane::new(&mech).unwrap();
@@ -1069,7 +1069,7 @@ mod tests {
     /// the series at the same instants.
     #[test]
     fn peak_amplitude_equals_direct_synthesis() {
-        let mut hbm = problem(500.0, 0, crate::speeds::Speeds::AbsoluteAngularVelocities);
+        let mut hbm = problem(500.0, 0, crate::model::speeds::Speeds::AbsoluteAngularVelocities);
         let sol = hbm.solve(3.05, None).unwrap();
         let period = 2.0 * PI / sol.base_frequency;
         for k in 0..sol.ndof() {
@@ -1092,14 +1092,16 @@ mod tests {
     /// closed-form per-sample derivatives) and with joint rates (per-sample central differences).
     #[test]
     fn jacobian_matches_differenced_residual() {
-        for speeds in [crate::speeds::Speeds::AbsoluteAngularVelocities, crate::speeds::Speeds::JointRates] {
+        for speeds in
+            [crate::model::speeds::Speeds::AbsoluteAngularVelocities, crate::model::speeds::Speeds::JointRates]
+        {
             for nt in [0, 45, 21] {
                 jacobian_check(nt, speeds);
             }
         }
     }
 
-    fn jacobian_check(time_samples: usize, speeds: crate::speeds::Speeds) {
+    fn jacobian_check(time_samples: usize, speeds: crate::model::speeds::Speeds) {
         let mut hbm = problem(40.0, time_samples, speeds);
         let sol = hbm.solve(3.05, None).unwrap();
         let mut x = hbm.unknowns_from(Some(&sol));

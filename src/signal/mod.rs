@@ -21,10 +21,10 @@
 //! `calibration_of_a_pure_sinusoid`). The negative-frequency image is ignored, so the band must sit
 //! well away from DC and Nyquist (enforced: it must lie within bins 1..N/2−1).
 
-mod order;
+mod angle;
 mod stft;
 
-pub use order::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};
+pub use angle::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};
 pub use stft::{StftOptions, stft_order_traces};
 
 /// The most points one analysis window (STFT window, angle-domain block) or one angle-resampled

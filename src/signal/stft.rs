@@ -27,7 +27,7 @@ impl Default for StftOptions {
 /// - `omega_rad_s`: reference speed Ω, rad/s, that turns orders into frequencies `f = m·n·Ω/2π`
 ///   (the nominal speed, as in `Excitation::omega`, not the instantaneous one).
 /// - `order_at`: the excitation order n(t) as a function of time, s (e.g. `&|t| order.at(t)` for
-///   a [`crate::excitation::Order`]); evaluated at each window centre.
+///   a [`crate::model::excitation::Order`]); evaluated at each window centre.
 /// - `multiples`: harmonic multiples m to track (e.g. `[1.0, 2.0]` for n and 2n).
 ///
 /// Each window of N samples (N = round(window_s·fs)) starts `round(hop_s·fs)` samples after the

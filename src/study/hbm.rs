@@ -5,8 +5,8 @@
 use super::sweep::SweepRun;
 use super::{Direction, HbmParameter, HbmSpec, Study, write_csv};
 use crate::error::{Error, Result};
-use crate::excitation::{Harmonic, rpm_to_rad_s};
 use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
+use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use std::fmt::Write as _;

@@ -3,9 +3,9 @@
 
 use super::{CampbellSpec, LinearResponseSpec, Study, write_csv};
 use crate::error::{Error, Result};
-use crate::excitation::rpm_to_rad_s;
 use crate::linear::{Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};
-use crate::mechanism::Mechanism;
+use crate::model::excitation::rpm_to_rad_s;
+use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -19,7 +19,7 @@ pub mod validate;
 use crate::error::{Error, Result};
 use crate::io::{ReadPolicy, Source};
 use crate::kane::Kane;
-use crate::mechanism::Mechanism;
+use crate::model::mechanism::Mechanism;
 pub use plan::{AnalysisPlan, Limits, Plan};
 pub use spec::*;
 use std::fmt::Write as _;

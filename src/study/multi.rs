@@ -6,7 +6,7 @@ use super::sim::{self, Progress};
 use super::sweep::order_name;
 use super::{MultiOrderSpec, Study, cell, write_csv};
 use crate::error::Result;
-use crate::excitation::{Excitation, Order, rpm_to_rad_s};
+use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::study::TrackingSpec;
 use rayon::prelude::*;

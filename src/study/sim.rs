@@ -3,10 +3,10 @@
 
 use super::{IntegrationSpec, TrackingSpec};
 use crate::error::{Error, Result};
-use crate::integrate::{IntegrateOptions, Sample, integrate};
 use crate::kane::Kane;
-use crate::mechanism::Mechanism;
+use crate::model::mechanism::Mechanism;
 use crate::signal::{OrderTrace, StftOptions, stft_order_traces};
+use crate::time::integrate::{IntegrateOptions, Sample, integrate};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
 
@@ -89,7 +89,7 @@ pub struct TimeSeries {
 /// |q| of the joints other than the spin joint, and optionally the full time series.
 pub(crate) struct Recorder {
     parents: Vec<Option<usize>>,
-    speeds: crate::speeds::Speeds,
+    speeds: crate::model::speeds::Speeds,
     path: Vec<usize>,
     spin: usize,
     n: usize,

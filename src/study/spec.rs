@@ -1,7 +1,7 @@
 //! The study file (RON): a mechanism, the joint that spins, the body whose response is reported,
 //! the joints locked in the reference twin, and a list of analyses.
 
-use crate::excitation::Harmonic;
+use crate::model::excitation::Harmonic;
 use serde::{Deserialize, Serialize};
 
 /// A study as written. Paths are relative to the study file.

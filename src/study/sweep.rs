@@ -4,7 +4,7 @@
 use super::sim::{self, Progress};
 use super::{Direction, Study, SweepSpec, write_csv};
 use crate::error::Result;
-use crate::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
+use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use rayon::prelude::*;

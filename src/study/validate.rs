@@ -5,10 +5,10 @@
 
 use super::{AnalysisSpec, HbmParameter, StudySpec};
 use crate::error::Result;
-use crate::excitation::rpm_to_rad_s;
 use crate::io::Source;
-use crate::loads::ForceFrame;
-use crate::mechanism::Mechanism;
+use crate::model::excitation::rpm_to_rad_s;
+use crate::model::loads::ForceFrame;
+use crate::model::mechanism::Mechanism;
 use std::f64::consts::PI;
 
 /// Longest study, analysis or variant name, characters: every output file name is built from

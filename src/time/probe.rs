@@ -13,10 +13,10 @@
 //! The rotor response of the paper (Figs. 3–6) is `BodyAccel(rotor)`, i.e. u̇1 in rad/s².
 
 use crate::error::{Error, Result};
-use crate::integrate::{IntegrateError, IntegrateOptions, IntegrateStats, integrate};
 use crate::kane::Kane;
-use crate::mechanism::Mechanism;
-use crate::speeds::Speeds;
+use crate::model::mechanism::Mechanism;
+use crate::model::speeds::Speeds;
+use crate::time::integrate::{IntegrateError, IntegrateOptions, IntegrateStats, integrate};
 use serde::{Deserialize, Serialize};
 
 /// What a probe measures (the serialisable half of a probe; see [`Probe::resolve`]).
@@ -214,7 +214,7 @@ impl SimResult {
 }
 
 /// Integrates `kane` from `x0 = [q; u]` at `t0` to `t1` with DOP853 (see
-/// [`crate::integrate::integrate`]) and records `probes` at `opts.sample_rate_hz` (2 kHz by
+/// [`crate::time::integrate::integrate`]) and records `probes` at `opts.sample_rate_hz` (2 kHz by
 /// default; `ẋ` is evaluated at the samples when a probe needs it, whatever
 /// `opts.sample_derivatives` says). A failed run keeps the samples recorded before the failure
 /// and names it in [`SimResult::error`]; probes that do not fit the mechanism, or a wrong `x0`,

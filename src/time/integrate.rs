@@ -9,10 +9,10 @@
 //! Memory stays O(1) in the length of the run: no step is stored. After every accepted step the
 //! sampler evaluates the step's interpolant at each sample time `t_k = t0 + k/fs` that the step
 //! covered and hands `(t_k, x(t_k))` to the caller, who keeps what it needs (see
-//! [`crate::probe::simulate`] for a recorder of named signals).
+//! [`crate::time::probe::simulate`] for a recorder of named signals).
 //!
 //! ```no_run
-//! use kanedyn::integrate::{integrate, IntegrateOptions};
+//! use kanedyn::time::integrate::{integrate, IntegrateOptions};
 //! # fn demo(kane: &mut kanedyn::kane::Kane, x0: &[f64]) {
 //! let mut u1 = Vec::new();
 //! let run = integrate(|t, x, dx| kane.rhs(t, x, dx), x0, 0.0, 10.0, &IntegrateOptions::default(), |s| {

@@ -4,8 +4,8 @@
 //! Sign conventions (DESIGN.md): a joint torque τ acts +τ on the child and −τ on the parent, so its
 //! generalized force is `τ · ∂q̇_joint/∂u`; a damper to ground puts `−c·ω` on its body.
 
-use crate::excitation::Excitation;
-use crate::math::Vec2;
+use crate::model::excitation::Excitation;
+use crate::model::math::Vec2;
 use serde::{Deserialize, Serialize};
 
 /// The frame in which a point force's components are given.

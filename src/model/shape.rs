@@ -1,7 +1,7 @@
 //! Plane shapes with a density → mass properties, through parry2d-f64.
 //!
 //! A body may take its mass, centre of mass and centroidal inertia from a shape instead of
-//! listing them (see [`crate::body::BodySpec`]). The shapes are a disc, an annulus, a rectangle,
+//! listing them (see [`crate::model::body::BodySpec`]). The shapes are a disc, an annulus, a rectangle,
 //! a convex polygon and a compound of placed shapes, some of which may be holes. Each primitive's
 //! area, centroid and polar second moment of area come from parry2d-f64's `MassProperties` (this
 //! module is the one place in kanedyn that sees parry's glam types); placing and combining them is
@@ -29,8 +29,8 @@
 //! - A hole must lie inside the solid parts. Only the totals are checked (the area left must be
 //!   positive), not the geometry of the overlap.
 
-use crate::inertia::PlanarInertia;
-use crate::math::Vec2;
+use crate::model::inertia::PlanarInertia;
+use crate::model::math::Vec2;
 use parry2d_f64::mass_properties::MassProperties;
 use parry2d_f64::math::Vector as ParryVec;
 use serde::{Deserialize, Serialize};
@@ -252,7 +252,7 @@ fn check_convex(points: &[(f64, f64)]) -> Result<(), ShapeError> {
     for k in 0..n {
         let (a, b, c) = (p(k + n - 1), p(k), p(k + 1));
         let (e1, e2) = (b - a, c - b);
-        let cross = crate::math::cross2(e1, e2);
+        let cross = crate::model::math::cross2(e1, e2);
         // Relative test: rounding of exactly collinear input leaves |cross| ~ 1e-16·|e1||e2|.
         if cross.abs() <= 1e-12 * e1.norm() * e2.norm() {
             return Err(err(

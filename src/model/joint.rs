@@ -2,7 +2,7 @@
 
 use crate::error::Result;
 use crate::io::Source;
-use crate::math::Vec2;
+use crate::model::math::Vec2;
 use serde::{Deserialize, Serialize};
 
 /// The joint vocabulary. Each kind gives its transform, its motion columns and its bias term; only
@@ -96,7 +96,7 @@ impl JointSpec {
     }
 }
 
-/// A resolved joint. In a [`crate::mechanism::Mechanism`], joint `i` is the inboard joint of body `i`
+/// A resolved joint. In a [`crate::model::mechanism::Mechanism`], joint `i` is the inboard joint of body `i`
 /// and owns coordinate `q[i]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {

@@ -3,8 +3,8 @@
 //! The engine's hot forward pass lives in [`crate::kane`], which may express each subtree in its
 //! root body's frame; the functions here always use the world frame and allocate their result.
 
-use crate::math::{Vec2, perp, rot2};
-use crate::mechanism::Mechanism;
+use crate::model::math::{Vec2, perp, rot2};
+use crate::model::mechanism::Mechanism;
 
 /// A body's pose in the world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,6 +80,6 @@ pub fn angular_momentum(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> f64 {
         .iter()
         .zip(&mech.bodies)
         .zip(&poses)
-        .map(|(((w, v), b), p)| b.inertia.i_com * w + b.inertia.mass * crate::math::cross2(p.com, *v))
+        .map(|(((w, v), b), p)| b.inertia.i_com * w + b.inertia.mass * crate::model::math::cross2(p.com, *v))
         .sum()
 }

@@ -1,6 +1,6 @@
 //! Planar rigid-body inertia as a value type that names its reference point.
 
-use crate::math::Vec2;
+use crate::model::math::Vec2;
 use std::ops::{Add, Sub};
 
 /// Mass properties of a planar body: mass (kg), centre of mass `com` (m, in the body's frame) and
@@ -43,7 +43,7 @@ impl PlanarInertia {
     /// The same body with its frame moved so that the old frame's `offset` becomes the origin and
     /// rotated by `angle` (rad): used when a part is placed inside a compound body.
     pub fn placed(&self, offset: Vec2, angle: f64) -> Self {
-        Self::new(self.mass, offset + crate::math::rot2(angle) * self.com, self.i_com)
+        Self::new(self.mass, offset + crate::model::math::rot2(angle) * self.com, self.i_com)
     }
 }
 

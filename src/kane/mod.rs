@@ -19,11 +19,13 @@
 //! All work buffers are sized in [`Kane::new`]; evaluating does no heap allocation.
 
 use crate::error::{EngineError, Error, Result};
-use crate::excitation::Excitation;
-use crate::loads::{ForceFrame, JointTorque, PointForce};
-use crate::math::{Vec2, cross2, perp, rotate_cs};
-use crate::mechanism::Mechanism;
-use crate::speeds::Speeds;
+use crate::model::excitation::Excitation;
+use crate::model::loads::{ForceFrame, JointTorque, PointForce};
+use crate::model::math::{Vec2, cross2, perp, rotate_cs};
+use crate::model::mechanism::Mechanism;
+
+pub mod kinematics;
+use crate::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 
 /// Relative size (to the largest diagonal entry of M) below which a Cholesky pivot counts as zero.

@@ -1,10 +1,10 @@
 //! Body specifications (the RON form) and resolved bodies.
 
 use crate::error::Result;
-use crate::inertia::PlanarInertia;
 use crate::io::Source;
-use crate::math::Vec2;
-use crate::shape::ShapeSpec;
+use crate::model::inertia::PlanarInertia;
+use crate::model::math::Vec2;
+use crate::model::shape::ShapeSpec;
 use serde::{Deserialize, Serialize};
 
 /// A body as written in a mechanism or catalog file.

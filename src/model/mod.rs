@@ -1,0 +1,15 @@
+//! What the user describes, as data: vectors and inertia, shapes and bodies, joints, loads and
+//! excitations, the choice of generalized speeds, and the validated [`mechanism::Mechanism`].
+//!
+//! Nothing here evaluates dynamics; reading files into these types is [`crate::load`]'s work and
+//! turning them into equations of motion is [`crate::kane`]'s.
+
+pub mod body;
+pub mod excitation;
+pub mod inertia;
+pub mod joint;
+pub mod loads;
+pub mod math;
+pub mod mechanism;
+pub mod shape;
+pub mod speeds;
