@@ -8,7 +8,7 @@
 use crate::error::{EngineError, Error, Result};
 use crate::io::{ReadPolicy, Source};
 use crate::model::body::{Body, BodySpec};
-use crate::model::joint::{Joint, JointKind, JointSpec};
+use crate::model::joint::{Joint, JointSpec};
 use crate::model::loads::{GroundDamper, JointTorque, LoadSpec, Loads, PointForce};
 use crate::model::math::Vec2;
 use crate::model::mechanism::{GROUND, Mechanism, MechanismSpec, known_list};
@@ -206,18 +206,43 @@ impl Mechanism {
 
         let mut bodies = Vec::with_capacity(nb);
         let mut joints = Vec::with_capacity(nb);
+        let mut ncoord = 0;
         for &k in &order {
             let (name, js, parent, child) = &joint_specs[k];
             let (bname, props) = &body_specs[*child];
+            let path = format!("joints[{k}]");
+            let kind =
+                js.kind.unwrap_or_default().normalised().map_err(|(field, msg)| {
+                    src.error(&format!("{path}.kind.{field}"), format!("joint `{name}`: {msg}"))
+                })?;
+            if kind.dof() == 0 {
+                for (field, given) in [("spring", js.spring.is_some()), ("damper", js.damper.is_some_and(|c| c != 0.0))]
+                {
+                    if given {
+                        return Err(src.error(
+                            &format!("{path}.{field}"),
+                            format!("joint `{name}` is Fixed (welded, no coordinate): it cannot have a {field}"),
+                        ));
+                    }
+                }
+            }
+            let coordinate = (kind.dof() == 1).then(|| {
+                ncoord += 1;
+                ncoord - 1
+            });
             bodies.push(Body { name: bname.clone(), inertia: *props });
             joints.push(Joint {
                 name: name.clone(),
-                kind: js.kind.unwrap_or(JointKind::Revolute),
+                kind,
                 parent: parent.map(|p| new_index[p].unwrap_or(usize::MAX)),
                 at: js.at.map_or(Vec2::zeros(), |(x, y)| Vec2::new(x, y)),
+                coordinate,
                 spring: js.spring,
                 damper: js.damper.unwrap_or(0.0),
             });
+        }
+        if ncoord == 0 {
+            return Err(src.error("joints", "every joint is Fixed: the mechanism has no coordinate to move"));
         }
 
         // Loads.
@@ -252,6 +277,12 @@ impl Mechanism {
                     };
                     if let Err((field, msg)) = excitation.validate() {
                         return Err(src.error(&format!("{path}.excitation.{field}"), msg));
+                    }
+                    if joint_specs[k].1.kind.is_some_and(|kind| kind.dof() == 0) {
+                        return Err(src.error(
+                            &format!("{path}.joint"),
+                            format!("joint `{joint}` is Fixed: it has no coordinate for a torque to drive"),
+                        ));
                     }
                     let joint = new_index[joint_specs[k].3].unwrap_or(usize::MAX);
                     loads.joint_torques.push(JointTorque { joint, excitation: excitation.clone() });
@@ -288,8 +319,12 @@ impl Mechanism {
             loads,
         };
         // A tree whose mass matrix is singular or not finite at q = 0 cannot be simulated: say
-        // which joint (in the file's numbering: coordinate i is joint `order[i]`).
-        let at_coordinate = |i: usize| order.get(i).map_or_else(String::new, |k| format!("joints[{k}]"));
+        // which joint (in the file's numbering: coordinate i belongs to tree joint j = joint_of(i),
+        // which is the file's `order[j]`).
+        let at_coordinate = |i: usize| {
+            let j = mech.joint_of(i);
+            order.get(j).map_or_else(String::new, |k| format!("joints[{k}]"))
+        };
         let mut kane = match crate::kane::Kane::new(&mech) {
             Ok(kane) => kane,
             Err(e) => {
@@ -312,9 +347,9 @@ impl Mechanism {
             }
         };
         // The factorisation lets an infinite pivot through (inf > 0), so look at M itself.
-        let m = kane.mass_matrix(&vec![0.0; nb]);
-        if let Some((r, c)) = (0..nb).flat_map(|r| (0..nb).map(move |c| (r, c))).find(|&(r, c)| !m[(r, c)].is_finite())
-        {
+        let n = mech.ndof();
+        let m = kane.mass_matrix(&vec![0.0; n]);
+        if let Some((r, c)) = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).find(|&(r, c)| !m[(r, c)].is_finite()) {
             return Err(src.error(
                 &at_coordinate(r.max(c)),
                 format!(

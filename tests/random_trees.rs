@@ -117,7 +117,7 @@ fn partial_velocities_equal_finite_differences_of_body_velocities() {
     let mut worst: f64 = 0.0;
     for seed in 0..TREES {
         let mech = random_tree(seed);
-        let mut kane = Kane::new_world_frame(&mech).unwrap();
+        let kane = Kane::new_world_frame(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(2000 + seed);
         let (q, u) = random_state(&mech, &mut rng);
         let n = mech.ndof();

@@ -17,13 +17,16 @@ pub struct Pose {
     pub com: Vec2,
 }
 
-/// Poses of all bodies at coordinates `q` (rad).
+/// Poses of all bodies at coordinates `q` (rad for angles, m for slides), from the joints'
+/// transforms.
 pub fn world_poses(mech: &Mechanism, q: &[f64]) -> Vec<Pose> {
-    let mut out: Vec<Pose> = Vec::with_capacity(mech.ndof());
+    let mut out: Vec<Pose> = Vec::with_capacity(mech.bodies.len());
     for (j, joint) in mech.joints.iter().enumerate() {
+        let mo = joint.kind.motion(joint.at, joint.coordinate.map_or(0.0, |k| q[k]));
+        let turn = joint.coordinate.filter(|_| joint.kind.rotates()).map_or(0.0, |k| q[k]);
         let (angle, origin) = match joint.parent {
-            None => (q[j], joint.at),
-            Some(p) => (out[p].angle + q[j], out[p].origin + rot2(out[p].angle) * joint.at),
+            None => (turn, mo.origin),
+            Some(p) => (out[p].angle + turn, out[p].origin + rot2(out[p].angle) * mo.origin),
         };
         let com = origin + rot2(angle) * mech.bodies[j].inertia.com;
         out.push(Pose { angle, origin, com });
@@ -32,20 +35,23 @@ pub fn world_poses(mech: &Mechanism, q: &[f64]) -> Vec<Pose> {
 }
 
 /// World-frame velocity of each body: (angular velocity ω, rad/s; centre-of-mass velocity, m/s),
-/// from the joint rates `qdot` (rad/s) — not from the generalized speeds.
+/// from the coordinates' rates `qdot` — not from the generalized speeds.
 pub fn world_velocities(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> Vec<(f64, Vec2)> {
     let poses = world_poses(mech, q);
-    let mut w = vec![0.0; mech.ndof()];
-    let mut v_origin = vec![Vec2::zeros(); mech.ndof()];
-    let mut out = Vec::with_capacity(mech.ndof());
+    let nb = mech.bodies.len();
+    let mut w = vec![0.0; nb];
+    let mut v_origin = vec![Vec2::zeros(); nb];
+    let mut out = Vec::with_capacity(nb);
     for (j, joint) in mech.joints.iter().enumerate() {
-        let (wp, vo) = match joint.parent {
-            None => (0.0, Vec2::zeros()),
-            Some(p) => (w[p], v_origin[p] + w[p] * perp(poses[j].origin - poses[p].origin)),
+        let (qj, qdj) = joint.coordinate.map_or((0.0, 0.0), |k| (q[k], qdot[k]));
+        let mo = joint.kind.motion(joint.at, qj);
+        let (wp, vo, parent_angle) = match joint.parent {
+            None => (0.0, Vec2::zeros(), 0.0),
+            Some(p) => (w[p], v_origin[p] + w[p] * perp(poses[j].origin - poses[p].origin), poses[p].angle),
         };
-        w[j] = wp + qdot[j];
-        v_origin[j] = vo;
-        out.push((w[j], vo + w[j] * perp(poses[j].com - poses[j].origin)));
+        w[j] = wp + mo.omega * qdj;
+        v_origin[j] = vo + rot2(parent_angle) * mo.velocity * qdj;
+        out.push((w[j], v_origin[j] + w[j] * perp(poses[j].com - poses[j].origin)));
     }
     out
 }
@@ -67,8 +73,8 @@ pub fn potential_energy(mech: &Mechanism, q: &[f64]) -> f64 {
     let springs: f64 = mech
         .joints
         .iter()
-        .zip(q)
-        .filter_map(|(j, &qj)| j.spring.map(|s| 0.5 * s.stiffness * (qj - s.free_angle).powi(2)))
+        .filter_map(|j| Some((j.spring?, q[j.coordinate?])))
+        .map(|(s, qj)| 0.5 * s.stiffness * (qj - s.free_angle).powi(2))
         .sum();
     grav + springs
 }

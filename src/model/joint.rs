@@ -5,22 +5,133 @@ use crate::io::Source;
 use crate::model::math::Vec2;
 use serde::{Deserialize, Serialize};
 
-/// The joint vocabulary. Each kind gives its transform, its motion columns and its bias term; only
-/// the planar revolute joint exists so far (prismatic, fixed and absorber path joints are planned).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+/// The joint vocabulary: how a child body's frame may move relative to its parent's.
+///
+/// Every kind has at most one coordinate (a joint of several coordinates is a chain of these with
+/// massless bodies between them) and answers three questions through [`JointKind::motion`]: where
+/// the child frame is (its transform), how it moves per unit rate of the coordinate (its motion
+/// columns) and what its motion adds at zero coordinate acceleration (its velocity-product or
+/// bias terms). The engine's general forms ([`crate::kane`]'s reference and joint-rate forms) use
+/// nothing else about a joint.
+///
+/// In RON: `Revolute`, `Prismatic(axis: (1.0, 0.0))`, `Fixed`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub enum JointKind {
     /// Rotation about z through the joint point; one coordinate, the relative angle (rad).
     #[default]
     Revolute,
+    /// Translation along `axis` (in the parent frame; normalised when the mechanism is loaded)
+    /// from the joint point, without rotation; one coordinate, the displacement (m).
+    Prismatic {
+        /// Direction of the slide in the parent frame (any non-zero length).
+        axis: (f64, f64),
+    },
+    /// Welded: the child frame sits at the joint point, parallel to the parent's; no coordinate.
+    Fixed,
 }
 
-/// A linear torsional spring inside a joint: torque `−stiffness·(q − free_angle)` on the child.
+/// A joint's kinematics at one value `q` of its coordinate, in the parent frame.
+///
+/// The child frame's origin is `origin(q)` and its rotation relative to the parent is
+/// `angle(q)`; with `q̇` the coordinate's rate, the child moves relative to the parent with angular
+/// velocity `omega · q̇` and origin velocity `velocity · q̇`, and at `q̈ = 0` with angular
+/// acceleration `bias_alpha · q̇²` and origin acceleration `bias_acc · q̇²` (the velocity-product
+/// terms, `∂(columns)/∂q`). For a joint without coordinate the columns are zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointMotion {
+    /// Cosine and sine of the child frame's rotation relative to the parent frame.
+    pub cos: f64,
+    /// See `cos`.
+    pub sin: f64,
+    /// The child frame's origin in the parent frame, m.
+    pub origin: Vec2,
+    /// Partial angular velocity of the child frame per unit rate (rad/s per unit of q̇).
+    pub omega: f64,
+    /// Partial velocity of the child origin relative to the parent frame, per unit rate, in the
+    /// parent frame (m/s per unit of q̇).
+    pub velocity: Vec2,
+    /// Relative angular acceleration per q̇² at q̈ = 0 (rad/s² per unit² of q̇).
+    pub bias_alpha: f64,
+    /// Relative acceleration of the child origin per q̇² at q̈ = 0, parent frame.
+    pub bias_acc: Vec2,
+}
+
+impl JointKind {
+    /// Number of coordinates (and generalized speeds) the joint owns: 1, or 0 for `Fixed`.
+    pub fn dof(self) -> usize {
+        match self {
+            JointKind::Revolute | JointKind::Prismatic { .. } => 1,
+            JointKind::Fixed => 0,
+        }
+    }
+
+    /// True when the coordinate is an angle that adds to the child's absolute rotation.
+    pub fn rotates(self) -> bool {
+        matches!(self, JointKind::Revolute)
+    }
+
+    /// The joint's transform, motion columns and bias terms at coordinate `q` (ignored without a
+    /// coordinate), for a joint at point `at` of the parent frame (m).
+    #[inline]
+    pub fn motion(self, at: Vec2, q: f64) -> JointMotion {
+        let still = JointMotion {
+            cos: 1.0,
+            sin: 0.0,
+            origin: at,
+            omega: 0.0,
+            velocity: Vec2::zeros(),
+            bias_alpha: 0.0,
+            bias_acc: Vec2::zeros(),
+        };
+        match self {
+            JointKind::Revolute => {
+                let (sin, cos) = q.sin_cos();
+                JointMotion { cos, sin, omega: 1.0, ..still }
+            }
+            JointKind::Prismatic { axis } => {
+                let axis = Vec2::new(axis.0, axis.1);
+                JointMotion { origin: at + q * axis, velocity: axis, ..still }
+            }
+            JointKind::Fixed => still,
+        }
+    }
+
+    /// The kind with its parameters checked and normalised (a prismatic axis to unit length), or
+    /// the field below the kind and what is wrong.
+    pub fn normalised(self) -> std::result::Result<JointKind, (&'static str, String)> {
+        match self {
+            JointKind::Prismatic { axis: (x, y) } => {
+                let len = x.hypot(y);
+                if !(x.is_finite() && y.is_finite()) || !(len > 1e-12) {
+                    return Err((
+                        "axis",
+                        format!("a prismatic joint needs a finite, non-zero slide axis, got ({x}, {y})"),
+                    ));
+                }
+                Ok(JointKind::Prismatic { axis: (x / len, y / len) })
+            }
+            other => Ok(other),
+        }
+    }
+
+    /// The unit of the coordinate, for messages and reports.
+    pub fn coordinate_unit(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "rad",
+            JointKind::Prismatic { .. } => "m",
+            JointKind::Fixed => "",
+        }
+    }
+}
+
+/// A linear spring inside a joint: generalized force `−stiffness·(q − free_angle)` on the child
+/// (a torque for a revolute joint, a force along the axis for a prismatic one).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spring {
-    /// Torsional stiffness, N·m/rad.
+    /// Stiffness: N·m/rad for a revolute joint, N/m for a prismatic one.
     pub stiffness: f64,
-    /// Angle at which the spring is relaxed, rad.
+    /// Coordinate at which the spring is relaxed: rad for a revolute joint, m for a prismatic one.
     #[serde(default)]
     pub free_angle: f64,
 }
@@ -47,7 +158,8 @@ pub struct JointSpec {
     pub at: Option<(f64, f64)>,
     /// Internal torsional spring.
     pub spring: Option<Spring>,
-    /// Internal viscous damper, N·m·s/rad: torque `−damper·q̇` on the child, the reverse on the parent.
+    /// Internal viscous damper, N·m·s/rad (N·s/m for a prismatic joint): generalized force
+    /// `−damper·q̇` on the child, the reverse on the parent.
     pub damper: Option<f64>,
 }
 
@@ -96,8 +208,8 @@ impl JointSpec {
     }
 }
 
-/// A resolved joint. In a [`crate::model::mechanism::Mechanism`], joint `i` is the inboard joint of body `i`
-/// and owns coordinate `q[i]`.
+/// A resolved joint. In a [`crate::model::mechanism::Mechanism`], joint `i` is the inboard joint of
+/// body `i`; it owns coordinate `q[coordinate]` when its kind has one.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Joint {
     /// Unique name.
@@ -108,6 +220,8 @@ pub struct Joint {
     pub parent: Option<usize>,
     /// Joint point in the parent frame (world frame for ground), m.
     pub at: Vec2,
+    /// Index of its coordinate in q (and of its speed in u), `None` for a joint without one.
+    pub coordinate: Option<usize>,
     /// Internal spring.
     pub spring: Option<Spring>,
     /// Internal viscous damping, N·m·s/rad (0 when none).

@@ -52,7 +52,7 @@ pub enum LoadSpec {
 /// A resolved joint torque.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointTorque {
-    /// Joint index (= its coordinate index).
+    /// Joint index (= the index of the body it drives; its coordinate is that joint's `coordinate`).
     pub joint: usize,
     /// The torque signal, N·m.
     pub excitation: Excitation,

@@ -34,8 +34,10 @@ pub struct MechanismSpec {
     pub loads: Vec<LoadSpec>,
 }
 
-/// A validated mechanism (built by [`crate::load`]). Body `i` hangs from joint `i`, which owns coordinate `q[i]`; parents
-/// come before children (`joints[i].parent < Some(i)`).
+/// A validated mechanism (built by [`crate::load`]). Body `i` hangs from joint `i`; parents come
+/// before children (`joints[i].parent < Some(i)`). Coordinates are numbered in the same order over
+/// the joints that have one (all but `Fixed`), so a mechanism without fixed joints has coordinate
+/// `q[i]` at joint `i`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Mechanism {
     /// Name.
@@ -53,14 +55,71 @@ pub struct Mechanism {
 }
 
 impl Mechanism {
-    /// Number of degrees of freedom (= coordinates = speeds).
+    /// Number of degrees of freedom (= coordinates = speeds): one per joint that has a coordinate.
     pub fn ndof(&self) -> usize {
-        self.joints.len()
+        self.joints.iter().filter(|j| j.coordinate.is_some()).count()
     }
 
-    /// Parent indices (None = ground), one per body.
+    /// Parent body indices (None = ground), one per body (= per joint).
     pub fn parents(&self) -> Vec<Option<usize>> {
         self.joints.iter().map(|j| j.parent).collect()
+    }
+
+    /// The coordinate of joint `j`, `None` for a joint without one (Fixed).
+    pub fn coordinate(&self, j: usize) -> Option<usize> {
+        self.joints[j].coordinate
+    }
+
+    /// The joint that owns coordinate `k`.
+    pub fn joint_of(&self, k: usize) -> usize {
+        self.joints.iter().position(|j| j.coordinate == Some(k)).unwrap_or(usize::MAX)
+    }
+
+    /// The coordinate of the joint named `name`, if it exists and has one.
+    pub fn coordinate_index(&self, name: &str) -> Option<usize> {
+        self.joint_index(name).and_then(|j| self.coordinate(j))
+    }
+
+    /// For each coordinate k, the coordinate whose speed is subtracted in `q̇_k = u_k − u_p` under
+    /// absolute angular velocities ([`Speeds::qdot`]): for a rotating joint, the nearest rotating
+    /// joint above it (whose speed is the parent body's absolute angular velocity); `None` for a
+    /// root rotation and for every non-rotating coordinate (its speed is its own rate).
+    pub fn speed_parents(&self) -> Vec<Option<usize>> {
+        let mut out = Vec::with_capacity(self.ndof());
+        for (j, joint) in self.joints.iter().enumerate() {
+            if joint.coordinate.is_none() {
+                continue;
+            }
+            out.push(if joint.kind.rotates() { self.rotation_coordinates_above(j).last().copied() } else { None });
+        }
+        out
+    }
+
+    /// The coordinates of the rotating joints on the path from ground to body `body`, root first:
+    /// the body's absolute angle is their sum (every joint kind keeps the child parallel to the
+    /// parent at zero coordinate), and so are its angular velocity and acceleration from q̇ and q̈.
+    pub fn rotation_coordinates(&self, body: usize) -> Vec<usize> {
+        let mut out = self.rotation_coordinates_above(body);
+        if self.joints[body].kind.rotates()
+            && let Some(k) = self.joints[body].coordinate
+        {
+            out.push(k);
+        }
+        out
+    }
+
+    /// [`Mechanism::rotation_coordinates`] of the parent of `body` (empty for a root).
+    fn rotation_coordinates_above(&self, body: usize) -> Vec<usize> {
+        let mut path = self.path_to(body);
+        path.pop();
+        path.into_iter().filter(|&j| self.joints[j].kind.rotates()).filter_map(|j| self.joints[j].coordinate).collect()
+    }
+
+    /// A body's absolute angle (rad), angular velocity (rad/s) or angular acceleration (rad/s²)
+    /// from the coordinates, their rates or their accelerations `x` (one entry per coordinate):
+    /// the sum over the rotating joints of its path.
+    pub fn body_rotation(&self, body: usize, x: &[f64]) -> f64 {
+        self.rotation_coordinates(body).iter().map(|&k| x[k]).sum()
     }
 
     /// Index of a body by name.
@@ -97,10 +156,10 @@ impl Mechanism {
                 "joint `{name}` connects to ground; locking it would weld its subtree to ground"
             )));
         };
-        let rot = crate::model::math::rot2(q_lock);
-        let at_c = self.joints[c].at;
+        let lock = self.joints[c].kind.motion(self.joints[c].at, q_lock);
         // Child-frame vectors expressed in the parent frame.
-        let to_parent = |v: Vec2| at_c + rot * v;
+        let rotate = |v: Vec2| crate::model::math::rotate_cs(lock.cos, lock.sin, v);
+        let to_parent = |v: Vec2| lock.origin + rotate(v);
         let mut out = self.clone();
         out.name = format!("{}_locked", self.name);
         let child = &self.bodies[c].inertia;
@@ -122,7 +181,7 @@ impl Mechanism {
                 f.body = p;
                 f.at = to_parent(f.at);
                 if f.frame == crate::model::loads::ForceFrame::Body {
-                    f.force = rot * f.force;
+                    f.force = rotate(f.force);
                 }
             }
         }
@@ -142,6 +201,13 @@ impl Mechanism {
         }
         for t in &mut out.loads.joint_torques {
             t.joint = shift(t.joint);
+        }
+        let mut next = 0;
+        for joint in &mut out.joints {
+            if joint.coordinate.is_some() {
+                joint.coordinate = Some(next);
+                next += 1;
+            }
         }
         Ok(out)
     }

@@ -202,7 +202,7 @@ impl Study {
         let mut qdot = vec![0.0; n];
         qdot[spin] = omega;
         let mut u = vec![0.0; n];
-        mech.speeds.u_from_qdot(&mech.parents(), &qdot, &mut u);
+        mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut u);
         let mut x = vec![0.0; 2 * n];
         x[n..].copy_from_slice(&u);
         x

@@ -410,7 +410,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
                 let mut dq = vec![0.0; n];
                 dq[spin] = -delta;
                 let mut du = vec![0.0; n];
-                mech.speeds.u_from_qdot(&mech.parents(), &dq, &mut du);
+                mech.speeds.u_from_qdot(&mech.speed_parents(), &dq, &mut du);
                 for (xi, d) in x[n..].iter_mut().zip(&du) {
                     *xi += d;
                 }

@@ -117,7 +117,7 @@ impl Recorder {
             TimeSeries { columns: vec![Vec::new(); names.len()], names }
         });
         Recorder {
-            parents: mech.parents(),
+            parents: mech.speed_parents(),
             speeds: mech.speeds,
             path: mech.path_to(body),
             spin,
