@@ -1,13 +1,16 @@
-//! Invariants of the engine on seeded random revolute trees (up to 10 bodies, random branching,
-//! offsets, masses, inertias, gravity, springs, dampers and point forces), each checked against
-//! an independent route: world-frame velocity recursion, finite differences of positions, and
-//! Lagrange's equations by numeric differentiation of the kinetic and potential energy.
+//! Invariants of the engine on seeded random trees (up to 10 bodies, random branching, offsets,
+//! masses, inertias, gravity, springs, dampers and point forces): revolute trees, and trees that
+//! mix revolute, prismatic and fixed joints. Each is checked against an independent route:
+//! world-frame velocity recursion, finite differences of positions, Lagrange's equations by
+//! numeric differentiation of the kinetic and potential energy, and Kane's sums body by body
+//! (`kane::reference`) for the fast forms.
 
 use kanedyn::kane::Kane;
 use kanedyn::kane::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
+use kanedyn::kane::reference;
 use kanedyn::model::body::BodySpec;
 use kanedyn::model::excitation::Excitation;
-use kanedyn::model::joint::{JointSpec, Spring};
+use kanedyn::model::joint::{JointKind, JointSpec, Spring};
 use kanedyn::model::loads::{ForceFrame, LoadSpec};
 use kanedyn::model::math::{Vec2, rot2};
 use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
@@ -18,12 +21,21 @@ use rand::{Rng, SeedableRng};
 
 const TREES: u64 = 60;
 
+/// Seeds at or above this make trees that mix the joint kinds.
+const MIXED: u64 = 1000;
+
+/// The seeds of every test: 60 revolute trees and 60 mixed ones.
+fn seeds() -> impl Iterator<Item = u64> {
+    (0..TREES).chain(MIXED..MIXED + TREES)
+}
+
 fn random_tree(seed: u64) -> Mechanism {
     Mechanism::from_spec(&random_spec(seed)).unwrap()
 }
 
 fn random_spec(seed: u64) -> MechanismSpec {
     let mut rng = StdRng::seed_from_u64(seed);
+    let mixed = seed >= MIXED;
     let n = rng.random_range(1..=10);
     let name = |i: usize| format!("b{i}");
     let mut bodies = Vec::new();
@@ -40,15 +52,25 @@ fn random_spec(seed: u64) -> MechanismSpec {
         });
         // Roughly one tree in five has a second root on ground.
         let parent = if i == 0 || rng.random_bool(0.1) { "ground".to_string() } else { name(rng.random_range(0..i)) };
+        // Mixed trees: a fifth of the joints slide along a random (not unit) axis, a sixth are
+        // welded; the first joint always has a coordinate.
+        let kind = match rng.random_range(0.0..1.0) {
+            x if mixed && x < 0.2 => {
+                JointKind::Prismatic { axis: (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0)) }
+            }
+            x if mixed && i > 0 && x > 5.0 / 6.0 => JointKind::Fixed,
+            _ => JointKind::Revolute,
+        };
+        let moves = kind != JointKind::Fixed;
         joints.push(JointSpec {
             name: Some(format!("j{i}")),
+            kind: mixed.then_some(kind),
             parent: Some(parent),
             child: Some(name(i)),
             at: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
-            spring: rng
-                .random_bool(0.5)
+            spring: (rng.random_bool(0.5) && moves)
                 .then(|| Spring { stiffness: rng.random_range(0.0..50.0), free_angle: rng.random_range(-1.0..1.0) }),
-            damper: rng.random_bool(0.5).then(|| rng.random_range(0.0..2.0)),
+            damper: (rng.random_bool(0.5) && moves).then(|| rng.random_range(0.0..2.0)),
             ..JointSpec::default()
         });
         if rng.random_bool(0.3) {
@@ -62,7 +84,7 @@ fn random_spec(seed: u64) -> MechanismSpec {
                 frame: if rng.random_bool(0.5) { ForceFrame::World } else { ForceFrame::Body },
             });
         }
-        if rng.random_bool(0.3) {
+        if rng.random_bool(0.3) && moves {
             loads.push(LoadSpec::JointTorque {
                 joint: format!("j{i}"),
                 excitation: Excitation::constant(rng.random_range(-5.0..5.0)),
@@ -84,14 +106,14 @@ fn random_state(mech: &Mechanism, rng: &mut StdRng) -> (Vec<f64>, Vec<f64>) {
 
 fn qdot_of(mech: &Mechanism, u: &[f64]) -> Vec<f64> {
     let mut qd = vec![0.0; u.len()];
-    mech.speeds.qdot(&mech.parents(), u, &mut qd);
+    mech.speeds.qdot(&mech.speed_parents(), u, &mut qd);
     qd
 }
 
 #[test]
 fn mass_matrix_is_symmetric_positive_definite_and_gives_kinetic_energy() {
     let mut worst: f64 = 0.0;
-    for seed in 0..TREES {
+    for seed in seeds() {
         let mech = random_tree(seed);
         let mut kane = Kane::new(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(1000 + seed);
@@ -115,7 +137,7 @@ fn mass_matrix_is_symmetric_positive_definite_and_gives_kinetic_energy() {
 #[test]
 fn partial_velocities_equal_finite_differences_of_body_velocities() {
     let mut worst: f64 = 0.0;
-    for seed in 0..TREES {
+    for seed in seeds() {
         let mech = random_tree(seed);
         let kane = Kane::new_world_frame(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(2000 + seed);
@@ -128,14 +150,15 @@ fn partial_velocities_equal_finite_differences_of_body_velocities() {
         let qm: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a - h * b).collect();
         let (pp, pm) = (world_poses(&mech, &qp), world_poses(&mech, &qm));
         let vel = world_velocities(&mech, &q, &qd);
-        for j in 0..n {
+        let nb = mech.bodies.len();
+        for j in 0..nb {
             let v_fd = (pp[j].com - pm[j].com) / (2.0 * h);
             let w_fd = (pp[j].angle - pm[j].angle) / (2.0 * h);
             assert!((v_fd - vel[j].1).norm() < 1e-6 * (1.0 + vel[j].1.norm()), "tree {seed} body {j}: velocity");
             assert!((w_fd - vel[j].0).abs() < 1e-6 * (1.0 + vel[j].0.abs()));
         }
         // ∂v_j/∂u_r by central differences in u (exact up to rounding: v is linear in u).
-        for j in 0..n {
+        for j in 0..nb {
             let (pv, pw) = kane.partial_velocities(&q, j);
             for r in 0..n {
                 let mut up = u.clone();
@@ -193,7 +216,8 @@ fn lagrange_forcing(mech: &Mechanism, t: f64, q: &[f64], qd: &[f64]) -> DVector<
         let mut e = vec![0.0; n];
         e[k] = 1.0;
         let ve = world_velocities(mech, q, &e);
-        out[k] -= mech.joints[k].damper * qd[k];
+        let joint = mech.joint_of(k);
+        out[k] -= mech.joints[joint].damper * qd[k];
         for g in &mech.loads.ground_dampers {
             out[k] -= g.c * vel[g.body].0 * ve[g.body].0;
         }
@@ -208,7 +232,7 @@ fn lagrange_forcing(mech: &Mechanism, t: f64, q: &[f64], qd: &[f64]) -> DVector<
             out[k] += f.dot(&v_point);
         }
         for jt in &mech.loads.joint_torques {
-            if jt.joint == k {
+            if jt.joint == joint {
                 out[k] += jt.excitation.torque(t);
             }
         }
@@ -219,7 +243,7 @@ fn lagrange_forcing(mech: &Mechanism, t: f64, q: &[f64], qd: &[f64]) -> DVector<
 #[test]
 fn forcing_agrees_with_lagrange_route() {
     let mut worst: f64 = 0.0;
-    for seed in 0..TREES {
+    for seed in seeds() {
         let mech = random_tree(seed);
         let mut kane = Kane::new(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(3000 + seed);
@@ -228,7 +252,7 @@ fn forcing_agrees_with_lagrange_route() {
         let f = kane.forcing(0.0, &q, &u).clone();
         // Kane's F in the mechanism's speeds equals W⁻ᵀ Q_rates: compare in joint-rate space,
         // F_rates = Wᵀ F_u.
-        let w = mech.speeds.w_matrix(&mech.parents());
+        let w = mech.speeds.w_matrix(&mech.speed_parents());
         let f_rates = w.transpose() * f;
         let f_lag = lagrange_forcing(&mech, 0.0, &q, &qd);
         let scale = f_lag.amax().max(1.0);
@@ -241,7 +265,7 @@ fn forcing_agrees_with_lagrange_route() {
 
 #[test]
 fn rhs_solves_m_udot_equals_f() {
-    for seed in 0..TREES {
+    for seed in seeds() {
         let mech = random_tree(seed);
         let mut kane = Kane::new(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(4000 + seed);
@@ -258,28 +282,50 @@ fn rhs_solves_m_udot_equals_f() {
     }
 }
 
+/// The fast forms (the pair form for absolute speeds on revolute trees, the composite-body form
+/// for joint rates, the mapped composite-body form for absolute speeds on mixed trees) against
+/// Kane's sums written body by body in `kane::reference`, M and F, in the engine's own basis and
+/// in the world frame. Both routes sum the same terms in another order, so they agree to
+/// rounding: 1e-12 relative to the largest entry leaves two to three decades of margin.
 #[test]
-fn mass_matrix_equals_kane_sum_over_bodies_of_partial_velocities() {
-    // M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}, body by body, from the exposed
-    // partial velocities: the textbook definition the composite sums of the engine regroup.
-    for seed in 0..TREES {
+fn fast_forms_equal_the_reference() {
+    let mut worst: f64 = 0.0;
+    for seed in seeds() {
         let mech = random_tree(seed);
-        let mut kane = Kane::new_world_frame(&mech).unwrap();
         let mut rng = StdRng::seed_from_u64(5000 + seed);
-        let (q, _) = random_state(&mech, &mut rng);
-        let n = mech.ndof();
-        let mut m_sum = DMatrix::zeros(n, n);
-        for (j, b) in mech.bodies.iter().enumerate() {
-            let (v, w) = kane.partial_velocities(&q, j);
-            for r in 0..n {
-                for s in 0..n {
-                    m_sum[(r, s)] += b.inertia.mass * v[r].dot(&v[s]) + b.inertia.i_com * w[r] * w[s];
-                }
+        for world in [false, true] {
+            let mut kane = if world { Kane::new_world_frame(&mech) } else { Kane::new(&mech) }.unwrap();
+            for _ in 0..3 {
+                let (q, u) = random_state(&mech, &mut rng);
+                let t = rng.random_range(0.0..10.0);
+                let (m_ref, f_ref) = reference::mass_matrix_and_forcing(&mech, kane.joint_torques(), t, &q, &u);
+                let (m, f) = kane.mass_matrix_and_forcing(t, &q, &u);
+                let em = (m - &m_ref).amax() / m_ref.amax();
+                let ef = (f - &f_ref).amax() / f_ref.amax().max(m_ref.amax());
+                worst = worst.max(em).max(ef);
+                assert!(em <= 1e-12, "tree {seed}: M differs from the reference by {em:e}");
+                assert!(ef <= 1e-12, "tree {seed}: F differs from the reference by {ef:e}\n{f}\n{f_ref}");
             }
         }
-        let m = kane.mass_matrix(&q);
-        assert!((m - &m_sum).amax() <= 1e-12 * m_sum.amax(), "tree {seed}");
     }
+    // The mixed trees must exercise every kind, together.
+    let kinds = |k: fn(&JointKind) -> bool| {
+        (MIXED..MIXED + TREES).filter(|&s| random_tree(s).joints.iter().any(|j| k(&j.kind))).count()
+    };
+    let (prismatic, fixed) = (kinds(|k| matches!(k, JointKind::Prismatic { .. })), kinds(|k| *k == JointKind::Fixed));
+    let all_three = (MIXED..MIXED + TREES)
+        .filter(|&s| {
+            let m = random_tree(s);
+            let has = |k: fn(&JointKind) -> bool| m.joints.iter().any(|j| k(&j.kind));
+            has(|k| matches!(k, JointKind::Prismatic { .. }))
+                && has(|k| *k == JointKind::Fixed)
+                && has(|k| *k == JointKind::Revolute)
+        })
+        .count();
+    println!(
+        "fast forms vs reference: worst {worst:.1e}; mixed trees with prismatic {prismatic}, fixed {fixed}, all three {all_three}"
+    );
+    assert!(prismatic >= 20 && fixed >= 20 && all_three >= 10);
 }
 
 /// `Kane::residual_jacobian` (closed-form derivatives of the pair terms) against central
@@ -292,17 +338,22 @@ fn mass_matrix_equals_kane_sum_over_bodies_of_partial_velocities() {
 fn residual_jacobian_equals_central_differences() {
     let mut rng = StdRng::seed_from_u64(11);
     let mut worst = 0.0f64;
-    for seed in 0..TREES {
+    for seed in seeds() {
         let mut spec = random_spec(seed);
         let full = Mechanism::from_spec(&spec).unwrap();
         let mut kane = Kane::new(&full).unwrap();
         let n = full.ndof();
         let (mut r, mut a, mut b, mut m) = (vec![0.0; n], vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]);
         let (q, u) = random_state(&full, &mut rng);
+        let revolute = full.joints.iter().all(|j| j.kind == JointKind::Revolute);
         let supported = full.speeds == Speeds::AbsoluteAngularVelocities
+            && revolute
             && spec.gravity == (0.0, 0.0)
             && !spec.loads.iter().any(|l| matches!(l, LoadSpec::PointForce { .. }));
         assert_eq!(kane.residual_jacobian(0.3, &q, &u, &u, &mut r, &mut a, &mut b, &mut m), supported, "tree {seed}");
+        if !revolute {
+            continue;
+        }
 
         spec.speeds = Speeds::AbsoluteAngularVelocities;
         spec.gravity = (0.0, 0.0);

@@ -478,6 +478,12 @@ impl Kane {
                 }
             }
         }
+        // Bᵀ M B is symmetric, but the two passes round its halves differently: mirror the lower.
+        for r in 0..n {
+            for c in 0..r {
+                m[c * n + r] = m[r * n + c];
+            }
+        }
     }
 
     fn copy_out(&mut self) {
