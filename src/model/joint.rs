@@ -102,7 +102,7 @@ impl JointKind {
         match self {
             JointKind::Prismatic { axis: (x, y) } => {
                 let len = x.hypot(y);
-                if !(x.is_finite() && y.is_finite()) || !(len > 1e-12) {
+                if !(x.is_finite() && y.is_finite() && len > 1e-12) {
                     return Err((
                         "axis",
                         format!("a prismatic joint needs a finite, non-zero slide axis, got ({x}, {y})"),
