@@ -147,7 +147,7 @@ fn axis(spec: &HbmSpec) -> Axis {
 }
 
 pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path) -> Result<Output> {
-    let path = study.mechanism.path_to(study.body);
+    let path = study.mechanism.rotation_coordinates(study.body);
     let ax = axis(spec);
     // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
     let (cases, parameter, omega, scale): (Vec<f64>, Parameter, f64, f64) = match spec.parameter {

@@ -152,6 +152,23 @@ impl Study {
                 format!("joint `{}` does not connect to ground: the spin joint must", spec.spin_joint),
             ));
         }
+        if mechanism.joints[spin].kind != crate::model::joint::JointKind::Revolute {
+            return Err(src.error(
+                "spin_joint",
+                format!("joint `{}` is not revolute: the spin joint turns the rotor", spec.spin_joint),
+            ));
+        }
+        // The analyses still number coordinates by joint; a welded body breaks that equality.
+        if let Some(j) = mechanism.joints.iter().find(|j| j.coordinate.is_none()) {
+            return Err(src.error(
+                "mechanism",
+                format!(
+                    "joint `{}` is Fixed: studies do not take welded bodies yet; merge the body into its \
+                     parent (its inertia by the parallel-axis rule) or make the joint revolute with a stiff spring",
+                    j.name
+                ),
+            ));
+        }
         let body = mechanism.body_index(&spec.response_body).ok_or_else(|| {
             let names: Vec<&str> = mechanism.bodies.iter().map(|b| b.name.as_str()).collect();
             src.error("response_body", format!("unknown body `{}` (bodies: {})", spec.response_body, names.join(", ")))

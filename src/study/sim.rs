@@ -90,7 +90,9 @@ pub struct TimeSeries {
 pub(crate) struct Recorder {
     parents: Vec<Option<usize>>,
     speeds: crate::model::speeds::Speeds,
-    path: Vec<usize>,
+    /// The coordinates of the rotating joints on the response body's path
+    /// ([`Mechanism::rotation_coordinates`]): its angle, rate and acceleration are their sums.
+    rotation: Vec<usize>,
     spin: usize,
     n: usize,
     qdd: Vec<f64>,
@@ -113,13 +115,18 @@ impl Recorder {
             let b = &mech.bodies[body].name;
             let mut names =
                 vec!["time_s".into(), format!("{b}_angle_rad"), format!("{b}_rate_rad_s"), format!("{b}_accel_rad_s2")];
-            names.extend(mech.joints.iter().map(|j| format!("{}_q_rad", j.name)));
+            names.extend(
+                mech.joints
+                    .iter()
+                    .filter(|j| j.coordinate.is_some())
+                    .map(|j| format!("{}_q_{}", j.name, j.kind.coordinate_unit())),
+            );
             TimeSeries { columns: vec![Vec::new(); names.len()], names }
         });
         Recorder {
             parents: mech.speed_parents(),
             speeds: mech.speeds,
-            path: mech.path_to(body),
+            rotation: mech.rotation_coordinates(body),
             spin,
             n,
             qdd: vec![0.0; n],
@@ -141,17 +148,17 @@ impl Recorder {
         let n = self.n;
         let (q, u) = s.x.split_at(n);
         let Some(xd) = s.xdot else { return };
-        // ω̇_body = Σ_{k on its path} q̈_k with q̈ = W⁻¹ u̇ (W constant for both speed choices).
+        // ω̇_body = Σ q̈_k over the rotating joints of its path, q̈ = W⁻¹ u̇ (W is constant).
         self.speeds.qdot(&self.parents, &xd[n..], &mut self.qdd);
-        let acc: f64 = self.path.iter().map(|&k| self.qdd[k]).sum();
+        let acc: f64 = self.rotation.iter().map(|&k| self.qdd[k]).sum();
         self.accel.push(acc);
         let rel = (0..n).filter(|&k| k != self.spin).map(|k| q[k].abs()).fold(0.0, f64::max);
         self.rel.push(rel);
         self.spin_rate.push(xd[self.spin]);
         self.max_relative_angle = self.max_relative_angle.max(rel);
         if let Some(ts) = &mut self.series {
-            let angle: f64 = self.path.iter().map(|&k| q[k]).sum();
-            let rate: f64 = self.path.iter().map(|&k| xd[k]).sum();
+            let angle: f64 = self.rotation.iter().map(|&k| q[k]).sum();
+            let rate: f64 = self.rotation.iter().map(|&k| xd[k]).sum();
             let _ = u;
             let row = [s.t, angle, rate, acc];
             for (c, v) in ts.columns.iter_mut().zip(row.iter().chain(q.iter())) {

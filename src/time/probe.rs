@@ -3,12 +3,13 @@
 //!
 //! A probe is resolved once against a [`Mechanism`] by body or joint name; recording is then
 //! index arithmetic on the state `x = [q; u]` (and `ẋ` for accelerations):
-//! - body angle `β_b = Σ q_k` over the joints k on the path root → b (angles add along the tree);
-//! - body rate `ω_b`: `u_b` itself for absolute angular velocities as speeds, `Σ q̇_k = Σ u_k`
-//!   along the path for joint rates;
+//! - body angle `β_b = Σ q_k` over the rotating joints k on the path root → b
+//!   ([`Mechanism::rotation_coordinates`]: angles add along the tree, slides and welds turn nothing);
+//! - body rate `ω_b`: `u_b` itself for absolute angular velocities as speeds on a revolute body,
+//!   else `Σ q̇_k` over the same joints with `q̇ = W⁻¹u`;
 //! - body acceleration `ω̇_b`: the same with `u̇` (W is constant for both speed choices, so no
 //!   `Ẇ` term); it needs `ẋ` at the sample state, one extra right-hand-side call per sample;
-//! - joint angle: the relative coordinate `q_j` (the pendulum's φ).
+//! - joint angle: the joint's own coordinate `q_j` (the pendulum's φ; m for a slide).
 //!
 //! The rotor response of the paper (Figs. 3–6) is `BodyAccel(rotor)`, i.e. u̇1 in rad/s².
 
@@ -57,6 +58,12 @@ impl Probe {
             let j = mech
                 .joint_index(name)
                 .ok_or_else(|| unknown("joint", mech.joints.iter().map(|j| j.name.as_str()).collect()))?;
+            if mech.coordinate(j).is_none() {
+                return Err(Error::Model {
+                    mechanism: mech.name.clone(),
+                    message: format!("probe {kind:?}: joint `{name}` is Fixed and has no coordinate"),
+                });
+            }
             return Ok(Probe::JointAngle(j));
         }
         let b = mech
@@ -119,7 +126,8 @@ pub struct Recorder {
     n: usize,
     absolute: bool,
     probes: Vec<Probe>,
-    /// Joint path (root → body) of each probe's body; empty for joint probes.
+    /// Per probe: the coordinates whose sum is its body's rotation
+    /// ([`Mechanism::rotation_coordinates`]), or its joint's one coordinate for a joint probe.
     paths: Vec<Vec<usize>>,
     /// Sample times, s.
     pub time: Vec<f64>,
@@ -130,16 +138,22 @@ pub struct Recorder {
 impl Recorder {
     /// A recorder for `probes` on `mech`; refuses indices outside the mechanism.
     pub fn new(mech: &Mechanism, probes: &[Probe]) -> Result<Self> {
-        let n = mech.ndof();
+        let (n, nb) = (mech.ndof(), mech.bodies.len());
         let mut paths = Vec::with_capacity(probes.len());
         for p in probes {
-            if p.index() >= n {
-                return Err(Error::Model {
-                    mechanism: mech.name.clone(),
-                    message: format!("probe {p:?}: index out of range ({n} bodies and joints)"),
-                });
+            let out_of_range = |what: &str| Error::Model {
+                mechanism: mech.name.clone(),
+                message: format!("probe {p:?}: {what} ({nb} bodies and joints)"),
+            };
+            if p.index() >= nb {
+                return Err(out_of_range("index out of range"));
             }
-            paths.push(if let Probe::JointAngle(_) = p { Vec::new() } else { mech.path_to(p.index()) });
+            paths.push(match p {
+                Probe::JointAngle(j) => {
+                    vec![mech.coordinate(*j).ok_or_else(|| out_of_range("joint has no coordinate"))?]
+                }
+                _ => mech.rotation_coordinates(p.index()),
+            });
         }
         Ok(Self {
             n,
@@ -166,14 +180,16 @@ impl Recorder {
     pub fn value(&self, i: usize, x: &[f64], xdot: Option<&[f64]>) -> f64 {
         let n = self.n;
         // Absolute rate (or acceleration) of the probe's body from speeds (or their rates) `v`.
+        // With absolute angular velocities the last rotating joint's speed is the body's own.
         let absolute = |v: &[f64]| {
-            if self.absolute { v[self.probes[i].index()] } else { self.paths[i].iter().map(|&k| v[k]).sum() }
+            let path = &self.paths[i];
+            if self.absolute { path.last().map_or(0.0, |&k| v[k]) } else { path.iter().map(|&k| v[k]).sum() }
         };
         match self.probes[i] {
             Probe::BodyAngle(_) => self.paths[i].iter().map(|&k| x[k]).sum(),
             Probe::BodyRate(_) => absolute(&x[n..2 * n]),
             Probe::BodyAccel(_) => xdot.map_or(f64::NAN, |d| absolute(&d[n..2 * n])),
-            Probe::JointAngle(j) => x[j],
+            Probe::JointAngle(_) => x[self.paths[i][0]],
         }
     }
 
