@@ -16,7 +16,7 @@ impl Kane {
     /// while still in registers (the evaluation is latency bound, not flop bound: measured 711 →
     /// 707 instructions but 42 → 37 ns per CPVA call).
     pub(super) fn factor_solve(&mut self, x: &mut [f64]) -> Result<(), EngineError> {
-        with_literal_n!(self.literal_n, self.factor_solve_n(x))
+        if self.nb == self.n { with_literal_n!(self.n, self.factor_solve_n(x)) } else { self.factor_solve_n::<0>(x) }
     }
 
     #[inline(always)]

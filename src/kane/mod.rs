@@ -161,8 +161,6 @@ pub struct Kane {
     n: usize,
     /// Number of bodies (n plus the fixed joints).
     nb: usize,
-    /// n when every body has a coordinate (loops may then run to a literal n), else 0.
-    literal_n: usize,
     /// Per coordinate: the speed subtracted in `q̇ = W⁻¹u` ([`Mechanism::speed_parents`]).
     speed_parent: Vec<Option<usize>>,
     /// Per coordinate: its joint (= body) index.
@@ -290,7 +288,6 @@ impl Kane {
             pairs,
             n,
             nb,
-            literal_n: if nb == n { n } else { 0 },
             speed_parent: mech.speed_parents(),
             joint_of,
             speeds: mech.speeds,
@@ -396,7 +393,9 @@ impl Kane {
             let (what, got) = if x.len() != 2 * n { ("state x", x.len()) } else { ("derivative ẋ", xdot.len()) };
             return Err(EngineError::Dimension { what, got, expected: 2 * n });
         }
-        with_literal_n!(self.literal_n, self.rhs_n(t, x, xdot))
+        // NOTE: dispatched on n itself (not on a copy of it), so the compiler knows x has 2N
+        // entries in the literal instances and drops the slices' range checks.
+        if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) }
     }
 
     /// The body of [`Kane::rhs`] for `N` degrees of freedom (`N = 0`: any).
@@ -428,7 +427,11 @@ impl Kane {
     /// by the form chosen at build (see the module doc). Only entries (k, l) with one an ancestor
     /// of the other are written: the others are zero for a tree and stay as allocated.
     fn evaluate(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
-        with_literal_n!(self.literal_n, self.evaluate_n(t, q, u, forcing))
+        if self.nb == self.n {
+            with_literal_n!(self.n, self.evaluate_n(t, q, u, forcing))
+        } else {
+            self.evaluate_n::<0>(t, q, u, forcing)
+        }
     }
 
     /// The body of [`Kane::evaluate`] for `N` degrees of freedom (`N = 0`: any, read at run time).
@@ -442,16 +445,23 @@ impl Kane {
         match self.form {
             Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
             Form::Rates => self.evaluate_rates::<N>(t, q, u, forcing),
-            Form::MappedRates => {
-                let mut rates = std::mem::take(&mut self.qdot);
-                if forcing {
-                    self.speeds.qdot(&self.speed_parent, &u[..self.n], &mut rates);
-                }
-                self.evaluate_rates::<N>(t, q, &rates, forcing);
-                self.qdot = rates;
-                self.map_rates_to_speeds(forcing);
-            }
+            Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
         }
+    }
+
+    /// [`Form::MappedRates`]: the joint-rate form at `q̇ = W⁻¹u`, mapped to the speeds.
+    ///
+    /// NOTE: kept out of line so the code of this rarer form does not crowd the pair form's
+    /// registers in the hot, literal-n evaluation (measured, BENCHMARKS.md).
+    #[inline(never)]
+    fn evaluate_mapped(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+        let mut rates = std::mem::take(&mut self.qdot);
+        if forcing {
+            self.speeds.qdot(&self.speed_parent, &u[..self.n], &mut rates);
+        }
+        self.evaluate_rates::<0>(t, q, &rates, forcing);
+        self.qdot = rates;
+        self.map_rates_to_speeds(forcing);
     }
 
     /// Maps M and F from joint rates to absolute angular velocities: with `q̇ = B u`,
