@@ -2,15 +2,17 @@
 //! against the hand-written closed form of eq. (7) at the same state and time (both
 //! allocation-free, both evaluating the same excitation torque), and planar chains of N links.
 
+#[path = "support/cpva_rhs.rs"]
+mod cpva_rhs;
+
+use cpva_rhs::{CpvaRhs, T, X};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use kanedyn::cpva::CpvaParams;
 use kanedyn::kane::Kane;
 use kanedyn::model::body::BodySpec;
 use kanedyn::model::joint::JointSpec;
 use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
 use kanedyn::model::speeds::Speeds;
 use std::hint::black_box;
-use std::path::Path;
 
 fn chain(n: usize) -> Mechanism {
     let bodies = (0..n)
@@ -45,13 +47,8 @@ fn chain(n: usize) -> Mechanism {
 
 fn rhs(c: &mut Criterion) {
     let mut g = c.benchmark_group("rhs");
-    let mech = Mechanism::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva.ron")).unwrap();
-    let excitation = mech.loads.joint_torques[0].excitation.clone();
-    let mut kane = Kane::new(&mech).unwrap();
-    let cf = CpvaParams::canonical().closed_form();
-    // A state in the middle of a run: large spin angle, pendulum swinging.
-    let x = [1234.5, 0.4, 104.9, 108.2];
-    let t = 12.345;
+    let CpvaRhs { mut kane, excitation, closed: cf } = CpvaRhs::new();
+    let (x, t) = (X, T);
     let mut xdot = [0.0; 4];
     g.bench_function("generic_cpva", |b| {
         b.iter(|| {

@@ -66,7 +66,7 @@ pub enum Error {
 /// Failures of the equation-of-motion evaluation.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EngineError {
-    /// The Cholesky factorisation of M met a non-positive pivot: the speed `dof` (named by its
+    /// The LDLᵀ factorisation of M met a non-positive pivot: the speed `dof` (named by its
     /// joint) has no inertia of its own at this configuration.
     #[error(
         "mass matrix is not positive definite: pivot {pivot:e} at speed {dof} (joint `{joint}`); a body without mass or inertia about that joint, or a massless point mass on its own pivot?"

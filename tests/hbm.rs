@@ -4,6 +4,10 @@
 //! equations (a fixed-step RK4 over the Kane engine) with an FFT over whole periods, a monodromy
 //! matrix obtained by differencing time integrations, and the balance of angular momentum.
 
+#[path = "support/cpva_hbm.rs"]
+mod cpva_hbm;
+
+use cpva_hbm::{RPM, cpva_hbm, omega, single};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{
     BifurcationKind, Branch, BranchEnd, ContinuationOptions, FoldKind, Hbm, HbmOptions, HbmSolution, Parameter,
@@ -13,23 +17,6 @@ use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use nalgebra::{Complex, DMatrix};
 use realfft::RealFftPlanner;
 use std::f64::consts::PI;
-use std::time::Instant;
-
-const RPM: f64 = 1000.0;
-
-fn omega() -> f64 {
-    rpm_to_rad_s(RPM)
-}
-
-fn single(amplitude: f64) -> Vec<Harmonic> {
-    vec![Harmonic { multiple: 1.0, amplitude, phase: 0.0 }]
-}
-
-fn cpva_hbm(harmonics: &[Harmonic], opts: HbmOptions) -> Hbm {
-    let mech = CpvaParams::canonical().mechanism(None).unwrap();
-    let kane = Kane::new(&mech).unwrap();
-    Hbm::new(&kane, mech.joint_index("spin").unwrap(), omega(), harmonics, opts).unwrap()
-}
 
 /// Main-order rotor acceleration amplitude (rad/s²) of the linearised equations (13), solved as
 /// in eq. (22) for x = x̂ e^{iωt}, ω = nΩ:
@@ -410,32 +397,6 @@ fn four_pendulums_and_two_orders() {
     let s = cpva_hbm(&half, opts).solve(3.0, None).unwrap();
     assert!((s.base_frequency - 1.5 * omega()).abs() < 1e-12);
     assert_eq!(s.harmonic_of(1.0), Some(2));
-}
-
-/// Timing of the branches 2.9 → 3.3 and 3.3 → 2.9 at 40 and 500 N·m (with stability at every
-/// point); run with
-/// `cargo test --release --test hbm -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn branch_timing() {
-    for &torque in &[40.0, 500.0] {
-        for (from, to) in [(2.9, 3.3), (3.3, 2.9)] {
-            let mut best = f64::INFINITY;
-            let (mut pts, mut newton) = (0, 0);
-            for _ in 0..5 {
-                let mut hbm = cpva_hbm(&single(torque), HbmOptions::default());
-                let t0 = Instant::now();
-                let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).unwrap();
-                best = best.min(t0.elapsed().as_secs_f64());
-                pts = b.points.len();
-                newton = b.newton_iterations;
-            }
-            println!(
-                "{torque} N·m: branch {from} → {to} with {pts} points in {:.1} ms (best of 5), {newton} corrector iterations",
-                best * 1e3
-            );
-        }
-    }
 }
 
 /// The 40 N·m order folds, seen from the other two parameters. A fold of the order branch at

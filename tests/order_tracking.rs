@@ -6,24 +6,23 @@
 //! 2.6e-4 low half a bin off; the sweep moves the line by at most 0.11 Hz (2n) within a 2 s window,
 //! a fifth of a bin; cubic resampling lowers order 6.6 by ~1.8e-4 (rms gain of the interpolant). Each test prints its worst error.
 
+#[path = "support/swept_signal.rs"]
+mod swept_signal;
+
 use kanedyn::model::excitation::{Order, rpm_to_rad_s};
 use kanedyn::signal::{
     AngleOptions, OrderTrace, SignalError, StftOptions, angle_domain_order_traces, resample_at_constant_angle,
     stft_order_traces,
 };
 use std::f64::consts::PI;
+use swept_signal::{FS, swept_signal, times};
 
-const FS: f64 = 2000.0;
 /// The study's accuracy budget for order traces, 0.5 %.
 const BUDGET: f64 = 5e-3;
 /// What the analysis predicts, and what the tests hold the code to: 2.6e-4 (Hann 5-bin sum half a
 /// bin off) + 1.8e-4 (Catmull–Rom gain at order 6.6) with margin. A linear resampler (−0.99 % at
 /// order 6.6) or a wrong calibration fails this.
 const TOL: f64 = 6e-4;
-
-fn times(duration_s: f64) -> Vec<f64> {
-    (0..(duration_s * FS).round() as usize).map(|i| i as f64 / FS).collect()
-}
 
 /// Largest relative error of `trace` against `truth(order n)` over all windows.
 fn worst_error(trace: &OrderTrace, truth: impl Fn(f64) -> f64) -> f64 {
@@ -58,24 +57,6 @@ fn fixed_order_both_methods() {
         // Window centre times: t_c = (start + N/2)/fs.
         assert!((stft[0].time_s[0] - 1.0).abs() < 1e-12 && (stft[0].time_s[1] - 1.25).abs() < 1e-12);
     }
-}
-
-/// The swept signal of load case 4.1 (§4.1, eq. 23) with a second multiple:
-/// `0.7 + A₁(n) sin Φ + A₂(n) sin(2Φ − 0.32)`, Φ = Ω ∫n dt as `Order::integral` computes it,
-/// n from 2.9 to 3.3 over 240 s at 1000 rpm, the rotor turning at exactly Ω.
-fn swept_signal(a1: impl Fn(f64) -> f64, a2: impl Fn(f64) -> f64) -> (Order, f64, Vec<f64>, Vec<f64>) {
-    let order = Order::Sweep { from: 2.9, to: 3.3, duration_s: 240.0 };
-    let omega = rpm_to_rad_s(1000.0);
-    let t = times(240.0);
-    let x = t
-        .iter()
-        .map(|&t| {
-            let (n, phi) = (order.at(t), omega * order.integral(t));
-            0.7 + a1(n) * phi.sin() + a2(n) * (2.0 * phi - 0.32).sin()
-        })
-        .collect();
-    let theta = t.iter().map(|&t| omega * t).collect();
-    (order, omega, x, theta)
 }
 
 /// (b) Constant amplitudes 5 (order n) and 1.5 (order 2n) on the 2.9 → 3.3 sweep: every window of
@@ -220,27 +201,6 @@ fn errors_are_reported() {
         angle_domain_order_traces(&x, &back, FS, &|_| 3.0, &[1.0], &aopts),
         Err(SignalError::NotIncreasing { index: 99, .. })
     ));
-}
-
-/// Timing of the 240 s, 2 kHz, two-multiple traces (run with `--ignored --nocapture`); the best of
-/// 20 runs, since the machine may be shared.
-#[test]
-#[ignore]
-fn timing() {
-    let (order, omega, x, theta) = swept_signal(|_| 5.0, |_| 1.5);
-    let n_at = |t: f64| order.at(t);
-    let (mut best_s, mut best_a) = (f64::INFINITY, f64::INFINITY);
-    for _ in 0..20 {
-        let t0 = std::time::Instant::now();
-        let s = stft_order_traces(&x, FS, omega, &n_at, &[1.0, 2.0], &StftOptions::default()).unwrap();
-        let t1 = std::time::Instant::now();
-        let a = angle_domain_order_traces(&x, &theta, FS, &n_at, &[1.0, 2.0], &AngleOptions::default()).unwrap();
-        let t2 = std::time::Instant::now();
-        assert_eq!((s[0].len(), a[0].len()), (953, 993));
-        best_s = best_s.min((t1 - t0).as_secs_f64() * 1e3);
-        best_a = best_a.min((t2 - t1).as_secs_f64() * 1e3);
-    }
-    println!("STFT 953 windows: {best_s:.2} ms; angle domain 993 blocks: {best_a:.2} ms");
 }
 
 /// The two methods on a simulated sweep (not a synthetic signal): the canonical CPVA, 40 N·m, n

@@ -1,4 +1,5 @@
-//! Planar vector aliases and the three helpers every kinematic formula in kanedyn uses.
+//! Planar vector aliases and the four helpers the kinematic formulas of kanedyn use: `rot2`,
+//! `perp`, `cross2` and `rotate_cs`.
 //!
 //! Convention: z points out of the plane, angles are counter-clockwise positive, in rad.
 

@@ -1,9 +1,9 @@
-//! Time-domain order tracking by short-time Fourier transform (the study convention of DESIGN.md).
+//! Time-domain order tracking by short-time Fourier transform (the study convention of docs/design.md).
 
 use super::{HannSpectrum, MAX_POINTS, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
 use std::f64::consts::PI;
 
-/// Options of [`stft_order_traces`]. The defaults are the study convention of DESIGN.md.
+/// Options of [`stft_order_traces`]. The defaults are the study convention of docs/design.md.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StftOptions {
     /// Window length, s (default 2 s: 0.5 Hz bins). Rounded to a whole number of samples N.

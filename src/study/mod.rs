@@ -212,7 +212,7 @@ impl Study {
         (ground + mech.joints[spin].damper) * omega
     }
 
-    /// The initial state of a sweep or steady run (DESIGN.md): q = 0, the spin joint turning at
+    /// The initial state of a sweep or steady run (docs/design.md): q = 0, the spin joint turning at
     /// `omega` and every other joint at rest relative to its parent.
     pub fn initial_state(mech: &Mechanism, spin: usize, omega: f64) -> Vec<f64> {
         let n = mech.ndof();

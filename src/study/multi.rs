@@ -396,12 +396,13 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         if chunk.error.is_some() {
             break;
         }
-        // NOTE: the ramp-in leaves the mean speed off Ω (3.8e-2 rad/s at 1000 rpm, measured), and
-        // that rigid spin-speed mode decays only with J/c_r ≈ 730 s: the amplitudes then creep by
-        // ~1e-4 per window, which passes a two-window test while sitting 1.3 % off the periodic
-        // steady state (harmonic balance shows it). So the measured mean-speed error of the last
-        // window is removed as a rigid rotation of the spinning subtree (W·e_spin·δ), and two
-        // fresh windows are required after each correction.
+        // NOTE: the ramp-in leaves the mean speed off Ω, and that rigid spin-speed mode decays
+        // only with the slow time constant J/c_r (locked inertia over rotor loss): the amplitudes
+        // then creep so slowly from window to window that a two-window test passes while they
+        // still sit measurably off the periodic steady state (harmonic balance shows it; figures
+        // in BENCHMARKS.md, "Measured reasons behind code choices"). So the measured mean-speed
+        // error of the last window is removed as a rigid rotation of the spinning subtree
+        // (W·e_spin·δ), and two fresh windows are required after each correction.
         if rec.spin_rate.len() >= win && !at_end {
             let tail = &rec.spin_rate[rec.spin_rate.len() - win..];
             let delta = tail.iter().sum::<f64>() / win as f64 - omega;

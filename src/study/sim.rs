@@ -250,7 +250,7 @@ pub(crate) fn simulate(
     }
 }
 
-/// Order traces of a sampled response by the STFT of DESIGN.md; `mechanism` names the model in
+/// Order traces of a sampled response by the STFT of docs/design.md; `mechanism` names the model in
 /// an error (the study validates the bands at load, so one is an internal inconsistency).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(

@@ -59,7 +59,7 @@ impl Default for IntegrationSpec {
     }
 }
 
-/// Short-time FFT order-tracking settings (DESIGN.md: 2 s Hann windows, 0.25 s hop, 5 bins).
+/// Short-time FFT order-tracking settings (docs/design.md: 2 s Hann windows, 0.25 s hop, 5 bins).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrackingSpec {

@@ -255,7 +255,8 @@ where
 {
     check_input(x0, t0, t1, opts)?;
     // NOTE: the solver is monomorphised per state length only, not per closure type: one compiled
-    // DOP853 per length serves every caller (an indirect call costs ~1 ns next to ~50 ns of rhs).
+    // DOP853 per length serves every caller, and the indirect call this costs is small next to one
+    // right-hand side (figures: BENCHMARKS.md, "Measured reasons behind code choices").
     let rhs: &mut DynRhs = &mut rhs;
     let on_sample: &mut dyn FnMut(&Sample<'_>) = &mut on_sample;
     macro_rules! dispatch {
@@ -467,8 +468,8 @@ impl Sampler<'_> {
 /// NOTE: differential-equations 0.7 evaluates DOP853's dense output with s and 1 − s swapped in
 /// its high-order part: it returns `c0 + s(c1 + s1(c2 + s(c3 + s1·W(1−s))))` where Hairer's
 /// CONTD8 has `W(s) = c4 + s(c5 + s1(c6 + s·c7))`, s1 = 1 − s. That leaves the step's ends exact
-/// but errs by ~1e-8 inside a step at rtol 1e-12 (measured on x'' = −49x; the unit test below
-/// guards it). Since `A(σ) = c0 + σc1 + σ(1−σ)c2 + σ²(1−σ)c3` is the low-order part and
+/// but puts the samples inside a step far outside the tolerance (measured on x'' = −49x, figures
+/// in BENCHMARKS.md, "Measured reasons behind code choices"; the unit test below guards it). Since `A(σ) = c0 + σc1 + σ(1−σ)c2 + σ²(1−σ)c3` is the low-order part and
 /// `s²s1²` multiplies W in both, the correct value follows from the crate's value at the mirrored
 /// point: `P(s) = P_crate(1 − s) + A(s) − A(1 − s) = P_crate(1 − s) + (2s − 1)(c1 + s·s1·c3)`, with
 /// `c1 = y − y_prev` and `c3 = 2c1 − h(f_prev + f)` from the derivatives at the step's two ends.

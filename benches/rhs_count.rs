@@ -1,34 +1,35 @@
 //! A driver for counting instructions per right-hand-side call under callgrind (timings on a
-//! shared machine are too noisy; instruction counts repeat exactly). Ignored in normal runs:
+//! shared machine are too noisy; instruction counts repeat exactly), and a robust timer.
+//! The set-up (engine, closed form, state) is benches/rhs.rs's, from `support/cpva_rhs.rs`.
 //!
 //! ```text
-//! cargo test --release --test rhs_count --no-run
-//! RHS_MODE=generic valgrind --tool=callgrind target/release/deps/rhs_count-<hash> --ignored --exact count
+//! cargo bench --bench rhs_count --no-run        # prints the binary: target/release/deps/rhs_count-<hash>
+//! RHS_MODE=none    valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
+//! RHS_MODE=generic valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
+//! RHS_MODE=closed  valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
+//! cargo bench --bench rhs_count                 # RHS_MODE=time, the default
 //! ```
 //!
 //! `RHS_MODE` is `generic` (Kane on examples/cpva.ron), `closed` (eq. (7) with the same
-//! excitation), `none` (the loop alone, to subtract) or `time` (both, timed in alternating
-//! chunks of 10⁴ calls, best chunk of each; run without valgrind, with `--nocapture`);
-//! `RHS_CALLS` sets the number of calls (default 10⁶). See BENCHMARKS.md.
+//! excitation), `none` (the loop alone, to subtract: instructions per call = (Ir − Ir_none) /
+//! calls) or `time` (both, timed in alternating chunks of 10⁴ calls, best chunk of each; the
+//! default, run without valgrind). `RHS_CALLS` sets the number of calls (default 10⁶). See
+//! BENCHMARKS.md.
 
-use kanedyn::cpva::CpvaParams;
-use kanedyn::kane::Kane;
-use kanedyn::model::mechanism::Mechanism;
+#[path = "support/cpva_rhs.rs"]
+mod cpva_rhs;
+
+use cpva_rhs::{CpvaRhs, T, X};
 use std::hint::black_box;
-use std::path::Path;
 
-#[test]
-#[ignore = "instruction-count driver for callgrind, not a test"]
-fn count() {
-    let mode = std::env::var("RHS_MODE").unwrap_or_else(|_| "none".into());
-    let calls: usize = std::env::var("RHS_CALLS").map_or(1_000_000, |s| s.parse().unwrap());
-    let mech = Mechanism::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva.ron")).unwrap();
-    let excitation = mech.loads.joint_torques[0].excitation.clone();
-    let mut kane = Kane::new(&mech).unwrap();
-    let cf = CpvaParams::canonical().closed_form();
-    // The state of benches/rhs.rs.
-    let x = [1234.5, 0.4, 104.9, 108.2];
-    let t = 12.345;
+fn main() {
+    let mode = std::env::var("RHS_MODE").unwrap_or_else(|_| "time".into());
+    let calls: usize = match std::env::var("RHS_CALLS") {
+        Ok(s) => s.parse().unwrap_or_else(|_| panic!("RHS_CALLS must be a whole number, got `{s}`")),
+        Err(_) => 1_000_000,
+    };
+    let CpvaRhs { mut kane, excitation, closed: cf } = CpvaRhs::new();
+    let (x, t) = (X, T);
     let mut xdot = [0.0; 4];
     let mut acc = 0.0;
     match mode.as_str() {
@@ -64,7 +65,8 @@ fn count() {
                 best_c = best_c.min(start.elapsed().as_secs_f64() / 1e4);
             }
             println!(
-                "generic {:.1} ns, closed form {:.1} ns, ratio {:.2}",
+                "rhs_count: best of {} chunks of 10⁴ calls: generic {:.1} ns, closed form {:.1} ns, ratio {:.2}",
+                calls / 10_000,
                 best_g * 1e9,
                 best_c * 1e9,
                 best_g / best_c
@@ -75,7 +77,10 @@ fn count() {
                 acc += black_box(xdot[2]);
             }
         }
-        other => panic!("unknown RHS_MODE `{other}`"),
+        other => panic!("unknown RHS_MODE `{other}` (generic, closed, none or time)"),
     }
     black_box(acc);
+    if mode != "time" {
+        println!("rhs_count: RHS_MODE={mode}, {calls} calls (read the instruction count from callgrind)");
+    }
 }
