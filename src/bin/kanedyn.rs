@@ -188,18 +188,21 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
             b.name, i.mass, i.com.x, i.com.y, i.i_com
         );
     }
-    println!("joints (coordinate order): {}", mech.joints.len());
+    println!("joints (tree order): {}", mech.joints.len());
     for (k, j) in mech.joints.iter().enumerate() {
         let parent = j.parent.map_or("ground", |p| mech.bodies[p].name.as_str());
+        // Units of the coordinate's spring and damper: per radian for a turn, per metre for a slide.
+        let (per, unit) = if j.kind.rotates() { ("N·m", "rad") } else { ("N", "m") };
         let mut extra = String::new();
         if j.damper > 0.0 {
-            extra += &format!("   damper {} N·m·s/rad", j.damper);
+            extra += &format!("   damper {} {per}·s/{unit}", j.damper);
         }
         if let Some(s) = j.spring {
-            extra += &format!("   spring {} N·m/rad (free at {} rad)", s.stiffness, s.free_angle);
+            extra += &format!("   spring {} {per}/{unit} (free at {} {unit})", s.stiffness, s.free_angle);
         }
+        let q = j.coordinate.map_or_else(|| "    ".to_string(), |c| format!("q[{c}]"));
         println!(
-            "  q[{k}] {:<12} {:?} {} -> {} at ({}, {}) m{extra}",
+            "  {q} {:<12} {:?} {} -> {} at ({}, {}) m{extra}",
             j.name, j.kind, parent, mech.bodies[k].name, j.at.x, j.at.y
         );
     }

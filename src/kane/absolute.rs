@@ -50,9 +50,9 @@ impl Kane {
     /// one `sin_cos` (none for a root in its own frame) and each pair a few multiplications.
     ///
     /// NOTE: this replaced a composite-body recursion (forward pass of poses and centripetal
-    /// accelerations, backward pass of subtree forces and moments): the same sums, but 708 → 616
-    /// instructions per CPVA call (tests/rhs_count.rs, callgrind; the closed form takes 301),
-    /// because the accelerations, forces and moments about joint points are never formed.
+    /// accelerations, backward pass of subtree forces and moments): the same sums in fewer
+    /// instructions (BENCHMARKS.md), because the accelerations, forces and moments about joint
+    /// points are never formed.
     #[inline(always)]
     pub(super) fn evaluate_absolute<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         let n = if N == 0 { self.n } else { N };
@@ -70,7 +70,7 @@ impl Kane {
             let root = nd.parent == GROUND_PARENT;
             let (js, jc) = if root && !world { (0.0, 1.0) } else { q[j].sin_cos() };
             // NOTE: the body's own orientation is only needed by gravity and point forces; the
-            // pairs use relative angles (measured: 616 → 610 instructions per CPVA call).
+            // pairs use relative angles (measured, BENCHMARKS.md).
             let (c, s) = if root || !oriented {
                 (jc, js)
             } else {

@@ -13,8 +13,7 @@ impl Kane {
     /// pivot that the solve reuses as a multiplication (n divisions in all, as many as Cramer's
     /// rule in the closed form for n = 2). Its pivots d_j are exactly Cholesky's squared ones.
     /// The forward substitution runs row by row with the factorisation, so each row of L is used
-    /// while still in registers (the evaluation is latency bound, not flop bound: measured 711 →
-    /// 707 instructions but 42 → 37 ns per CPVA call).
+    /// while still in registers (the evaluation is latency bound, not flop bound; BENCHMARKS.md).
     pub(super) fn factor_solve(&mut self, x: &mut [f64]) -> Result<(), EngineError> {
         if self.nb == self.n { with_literal_n!(self.n, self.factor_solve_n(x)) } else { self.factor_solve_n::<0>(x) }
     }

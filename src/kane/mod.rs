@@ -118,8 +118,7 @@ struct Node {
 /// sums of its subtree about its joint point o, and its joint's rate and torque.
 ///
 /// NOTE: one record per body rather than one buffer per quantity: each buffer costs a length
-/// check and a register (or a stack spill) per call (measured: 805 → 761 instructions per CPVA
-/// call, callgrind, tests/rhs_count.rs).
+/// check and a register (or a stack spill) per call (measured, BENCHMARKS.md).
 #[derive(Debug, Clone, Copy, Default)]
 struct BodyState {
     /// Cosine and sine of the body's angle.
@@ -366,8 +365,8 @@ impl Kane {
     }
 
     /// Like [`Kane::mass_matrix_and_forcing`], as slices into the engine's buffers: M row-major
-    /// (`m[r·n + c]`) and F. It skips the copy into nalgebra types, which measured 8 % of the
-    /// instructions of a harmonic-balance branch (one copy per engine call).
+    /// (`m[r·n + c]`) and F. It skips the copy into nalgebra types, a measurable share of a
+    /// harmonic-balance branch (one copy per engine call; BENCHMARKS.md).
     pub fn mass_matrix_and_forcing_rows(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&[f64], &[f64]) {
         self.evaluate(t, q, u, true);
         (&self.m, &self.f)
