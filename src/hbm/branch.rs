@@ -12,8 +12,8 @@ use std::f64::consts::PI;
 /// The parameter continued along a branch; the others keep the values of the
 /// [`Hbm`](super::Hbm) problem ([`Hbm::omega`](super::Hbm::omega),
 /// [`Hbm::torque_scale`](super::Hbm::torque_scale)) unless the variant fixes them. Its kind
-/// also names the derivative ∂R̂/∂p that the Jacobian assembly forms. The study file names it
-/// with its range in the spec's units ([`crate::study::HbmParameter`]).
+/// also names the derivative ∂R̂/∂p that the Jacobian assembly forms. (A study file names it,
+/// with its range in the spec's units, as `study::HbmParameter`.)
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Parameter {
     /// The excitation order n (dimensionless).
