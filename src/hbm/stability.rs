@@ -74,7 +74,7 @@ impl Hbm {
             *o == at && xs.iter().zip(&x).all(|(a, b)| (a - b).abs() <= 1e-14 * (1.0 + b.abs()))
         };
         if !self.samples_at.as_ref().is_some_and(same) {
-            self.assemble(&x, &at, Some(super::Free::Order));
+            self.assemble(&x, &at, Some(super::Parameter::Order));
         }
         let nt = self.aft.nt;
         let nn = n * n;
@@ -132,8 +132,8 @@ impl Hbm {
 /// `[K | L]` (n rows of 2n, row-major) at the N_s instants, and the stages use every (or every
 /// other) instant. Small systems go through fixed-size arrays, padded with
 /// decoupled states up to the next supported size: the generic slice loop spends most of its
-/// time on loop and bounds overhead at 4 × 4 (measured: 570 k instructions per stability
-/// analysis of the single-pendulum CPVA with slices, see `BENCHMARKS.md` for after).
+/// time on loop and bounds overhead at 4 × 4 (instruction counts of the single-pendulum CPVA's
+/// stability analysis before and after: `BENCHMARKS.md`).
 fn monodromy(sys: &[f64], n: usize, ns: usize, period: f64) -> Vec<f64> {
     let (fine, coarse) = match 2 * n {
         d if d <= 4 => monodromy_fixed::<4>(sys, n, ns, period),

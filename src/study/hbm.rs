@@ -150,14 +150,11 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
     let path = study.mechanism.rotation_coordinates(study.body);
     let ax = axis(spec);
     // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
-    let (cases, parameter, omega, scale): (Vec<f64>, Parameter, f64, f64) = match spec.parameter {
-        HbmParameter::Order => (spec.amplitudes.clone(), Parameter::Order, rpm_to_rad_s(spec.rpm), 1.0),
-        HbmParameter::Speed { order, rpm_min, .. } => {
-            (spec.amplitudes.clone(), Parameter::Speed { order }, rpm_to_rad_s(rpm_min), rpm_to_rad_s(1.0))
-        }
-        HbmParameter::Torque { order, .. } => {
-            (vec![f64::NAN], Parameter::TorqueScale { order }, rpm_to_rad_s(spec.rpm), 1.0)
-        }
+    let parameter = spec.parameter.continued();
+    let (cases, omega, scale): (Vec<f64>, f64, f64) = match spec.parameter {
+        HbmParameter::Order => (spec.amplitudes.clone(), rpm_to_rad_s(spec.rpm), 1.0),
+        HbmParameter::Speed { rpm_min, .. } => (spec.amplitudes.clone(), rpm_to_rad_s(rpm_min), rpm_to_rad_s(1.0)),
+        HbmParameter::Torque { .. } => (vec![f64::NAN], rpm_to_rad_s(spec.rpm), 1.0),
     };
     let mut branches = Vec::new();
     let mut failures = Vec::new();

@@ -167,7 +167,8 @@ pub struct HbmSpec {
     pub max_step: Option<f64>,
 }
 
-/// What a `HarmonicBalance` analysis continues.
+/// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
+/// study file's form of [`crate::hbm::Parameter`] (see [`HbmParameter::continued`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub enum HbmParameter {
     /// The excitation order, over `order_min`..`order_max` at `rpm`, per amplitude.
@@ -193,6 +194,19 @@ pub enum HbmParameter {
         /// Upper end of the amplitude range, N·m.
         max: f64,
     },
+}
+
+impl HbmParameter {
+    /// The harmonic balance's continued parameter, with the order it holds fixed (the range
+    /// stays here): `Torque` continues the torque scale of a 1 N·m excitation, in N·m.
+    pub fn continued(self) -> crate::hbm::Parameter {
+        use crate::hbm::Parameter;
+        match self {
+            HbmParameter::Order => Parameter::Order,
+            HbmParameter::Speed { order, .. } => Parameter::Speed { order },
+            HbmParameter::Torque { order, .. } => Parameter::TorqueScale { order },
+        }
+    }
 }
 
 fn default_harmonics() -> usize {

@@ -1,0 +1,180 @@
+//! The per-sample evaluator of the harmonic balance (sections "Residual" and "Jacobian" of the
+//! module docs of [`crate::hbm`]): Kane's equations as the residual
+//! `R(t) = M(q) W q̈ − F(q, W q̇, t) − g·T(t)` at one time sample, and its derivatives
+//! `A = ∂R/∂q`, `B = ∂R/∂q̇` (central differences of the engine, the spin angle's column of A
+//! zero as the angle is cyclic; or one call of the engine's closed-form residual Jacobian where it
+//! has one) and `C = ∂R/∂q̈ = M W`.
+
+use crate::kane::Kane;
+use crate::model::speeds::Speeds;
+
+/// The engine wrapped to evaluate `R = M W q̈ − F(q, W q̇) − g T` and its per-sample derivatives.
+#[derive(Debug, Clone)]
+pub(super) struct Evaluator {
+    kane: Kane,
+    n: usize,
+    pub(super) speeds: Speeds,
+    pub(super) parents: Vec<Option<usize>>,
+    /// W, row-major.
+    w: Vec<f64>,
+    /// Generalized force (in speeds) of a unit torque in the spin joint.
+    pub(super) g: Vec<f64>,
+    u: Vec<f64>,
+    ud: Vec<f64>,
+    rp: Vec<f64>,
+    rm: Vec<f64>,
+    /// ∂R/∂u and M (row-major) from the engine's closed-form derivatives.
+    dr_du: Vec<f64>,
+    mass: Vec<f64>,
+}
+
+/// Per-sample linearisation: R, and row-major `A = ∂R/∂q`, `B = ∂R/∂q̇`, `C = ∂R/∂q̈`.
+#[derive(Debug, Clone)]
+pub(super) struct SampleLin {
+    /// R, n entries.
+    pub(super) r: Vec<f64>,
+    /// ∂R/∂q, n × n.
+    pub(super) a: Vec<f64>,
+    /// ∂R/∂q̇, n × n.
+    pub(super) b: Vec<f64>,
+    /// ∂R/∂q̈ = M W, n × n.
+    pub(super) c: Vec<f64>,
+}
+
+impl SampleLin {
+    /// Zeroed buffers for n coordinates.
+    pub(super) fn new(n: usize) -> Self {
+        Self { r: vec![0.0; n], a: vec![0.0; n * n], b: vec![0.0; n * n], c: vec![0.0; n * n] }
+    }
+}
+
+impl Evaluator {
+    /// The evaluator of `kane`'s mechanism (its spin torque already removed) with `speeds`, the
+    /// joints' `parents`, W (row-major) and the generalized force `g` of a unit spin torque.
+    pub(super) fn new(kane: Kane, speeds: Speeds, parents: Vec<Option<usize>>, w: Vec<f64>, g: Vec<f64>) -> Self {
+        let n = kane.ndof();
+        Self {
+            kane,
+            n,
+            speeds,
+            parents,
+            w,
+            g,
+            u: vec![0.0; n],
+            ud: vec![0.0; n],
+            rp: vec![0.0; n],
+            rm: vec![0.0; n],
+            dr_du: vec![0.0; n * n],
+            mass: vec![0.0; n * n],
+        }
+    }
+
+    /// R at one sample; writes `M W` into `mw` when given.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn residual(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        torque: f64,
+        r: &mut [f64],
+        mw: Option<&mut [f64]>,
+    ) {
+        let n = self.n;
+        self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
+        self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
+        let (m, f) = self.kane.mass_matrix_and_forcing_rows(t, q, &self.u);
+        for i in 0..n {
+            let mut s = -f[i] - self.g[i] * torque;
+            for j in 0..n {
+                s += m[i * n + j] * self.ud[j];
+            }
+            r[i] = s;
+        }
+        if let Some(mw) = mw {
+            for i in 0..n {
+                for k in 0..n {
+                    let mut s = 0.0;
+                    for j in 0..n {
+                        s += m[i * n + j] * self.w[j * n + k];
+                    }
+                    mw[i * n + k] = s;
+                }
+            }
+        }
+    }
+
+    /// R, A, B, C at one sample by central differences (q and q̇ are restored on return). The
+    /// spin angle is cyclic, so its column of A is zero and not differenced.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn linearize(
+        &mut self,
+        t: f64,
+        q: &mut [f64],
+        qd: &mut [f64],
+        qdd: &[f64],
+        torque: f64,
+        spin: usize,
+        h: f64,
+        lin: &mut SampleLin,
+    ) {
+        let n = self.n;
+        // Closed-form derivatives where the engine has them (absolute speeds, no gravity or
+        // point forces): one evaluation instead of 1 + 2(n − 1) + 2n (fewer instructions for a
+        // whole CPVA branch, see `BENCHMARKS.md`).
+        if self.kane.has_residual_jacobian() {
+            self.speeds.u_from_qdot(&self.parents, qd, &mut self.u);
+            self.speeds.u_from_qdot(&self.parents, qdd, &mut self.ud);
+            let (du, m) = (&mut self.dr_du, &mut self.mass);
+            self.kane.residual_jacobian(t, q, &self.u, &self.ud, &mut lin.r, &mut lin.a, du, m);
+            for i in 0..n {
+                lin.r[i] -= self.g[i] * torque;
+                lin.a[i * n + spin] = 0.0;
+                for k in 0..n {
+                    let (mut b, mut c) = (0.0, 0.0);
+                    for j in 0..n {
+                        b += du[i * n + j] * self.w[j * n + k];
+                        c += m[i * n + j] * self.w[j * n + k];
+                    }
+                    lin.b[i * n + k] = b;
+                    lin.c[i * n + k] = c;
+                }
+            }
+            return;
+        }
+        let (mut rp, mut rm) = (std::mem::take(&mut self.rp), std::mem::take(&mut self.rm));
+        self.residual(t, q, qd, qdd, torque, &mut lin.r, Some(&mut lin.c));
+        for k in 0..n {
+            if k == spin {
+                for i in 0..n {
+                    lin.a[i * n + k] = 0.0;
+                }
+                continue;
+            }
+            let q0 = q[k];
+            q[k] = q0 + h;
+            self.residual(t, q, qd, qdd, torque, &mut rp, None);
+            q[k] = q0 - h;
+            self.residual(t, q, qd, qdd, torque, &mut rm, None);
+            q[k] = q0;
+            for i in 0..n {
+                lin.a[i * n + k] = (rp[i] - rm[i]) / (2.0 * h);
+            }
+        }
+        for k in 0..n {
+            let v0 = qd[k];
+            let hv = h * v0.abs().max(1.0);
+            qd[k] = v0 + hv;
+            self.residual(t, q, qd, qdd, torque, &mut rp, None);
+            qd[k] = v0 - hv;
+            self.residual(t, q, qd, qdd, torque, &mut rm, None);
+            qd[k] = v0;
+            for i in 0..n {
+                lin.b[i * n + k] = (rp[i] - rm[i]) / (2.0 * hv);
+            }
+        }
+        self.rp = rp;
+        self.rm = rm;
+    }
+}

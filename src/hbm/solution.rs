@@ -1,0 +1,199 @@
+//! One periodic steady state of the harmonic balance ([`HbmSolution`]): the truncated Fourier
+//! series `p_k = a_k0 + Σ_{h=1..H} a_kh cos hω₀t + b_kh sin hω₀t` of every coordinate (the spin
+//! one about Ωt) with the solved mean torque T_m, and its read-outs: harmonic amplitudes,
+//! accelerations `(hω₀)²·|c_h|` at an order, the synthesis of q(t) and q̇(t), the peak amplitude
+//! over a period (Clenshaw's recurrence), and the top-harmonic share of the acceleration spectrum
+//! that says whether H suffices (section "Harmonic count" of the module docs of [`crate::hbm`]).
+
+use super::Stability;
+use std::f64::consts::PI;
+
+/// One periodic steady state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HbmSolution {
+    /// Excitation order n.
+    pub order: f64,
+    /// Mean speed Ω, rad/s.
+    pub omega: f64,
+    /// Torque scale s: the oscillating excitation amplitudes are s·T_k (1: as given).
+    pub torque_scale: f64,
+    /// Base frequency ω₀ of the Fourier series, rad/s (nΩ for a single order).
+    pub base_frequency: f64,
+    /// Number of harmonics H.
+    pub harmonics: usize,
+    /// Index of the spin coordinate.
+    pub spin: usize,
+    /// Fourier coefficients of the periodic parts p_k, row-major per coordinate k:
+    /// `[a_k0, a_k1, b_k1, …, a_kH, b_kH]` (rad), `p_k(t) = a_k0 + Σ a_kh cos hω₀t + b_kh sin hω₀t`.
+    /// The spin coordinate's `a_s0` is the gauge 0.
+    pub coefficients: Vec<f64>,
+    /// The mean spin torque T_m that holds the mean speed at Ω, N·m.
+    pub mean_torque: f64,
+    /// Newton iterations used.
+    pub iterations: usize,
+    /// Max norm of the projected residual at the solution, N·m.
+    pub residual: f64,
+    /// Largest share of the top harmonic in a coordinate's acceleration spectrum.
+    pub top_harmonic_ratio: f64,
+    /// True when `top_harmonic_ratio` exceeds [`HbmOptions::harmonic_tol`](super::HbmOptions::harmonic_tol): raise H.
+    pub needs_more_harmonics: bool,
+    /// Floquet stability, when computed.
+    pub stability: Option<Stability>,
+}
+
+impl HbmSolution {
+    /// Fourier coefficients per coordinate, 2H + 1.
+    pub(super) fn nb(&self) -> usize {
+        2 * self.harmonics + 1
+    }
+
+    /// Number of coordinates.
+    pub fn ndof(&self) -> usize {
+        self.coefficients.len() / self.nb()
+    }
+
+    /// The coefficients `(a_kh, b_kh)` of harmonic h ≥ 1 of coordinate k (rad); (a_k0, 0) for h = 0;
+    /// zero above H.
+    pub fn coefficient(&self, k: usize, h: usize) -> (f64, f64) {
+        let c = &self.coefficients[k * self.nb()..(k + 1) * self.nb()];
+        match h {
+            0 => (c[0], 0.0),
+            h if h <= self.harmonics => (c[2 * h - 1], c[2 * h]),
+            _ => (0.0, 0.0),
+        }
+    }
+
+    /// Amplitude of harmonic h (frequency hω₀) of coordinate k, rad.
+    pub fn amplitude(&self, k: usize, h: usize) -> f64 {
+        let (a, b) = self.coefficient(k, h);
+        if h == 0 { a.abs() } else { a.hypot(b) }
+    }
+
+    /// Amplitude of the angular acceleration of coordinate k at harmonic h, rad/s².
+    pub fn acceleration_amplitude(&self, k: usize, h: usize) -> f64 {
+        let w = h as f64 * self.base_frequency;
+        w * w * self.amplitude(k, h)
+    }
+
+    /// Harmonic index of order `multiple·n`, if it is a harmonic of ω₀.
+    pub fn harmonic_of(&self, multiple: f64) -> Option<usize> {
+        let h = multiple * self.order * self.omega / self.base_frequency;
+        let r = h.round();
+        ((h - r).abs() < 1e-9 * h.abs().max(1.0) && r >= 1.0).then_some(r as usize)
+    }
+
+    /// Amplitude of the angular acceleration of coordinate k at the order `multiple·n` (rad/s²);
+    /// 0 when that order is not a harmonic of ω₀ or lies above H. For the spin coordinate this is
+    /// the rotor acceleration `u̇1` of the paper's figures (multiple 1: main order, 2: second).
+    pub fn order_acceleration(&self, k: usize, multiple: f64) -> f64 {
+        self.harmonic_of(multiple).map_or(0.0, |h| self.acceleration_amplitude(k, h))
+    }
+
+    /// The periodic part p_k and its first two time derivatives at time t (rad, rad/s, rad/s²).
+    pub fn periodic_part(&self, k: usize, t: f64) -> (f64, f64, f64) {
+        let w = self.base_frequency;
+        let c = &self.coefficients[k * self.nb()..(k + 1) * self.nb()];
+        let (mut p, mut pd, mut pdd) = (c[0], 0.0, 0.0);
+        for h in 1..=self.harmonics {
+            let hw = h as f64 * w;
+            let (s, co) = (hw * t).sin_cos();
+            let (a, b) = (c[2 * h - 1], c[2 * h]);
+            p += a * co + b * s;
+            pd += hw * (b * co - a * s);
+            pdd -= hw * hw * (a * co + b * s);
+        }
+        (p, pd, pdd)
+    }
+
+    /// Coordinates q(t) and rates q̇(t) (rad, rad/s), the spin one including Ωt.
+    pub fn coordinates_at(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
+        let n = self.ndof();
+        let (mut q, mut qd) = (vec![0.0; n], vec![0.0; n]);
+        for k in 0..n {
+            let (p, pd, _) = self.periodic_part(k, t);
+            q[k] = p;
+            qd[k] = pd;
+        }
+        q[self.spin] += self.omega * t;
+        qd[self.spin] += self.omega;
+        (q, qd)
+    }
+
+    /// Peak amplitude `max_t |p_k(t) − a_k0|` of coordinate k over one period (rad), sampled at
+    /// 16(H + 1) points.
+    pub fn peak_amplitude(&self, k: usize) -> f64 {
+        let ns = 16 * (self.harmonics + 1);
+        let c = &self.coefficients[k * self.nb()..(k + 1) * self.nb()];
+        let (ds, dc) = (2.0 * PI / ns as f64).sin_cos();
+        let (mut s1, mut c1) = (0.0f64, 1.0f64);
+        let mut peak = 0.0f64;
+        for _ in 0..ns {
+            // Clenshaw's recurrence for Σ a_h cos hτ + b_h sin hτ: two multiply-adds per
+            // harmonic and series, against a rotation of (cos hτ, sin hτ) per harmonic.
+            let two_c = 2.0 * c1;
+            let (mut ya, mut ya1, mut yb, mut yb1) = (0.0, 0.0, 0.0, 0.0);
+            for h in (1..=self.harmonics).rev() {
+                (ya, ya1) = (c[2 * h - 1] + two_c * ya - ya1, ya);
+                (yb, yb1) = (c[2 * h] + two_c * yb - yb1, yb);
+            }
+            // Σ_{h≥1} a_h cos hτ = ya cos τ − ya1, Σ b_h sin hτ = yb sin τ.
+            let p = ya * c1 - ya1 + yb * s1;
+            peak = peak.max(p.abs());
+            // The sample angle by rotation (one sin_cos per call instead of per sample).
+            (c1, s1) = (c1 * dc - s1 * ds, s1 * dc + c1 * ds);
+        }
+        peak
+    }
+
+    /// Largest peak amplitude over the coordinates other than the spin (the pendulums), rad.
+    pub fn max_peak_amplitude(&self) -> f64 {
+        (0..self.ndof()).filter(|&k| k != self.spin).map(|k| self.peak_amplitude(k)).fold(0.0, f64::max)
+    }
+
+    /// The share of the top harmonic (see the module docs).
+    pub(super) fn harmonic_ratio(&self) -> f64 {
+        let mut worst = 0.0f64;
+        for k in 0..self.ndof() {
+            let mut sum = 0.0;
+            for h in 1..=self.harmonics {
+                let c = (h * h) as f64 * self.amplitude(k, h);
+                sum += c * c;
+            }
+            // A coordinate that barely moves (below 1e-9 rad/s² at the base frequency) says
+            // nothing about convergence.
+            if sum.sqrt() * self.base_frequency.powi(2) < 1e-9 {
+                continue;
+            }
+            let top = (self.harmonics * self.harmonics) as f64 * self.amplitude(k, self.harmonics);
+            worst = worst.max(top / sum.sqrt());
+        }
+        worst
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_problem;
+    use std::f64::consts::PI;
+
+    /// The peak amplitude (Clenshaw sums at 16(H + 1) samples) equals the direct synthesis of
+    /// the series at the same instants.
+    #[test]
+    fn peak_amplitude_equals_direct_synthesis() {
+        let mut hbm = test_problem(500.0, 0, crate::model::speeds::Speeds::AbsoluteAngularVelocities);
+        let sol = hbm.solve(3.05, None).unwrap();
+        let period = 2.0 * PI / sol.base_frequency;
+        for k in 0..sol.ndof() {
+            let ns = 16 * (sol.harmonics + 1);
+            let a0 = sol.coefficient(k, 0).0;
+            let direct =
+                (0..ns).map(|j| (sol.periodic_part(k, period * j as f64 / ns as f64).0 - a0).abs()).fold(0.0, f64::max);
+            let e = (sol.peak_amplitude(k) - direct).abs();
+            assert!(
+                direct > 0.0 && e <= 1e-12 * direct,
+                "coordinate {k}: {} vs {direct} ({e:e})",
+                sol.peak_amplitude(k)
+            );
+        }
+    }
+}

@@ -1,0 +1,308 @@
+//! Eigen-analysis of the linearised mechanism ([`LinearModel::modes`]): the eigenvalues of the
+//! reduced state matrix `ẋ_r = S x_r` (eq. 19, `M ẋ + A x = 0`, solved for ẋ with the cyclic spin
+//! angle θ* removed, and the spin speed removed too when it is held, eq. 14), by balancing
+//! (Parlett–Reinsch) and the real Schur form; each mode's shape as the right singular vector of
+//! `S − λI` with the smallest singular value (the next ones for a repeated root). The modes are
+//! classified (spin angle, spin speed, vibration: see the module docs of [`crate::linear`]),
+//! scaled, and given eigen-orders |Im λ|/Ω, damping ratios, coordinate shares and kinetic-energy
+//! shares per body. For the CPVA the held spin gives the pendulum's tuning order n_t (eq. 15).
+
+use super::{C64, Damping, LinResult, LinearError, LinearModel, Spin};
+use nalgebra::DMatrix;
+use std::f64::consts::PI;
+
+/// An eigenvalue counts as real when `|Im λ| ≤ REAL_TOL · scale` (scale: the largest |λ| or Ω).
+const REAL_TOL: f64 = 1e-10;
+/// Eigenvalues closer than `REPEAT_TOL · scale` share a null space (repeated roots, e.g. the
+/// non-unison pendulum modes of N identical pendulums); they get distinct null vectors.
+const REPEAT_TOL: f64 = 1e-7;
+
+/// What a mode is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModeKind {
+    /// Rigid rotation of the whole spinning mechanism by a constant angle (λ = 0 exactly).
+    SpinAngle,
+    /// Rigid change of spin speed (λ = 0 without losses, ≈ −c_r/J with them).
+    SpinSpeed,
+    /// A vibration mode (one per remaining degree of freedom; zero-frequency ones included, e.g. a
+    /// pendulum at Ω = 0).
+    Vibration,
+}
+
+/// One mode of the linearised mechanism.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// What it is.
+    pub kind: ModeKind,
+    /// Its eigenvalue λ (rad/s), with Im λ ≥ 0; for a pair of real eigenvalues (an overdamped
+    /// or zero-frequency mode) the one of smaller modulus.
+    pub eigenvalue: C64,
+    /// The other eigenvalue of the mode: the conjugate, or the other real one.
+    pub partner: C64,
+    /// Undamped natural frequency ω_n = |λ| (= sqrt(λ₁λ₂) for a real pair), rad/s.
+    pub natural_frequency_rad_s: f64,
+    /// Damped frequency |Im λ|, rad/s.
+    pub damped_frequency_rad_s: f64,
+    /// Damped frequency in Hz.
+    pub frequency_hz: f64,
+    /// Eigen-order |Im λ| / Ω (NaN at Ω = 0).
+    pub order: f64,
+    /// Damping ratio −Re λ / |λ| (−(λ₁+λ₂)/(2ω_n) for a real pair; NaN when ω_n = 0).
+    pub damping_ratio: f64,
+    /// Shape in the coordinates q (n entries, joint order), scaled so that the largest entry of
+    /// `shape_qdot` is 1 (for a zero-frequency vibration mode, where q̇ = λq vanishes, the
+    /// largest entry of `shape_q` is 1 instead). For the spin-speed mode the spin angle entry is
+    /// left at 0 (it grows linearly in time there).
+    pub shape_q: Vec<C64>,
+    /// Shape in the joint rates q̇ = W⁻¹u (= λ·shape_q), largest entry 1.
+    pub shape_qdot: Vec<C64>,
+    /// Shape in the speeds u of the mechanism, same scaling.
+    pub shape_u: Vec<C64>,
+    /// Share of each coordinate, `|q̇_j|² (M_q)_jj` normalised to sum 1 (the diagonal part of
+    /// the kinetic energy; independent of the speeds choice; `|q_j|²` in place of `|q̇_j|²` for
+    /// a zero-frequency mode).
+    pub coordinate_share: Vec<f64>,
+    /// Share of each body in the mode's kinetic energy `½(m|v|² + I|ω|²)` (sum 1; all 0 for the
+    /// spin-angle mode, which has no velocity).
+    pub body_energy_share: Vec<f64>,
+    /// Name of the joint with the largest coordinate share.
+    pub label: String,
+}
+
+/// The eigen-analysis of a linear model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Modal {
+    /// Spin speed Ω, rad/s.
+    pub omega: f64,
+    /// Spin free or held.
+    pub spin: Spin,
+    /// Dampers kept or removed.
+    pub damping: Damping,
+    /// Joint names (coordinate order).
+    pub joints: Vec<String>,
+    /// Body names.
+    pub bodies: Vec<String>,
+    /// Rigid-body modes of the free spin (spin angle, spin speed); empty when held.
+    pub rigid: Vec<Mode>,
+    /// Vibration modes (n − 1 of them), by increasing natural frequency.
+    pub modes: Vec<Mode>,
+    /// True when no eigenvalue has a positive real part (beyond rounding).
+    pub stable: bool,
+}
+
+impl LinearModel {
+    /// Kept coordinate and speed indices of the reduced state (the spin angle is always dropped:
+    /// cyclic).
+    fn kept(&self, spin: Spin) -> (Vec<usize>, Vec<usize>) {
+        let s = self.op.spin_joint;
+        let qi: Vec<usize> = (0..self.ndof()).filter(|&j| j != s).collect();
+        let ui = match spin {
+            Spin::Free => (0..self.ndof()).collect(),
+            Spin::Held => qi.clone(),
+        };
+        (qi, ui)
+    }
+
+    /// The reduced state matrix `ẋ_r = S x_r`, `x_r = [q_qi; u_ui]`.
+    fn state_matrix(&self, spin: Spin, damping: Damping) -> LinResult<(DMatrix<f64>, Vec<usize>, Vec<usize>)> {
+        let (qi, ui) = self.kept(spin);
+        let (nq, nu) = (qi.len(), ui.len());
+        let chol = select(&self.mass, &ui, &ui)
+            .cholesky()
+            .ok_or_else(|| LinearError::MassMatrix { mechanism: self.mech.name.clone() })?;
+        let mut s = DMatrix::zeros(nq + nu, nq + nu);
+        s.view_mut((0, nq), (nq, nu)).copy_from(&select(&self.w_inv, &qi, &ui));
+        s.view_mut((nq, 0), (nu, nq)).copy_from(&chol.solve(&select(&self.f_q, &ui, &qi)));
+        s.view_mut((nq, nq), (nu, nu)).copy_from(&chol.solve(&select(self.f_u_of(damping), &ui, &ui)));
+        Ok((s, qi, ui))
+    }
+
+    /// Eigen-analysis: rigid-body modes of the free spin and the n − 1 vibration modes with
+    /// eigen-orders, damping ratios, shapes and participation (see [`Mode`]).
+    pub fn modes(&self, spin: Spin, damping: Damping) -> LinResult<Modal> {
+        let n = self.ndof();
+        let s = self.op.spin_joint;
+        let omega = self.op.omega;
+        let (sm, qi, ui) = self.state_matrix(spin, damping)?;
+        let lambdas = eigenvalues(&sm)?;
+        let scale = lambdas.iter().map(|l| l.norm()).fold(omega.abs(), f64::max).max(f64::MIN_POSITIVE);
+        let is_real = |l: &C64| l.im.abs() <= REAL_TOL * scale;
+        let mut reals: Vec<f64> = lambdas.iter().filter(|l| is_real(l)).map(|l| l.re).collect();
+        reals.sort_by(f64::total_cmp);
+        // (representative, partner, kind)
+        let mut picks: Vec<(C64, C64, ModeKind)> = Vec::new();
+        if spin == Spin::Free
+            && let Some((i, _)) = reals.iter().enumerate().min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        {
+            let l = reals.remove(i);
+            picks.push((C64::new(l, 0.0), C64::new(l, 0.0), ModeKind::SpinSpeed));
+        }
+        for l in lambdas.iter().filter(|l| !is_real(l) && l.im > 0.0) {
+            picks.push((*l, l.conj(), ModeKind::Vibration));
+        }
+        for pair in reals.chunks(2) {
+            let (a, b) = (pair[0], *pair.get(1).unwrap_or(&pair[0]));
+            let (rep, other) = if a.abs() <= b.abs() { (a, b) } else { (b, a) };
+            picks.push((C64::new(rep, 0.0), C64::new(other, 0.0), ModeKind::Vibration));
+        }
+        let mq = self.second_order(damping).m;
+        let joints: Vec<String> = self.mech.joints.iter().map(|j| j.name.clone()).collect();
+        let bodies: Vec<String> = self.mech.bodies.iter().map(|b| b.name.clone()).collect();
+        let mut rigid = Vec::new();
+        let mut modes = Vec::new();
+        if spin == Spin::Free {
+            let mut shape_q = vec![C64::new(0.0, 0.0); n];
+            shape_q[s] = C64::new(1.0, 0.0);
+            let mut share = vec![0.0; n];
+            share[s] = 1.0;
+            rigid.push(Mode {
+                kind: ModeKind::SpinAngle,
+                eigenvalue: C64::new(0.0, 0.0),
+                partner: C64::new(0.0, 0.0),
+                natural_frequency_rad_s: 0.0,
+                damped_frequency_rad_s: 0.0,
+                frequency_hz: 0.0,
+                order: 0.0,
+                damping_ratio: f64::NAN,
+                shape_q,
+                shape_qdot: vec![C64::new(0.0, 0.0); n],
+                shape_u: vec![C64::new(0.0, 0.0); n],
+                coordinate_share: share,
+                body_energy_share: vec![0.0; n],
+                label: joints[s].clone(),
+            });
+        }
+        let mut used: Vec<C64> = Vec::new();
+        for (rep, partner, kind) in picks {
+            let k = used.iter().filter(|u| (**u - rep).norm() <= REPEAT_TOL * scale).count();
+            used.push(rep);
+            let v = null_vector(&sm, rep, k);
+            let nq = qi.len();
+            let mut q = vec![C64::new(0.0, 0.0); n];
+            let mut u = vec![C64::new(0.0, 0.0); n];
+            for (a, &j) in qi.iter().enumerate() {
+                q[j] = v[a];
+            }
+            for (a, &j) in ui.iter().enumerate() {
+                u[j] = v[nq + a];
+            }
+            if spin == Spin::Free && kind == ModeKind::Vibration && rep.norm() > 0.0 {
+                // θ̇* = u_s*: the spin angle's part of the eigenvector.
+                q[s] = u[s] / rep;
+            }
+            let mut qdot = vec![C64::new(0.0, 0.0); n];
+            for k in 0..n {
+                for r in 0..n {
+                    qdot[k] += u[r] * self.w_inv[(k, r)];
+                }
+            }
+            // Scale: largest q̇ entry made 1; for a zero-frequency mode (q̇ = λq ≈ 0, only rounding
+            // left in q̇) the displacement q stands in for q̇ in the scaling and the shares.
+            let moving = rep.norm() > REPEAT_TOL * scale || kind == ModeKind::SpinSpeed;
+            let basis = if moving { &qdot } else { &q };
+            let pivot = basis
+                .iter()
+                .copied()
+                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+                .filter(|p| p.norm() > 0.0)
+                .unwrap_or(C64::new(1.0, 0.0));
+            for x in q.iter_mut().chain(u.iter_mut()).chain(qdot.iter_mut()) {
+                *x /= pivot;
+            }
+            let basis = if moving { &qdot } else { &q };
+            let mut share: Vec<f64> = (0..n).map(|j| basis[j].norm_sqr() * mq[(j, j)]).collect();
+            normalise(&mut share);
+            let mut energy: Vec<f64> = (0..n)
+                .map(|j| {
+                    let (pv, pw) = &self.partials[j];
+                    let (mut vx, mut vy, mut w) = (C64::new(0.0, 0.0), C64::new(0.0, 0.0), C64::new(0.0, 0.0));
+                    for r in 0..n {
+                        vx += u[r] * pv[r].x;
+                        vy += u[r] * pv[r].y;
+                        w += u[r] * pw[r];
+                    }
+                    let b = &self.mech.bodies[j].inertia;
+                    0.5 * (b.mass * (vx.norm_sqr() + vy.norm_sqr()) + b.i_com * w.norm_sqr())
+                })
+                .collect();
+            normalise(&mut energy);
+            let top = share.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
+            let (wn, zeta) = if rep.im != 0.0 {
+                (rep.norm(), if rep.norm() > 0.0 { -rep.re / rep.norm() } else { f64::NAN })
+            } else {
+                let wn = (rep.re * partner.re).abs().sqrt();
+                (wn, if wn > 0.0 { -(rep.re + partner.re) / (2.0 * wn) } else { f64::NAN })
+            };
+            let wd = rep.im.abs();
+            let mode = Mode {
+                kind,
+                eigenvalue: rep,
+                partner,
+                natural_frequency_rad_s: wn,
+                damped_frequency_rad_s: wd,
+                frequency_hz: wd / (2.0 * PI),
+                order: if omega != 0.0 { wd / omega.abs() } else { f64::NAN },
+                damping_ratio: zeta,
+                shape_q: q,
+                shape_qdot: qdot,
+                shape_u: u,
+                coordinate_share: share,
+                body_energy_share: energy,
+                label: joints[top].clone(),
+            };
+            if kind == ModeKind::SpinSpeed {
+                let mut mode = mode;
+                mode.shape_q[s] = C64::new(0.0, 0.0);
+                mode.label = joints[s].clone();
+                rigid.push(mode);
+            } else {
+                modes.push(mode);
+            }
+        }
+        modes.sort_by(|a, b| a.natural_frequency_rad_s.total_cmp(&b.natural_frequency_rad_s));
+        let stable = lambdas.iter().all(|l| l.re <= 1e-9 * scale);
+        Ok(Modal { omega, spin, damping, joints, bodies, rigid, modes, stable })
+    }
+}
+
+/// The submatrix of `m` on `rows` × `cols`.
+fn select(m: &DMatrix<f64>, rows: &[usize], cols: &[usize]) -> DMatrix<f64> {
+    DMatrix::from_fn(rows.len(), cols.len(), |i, j| m[(rows[i], cols[j])])
+}
+
+/// Scales `v` to sum 1 (left alone when the sum is not positive).
+fn normalise(v: &mut [f64]) {
+    let s: f64 = v.iter().sum();
+    if s > 0.0 {
+        v.iter_mut().for_each(|x| *x /= s);
+    }
+}
+
+/// Eigenvalues of a real square matrix: balanced (Parlett–Reinsch), then real Schur form.
+fn eigenvalues(s: &DMatrix<f64>) -> LinResult<Vec<C64>> {
+    let d = s.nrows();
+    match d {
+        0 => return Ok(Vec::new()),
+        1 => return Ok(vec![C64::new(s[(0, 0)], 0.0)]),
+        _ => {}
+    }
+    let mut b = s.clone();
+    nalgebra::linalg::balancing::balance_parlett_reinsch(&mut b);
+    let schur = nalgebra::Schur::try_new(b, f64::EPSILON, 100_000).ok_or(LinearError::Eigen { dim: d })?;
+    Ok(schur.complex_eigenvalues().iter().copied().collect())
+}
+
+/// The right singular vector of `S − λI` with the (k+1)-th smallest singular value: the
+/// eigenvector for k = 0, further null vectors of a repeated eigenvalue for k ≥ 1.
+fn null_vector(s: &DMatrix<f64>, lambda: C64, k: usize) -> Vec<C64> {
+    let d = s.nrows();
+    let a = DMatrix::from_fn(d, d, |i, j| C64::new(s[(i, j)], 0.0) - if i == j { lambda } else { C64::new(0.0, 0.0) });
+    let svd = a.svd(false, true);
+    let Some(vt) = svd.v_t else {
+        return vec![C64::new(0.0, 0.0); d];
+    };
+    let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
+    order.sort_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]));
+    let row = order[k.min(d - 1)];
+    (0..d).map(|j| vt[(row, j)].conj()).collect()
+}
