@@ -324,7 +324,7 @@ impl Hbm {
         let t_scale = harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>().max(1.0);
         let mut kane = kane.clone();
         kane.set_joint_torque(spin_joint, Excitation::constant(0.0));
-        let parents = mech.parents();
+        let parents = mech.speed_parents();
         let speeds = mech.speeds;
         let w = speeds.w_matrix(&parents);
         // g_r = ∂q̇_s/∂u_r: a spin torque τ does τ q̇_s of power.

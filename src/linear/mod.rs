@@ -360,7 +360,7 @@ fn undamped(mech: &Mechanism) -> Mechanism {
 /// W⁻¹ column by column: column r is q̇ for u = e_r (exact: entries 0, ±1).
 fn w_inverse(mech: &Mechanism) -> DMatrix<f64> {
     let n = mech.ndof();
-    let parents = mech.parents();
+    let parents = mech.speed_parents();
     let mut w = DMatrix::zeros(n, n);
     let mut e = vec![0.0; n];
     let mut col = vec![0.0; n];
@@ -409,7 +409,7 @@ impl LinearModel {
         let prepared = prepare(mech, s);
         let mut kane = Kane::new(&prepared)?;
         let w_inv = w_inverse(&prepared);
-        let parents = prepared.parents();
+        let parents = prepared.speed_parents();
         let mut qdot0 = vec![0.0; n];
         qdot0[s] = omega_rad_s;
         let mut u = vec![0.0; n];
@@ -528,10 +528,10 @@ impl LinearModel {
     }
 
     /// The row c of the absolute angular velocity of body `body`, `ω_body = c·u` (the sum of the
-    /// joint rates on its path).
+    /// rates of the rotating joints on its path, [`Mechanism::rotation_coordinates`]).
     pub fn angular_velocity_row(&self, body: usize) -> DVector<f64> {
         let mut c = DVector::zeros(self.ndof());
-        for k in self.mech.path_to(body) {
+        for k in self.mech.rotation_coordinates(body) {
             c += self.w_inv.row(k).transpose();
         }
         c
