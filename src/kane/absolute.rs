@@ -6,7 +6,7 @@
 //! body j (c the child of k on the path to j, Δ = θ_j − θ_k the sum of the joint angles between),
 //! `M_kj = α cos Δ − β sin Δ` with `α = at_c·S'_j` and `β = at_c × S'_j` computed once, and the
 //! centripetal inertia forces of that pair are `F_k += u_j² D`, `F_j −= u_k² D` with
-//! `D = α sin Δ + β cos Δ` (see [`Kane::evaluate_absolute`]).
+//! `D = α sin Δ + β cos Δ` (see `Kane::evaluate_absolute`).
 //!
 //! **The CPVA of the paper, eq. (7).** The rotor is body k = 0 (coordinate θ), pendulum i is body
 //! j = i (coordinate φ_i) pivoted at `at_c = (R, 0)` on the rotor, with its first moment
@@ -28,7 +28,7 @@ use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, rotate_cs};
 
 impl Kane {
-    /// [`Kane::evaluate`] for absolute angular velocities, in pair-coefficient form.
+    /// `Kane::evaluate` for absolute angular velocities, in pair-coefficient form.
     ///
     /// Kane's sums regrouped by pairs of speeds: with u_k = ω_k, a body i below k has
     /// `ω_{i,k} = δ_ik` and `v_{i,k} = ẑ × R_k r_ik` with r_ik constant in body k's frame (the
@@ -145,7 +145,7 @@ impl Kane {
     /// The residual `r = M(q) u̇ − F(q, u, t)` with its exact derivatives `∂r/∂q` and `∂r/∂u`
     /// (row-major n × n), and M (row-major) into `m_out`, for absolute angular velocities
     /// without gravity or point forces: there every q-dependence is a pair term of
-    /// [`Kane::evaluate_absolute`], `M_kj = α cos Δ − β sin Δ` and `D = α sin Δ + β cos Δ`, with
+    /// `Kane::evaluate_absolute`, `M_kj = α cos Δ − β sin Δ` and `D = α sin Δ + β cos Δ`, with
     /// `∂M_kj/∂Δ = −D`, `∂D/∂Δ = M_kj`, and Δ = θ_j − θ_k the sum of the joint angles on the path
     /// from k (exclusive) to j, so the derivatives cost one extra walk over the pairs instead of
     /// 2n (q) + 2n (u) central differences. Returns false, writing nothing, for the other

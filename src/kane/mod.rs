@@ -8,7 +8,7 @@
 //! `M_rs = Σ_j m_j v_{j,r}·v_{j,s} + I_j ω_{j,r} ω_{j,s}` and `F_r + F*_r` with
 //! `F*_r = −Σ_j (m_j a⁰_j·v_{j,r} + I_j α⁰_j ω_{j,r})`. Three forms compute the same sums:
 //!
-//! - [`reference`]: the sums as the textbook writes them, body by body, allocating: the
+//! - [`reference`](mod@reference): the sums as the textbook writes them, body by body, allocating: the
 //!   definition the other two are tested against;
 //! - [`rates`]: regrouped by subtree (composite bodies) in one forward and one backward pass, for
 //!   any joint kind; with absolute angular velocities on a tree that is not purely revolute its
@@ -78,9 +78,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// Which regrouping of Kane's sums evaluates this mechanism (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Form {
-    /// Absolute angular velocities on a purely revolute tree: [`Kane::evaluate_absolute`].
+    /// Absolute angular velocities on a purely revolute tree: `Kane::evaluate_absolute`.
     Pairs,
-    /// Joint rates: [`Kane::evaluate_rates`].
+    /// Joint rates: `Kane::evaluate_rates`.
     Rates,
     /// Absolute angular velocities with other joint kinds: the rates form, mapped to the speeds.
     MappedRates,
@@ -173,7 +173,7 @@ pub struct Kane {
     torques: Vec<JointTorque>,
     /// Absolute speeds: the constant coefficients `(α, β)` of every ancestor pair (k, j), in the
     /// order the forward pass walks them (j ascending, then k from j's parent up to the root); see
-    /// [`Kane::evaluate_absolute`].
+    /// `Kane::evaluate_absolute`.
     pairs: Vec<(f64, f64)>,
     // Work buffers.
     /// The joints of one ancestor walk, for [`Kane::residual_jacobian`] (capacity n).
@@ -433,7 +433,7 @@ impl Kane {
         }
     }
 
-    /// The body of [`Kane::evaluate`] for `N` degrees of freedom (`N = 0`: any, read at run time).
+    /// The body of `Kane::evaluate` for `N` degrees of freedom (`N = 0`: any, read at run time).
     ///
     /// NOTE: a literal n lets the compiler unroll the loops and drop most bounds checks for the
     /// small mechanisms that dominate torsional work.

@@ -21,7 +21,7 @@ use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 
 impl Kane {
-    /// [`Kane::evaluate`] for joint rates (u = q̇; in the mapped form, u holds q̇ already), by
+    /// `Kane::evaluate` for joint rates (u = q̇; in the mapped form, u holds q̇ already), by
     /// composite bodies (see the module doc).
     #[inline(always)]
     pub(super) fn evaluate_rates<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
