@@ -23,7 +23,6 @@ use super::Kane;
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 use crate::model::mechanism::Mechanism;
-use crate::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 
 /// One body's kinematics at a state, in the world frame, as Kane's method uses them.
@@ -49,19 +48,9 @@ pub struct BodyKinematics {
     pub acc0: Vec2,
 }
 
-/// The matrix B of `q̇ = B u` (n × n): the identity for joint rates; for absolute angular
-/// velocities `B_kk = 1` and `B_kp = −1` for the speed parent p of k.
+/// The matrix B = W⁻¹ of `q̇ = B u` ([`crate::model::speeds::Speeds::w_inverse_matrix`]).
 pub fn speeds_to_rates(mech: &Mechanism) -> DMatrix<f64> {
-    let n = mech.ndof();
-    let mut b = DMatrix::identity(n, n);
-    if mech.speeds == Speeds::AbsoluteAngularVelocities {
-        for (k, p) in mech.speed_parents().into_iter().enumerate() {
-            if let Some(p) = p {
-                b[(k, p)] = -1.0;
-            }
-        }
-    }
-    b
+    mech.speeds.w_inverse_matrix(&mech.speed_parents())
 }
 
 /// Every body's kinematics at coordinates `q` and speeds `u` (steps 1–3 of the module doc).

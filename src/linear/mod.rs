@@ -357,24 +357,6 @@ fn undamped(mech: &Mechanism) -> Mechanism {
     m
 }
 
-/// W⁻¹ column by column: column r is q̇ for u = e_r (exact: entries 0, ±1).
-fn w_inverse(mech: &Mechanism) -> DMatrix<f64> {
-    let n = mech.ndof();
-    let parents = mech.speed_parents();
-    let mut w = DMatrix::zeros(n, n);
-    let mut e = vec![0.0; n];
-    let mut col = vec![0.0; n];
-    for r in 0..n {
-        e.iter_mut().for_each(|x| *x = 0.0);
-        e[r] = 1.0;
-        mech.speeds.qdot(&parents, &e, &mut col);
-        for k in 0..n {
-            w[(k, r)] = col[k];
-        }
-    }
-    w
-}
-
 impl LinearModel {
     /// Linearises `mech` about a steady spin of joint `spin_joint` at `omega_rad_s`, the other
     /// coordinates at the relative equilibrium found by Newton from `guess` (all n coordinates;
@@ -408,7 +390,7 @@ impl LinearModel {
         q[s] = 0.0;
         let prepared = prepare(mech, s);
         let mut kane = Kane::new(&prepared)?;
-        let w_inv = w_inverse(&prepared);
+        let w_inv = prepared.speeds.w_inverse_matrix(&prepared.speed_parents());
         let parents = prepared.speed_parents();
         let mut qdot0 = vec![0.0; n];
         qdot0[s] = omega_rad_s;

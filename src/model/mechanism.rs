@@ -115,13 +115,6 @@ impl Mechanism {
         path.into_iter().filter(|&j| self.joints[j].kind.rotates()).filter_map(|j| self.joints[j].coordinate).collect()
     }
 
-    /// A body's absolute angle (rad), angular velocity (rad/s) or angular acceleration (rad/s²)
-    /// from the coordinates, their rates or their accelerations `x` (one entry per coordinate):
-    /// the sum over the rotating joints of its path.
-    pub fn body_rotation(&self, body: usize, x: &[f64]) -> f64 {
-        self.rotation_coordinates(body).iter().map(|&k| x[k]).sum()
-    }
-
     /// Index of a body by name.
     pub fn body_index(&self, name: &str) -> Option<usize> {
         self.bodies.iter().position(|b| b.name == name)

@@ -45,6 +45,21 @@ impl Speeds {
         }
     }
 
+    /// The matrix `W⁻¹` (n×n) of `q̇ = W⁻¹ u`, exact: the identity for joint rates; for absolute
+    /// angular velocities ones on the diagonal and `−1` at (k, p) for each speed parent p of k.
+    pub fn w_inverse_matrix(self, parent: &[Option<usize>]) -> nalgebra::DMatrix<f64> {
+        let n = parent.len();
+        let mut b = nalgebra::DMatrix::identity(n, n);
+        if self == Speeds::AbsoluteAngularVelocities {
+            for (k, p) in parent.iter().enumerate() {
+                if let Some(p) = *p {
+                    b[(k, p)] = -1.0;
+                }
+            }
+        }
+        b
+    }
+
     /// The matrix W (n×n), for tests and reports.
     pub fn w_matrix(self, parent: &[Option<usize>]) -> nalgebra::DMatrix<f64> {
         let n = parent.len();
