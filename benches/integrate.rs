@@ -8,7 +8,7 @@ use kanedyn::cpva::CpvaParams;
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use kanedyn::time::integrate::{IntegrateOptions, integrate};
-use kanedyn::time::probe::{Probe, ProbeKind, simulate};
+use kanedyn::time::probe::{Probe, ProbeKind, Recorder, simulate};
 use std::hint::black_box;
 
 fn sweep(c: &mut Criterion) {
@@ -49,7 +49,11 @@ fn sweep(c: &mut Criterion) {
         })
     });
     g.bench_function("simulate_rotor_accel", |b| {
-        b.iter(|| black_box(simulate(&mut kane, &x0, 0.0, 240.0, &opts, &[probe]).columns[0][1000]))
+        b.iter(|| {
+            let mut rec = Recorder::new(&mech, &[probe]).unwrap();
+            simulate(&mut kane, &x0, 0.0, 240.0, &opts, &mut rec, &mut |_| {});
+            black_box(rec.columns[0][1000])
+        })
     });
     g.finish();
 }

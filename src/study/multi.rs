@@ -9,6 +9,8 @@ use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::study::TrackingSpec;
+use crate::time::probe::Outcome;
+use crate::time::steady::{SteadyOptions, WindowPair, settle};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -24,10 +26,10 @@ pub struct Steady {
     pub time_s: f64,
     /// Largest |q| of the joints other than the spin joint over the last window, rad.
     pub max_relative_angle: f64,
-    /// Total mean-speed error removed after the ramp-in, rad/s (see the NOTE in `steady`).
+    /// Total mean-speed error removed after the ramp-in, rad/s (see `crate::time::steady`).
     pub speed_correction: f64,
     /// The simulation's statistics and outcome.
-    pub sim: sim::SimInfo,
+    pub sim: Outcome,
 }
 
 /// One operating speed.
@@ -372,81 +374,46 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     let mut kane = study.kane(locked)?;
     kane.set_joint_torque(spin, excitation);
     let fs = study.spec.integration.sample_hz;
-    let win = (spec.window_s * fs).round() as usize;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
     let bar = progress.bar(spec.max_time_s, &label);
-    let mut rec = sim::Recorder::new(mech, spin, body, false);
-    let mut x = Study::initial_state(mech, spin, omega);
-    let mut t = 0.0;
-    // Start comparing once the ramp is over, two full windows follow it, and the minimum time has
-    // passed.
-    let first = (spec.ramp_s + 2.0 * spec.window_s).max(spec.min_time_s).min(spec.max_time_s);
+    let mut rec = sim::recorder(mech, spin, body, false)?;
+    let x0 = Study::initial_state(mech, spin, omega);
     let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
-    let mut info = sim::SimInfo::default();
-    let mut last: Option<(Vec<f64>, f64)> = None;
     let order = spec.order;
-    let mut speed_correction = 0.0;
-    loop {
-        let t_next = if t < first { first } else { (t + spec.window_s).min(spec.max_time_s) };
-        let chunk = sim::simulate(&mut kane, &x, t, t_next, &study.spec.integration, &mut rec, &bar);
-        info.absorb(&chunk);
-        x = chunk.x_end.clone();
-        t = chunk.t_end;
-        let at_end = t >= spec.max_time_s - 1e-9;
-        if chunk.error.is_some() {
-            break;
-        }
-        // NOTE: the ramp-in leaves the mean speed off Ω, and that rigid spin-speed mode decays
-        // only with the slow time constant J/c_r (locked inertia over rotor loss): the amplitudes
-        // then creep so slowly from window to window that a two-window test passes while they
-        // still sit measurably off the periodic steady state (harmonic balance shows it; figures
-        // in BENCHMARKS.md, "Measured reasons behind code choices"). So the measured mean-speed
-        // error of the last window is removed as a rigid rotation of the spinning subtree
-        // (W·e_spin·δ), and two fresh windows are required after each correction.
-        if rec.spin_rate.len() >= win && !at_end {
-            let tail = &rec.spin_rate[rec.spin_rate.len() - win..];
-            let delta = tail.iter().sum::<f64>() / win as f64 - omega;
-            if delta.abs() > 1e-7 * omega {
-                let n = mech.ndof();
-                let mut dq = vec![0.0; n];
-                dq[spin] = -delta;
-                let mut du = vec![0.0; n];
-                mech.speeds.u_from_qdot(&mech.speed_parents(), &dq, &mut du);
-                for (xi, d) in x[n..].iter_mut().zip(&du) {
-                    *xi += d;
-                }
-                speed_correction += delta;
-                rec.keep_last(0);
-                continue;
-            }
-        }
-        if rec.accel.len() < 2 * win {
-            if at_end {
-                break;
-            }
-            continue;
-        }
-        let tail = &rec.accel[rec.accel.len() - 2 * win..];
+    let mut measure = |tail: &[f64]| -> Result<WindowPair> {
         let traces = sim::track(&mech.name, tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
-        let a_prev: Vec<f64> = traces.iter().map(|tr| tr.amplitude[0]).collect();
-        let a_last: Vec<f64> = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
-        let change = a_prev.iter().zip(&a_last).map(|(p, l)| ((l - p) / l).abs()).fold(0.0, f64::max);
-        last = Some((a_last, change));
-        if change <= spec.steady_tol || at_end {
-            break;
-        }
-        // Keep memory bounded: only the last two windows are ever analysed.
-        rec.keep_last(2 * win);
-    }
+        let first = traces.iter().map(|tr| tr.amplitude[0]).collect();
+        let last = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
+        Ok((first, last))
+    };
+    let options = SteadyOptions {
+        omega,
+        ramp_s: spec.ramp_s,
+        window_s: spec.window_s,
+        min_time_s: spec.min_time_s,
+        max_time_s: spec.max_time_s,
+        steady_tol: spec.steady_tol,
+    };
+    let run = settle(
+        &mut kane,
+        &x0,
+        spin,
+        &sim::options(&study.spec.integration),
+        &options,
+        &mut rec,
+        (sim::SPIN_RATE, sim::ACCEL),
+        &mut measure,
+        &mut |t| bar.set_position((t * 1000.0) as u64),
+    )?;
     bar.finish_and_clear();
-    let (amplitudes, change) = last.unwrap_or((vec![f64::NAN; spec.multiples.len()], f64::NAN));
+    let relative = &rec.columns[sim::RELATIVE];
     Ok(Steady {
-        amplitudes,
-        change,
-        time_s: t,
-        max_relative_angle: rec.max_relative_angle_recent(win),
-        speed_correction,
-        sim: info,
+        amplitudes: if run.amplitudes.is_empty() { vec![f64::NAN; spec.multiples.len()] } else { run.amplitudes },
+        change: run.change,
+        time_s: run.time_s,
+        max_relative_angle: relative.iter().rev().take(run.window_samples).copied().fold(0.0, f64::max),
+        speed_correction: run.speed_correction,
+        sim: run.outcome,
     })
 }
 

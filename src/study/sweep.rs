@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
+use crate::time::probe::{Outcome, simulate};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -27,7 +28,9 @@ pub struct SweepRun {
     /// Largest |q| of the joints other than the spin joint (the pendulum angles φ), rad.
     pub max_relative_angle: f64,
     /// The simulation's statistics and outcome.
-    pub sim: sim::SimInfo,
+    pub sim: Outcome,
+    /// The sampled time series, when asked for.
+    pub time_series: Option<sim::TimeSeries>,
 }
 
 impl SweepRun {
@@ -116,7 +119,7 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
                 t.time_s[i]
             ));
         }
-        if let Some(ts) = &r.sim.time_series
+        if let Some(ts) = &r.time_series
             && spec.write_time_series
         {
             let path = dir.join(format!("{}_time_series.csv", r.label()));
@@ -237,13 +240,15 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         if job.locked { " locked" } else { "" }
     );
     let bar = progress.bar(spec.duration_s, &label);
-    let mut rec = sim::Recorder::new(mech, spin, body, spec.write_time_series);
-    let info = sim::simulate(&mut kane, &x0, 0.0, spec.duration_s, &study.spec.integration, &mut rec, &bar);
+    let mut rec = sim::recorder(mech, spin, body, spec.write_time_series)?;
+    let opts = sim::options(&study.spec.integration);
+    let info =
+        simulate(&mut kane, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| bar.set_position((t * 1000.0) as u64));
     bar.finish_and_clear();
     let order = excitation.order;
     let traces = sim::track(
         &mech.name,
-        &rec.accel,
+        &rec.columns[sim::ACCEL],
         study.spec.integration.sample_hz,
         omega,
         &move |t| order.at(t),
@@ -256,8 +261,9 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         direction: job.direction,
         locked: job.locked,
         traces,
-        max_relative_angle: rec.max_relative_angle,
-        sim: sim::SimInfo { time_series: rec.into_time_series(), ..info },
+        max_relative_angle: rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max),
+        sim: info,
+        time_series: sim::time_series(mech, body, rec),
     })
 }
 
@@ -370,9 +376,9 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
             min.map_or("–".into(), |m| format!("{:.4}", m.0)),
             min.map_or("–".into(), |m| format!("{:.4}", m.1)),
             second_over,
-            r.sim.rhs_evals,
-            r.sim.accepted,
-            r.sim.rejected,
+            r.sim.rhs_evals(),
+            r.sim.stats.accepted,
+            r.sim.stats.rejected,
             r.sim.wall_s
         );
     }

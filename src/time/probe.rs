@@ -1,5 +1,6 @@
-//! Named signals of a simulation (probes), a recorder that turns sampled states into columns,
-//! and [`simulate`]: integrate a [`Kane`] engine and record its probes at the sample rate.
+//! Named signals of a simulation (probes), the one recorder that turns sampled states into
+//! columns, and [`simulate`]: integrate a [`Kane`] engine into a [`Recorder`], with one
+//! [`Outcome`] per run. Studies and library users go through these three.
 //!
 //! A probe is resolved once against a [`Mechanism`] by body or joint name; recording is then
 //! index arithmetic on the state `x = [q; u]` (and `ẋ` for accelerations):
@@ -9,7 +10,9 @@
 //!   else `Σ q̇_k` over the same joints with `q̇ = W⁻¹u`;
 //! - body acceleration `ω̇_b`: the same with `u̇` (W is constant for both speed choices, so no
 //!   `Ẇ` term); it needs `ẋ` at the sample state, one extra right-hand-side call per sample;
-//! - joint angle: the joint's own coordinate `q_j` (the pendulum's φ; m for a slide).
+//! - joint coordinate `q_j` (the pendulum's φ in rad; m for a slide) and its rate `q̇_j`;
+//! - the largest `|q_k|` over every coordinate except one joint's (for a rotor with absorbers,
+//!   the largest absorber excursion when the spin joint is excepted).
 //!
 //! The rotor response of the paper (Figs. 3–6) is `BodyAccel(rotor)`, i.e. u̇1 in rad/s².
 
@@ -29,8 +32,12 @@ pub enum ProbeKind {
     BodyRate,
     /// Absolute angular acceleration of a body, rad/s².
     BodyAccel,
-    /// Relative angle q of a joint (child relative to parent), rad.
+    /// Coordinate q of a joint (child relative to parent), rad or m.
     JointAngle,
+    /// Rate q̇ of a joint's coordinate, rad/s or m/s.
+    JointRate,
+    /// Largest |q| over the coordinates of every joint except the named one, rad (m for slides).
+    LargestJointAngle,
 }
 
 /// A signal to record, with its body or joint index resolved in a mechanism.
@@ -42,8 +49,12 @@ pub enum Probe {
     BodyRate(usize),
     /// Absolute angular acceleration of body `b`, rad/s².
     BodyAccel(usize),
-    /// Relative angle q of joint `j`, rad.
+    /// Coordinate q of joint `j`, rad (m for a slide).
     JointAngle(usize),
+    /// Rate q̇ of joint `j`'s coordinate, rad/s (m/s for a slide).
+    JointRate(usize),
+    /// Largest |q_k| over every coordinate except joint `j`'s.
+    LargestJointAngle(usize),
 }
 
 impl Probe {
@@ -54,17 +65,20 @@ impl Probe {
             mechanism: mech.name.clone(),
             message: format!("probe {kind:?}: unknown {what} `{name}` (known {what}s: {})", known.join(", ")),
         };
-        if kind == ProbeKind::JointAngle {
+        if matches!(kind, ProbeKind::JointAngle | ProbeKind::JointRate | ProbeKind::LargestJointAngle) {
             let j = mech
                 .joint_index(name)
                 .ok_or_else(|| unknown("joint", mech.joints.iter().map(|j| j.name.as_str()).collect()))?;
+            if kind == ProbeKind::LargestJointAngle {
+                return Ok(Probe::LargestJointAngle(j));
+            }
             if mech.coordinate(j).is_none() {
                 return Err(Error::Model {
                     mechanism: mech.name.clone(),
                     message: format!("probe {kind:?}: joint `{name}` is Fixed and has no coordinate"),
                 });
             }
-            return Ok(Probe::JointAngle(j));
+            return Ok(if kind == ProbeKind::JointAngle { Probe::JointAngle(j) } else { Probe::JointRate(j) });
         }
         let b = mech
             .body_index(name)
@@ -83,13 +97,20 @@ impl Probe {
             Probe::BodyRate(_) => ProbeKind::BodyRate,
             Probe::BodyAccel(_) => ProbeKind::BodyAccel,
             Probe::JointAngle(_) => ProbeKind::JointAngle,
+            Probe::JointRate(_) => ProbeKind::JointRate,
+            Probe::LargestJointAngle(_) => ProbeKind::LargestJointAngle,
         }
     }
 
     /// The body or joint index.
     pub fn index(&self) -> usize {
         match *self {
-            Probe::BodyAngle(i) | Probe::BodyRate(i) | Probe::BodyAccel(i) | Probe::JointAngle(i) => i,
+            Probe::BodyAngle(i)
+            | Probe::BodyRate(i)
+            | Probe::BodyAccel(i)
+            | Probe::JointAngle(i)
+            | Probe::JointRate(i)
+            | Probe::LargestJointAngle(i) => i,
         }
     }
 
@@ -98,37 +119,56 @@ impl Probe {
         matches!(self, Probe::BodyAccel(_))
     }
 
-    /// SI unit of the recorded values.
-    pub fn unit(&self) -> &'static str {
-        match self {
-            Probe::BodyAngle(_) | Probe::JointAngle(_) => "rad",
+    /// SI unit of the recorded values in `mech` (a slide's coordinate is in m).
+    pub fn unit(&self, mech: &Mechanism) -> &'static str {
+        let slides = |j: usize| mech.joints.get(j).is_some_and(|j| !j.kind.rotates());
+        match *self {
+            Probe::BodyAngle(_) | Probe::LargestJointAngle(_) => "rad",
             Probe::BodyRate(_) => "rad/s",
             Probe::BodyAccel(_) => "rad/s²",
+            Probe::JointAngle(j) if slides(j) => "m",
+            Probe::JointAngle(_) => "rad",
+            Probe::JointRate(j) if slides(j) => "m/s",
+            Probe::JointRate(_) => "rad/s",
         }
     }
 
-    /// Column name `<body>.angle`, `<body>.rate`, `<body>.accel` or `<joint>.q` (names not
-    /// checked: use on the mechanism the probe was resolved in).
+    /// Column name `<body>.angle`, `<body>.rate`, `<body>.accel`, `<joint>.q`, `<joint>.qdot` or
+    /// `max_abs_q_except_<joint>` (names not checked: use on the mechanism the probe was
+    /// resolved in).
     pub fn label(&self, mech: &Mechanism) -> String {
         let body = |b: usize| mech.bodies.get(b).map_or("?", |b| b.name.as_str()).to_string();
+        let joint = |j: usize| mech.joints.get(j).map_or("?", |j| j.name.as_str()).to_string();
         match *self {
             Probe::BodyAngle(b) => format!("{}.angle", body(b)),
             Probe::BodyRate(b) => format!("{}.rate", body(b)),
             Probe::BodyAccel(b) => format!("{}.accel", body(b)),
-            Probe::JointAngle(j) => format!("{}.q", mech.joints.get(j).map_or("?", |j| j.name.as_str())),
+            Probe::JointAngle(j) => format!("{}.q", joint(j)),
+            Probe::JointRate(j) => format!("{}.qdot", joint(j)),
+            Probe::LargestJointAngle(j) => format!("max_abs_q_except_{}", joint(j)),
         }
     }
 }
 
 /// Turns sampled states into one column per probe (plus the time column), kept in memory.
+///
+/// Times strictly increase: a sample closer than half a sample period to the last one is the
+/// boundary of consecutive runs (see [`simulate`]) and is dropped, so a run continued in chunks
+/// records the same columns as one run.
 #[derive(Debug, Clone)]
 pub struct Recorder {
     n: usize,
     absolute: bool,
+    parents: Vec<Option<usize>>,
     probes: Vec<Probe>,
     /// Per probe: the coordinates whose sum is its body's rotation
-    /// ([`Mechanism::rotation_coordinates`]), or its joint's one coordinate for a joint probe.
+    /// ([`Mechanism::rotation_coordinates`]), its joint's one coordinate for a joint probe, or
+    /// the coordinates compared by [`Probe::LargestJointAngle`].
     paths: Vec<Vec<usize>>,
+    names: Vec<String>,
+    units: Vec<&'static str>,
+    min_gap_s: f64,
+    last_t: f64,
     /// Sample times, s.
     pub time: Vec<f64>,
     /// One column per probe, in the order given.
@@ -148,9 +188,13 @@ impl Recorder {
             if p.index() >= nb {
                 return Err(out_of_range("index out of range"));
             }
-            paths.push(match p {
-                Probe::JointAngle(j) => {
-                    vec![mech.coordinate(*j).ok_or_else(|| out_of_range("joint has no coordinate"))?]
+            paths.push(match *p {
+                Probe::JointAngle(j) | Probe::JointRate(j) => {
+                    vec![mech.coordinate(j).ok_or_else(|| out_of_range("joint has no coordinate"))?]
+                }
+                Probe::LargestJointAngle(j) => {
+                    let own = mech.coordinate(j);
+                    (0..n).filter(|&k| Some(k) != own).collect()
                 }
                 _ => mech.rotation_coordinates(p.index()),
             });
@@ -158,11 +202,36 @@ impl Recorder {
         Ok(Self {
             n,
             absolute: mech.speeds == Speeds::AbsoluteAngularVelocities,
+            parents: mech.speed_parents(),
             probes: probes.to_vec(),
             paths,
+            names: probes.iter().map(|p| p.label(mech)).collect(),
+            units: probes.iter().map(|p| p.unit(mech)).collect(),
+            min_gap_s: 0.0,
+            last_t: f64::NEG_INFINITY,
             time: Vec::new(),
             columns: vec![Vec::new(); probes.len()],
         })
+    }
+
+    /// The probes, in column order.
+    pub fn probes(&self) -> &[Probe] {
+        &self.probes
+    }
+
+    /// Column names ([`Probe::label`]), in column order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Units of the columns ([`Probe::unit`]).
+    pub fn units(&self) -> &[&'static str] {
+        &self.units
+    }
+
+    /// The column called `name`.
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice())
     }
 
     /// Whether any probe needs `ẋ`.
@@ -179,107 +248,141 @@ impl Recorder {
     /// The value of probe `i` at state `x` (and `xdot`; accelerations are NaN without it).
     pub fn value(&self, i: usize, x: &[f64], xdot: Option<&[f64]>) -> f64 {
         let n = self.n;
+        let path = &self.paths[i];
         // Absolute rate (or acceleration) of the probe's body from speeds (or their rates) `v`.
         // With absolute angular velocities the last rotating joint's speed is the body's own.
         let absolute = |v: &[f64]| {
-            let path = &self.paths[i];
             if self.absolute { path.last().map_or(0.0, |&k| v[k]) } else { path.iter().map(|&k| v[k]).sum() }
         };
         match self.probes[i] {
-            Probe::BodyAngle(_) => self.paths[i].iter().map(|&k| x[k]).sum(),
+            Probe::BodyAngle(_) => path.iter().map(|&k| x[k]).sum(),
             Probe::BodyRate(_) => absolute(&x[n..2 * n]),
             Probe::BodyAccel(_) => xdot.map_or(f64::NAN, |d| absolute(&d[n..2 * n])),
-            Probe::JointAngle(_) => x[self.paths[i][0]],
+            Probe::JointAngle(_) => x[path[0]],
+            Probe::JointRate(_) => {
+                // q̇_k = (W⁻¹u)_k, row k of Speeds::qdot.
+                let k = path[0];
+                let parent = if self.absolute { self.parents[k] } else { None };
+                x[n + k] - parent.map_or(0.0, |p| x[n + p])
+            }
+            Probe::LargestJointAngle(_) => path.iter().map(|&k| x[k].abs()).fold(0.0, f64::max),
         }
     }
 
-    /// Appends one sample.
+    /// Appends one sample (dropped when it repeats the last one, see the type's doc).
     pub fn record(&mut self, t: f64, x: &[f64], xdot: Option<&[f64]>) {
+        if t <= self.last_t + self.min_gap_s {
+            return;
+        }
+        self.last_t = t;
         self.time.push(t);
         for i in 0..self.probes.len() {
             let v = self.value(i, x, xdot);
             self.columns[i].push(v);
         }
     }
+
+    /// Drops all but the last `keep` samples (a long run analysed window by window stays
+    /// bounded in memory).
+    pub fn keep_last(&mut self, keep: usize) {
+        for v in std::iter::once(&mut self.time).chain(self.columns.iter_mut()) {
+            if v.len() > keep {
+                v.drain(..v.len() - keep);
+            }
+        }
+    }
 }
 
-/// The recorded signals of one run; partial (up to the failure) when `error` is set.
-#[derive(Debug, Clone)]
-pub struct SimResult {
-    /// Sample times, s.
-    pub time: Vec<f64>,
-    /// One column per probe, same length as `time`.
-    pub columns: Vec<Vec<f64>>,
-    /// Column names ([`Probe::label`]), same order as `columns`.
-    pub names: Vec<String>,
-    /// Units of the columns ([`Probe::unit`]).
-    pub units: Vec<&'static str>,
+/// How one run ended, with its counters (or the sum over consecutive chunks, see
+/// [`Outcome::absorb`]).
+#[derive(Debug, Clone, Default)]
+pub struct Outcome {
     /// Integration counters (also on failure).
     pub stats: IntegrateStats,
-    /// State at the end time t1 when the run completed.
+    /// Wall-clock time, s.
+    pub wall_s: f64,
+    /// Time reached, s (the end time when the run completed).
+    pub t_end: f64,
+    /// State at the end time when the run completed.
     pub x_end: Option<Vec<f64>>,
-    /// Why the run ended early, if it did.
+    /// Why the run ended early, if it did; the samples recorded up to there are kept.
     pub error: Option<IntegrateError>,
 }
 
-impl SimResult {
-    /// The column called `name`.
-    pub fn column(&self, name: &str) -> Option<&[f64]> {
-        self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice())
+impl Outcome {
+    /// Right-hand-side evaluations by the integrator plus those at the samples.
+    pub fn rhs_evals(&self) -> usize {
+        self.stats.rhs_evals + self.stats.sample_rhs_evals
+    }
+
+    /// Adds a later chunk's counters and takes its end state and outcome.
+    pub fn absorb(&mut self, later: &Outcome) {
+        let (s, c) = (&mut self.stats, &later.stats);
+        s.accepted += c.accepted;
+        s.rejected += c.rejected;
+        s.rhs_evals += c.rhs_evals;
+        s.sample_rhs_evals += c.sample_rhs_evals;
+        s.samples += c.samples;
+        self.wall_s += later.wall_s;
+        self.t_end = later.t_end;
+        self.x_end.clone_from(&later.x_end);
+        if later.error.is_some() {
+            self.error.clone_from(&later.error);
+        }
     }
 }
 
 /// Integrates `kane` from `x0 = [q; u]` at `t0` to `t1` with DOP853 (see
-/// [`crate::time::integrate::integrate`]) and records `probes` at `opts.sample_rate_hz` (2 kHz by
-/// default; `ẋ` is evaluated at the samples when a probe needs it, whatever
-/// `opts.sample_derivatives` says). A failed run keeps the samples recorded before the failure
-/// and names it in [`SimResult::error`]; probes that do not fit the mechanism, or a wrong `x0`,
-/// give an empty result with an `InvalidInput` error.
-pub fn simulate(kane: &mut Kane, x0: &[f64], t0: f64, t1: f64, opts: &IntegrateOptions, probes: &[Probe]) -> SimResult {
-    let mech = kane.mechanism();
-    let names = probes.iter().map(|p| p.label(mech)).collect();
-    let units = probes.iter().map(Probe::unit).collect();
-    let mut out = SimResult {
-        time: Vec::new(),
-        columns: vec![Vec::new(); probes.len()],
-        names,
-        units,
-        stats: IntegrateStats::default(),
-        x_end: None,
-        error: None,
-    };
-    let invalid = |message: String| Some(IntegrateError::InvalidInput { message });
-    let mut rec = match Recorder::new(mech, probes) {
-        Ok(r) => r,
-        Err(e) => {
-            out.error = invalid(e.to_string());
-            return out;
-        }
-    };
+/// [`crate::time::integrate::integrate`]) and records the probes of `rec` at
+/// `opts.sample_rate_hz` (2 kHz by default; `ẋ` is evaluated at the samples when a probe needs
+/// it, whatever `opts.sample_derivatives` says). `progress` is told the simulated time about ten
+/// times per simulated second. Never fails: a failed run keeps the samples recorded before the
+/// failure and names it in [`Outcome::error`]; a wrong `x0` records nothing and gives an
+/// `InvalidInput` error. A run continued from the end of another into the same recorder adds
+/// the new samples only.
+pub fn simulate(
+    kane: &mut Kane,
+    x0: &[f64],
+    t0: f64,
+    t1: f64,
+    opts: &IntegrateOptions,
+    rec: &mut Recorder,
+    progress: &mut dyn FnMut(f64),
+) -> Outcome {
+    let start = std::time::Instant::now();
     if x0.len() != 2 * kane.ndof() {
-        out.error = invalid(format!("x0 has length {}, the mechanism needs 2n = {}", x0.len(), 2 * kane.ndof()));
-        return out;
+        let message = format!("x0 has length {}, the mechanism needs 2n = {}", x0.len(), 2 * kane.ndof());
+        return Outcome { t_end: t0, error: Some(IntegrateError::InvalidInput { message }), ..Outcome::default() };
     }
     let mut opts = opts.clone();
     opts.sample_derivatives |= rec.needs_derivatives();
+    let mut tick = usize::MAX;
     if let Some(fs) = opts.sample_rate_hz
         && fs.is_finite()
-        && t1 > t0
+        && fs > 0.0
     {
-        rec.reserve(((t1 - t0) * fs) as usize + 2);
+        rec.min_gap_s = 0.5 / fs;
+        tick = (fs as usize / 10).max(1);
+        if t1 > t0 {
+            rec.reserve(((t1 - t0) * fs) as usize + 2);
+        }
     }
-    let run = integrate(|t, x, dx| kane.rhs(t, x, dx), x0, t0, t1, &opts, |s| rec.record(s.t, s.x, s.xdot));
+    let run = integrate(
+        |t, x, dx| kane.rhs(t, x, dx),
+        x0,
+        t0,
+        t1,
+        &opts,
+        |s| {
+            rec.record(s.t, s.x, s.xdot);
+            if s.k.is_multiple_of(tick) {
+                progress(s.t);
+            }
+        },
+    );
+    let wall_s = start.elapsed().as_secs_f64();
     match run {
-        Ok(done) => {
-            out.stats = done.stats;
-            out.x_end = Some(done.x_end);
-        }
-        Err(e) => {
-            out.stats = e.stats();
-            out.error = Some(e);
-        }
+        Ok(done) => Outcome { stats: done.stats, wall_s, t_end: done.t_end, x_end: Some(done.x_end), error: None },
+        Err(e) => Outcome { stats: e.stats(), wall_s, t_end: e.t_reached(), x_end: None, error: Some(e) },
     }
-    out.time = rec.time;
-    out.columns = rec.columns;
-    out
 }
