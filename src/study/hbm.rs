@@ -3,7 +3,7 @@
 //! drawn over the time-domain sweeps.
 
 use super::sweep::SweepRun;
-use super::{Direction, HbmParameter, HbmSpec, Study, write_csv};
+use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study, write_csv};
 use crate::error::{Error, Result};
 use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
@@ -55,13 +55,6 @@ pub struct HbmBranch {
 /// line between two points misses the solved mid-state by 28 % of the amplitude, the Hermite
 /// mid-state by 1.2 %, `tests/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
 pub const CURVE_SUBDIVISION: usize = 8;
-
-pub(crate) struct Output {
-    pub markdown: String,
-    pub files: Vec<PathBuf>,
-    pub failures: Vec<String>,
-    pub branches: Vec<HbmBranch>,
-}
 
 pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
     move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
@@ -146,19 +139,38 @@ fn axis(spec: &HbmSpec) -> Axis {
     }
 }
 
+/// The amplitudes continued: one case per amplitude (order and speed), or one with T_n = 1 N·m
+/// scaled (torque, NaN here).
+fn cases(spec: &HbmSpec) -> Vec<f64> {
+    match spec.parameter {
+        HbmParameter::Torque { .. } => vec![f64::NAN],
+        _ => spec.amplitudes.clone(),
+    }
+}
+
+/// Runs the branches ([`compute`]) and writes their outputs over the sweeps already run
+/// ([`render`]).
 pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path) -> Result<Output> {
+    let (branches, failures) = compute(study, spec);
+    let (markdown, files) = render(study, spec, &branches, sweeps, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Hbm(branches) })
+}
+
+/// Every branch, continued from each end of the range per amplitude, with its stability, folds
+/// and bifurcations, and the drawn curve; a failed continuation is listed, never lost with the
+/// others.
+pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<String>) {
     let path = study.mechanism.rotation_coordinates(study.body);
     let ax = axis(spec);
     // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
     let parameter = spec.parameter.continued();
-    let (cases, omega, scale): (Vec<f64>, f64, f64) = match spec.parameter {
-        HbmParameter::Order => (spec.amplitudes.clone(), rpm_to_rad_s(spec.rpm), 1.0),
-        HbmParameter::Speed { rpm_min, .. } => (spec.amplitudes.clone(), rpm_to_rad_s(rpm_min), rpm_to_rad_s(1.0)),
-        HbmParameter::Torque { .. } => (vec![f64::NAN], rpm_to_rad_s(spec.rpm), 1.0),
+    let (omega, scale) = match spec.parameter {
+        HbmParameter::Speed { rpm_min, .. } => (rpm_to_rad_s(rpm_min), rpm_to_rad_s(1.0)),
+        _ => (rpm_to_rad_s(spec.rpm), 1.0),
     };
     let mut branches = Vec::new();
     let mut failures = Vec::new();
-    for &amp in &cases {
+    for amp in cases(spec) {
         let harmonics = [Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }];
         // From above, the continuation follows the branch that comes down from high values; from
         // below, the one that comes up from low values. Where the response is S-shaped and a fold
@@ -228,7 +240,6 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         }
     }
 
-    let mut files = Vec::new();
     for br in &branches {
         if br.accel.iter().flatten().chain(&br.relative_angle).any(|v| !v.is_finite()) {
             failures.push(format!(
@@ -236,6 +247,22 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
                 spec.name, br.from
             ));
         }
+    }
+    (branches, failures)
+}
+
+/// Writes one CSV per branch and the figure with the overlaid sweeps (the paper's Figs. 3 and 4
+/// with every periodic state), and returns the summary section with the files written.
+pub(crate) fn render(
+    study: &Study,
+    spec: &HbmSpec,
+    branches: &[HbmBranch],
+    sweeps: &[SweepRun],
+    dir: &Path,
+) -> Result<(String, Vec<PathBuf>)> {
+    let ax = axis(spec);
+    let mut files = Vec::new();
+    for br in branches {
         let mut header = vec![ax.column.to_string()];
         let mut cols = vec![br.parameter.clone()];
         for (k, m) in spec.multiples.iter().enumerate() {
@@ -265,9 +292,9 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         None => Vec::new(),
     };
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
-    let panels: Vec<Panel> = cases
-        .iter()
-        .map(|&amp| {
+    let panels: Vec<Panel> = cases(spec)
+        .into_iter()
+        .map(|amp| {
             let mut series = Vec::new();
             for r in overlay.iter().filter(|r| r.amplitude == amp) {
                 for (k, t) in r.traces.iter().enumerate() {
@@ -334,7 +361,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
     // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
     let t = study.spec.order_tracking;
     let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
-    for br in &branches {
+    for br in branches {
         let stable = br.stable.iter().filter(|s| **s == Some(true)).count();
         let unstable = br.stable.iter().filter(|s| **s == Some(false)).count();
         let jumps = jump_orders(&overlay, br.amplitude, lag);
@@ -360,7 +387,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
         );
     }
     md.push('\n');
-    Ok(Output { markdown: md, files, failures, branches })
+    Ok((md, files))
 }
 
 fn list(v: &[f64]) -> String {

@@ -1,20 +1,14 @@
 //! The linear analyses of a study: the order-domain frequency response normalised by the locked
 //! twin (paper eq. 22, Fig. 2) and the Campbell diagram.
 
-use super::{CampbellSpec, LinearResponseSpec, Study, write_csv};
+use super::{CampbellSpec, LinearResponseSpec, Output, Results, Study, write_csv};
 use crate::error::{Error, Result};
-use crate::linear::{Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};
+use crate::linear::{Campbell, Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-pub(crate) struct Output {
-    pub markdown: String,
-    pub files: Vec<PathBuf>,
-    pub failures: Vec<String>,
-}
 
 /// A variant label as a file-name part: characters other than letters, digits, `.` and `-`
 /// become `_`.
@@ -29,6 +23,10 @@ pub struct ResponseVariant {
     pub label: String,
     /// Orders evaluated.
     pub orders: Vec<f64>,
+    /// |α̂| per unit torque at each order, rad/s² per N·m.
+    pub response: Vec<f64>,
+    /// The locked twin's |α̂| per unit torque at each order, rad/s² per N·m.
+    pub locked: Vec<f64>,
     /// |α̂| / |α̂_locked| at each order.
     pub ratio: Vec<f64>,
     /// Smallest ratio and its order.
@@ -50,8 +48,25 @@ pub struct LinearResult {
     pub n_t: Option<f64>,
     /// Undamped eigen-orders with the spin free, with their mode labels.
     pub free_orders: Vec<(f64, String)>,
+    /// The modes of the mechanism as built, spin held and free, undamped and damped.
+    pub modes: Vec<ModeRow>,
     /// One entry per damping variant.
     pub variants: Vec<ResponseVariant>,
+}
+
+/// One mode of the modal table of a linear response analysis.
+#[derive(Debug, Clone)]
+pub struct ModeRow {
+    /// Spin held (the absorbers alone) rather than free (coupled with the rotor).
+    pub spin_held: bool,
+    /// With the dampers (else undamped).
+    pub damped: bool,
+    /// Eigen-order (natural frequency over the spin speed).
+    pub order: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// The joint that dominates the mode.
+    pub label: String,
 }
 
 fn lin(mech: &Mechanism) -> impl Fn(LinearError) -> Error + '_ {
@@ -78,7 +93,18 @@ fn tuning_order(study: &Study, omega: f64) -> Result<Option<f64>> {
     Ok(modal.modes.iter().filter(|m| &m.label == first).map(|m| m.order).min_by(f64::total_cmp))
 }
 
-pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path) -> Result<(Output, LinearResult)> {
+/// Runs the linear response analysis ([`compute_response`]) and writes its outputs
+/// ([`render_response`]).
+pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path) -> Result<Output> {
+    let (result, failures) = compute_response(study, spec)?;
+    let (markdown, files) = render_response(study, spec, &result, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Linear(result) })
+}
+
+/// The modes at the operating speed and, per damping variant, the order-domain response of
+/// eq. (22) normalised by the locked twin, with its extremes, first amplification above n_t and
+/// high-order asymptote.
+pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Result<(LinearResult, Vec<String>)> {
     let omega = rpm_to_rad_s(spec.rpm);
     let mech = &study.mechanism;
     let n_t = tuning_order(study, omega)?;
@@ -94,16 +120,12 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     let free = model.modes(Spin::Free, Damping::Undamped).map_err(lin(mech))?;
     // The modal table of the mechanism as built: eigen-orders, damping ratios and the joint that
     // dominates each mode, with the spin held (absorber alone) and free (coupled).
-    let mut modal_md =
-        String::from("| spin | damping | eigen-order | damping ratio | dominant joint |\n|---|---|---|---|---|\n");
-    for (spin, sname) in [(Spin::Held, "held"), (Spin::Free, "free")] {
-        for (damping, dname) in [(Damping::Undamped, "undamped"), (Damping::Damped, "damped")] {
+    let mut modes = Vec::new();
+    for (spin, spin_held) in [(Spin::Held, true), (Spin::Free, false)] {
+        for (damping, damped) in [(Damping::Undamped, false), (Damping::Damped, true)] {
             for m in &model.modes(spin, damping).map_err(lin(mech))?.modes {
-                let _ = writeln!(
-                    modal_md,
-                    "| {sname} | {dname} | {:.10} | {:.3e} | `{}` |",
-                    m.order, m.damping_ratio, m.label
-                );
+                let (order, damping_ratio, label) = (m.order, m.damping_ratio, m.label.clone());
+                modes.push(ModeRow { spin_held, damped, order, damping_ratio, label });
             }
         }
     }
@@ -120,7 +142,6 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     let default_variant = [super::Variant { label: "as built".into(), dampers: Vec::new() }];
     let variants = if spec.variants.is_empty() { &default_variant[..] } else { &spec.variants[..] };
     let mut results = Vec::new();
-    let mut files = Vec::new();
     let mut failures = Vec::new();
     for v in variants {
         let m = with_dampers(mech, &v.dampers);
@@ -137,31 +158,62 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
             _ => None,
         };
         let asymptote = resp.asymptote().map_err(lin(&m))?;
-        let path = dir.join(format!("{}_{}.csv", spec.name, slug(&v.label)));
         if let Some(i) = pts.iter().position(|p| !(p.response.is_finite() && p.locked.is_finite())) {
             failures.push(format!(
                 "{} variant `{}`: the response is not finite at order {} (left empty in the CSV)",
                 spec.name, v.label, orders[i]
             ));
         }
-        let rel: Vec<f64> = orders.iter().map(|n| n / scale).collect();
-        let resp_abs: Vec<f64> = pts.iter().map(|p| p.response).collect();
-        let locked_abs: Vec<f64> = pts.iter().map(|p| p.locked).collect();
-        write_csv(
-            &path,
-            &["order", "order_over_nt", "accel_per_torque_rad_s2_per_Nm", "locked_rad_s2_per_Nm", "ratio"],
-            &[&orders, &rel, &resp_abs, &locked_abs, &ratio],
-        )?;
-        files.push(path);
         results.push(ResponseVariant {
             label: v.label.clone(),
             orders: orders.clone(),
+            response: pts.iter().map(|p| p.response).collect(),
+            locked: pts.iter().map(|p| p.locked).collect(),
             ratio,
             min: (ext.min_order, ext.min_ratio),
             max: (ext.max_order, ext.max_ratio),
             crossing,
             asymptote,
         });
+    }
+    let result = LinearResult { name: spec.name.clone(), n_t, free_orders, modes, variants: results };
+    Ok((result, failures))
+}
+
+/// Writes one CSV per variant and the figure (the paper's Fig. 2), and returns the summary
+/// section with the files written.
+pub(crate) fn render_response(
+    study: &Study,
+    spec: &LinearResponseSpec,
+    result: &LinearResult,
+    dir: &Path,
+) -> Result<(String, Vec<PathBuf>)> {
+    let LinearResult { n_t, free_orders, variants: results, .. } = result;
+    let n_t = *n_t;
+    let scale = if spec.relative { n_t.unwrap_or(1.0) } else { 1.0 };
+    let mut files = Vec::new();
+    for r in results {
+        let path = dir.join(format!("{}_{}.csv", spec.name, slug(&r.label)));
+        let rel: Vec<f64> = r.orders.iter().map(|n| n / scale).collect();
+        write_csv(
+            &path,
+            &["order", "order_over_nt", "accel_per_torque_rad_s2_per_Nm", "locked_rad_s2_per_Nm", "ratio"],
+            &[&r.orders, &rel, &r.response, &r.locked, &r.ratio],
+        )?;
+        files.push(path);
+    }
+    let mut modal_md =
+        String::from("| spin | damping | eigen-order | damping ratio | dominant joint |\n|---|---|---|---|---|\n");
+    for m in &result.modes {
+        let _ = writeln!(
+            modal_md,
+            "| {} | {} | {:.10} | {:.3e} | `{}` |",
+            if m.spin_held { "held" } else { "free" },
+            if m.damped { "damped" } else { "undamped" },
+            m.order,
+            m.damping_ratio,
+            m.label
+        );
     }
     let x_label = if spec.relative { "n / n_t" } else { "excitation order n" };
     let mut markers = Vec::new();
@@ -212,7 +264,7 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     if let Some(nt) = n_t {
         let _ = writeln!(md, "- tuning order n_t (spin held, undamped) = {nt:.10}");
     }
-    for (o, l) in &free_orders {
+    for (o, l) in free_orders {
         let _ = writeln!(md, "- free undamped eigen-order {o:.10} (mode `{l}`)");
     }
     let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
@@ -222,7 +274,7 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
     let nt = n_t.unwrap_or(f64::NAN);
-    for r in &results {
+    for r in results {
         let _ = writeln!(
             md,
             "| {} | {:.5} | {:.5} | {:.6} | {:.4} | {:.5} | {:.6} | {} | {} | {} |",
@@ -239,11 +291,19 @@ pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path)
         );
     }
     md.push('\n');
-    let result = LinearResult { name: spec.name.clone(), n_t, free_orders, variants: results };
-    Ok((Output { markdown: md, files, failures }, result))
+    Ok((md, files))
 }
 
+/// Runs the Campbell analysis ([`compute_campbell`]) and writes its outputs
+/// ([`render_campbell`]).
 pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Result<Output> {
+    let (c, failures) = compute_campbell(study, spec)?;
+    let (markdown, files) = render_campbell(spec, &c, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Campbell(c) })
+}
+
+/// The natural frequencies over the speed range, tracked by mode shape, with the order lines.
+pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Campbell, Vec<String>)> {
     let mech = &study.mechanism;
     let steps = spec.points.max(2);
     let rpm: Vec<f64> =
@@ -263,6 +323,12 @@ pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Re
             ));
         }
     }
+    Ok((c, failures))
+}
+
+/// Writes the Campbell CSV and figure, and returns the summary section with the files written.
+pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> Result<(String, Vec<PathBuf>)> {
+    let steps = c.rpm.len();
     let mut header = vec!["rpm".to_string()];
     let mut cols: Vec<Vec<f64>> = vec![c.rpm.clone()];
     for (k, t) in c.tracks.iter().enumerate() {
@@ -347,5 +413,5 @@ pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Re
         );
     }
     md.push('\n');
-    Ok(Output { markdown: md, files: vec![csv, svg], failures })
+    Ok((md, vec![csv, svg]))
 }

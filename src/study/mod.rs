@@ -106,6 +106,8 @@ pub struct StudyReport {
     pub linear: Vec<linear::LinearResult>,
     /// Harmonic-balance branches.
     pub hbm: Vec<hbm::HbmBranch>,
+    /// Campbell diagrams.
+    pub campbell: Vec<crate::linear::Campbell>,
 }
 
 pub use linear::{LinearResult, ResponseVariant};
@@ -334,6 +336,24 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     Ok(report)
 }
 
+/// What one analysis hands back to the study runner: its summary section, the files it wrote,
+/// the runs that failed and its results.
+pub(crate) struct Output {
+    pub markdown: String,
+    pub files: Vec<PathBuf>,
+    pub failures: Vec<String>,
+    pub results: Results,
+}
+
+/// The results of one analysis, by kind.
+pub(crate) enum Results {
+    Sweep(Vec<sweep::SweepRun>),
+    Multi(multi::MultiOrderResult),
+    Linear(linear::LinearResult),
+    Campbell(crate::linear::Campbell),
+    Hbm(Vec<hbm::HbmBranch>),
+}
+
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
 /// the summary.
 fn run_analysis(
@@ -343,42 +363,23 @@ fn run_analysis(
     progress: &sim::Progress,
     report: &mut StudyReport,
 ) -> Result<String> {
-    Ok(match a {
-        AnalysisSpec::OrderSweep(s) => {
-            let out = sweep::run(study, s, dir, progress)?;
-            report.files.extend(out.files);
-            report.failures.extend(out.failures);
-            report.sweeps.extend(out.runs);
-            out.markdown
-        }
-        AnalysisSpec::MultiOrder(m) => {
-            let out = multi::run(study, m, dir, progress)?;
-            report.files.extend(out.files);
-            report.failures.extend(out.failures);
-            report.multi.push(out.result);
-            out.markdown
-        }
-        AnalysisSpec::LinearResponse(l) => {
-            let (out, result) = linear::run_response(study, l, dir)?;
-            report.files.extend(out.files);
-            report.failures.extend(out.failures);
-            report.linear.push(result);
-            out.markdown
-        }
-        AnalysisSpec::Campbell(c) => {
-            let out = linear::run_campbell(study, c, dir)?;
-            report.files.extend(out.files);
-            report.failures.extend(out.failures);
-            out.markdown
-        }
-        AnalysisSpec::HarmonicBalance(h) => {
-            let out = hbm::run(study, h, &report.sweeps, dir)?;
-            report.files.extend(out.files);
-            report.failures.extend(out.failures);
-            report.hbm.extend(out.branches);
-            out.markdown
-        }
-    })
+    let out = match a {
+        AnalysisSpec::OrderSweep(s) => sweep::run(study, s, dir, progress)?,
+        AnalysisSpec::MultiOrder(m) => multi::run(study, m, dir, progress)?,
+        AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
+        AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
+        AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
+    };
+    report.files.extend(out.files);
+    report.failures.extend(out.failures);
+    match out.results {
+        Results::Sweep(runs) => report.sweeps.extend(runs),
+        Results::Multi(m) => report.multi.push(m),
+        Results::Linear(l) => report.linear.push(l),
+        Results::Campbell(c) => report.campbell.push(c),
+        Results::Hbm(b) => report.hbm.extend(b),
+    }
+    Ok(out.markdown)
 }
 
 /// `a / reference`, or NaN ("undefined", an empty CSV cell) when the reference is zero or below

@@ -4,7 +4,7 @@
 
 use super::sim::{self, Progress};
 use super::sweep::order_name;
-use super::{MultiOrderSpec, Study, cell, write_csv};
+use super::{MultiOrderSpec, Output, Results, Study, cell, write_csv};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -113,14 +113,17 @@ pub struct MultiOrderResult {
     pub speeds: Vec<SpeedResult>,
 }
 
-pub(crate) struct Output {
-    pub markdown: String,
-    pub files: Vec<PathBuf>,
-    pub failures: Vec<String>,
-    pub result: MultiOrderResult,
+/// Runs the multi-order analysis ([`compute`]) and writes its outputs ([`render`]).
+pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+    let (result, failures) = compute(study, spec, progress);
+    let (markdown, files) = render(study, spec, &result, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Multi(result) })
 }
 
-pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+/// The steady states at every speed (time domain, with the locked twin), the linear amplitudes
+/// and every harmonic-balance state, as asked for; a failed part is listed, never lost with the
+/// others.
+pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress) -> (MultiOrderResult, Vec<String>) {
     let mut jobs: Vec<(usize, bool)> =
         if spec.time_domain { (0..spec.speeds.len()).map(|i| (i, false)).collect() } else { Vec::new() };
     if study.locked.is_some() && spec.time_domain {
@@ -198,6 +201,17 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
         }
     }
 
+    (result, failures)
+}
+
+/// Writes the CSV (one row per speed) and the figure (the paper's Fig. 5), and returns the
+/// summary section with the files written.
+pub(crate) fn render(
+    study: &Study,
+    spec: &MultiOrderSpec,
+    result: &MultiOrderResult,
+    dir: &Path,
+) -> Result<(String, Vec<PathBuf>)> {
     // CSV: one row per speed.
     let mut header = vec!["rpm".to_string()];
     let mut cols: Vec<Vec<f64>> = vec![result.speeds.iter().map(|s| s.rpm).collect()];
@@ -277,8 +291,7 @@ pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &P
     let svg = dir.join(format!("{}.svg", spec.name));
     crate::plot::write_svg(&svg, &[panel], 720, 480)?;
 
-    let markdown = summary(spec, &result);
-    Ok(Output { markdown, files: vec![csv, svg], failures, result })
+    Ok((summary(spec, result), vec![csv, svg]))
 }
 
 fn fmt_mult(m: f64) -> String {

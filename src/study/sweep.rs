@@ -2,7 +2,7 @@
 //! down, at each amplitude; order traces of the response by the short-time FFT.
 
 use super::sim::{self, Progress};
-use super::{Direction, Study, SweepSpec, write_csv};
+use super::{Direction, Output, Results, Study, SweepSpec, write_csv};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -65,23 +65,23 @@ pub(crate) fn fmt_num(v: f64) -> String {
     }
 }
 
-/// What [`run`] hands back to the study runner.
-pub(crate) struct Output {
-    pub markdown: String,
-    pub files: Vec<PathBuf>,
-    pub failures: Vec<String>,
-    pub runs: Vec<SweepRun>,
-}
-
 struct Job {
     amplitude: f64,
     direction: Direction,
     locked: bool,
 }
 
-/// Runs every amplitude × direction (and the locked twin once per amplitude: it is linear, so
-/// its traces do not depend on the direction), in parallel.
+/// Runs the sweep ([`compute`]) and writes its outputs ([`render`]).
 pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+    let (runs, failures) = compute(study, spec, progress);
+    let (markdown, files) = render(study, spec, &runs, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Sweep(runs) })
+}
+
+/// Runs every amplitude × direction (and the locked twin once per amplitude: it is linear, so
+/// its traces do not depend on the direction), in parallel; a failed run is listed, never lost
+/// with the others.
+pub(crate) fn compute(study: &Study, spec: &SweepSpec, progress: &Progress) -> (Vec<SweepRun>, Vec<String>) {
     let omega = rpm_to_rad_s(spec.rpm);
     let mut jobs = Vec::new();
     for &amplitude in &spec.amplitudes {
@@ -95,7 +95,6 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
     let results: Vec<Result<SweepRun>> =
         jobs.par_iter().map(|job| run_one(study, spec, omega, job, progress)).collect();
     let mut runs = Vec::with_capacity(results.len());
-    let mut files = Vec::new();
     let mut failures = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
         match r {
@@ -119,6 +118,16 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
                 t.time_s[i]
             ));
         }
+    }
+    (runs, failures)
+}
+
+/// Writes the sweep's CSVs (traces with the locked reference and ratios; the time series when
+/// asked for), its figure (the paper's Figs. 3 and 4) and returns its summary section with the
+/// files written.
+pub(crate) fn render(study: &Study, spec: &SweepSpec, runs: &[SweepRun], dir: &Path) -> Result<(String, Vec<PathBuf>)> {
+    let mut files = Vec::new();
+    for r in runs {
         if let Some(ts) = &r.time_series
             && spec.write_time_series
         {
@@ -200,8 +209,7 @@ pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progre
     crate::plot::write_svg(&svg, &panels, 640, 440)?;
     files.push(svg);
 
-    let markdown = summary(spec, &runs);
-    Ok(Output { markdown, files, failures, runs })
+    Ok((summary(spec, runs), files))
 }
 
 /// "main order" for m = 1, "2nd order" for m = 2, …
