@@ -28,7 +28,7 @@ fn report() -> &'static StudyReport {
 /// The up sweep's main-order amplitude at order `n`, from its windows after the ramp-in (the
 /// first 10 s, up to n ≈ 2.917); below that, its first settled value (the trace is flat there).
 fn interp_by_order(up: &OrderTrace, n: f64) -> f64 {
-    let t = kanedyn::study::sweep::skip_ramp(up, 10.0);
+    let t = kanedyn::signal::findings::skip_ramp(up, 10.0);
     t.amplitude_at_order(n.max(t.order[0])).unwrap_or_else(|| panic!("order {n} outside the trace"))
 }
 

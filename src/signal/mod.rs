@@ -20,8 +20,12 @@
 //! loses 5·10⁻⁴ of the energy, i.e. the amplitude reads 2.6·10⁻⁴ low (unit test
 //! `calibration_of_a_pure_sinusoid`). The negative-frequency image is ignored, so the band must sit
 //! well away from DC and Nyquist (enforced: it must lie within bins 1..N/2−1).
+//!
+//! [`findings`] reads the traces: minima after the ramp-in, where the up and the down sweep
+//! differ, and where a sweep jumps.
 
 mod angle;
+pub mod findings;
 mod stft;
 
 pub use angle::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};

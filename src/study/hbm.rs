@@ -9,6 +9,7 @@ use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolu
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
+use crate::signal::findings::jump_order;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -426,19 +427,11 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
     }
 }
 
-/// The orders where the up and the down sweep jump: the largest change (at least 2×) of the
-/// main-order trace between windows `lag` apart, after the ramp-in; the order halfway between.
+/// The orders where the up and the down sweep of `amplitude` jump ([`jump_order`] on their
+/// main-order traces, after 5 s: the ramp-in and the first windows).
 pub fn jump_orders(sweeps: &[&SweepRun], amplitude: f64, lag: usize) -> Option<(Option<f64>, Option<f64>)> {
     let find = |dir: Direction| sweeps.iter().find(|r| r.amplitude == amplitude && r.direction == dir);
     let (up, down) = (find(Direction::Up)?, find(Direction::Down)?);
-    let jump = |t: &OrderTrace| -> Option<f64> {
-        let t = super::sweep::skip_ramp(t, 5.0);
-        let a = &t.amplitude;
-        (lag..a.len())
-            .map(|i| (i, (a[i] / a[i - lag]).ln().abs()))
-            .filter(|(_, r)| *r > std::f64::consts::LN_2)
-            .max_by(|x, y| x.1.total_cmp(&y.1))
-            .map(|(i, _)| 0.5 * (t.order[i] + t.order[i - lag]))
-    };
+    let jump = |t: &OrderTrace| jump_order(t, lag, 5.0);
     Some((up.trace(1.0).and_then(jump), down.trace(1.0).and_then(jump)))
 }

@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
+use crate::signal::findings::{at_order, branch_differences, exceeds, skip_ramp, trace_minimum};
 use crate::time::probe::{Outcome, simulate};
 use rayon::prelude::*;
 use std::fmt::Write as _;
@@ -275,70 +276,11 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
     })
 }
 
-/// The trace's amplitude at order `n` (NaN outside its range).
-fn at_order(t: &OrderTrace, n: f64) -> f64 {
-    t.amplitude_at_order(n).unwrap_or(f64::NAN)
-}
-
-/// Order and amplitude of a trace's minimum, ignoring the windows before `skip_before_s` (the
-/// ramp-in, where the amplitude is still growing).
-pub fn trace_minimum(t: &OrderTrace, skip_before_s: f64) -> Option<(f64, f64)> {
-    skip_ramp(t, skip_before_s).min().map(|p| (p.order, p.amplitude))
-}
-
-/// Order intervals where `pred(order)` holds, sampled on `orders` (sorted ascending).
-fn intervals(orders: &[f64], pred: impl Fn(f64) -> bool) -> Vec<(f64, f64)> {
-    let mut out: Vec<(f64, f64)> = Vec::new();
-    let mut start: Option<f64> = None;
-    let mut last = f64::NAN;
-    for &n in orders {
-        if pred(n) {
-            start.get_or_insert(n);
-            last = n;
-        } else if let Some(s) = start.take() {
-            out.push((s, last));
-        }
-    }
-    if let Some(s) = start {
-        out.push((s, last));
-    }
-    out
-}
-
 fn fmt_intervals(iv: &[(f64, f64)]) -> String {
     if iv.is_empty() {
         return "none".into();
     }
     iv.iter().map(|(a, b)| format!("{a:.3}–{b:.3}")).collect::<Vec<_>>().join(", ")
-}
-
-/// Where the up and down main-order traces differ by more than `factor` (either way), on an
-/// order grid of step 0.002 over the common range.
-pub fn branch_differences(up: &OrderTrace, down: &OrderTrace, factor: f64) -> Vec<(f64, f64)> {
-    let lo = up.order.iter().chain(&down.order).copied().fold(f64::INFINITY, f64::min);
-    let hi = up.order.iter().chain(&down.order).copied().fold(f64::NEG_INFINITY, f64::max);
-    let grid = order_grid(lo, hi);
-    let (u_lo, u_hi) = minmax(&up.order);
-    let (d_lo, d_hi) = minmax(&down.order);
-    intervals(&grid, |n| {
-        if n < u_lo.max(d_lo) || n > u_hi.min(d_hi) {
-            return false;
-        }
-        let (a, b) = (at_order(up, n), at_order(down, n));
-        a > factor * b || b > factor * a
-    })
-}
-
-fn order_grid(lo: f64, hi: f64) -> Vec<f64> {
-    if !(lo.is_finite() && hi.is_finite()) {
-        return Vec::new();
-    }
-    let steps = ((hi - lo) / 0.002).ceil() as usize;
-    (0..=steps).map(|i| lo + (hi - lo) * i as f64 / steps.max(1) as f64).collect()
-}
-
-fn minmax(v: &[f64]) -> (f64, f64) {
-    v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
 }
 
 fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
@@ -361,19 +303,7 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
     for r in runs {
         let min = r.trace(1.0).and_then(|t| trace_minimum(t, skip));
         let second_over = match (r.trace(1.0), r.trace(2.0)) {
-            (Some(m), Some(s)) => {
-                let mut pairs: Vec<(f64, bool)> = m
-                    .time_s
-                    .iter()
-                    .zip(m.order.iter().zip(m.amplitude.iter().zip(&s.amplitude)))
-                    .filter(|(t, _)| **t >= skip)
-                    .map(|(_, (&o, (&a1, &a2)))| (o, a2 > a1))
-                    .collect();
-                pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-                let orders: Vec<f64> = pairs.iter().map(|p| p.0).collect();
-                let flags = pairs;
-                fmt_intervals(&intervals(&orders, |n| flags.iter().find(|p| p.0 == n).is_some_and(|p| p.1)))
-            }
+            (Some(m), Some(s)) => fmt_intervals(&exceeds(m, s, skip)),
             _ => "–".into(),
         };
         let _ = writeln!(
@@ -405,17 +335,4 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
     }
     md.push('\n');
     md
-}
-
-/// The trace without its windows inside the ramp-in (their amplitudes are still growing).
-pub fn skip_ramp(t: &OrderTrace, skip_before_s: f64) -> OrderTrace {
-    let keep: Vec<usize> = (0..t.time_s.len()).filter(|&i| t.time_s[i] >= skip_before_s).collect();
-    let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
-    OrderTrace {
-        multiple: t.multiple,
-        time_s: pick(&t.time_s),
-        order: pick(&t.order),
-        freq_hz: pick(&t.freq_hz),
-        amplitude: pick(&t.amplitude),
-    }
 }
