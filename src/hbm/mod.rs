@@ -258,13 +258,20 @@ impl Hbm {
         let bad = |m: String| Err(HbmError::Invalid(m));
         let mech = kane.mechanism();
         let n = kane.ndof();
-        if spin_joint >= n {
-            return bad(format!("spin joint index {spin_joint} out of range (mechanism has {n} joints)"));
+        if spin_joint >= mech.joints.len() {
+            return bad(format!(
+                "spin joint index {spin_joint} out of range (mechanism has {} joints)",
+                mech.joints.len()
+            ));
         }
         let sj = &mech.joints[spin_joint];
         if sj.parent.is_some() {
             return bad(format!("spin joint `{}` must connect a body to ground", sj.name));
         }
+        // The unknowns are per coordinate: the spin's is its joint's (a welded joint has none).
+        let Some(spin) = sj.coordinate.filter(|_| sj.kind.rotates()) else {
+            return bad(format!("spin joint `{}` does not rotate: it cannot spin", sj.name));
+        };
         if sj.spring.is_some_and(|s| s.stiffness != 0.0) {
             return bad(format!("spin joint `{}` has a spring: its angle is not cyclic", sj.name));
         }
@@ -334,7 +341,7 @@ impl Hbm {
             e.iter_mut().for_each(|x| *x = 0.0);
             e[r] = 1.0;
             speeds.qdot(&parents, &e, &mut qd);
-            g[r] = qd[spin_joint];
+            g[r] = qd[spin];
         }
         let nb = 2 * opts.harmonics + 1;
         let ev = Evaluator::new(kane, speeds, parents, (0..n * n).map(|i| w[(i / n, i % n)]).collect(), g);
@@ -347,7 +354,7 @@ impl Hbm {
         Ok(Self {
             ev,
             n,
-            spin: spin_joint,
+            spin,
             omega,
             scale: 1.0,
             ratio,

@@ -218,8 +218,11 @@ pub enum Damping {
 /// The steady spin about which the mechanism is linearised.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OperatingPoint {
-    /// Index of the spin joint (= its coordinate).
+    /// Index of the spin joint.
     pub spin_joint: usize,
+    /// Index of the spin joint's coordinate (differs from the joint's when a welded joint
+    /// precedes it).
+    pub spin_coordinate: usize,
     /// Spin speed Ω, rad/s.
     pub omega: f64,
     /// Coordinates at t = 0 (the spin angle is 0; the others at their relative equilibrium), rad.
@@ -363,11 +366,14 @@ impl LinearModel {
     /// the spin entry is ignored; default all 0).
     pub fn new(mech: &Mechanism, spin_joint: &str, omega_rad_s: f64, guess: Option<&[f64]>) -> LinResult<Self> {
         let n = mech.ndof();
-        let s = joint_of(mech, spin_joint)?;
-        if mech.joints[s].parent.is_some() {
+        let sj = joint_of(mech, spin_joint)?;
+        if mech.joints[sj].parent.is_some() {
             return Err(LinearError::SpinNotRoot { mechanism: mech.name.clone(), joint: spin_joint.into() });
         }
-        if let Some(sp) = mech.joints[s].spring
+        let Some(s) = mech.coordinate(sj).filter(|_| mech.joints[sj].kind.rotates()) else {
+            return Err(LinearError::Invalid(format!("spin joint `{spin_joint}` does not rotate: it cannot spin")));
+        };
+        if let Some(sp) = mech.joints[sj].spring
             && sp.stiffness != 0.0
         {
             return Err(LinearError::SpinSpring {
@@ -388,7 +394,7 @@ impl LinearModel {
             None => vec![0.0; n],
         };
         q[s] = 0.0;
-        let prepared = prepare(mech, s);
+        let prepared = prepare(mech, sj);
         let mut kane = Kane::new(&prepared)?;
         let w_inv = prepared.speeds.w_inverse_matrix(&prepared.speed_parents());
         let parents = prepared.speed_parents();
@@ -452,20 +458,29 @@ impl LinearModel {
                 iterations,
             });
         }
-        kane.set_joint_torque(s, Excitation::constant(t_m));
+        kane.set_joint_torque(sj, Excitation::constant(t_m));
         let mass = kane.mass_matrix(&q).clone();
         let (f_q, f_u) = forcing_jacobians(&mut kane, &q, &u);
         let mut kane_free = Kane::new(&undamped(&prepared))?;
         let (_, f_u_undamped) = forcing_jacobians(&mut kane_free, &q, &u);
-        let partials = (0..n).map(|j| kane.partial_velocities(&q, j)).collect();
+        let partials = (0..mech.bodies.len()).map(|b| kane.partial_velocities(&q, b)).collect();
         let mut model_mech = prepared;
         model_mech
             .loads
             .joint_torques
-            .push(crate::model::loads::JointTorque { joint: s, excitation: Excitation::constant(t_m) });
+            .push(crate::model::loads::JointTorque { joint: sj, excitation: Excitation::constant(t_m) });
         Ok(LinearModel {
             mech: model_mech,
-            op: OperatingPoint { spin_joint: s, omega: omega_rad_s, q, u, mean_spin_torque: t_m, residual, iterations },
+            op: OperatingPoint {
+                spin_joint: sj,
+                spin_coordinate: s,
+                omega: omega_rad_s,
+                q,
+                u,
+                mean_spin_torque: t_m,
+                residual,
+                iterations,
+            },
             mass,
             f_q,
             f_u,
@@ -504,9 +519,12 @@ impl LinearModel {
     }
 
     /// Generalized force (n entries) of a unit torque in joint `joint` (+1 N·m on the child, −1 on
-    /// the parent): `g_r = ∂q̇_joint/∂u_r`.
+    /// the parent): `g_r = ∂q̇_joint/∂u_r`; zero for a welded joint (it has no coordinate).
     pub fn generalized_torque(&self, joint: usize) -> DVector<f64> {
-        self.w_inv.row(joint).transpose()
+        match self.mech.coordinate(joint) {
+            Some(k) => self.w_inv.row(k).transpose(),
+            None => DVector::zeros(self.ndof()),
+        }
     }
 
     /// The row c of the absolute angular velocity of body `body`, `ω_body = c·u` (the sum of the

@@ -94,7 +94,7 @@ impl LinearModel {
     /// Kept coordinate and speed indices of the reduced state (the spin angle is always dropped:
     /// cyclic).
     fn kept(&self, spin: Spin) -> (Vec<usize>, Vec<usize>) {
-        let s = self.op.spin_joint;
+        let s = self.op.spin_coordinate;
         let qi: Vec<usize> = (0..self.ndof()).filter(|&j| j != s).collect();
         let ui = match spin {
             Spin::Free => (0..self.ndof()).collect(),
@@ -121,7 +121,7 @@ impl LinearModel {
     /// eigen-orders, damping ratios, shapes and participation (see [`Mode`]).
     pub fn modes(&self, spin: Spin, damping: Damping) -> LinResult<Modal> {
         let n = self.ndof();
-        let s = self.op.spin_joint;
+        let s = self.op.spin_coordinate;
         let omega = self.op.omega;
         let (sm, qi, ui) = self.state_matrix(spin, damping)?;
         let lambdas = eigenvalues(&sm)?;
@@ -146,7 +146,9 @@ impl LinearModel {
             picks.push((C64::new(rep, 0.0), C64::new(other, 0.0), ModeKind::Vibration));
         }
         let mq = self.second_order(damping).m;
-        let joints: Vec<String> = self.mech.joints.iter().map(|j| j.name.clone()).collect();
+        // The joint that owns each coordinate names the modes.
+        let joints: Vec<String> = (0..n).map(|k| self.mech.joints[self.mech.joint_of(k)].name.clone()).collect();
+        let nb = self.mech.bodies.len();
         let bodies: Vec<String> = self.mech.bodies.iter().map(|b| b.name.clone()).collect();
         let mut rigid = Vec::new();
         let mut modes = Vec::new();
@@ -168,7 +170,7 @@ impl LinearModel {
                 shape_qdot: vec![C64::new(0.0, 0.0); n],
                 shape_u: vec![C64::new(0.0, 0.0); n],
                 coordinate_share: share,
-                body_energy_share: vec![0.0; n],
+                body_energy_share: vec![0.0; nb],
                 label: joints[s].clone(),
             });
         }
@@ -212,7 +214,7 @@ impl LinearModel {
             let basis = if moving { &qdot } else { &q };
             let mut share: Vec<f64> = (0..n).map(|j| basis[j].norm_sqr() * mq[(j, j)]).collect();
             normalise(&mut share);
-            let mut energy: Vec<f64> = (0..n)
+            let mut energy: Vec<f64> = (0..nb)
                 .map(|j| {
                     let (pv, pw) = &self.partials[j];
                     let (mut vx, mut vy, mut w) = (C64::new(0.0, 0.0), C64::new(0.0, 0.0), C64::new(0.0, 0.0));

@@ -119,7 +119,9 @@ impl OrderResponse {
                 return Err(LinearError::LockedInput { joint: name.clone() });
             }
             let c = joint_of(&lm, name)?;
-            let q_lock = model.op.q[joint_of(mech, name)?];
+            joint_of(mech, name)?;
+            // A welded joint has no coordinate: it is locked at its own pose already.
+            let q_lock = mech.coordinate_index(name).map_or(0.0, |k| model.op.q[k]);
             if lm.bodies[c].name == watched
                 && let Some(p) = lm.joints[c].parent
             {
@@ -127,8 +129,10 @@ impl OrderResponse {
             }
             lm = lm.lock(name, q_lock)?;
         }
-        let guess_l: Vec<f64> =
-            lm.joints.iter().map(|j| mech.joint_index(&j.name).map_or(0.0, |k| model.op.q[k])).collect();
+        // The twin's coordinates start where the mechanism's equilibrium has them, matched by name.
+        let guess_l: Vec<f64> = (0..lm.ndof())
+            .map(|k| mech.coordinate_index(&lm.joints[lm.joint_of(k)].name).map_or(0.0, |c| model.op.q[c]))
+            .collect();
         let locked = LinearModel::new(&lm, &spec.spin_joint, omega_rad_s, Some(&guess_l))?;
         let body_locked = body_of(&lm, &watched)?;
         let input_locked = joint_of(&lm, &spec.input_joint)?;

@@ -72,11 +72,6 @@ pub(crate) fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f6
     w * w * a.hypot(b)
 }
 
-/// Largest peak |q| of the joints other than the spin joint, rad.
-pub(crate) fn relative_peak(sol: &HbmSolution, spin: usize) -> f64 {
-    (0..sol.ndof()).filter(|&k| k != spin).map(|k| sol.peak_amplitude(k)).fold(0.0, f64::max)
-}
-
 /// Continues the periodic solution in order from `from` to `to` for the excitation `harmonics`.
 pub(crate) fn branch(
     study: &Study,
@@ -222,7 +217,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                     .iter()
                     .map(|&m| p.iter().map(|x| body_accel(&x.solution, &path, m)).collect())
                     .collect(),
-                relative_angle: p.iter().map(|x| relative_peak(&x.solution, study.spin)).collect(),
+                relative_angle: p.iter().map(|x| x.solution.max_peak_amplitude()).collect(),
                 stable: p.iter().map(|x| x.stable).collect(),
                 max_multiplier: p
                     .iter()

@@ -160,17 +160,6 @@ impl Study {
                 format!("joint `{}` is not revolute: the spin joint turns the rotor", spec.spin_joint),
             ));
         }
-        // The analyses still number coordinates by joint; a welded body breaks that equality.
-        if let Some(j) = mechanism.joints.iter().find(|j| j.coordinate.is_none()) {
-            return Err(src.error(
-                "mechanism",
-                format!(
-                    "joint `{}` is Fixed: studies do not take welded bodies yet; merge the body into its \
-                     parent (its inertia by the parallel-axis rule) or make the joint revolute with a stiff spring",
-                    j.name
-                ),
-            ));
-        }
         let body = mechanism.body_index(&spec.response_body).ok_or_else(|| {
             let names: Vec<&str> = mechanism.bodies.iter().map(|b| b.name.as_str()).collect();
             src.error("response_body", format!("unknown body `{}` (bodies: {})", spec.response_body, names.join(", ")))
@@ -219,7 +208,9 @@ impl Study {
     pub fn initial_state(mech: &Mechanism, spin: usize, omega: f64) -> Vec<f64> {
         let n = mech.ndof();
         let mut qdot = vec![0.0; n];
-        qdot[spin] = omega;
+        if let Some(k) = mech.coordinate(spin) {
+            qdot[k] = omega;
+        }
         let mut u = vec![0.0; n];
         mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut u);
         let mut x = vec![0.0; 2 * n];

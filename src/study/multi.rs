@@ -317,11 +317,7 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
             let amplitudes: Vec<f64> = spec.multiples.iter().map(|&m| super::hbm::body_accel(&sol, &path, m)).collect();
             let same = |h: &HbmState| (h.amplitudes[0] - amplitudes[0]).abs() <= 1e-6 * amplitudes[0].abs();
             if !out.iter().any(same) {
-                out.push(HbmState {
-                    amplitudes,
-                    stable,
-                    max_relative_angle: super::hbm::relative_peak(&sol, study.spin),
-                });
+                out.push(HbmState { amplitudes, stable, max_relative_angle: sol.max_peak_amplitude() });
             }
         }
     }
