@@ -19,7 +19,7 @@
 //! iteration costs one residual; when a step contracts by less than half, the Jacobian is
 //! refreshed at the current iterate (at most 3 times) and the updates restart. With light damping
 //! the Jacobian changes quickly along the branch near resonance, so about one refresh per point
-//! is typical there.
+//! is typical there. (The bordered systems and both correctors are in `corrector`.)
 //!
 //! Step control: the step grows by 1.5 after a corrector of at most 7 iterations with at most
 //! one refresh, and shrinks by 0.7 after 10 iterations or 3 refreshes; a failed corrector, or a
@@ -33,23 +33,24 @@
 //! (Illinois) on `dλ/ds = 0` along the arclength.
 
 use super::branch::bifurcations;
+use super::corrector::Chord;
 use super::{At, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 use super::{Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::kane::Kane;
 use crate::model::excitation::Harmonic;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 /// A continuation's parameter, its scale and the values held fixed.
 #[derive(Debug, Clone, Copy)]
-struct Setup {
-    param: Parameter,
-    p_ref: f64,
+pub(super) struct Setup {
+    pub(super) param: Parameter,
+    pub(super) p_ref: f64,
     base: At,
 }
 
 impl Setup {
     /// The residual's parameters at scaled parameter λ.
-    fn at(&self, lambda: f64) -> At {
+    pub(super) fn at(&self, lambda: f64) -> At {
         let mut at = self.base;
         match self.param {
             Parameter::Order => at.order = lambda,
@@ -69,7 +70,7 @@ impl Setup {
     }
 
     /// A scaled parameter the residual can be evaluated at.
-    fn valid(&self, lambda: f64) -> bool {
+    pub(super) fn valid(&self, lambda: f64) -> bool {
         lambda.is_finite() && (lambda > 0.0 || matches!(self.param, Parameter::TorqueScale { .. }))
     }
 }
@@ -114,29 +115,6 @@ impl Default for ContinuationOptions {
     }
 }
 
-type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
-
-/// A factorised bordered matrix for the chord iterations. The matrix bordered by the new tangent
-/// t differs from the one factorised for computing t (bordered by the previous tangent t₀) in
-/// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
-/// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
-/// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
-struct Chord {
-    lu: Lu,
-    update: Option<(DVector<f64>, DVector<f64>, f64)>,
-}
-
-impl Chord {
-    fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
-        let mut y = self.lu.solve(r)?;
-        if let Some((z, d, denom)) = &self.update {
-            let f = d.dot(&y) / denom;
-            y.axpy(-f, z, 1.0);
-        }
-        Some(y)
-    }
-}
-
 /// Unit tangent and state carried along the branch.
 struct Cursor {
     y: DVector<f64>,
@@ -144,148 +122,6 @@ struct Cursor {
 }
 
 impl Hbm {
-    /// The bordered matrix `[[J, ∂R̂/∂λ], [rowᵀ]]` from the work buffers (∂R̂/∂λ = p_ref ∂R̂/∂p).
-    fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
-        let m = self.unknowns();
-        let mut b = DMatrix::zeros(m + 1, m + 1);
-        b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
-        b.view_mut((0, m), (m, 1)).copy_from(&(&self.gp * su.p_ref));
-        b.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
-        b
-    }
-
-    /// Unit tangent from the buffers' Jacobian, oriented by `row` (previous tangent).
-    fn tangent(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
-        Ok(self.tangent_chord(su, row, order)?.0)
-    }
-
-    /// Like [`Hbm::tangent`], also returning the chord matrix bordered by the new tangent.
-    fn tangent_chord(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<(DVector<f64>, Chord), HbmError> {
-        let m = self.unknowns();
-        let mut rhs = DVector::zeros(m + 1);
-        rhs[m] = 1.0;
-        let lu = self.bordered(su, row).lu();
-        let z = lu.solve(&rhs).ok_or(HbmError::Singular { order })?;
-        let norm = z.norm();
-        if !norm.is_finite() || norm == 0.0 {
-            return Err(HbmError::NonFinite { order });
-        }
-        let t = &z / norm;
-        let d = &t - row;
-        Ok((t, Chord { lu, update: Some((z, d, norm)) }))
-    }
-
-    /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
-    fn correct(
-        &mut self,
-        su: &Setup,
-        pred: &DVector<f64>,
-        t: &DVector<f64>,
-        max_iter: usize,
-    ) -> Result<(DVector<f64>, usize), HbmError> {
-        let m = self.unknowns();
-        let mut y = pred.clone();
-        let mut step = f64::INFINITY;
-        for it in 1..=max_iter {
-            let at = su.at(y[m]);
-            let order = at.order;
-            if !su.valid(y[m]) {
-                return Err(HbmError::NonFinite { order });
-            }
-            let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-            self.assemble(&x, &at, Some(su.param));
-            let mut rhs = DVector::zeros(m + 1);
-            rhs.rows_mut(0, m).copy_from(&self.rhat);
-            rhs[m] = t.dot(&(&y - pred));
-            let dy = self.bordered(su, t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
-            step = dy.amax();
-            if !step.is_finite() {
-                return Err(HbmError::NonFinite { order });
-            }
-            y -= dy;
-            if step <= self.opts.tol {
-                return Ok((y, it));
-            }
-        }
-        Err(HbmError::NoConvergence { order: su.at(y[m]).order, iterations: max_iter, step })
-    }
-
-    /// Newton–chord corrector with Broyden updates: like [`Hbm::correct`], but it iterates with
-    /// the bordered matrix factorised at the previous point (`chord`), so an iteration costs one
-    /// residual (N_t engine calls) instead of a Jacobian. The chord steps are improved by good
-    /// Broyden rank-one updates of the inverse, kept as the step vectors only (Kelley, *Iterative
-    /// Methods for Linear and Nonlinear Equations*, SIAM 1995, §7.3): superlinear instead of linear
-    /// convergence for O(m) work per stored step (fewer corrector iterations, and fewer points as
-    /// the step control sees fewer iterations; counts in `BENCHMARKS.md`).
-    /// When a step contracts by less than half, the Jacobian is refreshed at the
-    /// current iterate (at most `max_refresh` times) and the updates restart from it. Returns the
-    /// point, the iterations and the refreshes.
-    fn correct_chord(
-        &mut self,
-        su: &Setup,
-        chord: &Chord,
-        pred: &DVector<f64>,
-        t: &DVector<f64>,
-        max_iter: usize,
-        max_refresh: usize,
-    ) -> Result<(DVector<f64>, usize, usize), HbmError> {
-        let m = self.unknowns();
-        let mut y = pred.clone();
-        let mut x = vec![0.0; m];
-        let mut rhs = DVector::zeros(m + 1);
-        let mut last = f64::INFINITY;
-        let mut fresh: Option<Chord> = None;
-        let mut refreshes = 0;
-        // Broyden steps s_j taken since the last (re)start, and |s_j|².
-        let mut steps: Vec<(DVector<f64>, f64)> = Vec::new();
-        for it in 1..=max_iter {
-            let at = su.at(y[m]);
-            let order = at.order;
-            if !su.valid(y[m]) {
-                return Err(HbmError::NonFinite { order });
-            }
-            x.copy_from_slice(&y.as_slice()[..m]);
-            self.assemble(&x, &at, None);
-            rhs.rows_mut(0, m).copy_from(&self.rhat);
-            rhs[m] = t.dot(&(&y - pred));
-            // Step s = −B⁻¹g with B the Broyden-updated chord matrix.
-            let mut s = -fresh.as_ref().unwrap_or(chord).solve(&rhs).ok_or(HbmError::Singular { order })?;
-            for w in steps.windows(2) {
-                let f = w[0].0.dot(&s) / w[0].1;
-                s.axpy(f, &w[1].0, 1.0);
-            }
-            if let Some((sn, nn)) = steps.last() {
-                let denom = 1.0 - sn.dot(&s) / nn;
-                if denom.abs() > 1e-12 {
-                    s /= denom;
-                }
-            }
-            let mut step = s.amax();
-            if it > 1 && step > 0.5 * last && refreshes < max_refresh {
-                self.assemble(&x, &at, Some(su.param));
-                let f = Chord { lu: self.bordered(su, t).lu(), update: None };
-                s = -f.solve(&rhs).ok_or(HbmError::Singular { order })?;
-                step = s.amax();
-                fresh = Some(f);
-                refreshes += 1;
-                steps.clear();
-            } else if it > 1 && step > 0.5 * last {
-                return Err(HbmError::NoConvergence { order, iterations: it, step });
-            }
-            if !step.is_finite() {
-                return Err(HbmError::NonFinite { order });
-            }
-            y += &s;
-            if step <= self.opts.tol {
-                return Ok((y, it, refreshes));
-            }
-            let nn = s.norm_squared();
-            steps.push((s, nn));
-            last = step;
-        }
-        Err(HbmError::NoConvergence { order: su.at(y[m]).order, iterations: max_iter, step: last })
-    }
-
     fn branch_point(
         &mut self,
         su: &Setup,

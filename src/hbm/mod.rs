@@ -84,6 +84,7 @@ mod aft;
 mod assembly;
 mod branch;
 mod continuation;
+mod corrector;
 mod sample;
 mod solution;
 mod stability;

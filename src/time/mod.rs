@@ -2,6 +2,7 @@
 //! ([`integrate`]), the probes that turn sampled states into named signals and the one
 //! `simulate` ([`probe`]), and steady-state detection by windows ([`steady`]).
 
+mod driver;
 pub mod integrate;
 pub mod probe;
 pub mod steady;
