@@ -1,15 +1,8 @@
 //! The command-line tool: `check` and `eom` on the examples, and clean failures on bad input.
 
-use std::process::Command;
-
-fn kanedyn(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_kanedyn"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::kanedyn;
 
 #[test]
 fn check_prints_dofs_and_mass() {

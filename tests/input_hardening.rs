@@ -27,14 +27,9 @@ fn with_part(part: &str) -> String {
     )
 }
 
-fn kanedyn(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_kanedyn"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::kanedyn;
 
 fn assert_mentions(msg: &str, parts: &[&str]) {
     for p in parts {

@@ -50,9 +50,9 @@ fn copy_dir(from: &Path, to: &Path, only: &[&str]) {
     }
 }
 
-fn kanedyn(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_kanedyn")).args(args).output().unwrap()
-}
+#[path = "support/cli.rs"]
+mod cli;
+use cli::run as kanedyn;
 
 fn text(o: &Output) -> String {
     format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))

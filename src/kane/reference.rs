@@ -55,9 +55,14 @@ pub fn speeds_to_rates(mech: &Mechanism) -> DMatrix<f64> {
 
 /// Every body's kinematics at coordinates `q` and speeds `u` (steps 1–3 of the module doc).
 pub fn body_kinematics(mech: &Mechanism, q: &[f64], u: &[f64]) -> Vec<BodyKinematics> {
-    let n = mech.ndof();
     let b = speeds_to_rates(mech);
-    let qdot = &b * DVector::from_column_slice(&u[..n]);
+    let qdot = &b * DVector::from_column_slice(&u[..mech.ndof()]);
+    kinematics(mech, &b, &qdot, q)
+}
+
+/// [`body_kinematics`] with B and the joint rates `q̇ = B u` already formed.
+fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]) -> Vec<BodyKinematics> {
+    let n = mech.ndof();
     // Per body, by joint rate k: ∂ω/∂q̇_k and ∂v_o/∂q̇_k of its joint point o.
     struct Frame {
         angle: f64,
@@ -147,9 +152,9 @@ pub fn mass_matrix_and_forcing(
     u: &[f64],
 ) -> (DMatrix<f64>, DVector<f64>) {
     let n = mech.ndof();
-    let kin = body_kinematics(mech, q, u);
     let b = speeds_to_rates(mech);
     let qdot = &b * DVector::from_column_slice(&u[..n]);
+    let kin = kinematics(mech, &b, &qdot, q);
     let mut m = DMatrix::zeros(n, n);
     let mut f = DVector::zeros(n);
     let g = mech.loads.gravity;
