@@ -33,47 +33,12 @@
 //! (Illinois) on `dλ/ds = 0` along the arclength.
 
 use super::branch::bifurcations;
-use super::corrector::Chord;
-use super::{At, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
+use super::corrector::{Chord, Setup};
+use super::{Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 use super::{Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::kane::Kane;
 use crate::model::excitation::Harmonic;
 use nalgebra::DVector;
-
-/// A continuation's parameter, its scale and the values held fixed.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Setup {
-    pub(super) param: Parameter,
-    pub(super) p_ref: f64,
-    base: At,
-}
-
-impl Setup {
-    /// The residual's parameters at scaled parameter λ.
-    pub(super) fn at(&self, lambda: f64) -> At {
-        let mut at = self.base;
-        match self.param {
-            Parameter::Order => at.order = lambda,
-            Parameter::Speed { .. } => at.omega = lambda * self.p_ref,
-            Parameter::TorqueScale { .. } => at.scale = lambda,
-        }
-        at
-    }
-
-    /// λ of a solution.
-    fn lambda(&self, sol: &HbmSolution) -> f64 {
-        match self.param {
-            Parameter::Order => sol.order,
-            Parameter::Speed { .. } => sol.omega / self.p_ref,
-            Parameter::TorqueScale { .. } => sol.torque_scale,
-        }
-    }
-
-    /// A scaled parameter the residual can be evaluated at.
-    pub(super) fn valid(&self, lambda: f64) -> bool {
-        lambda.is_finite() && (lambda > 0.0 || matches!(self.param, Parameter::TorqueScale { .. }))
-    }
-}
 
 /// Settings of the continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,11 +1,46 @@
-//! The corrector of the continuation in [`super::continuation`]: the bordered system
+//! The corrector of the continuation (`continuation.rs`), with the scaled parameter λ = p/p_ref
+//! it works in ([`Setup`]): the bordered system
 //! `[[∂R̂/∂x, ∂R̂/∂λ], [tᵀ]]` that stays regular through turning points, the unit tangent it
 //! yields, Newton's method on it, and the Newton–chord iteration with good-Broyden updates
 //! (Kelley §7.3) that reuses one factorisation per point.
 
-use super::continuation::Setup;
-use super::{Hbm, HbmError};
+use super::{At, Hbm, HbmError, HbmSolution, Parameter};
 use nalgebra::{DMatrix, DVector};
+
+/// A continuation's parameter, its scale and the values held fixed.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Setup {
+    pub(super) param: Parameter,
+    pub(super) p_ref: f64,
+    pub(super) base: At,
+}
+
+impl Setup {
+    /// The residual's parameters at scaled parameter λ.
+    pub(super) fn at(&self, lambda: f64) -> At {
+        let mut at = self.base;
+        match self.param {
+            Parameter::Order => at.order = lambda,
+            Parameter::Speed { .. } => at.omega = lambda * self.p_ref,
+            Parameter::TorqueScale { .. } => at.scale = lambda,
+        }
+        at
+    }
+
+    /// λ of a solution.
+    pub(super) fn lambda(&self, sol: &HbmSolution) -> f64 {
+        match self.param {
+            Parameter::Order => sol.order,
+            Parameter::Speed { .. } => sol.omega / self.p_ref,
+            Parameter::TorqueScale { .. } => sol.torque_scale,
+        }
+    }
+
+    /// A scaled parameter the residual can be evaluated at.
+    pub(super) fn valid(&self, lambda: f64) -> bool {
+        lambda.is_finite() && (lambda > 0.0 || matches!(self.param, Parameter::TorqueScale { .. }))
+    }
+}
 
 type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
 

@@ -5,7 +5,7 @@
 //! of our own: see the module doc of `integrate`.
 
 use crate::error::EngineError;
-use crate::time::integrate::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
+use crate::time::solver::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
 use differential_equations::interpolate::Interpolation;
 use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
 use differential_equations::ode::{ODE, OrdinaryNumericalMethod};

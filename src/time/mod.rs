@@ -5,4 +5,5 @@
 mod driver;
 pub mod integrate;
 pub mod probe;
+mod solver;
 pub mod steady;
