@@ -367,7 +367,7 @@ impl Mechanism {
         &self.mech.name
     }
 
-    /// The file it was read from, or None.
+    /// The file it was read from; for `from_str`, the name given.
     #[getter]
     fn file(&self) -> Option<String> {
         self.mech.file.as_ref().map(|f| f.display().to_string())
@@ -391,7 +391,7 @@ impl Mechanism {
     /// Returns
     /// -------
     /// dict
-    ///     ``name``, ``file`` (None for text), ``degrees_of_freedom``, ``speeds`` (the choice of
+    ///     ``name``, ``file`` (for text, the name given), ``degrees_of_freedom``, ``speeds`` (the choice of
     ///     generalized speeds, "JointRates" or "AbsoluteAngularVelocities"), ``bodies`` (a list
     ///     of dicts: ``name``, ``mass`` kg, ``com`` (x, y) m in the body frame, ``inertia``
     ///     kg·m² about the centre of mass), ``joints`` in tree order (a list of dicts: ``name``,
