@@ -57,9 +57,12 @@ pub struct Buffers {
     f: Vec<f64>,
 }
 
+/// The CLI's defaults, written as literals in the Python signatures so that `help()` shows them.
+const _: () = assert!(ReadPolicy::DEFAULT_MAX_BODIES == 1000 && ReadPolicy::DEFAULT_MAX_FILE_BYTES == 1024 * 1024);
+
 /// Read-policy keyword arguments, the same as the CLI's flags of the same names.
 struct PolicyArgs {
-    allow_read: Vec<PathBuf>,
+    allow_read: Option<Vec<PathBuf>>,
     allow_any_path: bool,
     max_file_kb: u64,
     max_bodies: usize,
@@ -72,7 +75,7 @@ impl PolicyArgs {
         let policy = if self.allow_any_path {
             ReadPolicy::unrestricted()
         } else {
-            self.allow_read.iter().fold(ReadPolicy::within(base), |p, d| p.allow(d))
+            self.allow_read.iter().flatten().fold(ReadPolicy::within(base), |p, d| p.allow(d))
         };
         policy.with_max_file_bytes(self.max_file_kb.saturating_mul(1024)).with_max_bodies(self.max_bodies)
     }
@@ -305,11 +308,11 @@ impl Mechanism {
     /// ModelError
     ///     The mechanism cannot be evaluated.
     #[staticmethod]
-    #[pyo3(signature = (path, *, allow_read = Vec::new(), allow_any_path = false, max_file_kb = 1024, max_bodies = ReadPolicy::DEFAULT_MAX_BODIES))]
+    #[pyo3(signature = (path, *, allow_read = None, allow_any_path = false, max_file_kb = 1024, max_bodies = 1000))]
     fn from_file(
         py: Python<'_>,
         path: PathBuf,
-        allow_read: Vec<PathBuf>,
+        allow_read: Option<Vec<PathBuf>>,
         allow_any_path: bool,
         max_file_kb: u64,
         max_bodies: usize,
@@ -342,12 +345,12 @@ impl Mechanism {
     /// InputError, ReadError, ModelError
     ///     As for `Mechanism.from_file`, located in `name`.
     #[staticmethod]
-    #[pyo3(name = "from_str", signature = (text, name = "<string>".to_string(), *, allow_read = Vec::new(), allow_any_path = false, max_file_kb = 1024, max_bodies = ReadPolicy::DEFAULT_MAX_BODIES))]
+    #[pyo3(name = "from_str", signature = (text, name = "<string>", *, allow_read = None, allow_any_path = false, max_file_kb = 1024, max_bodies = 1000))]
     fn from_text(
         py: Python<'_>,
         text: &str,
-        name: String,
-        allow_read: Vec<PathBuf>,
+        name: &str,
+        allow_read: Option<Vec<PathBuf>>,
         allow_any_path: bool,
         max_file_kb: u64,
         max_bodies: usize,
