@@ -91,9 +91,11 @@ impl Mechanism {
         Self { mech, cache: Mutex::new(Cache::default()) }
     }
 
-    /// The cache, or a fresh one when another thread holds it (so a call never waits while
-    /// holding the interpreter) or when a panic left it poisoned (its evaluator may be half
-    /// updated, so it is dropped, never read).
+    /// The cache, or a fresh private one when it is in use, so that a call never waits while
+    /// holding the interpreter: by another thread, or by this very thread when Python code run
+    /// while reading an argument (a mapping's `items()`, an object's `__array__`) calls `eom`
+    /// again. A cache that a panic left poisoned is reset (its evaluator may be half updated),
+    /// never read.
     fn cache(&self) -> CacheRef<'_> {
         match self.cache.try_lock() {
             Ok(guard) => CacheRef::Shared(guard),
@@ -107,15 +109,15 @@ impl Mechanism {
         }
     }
 
-    /// Parses one state vector: its length must be the number of degrees of freedom and every
-    /// value finite (the CLI's `parse_list` rules), copied into `out`.
-    fn read_vector(
-        &self,
-        py: Python<'_>,
-        name: &str,
-        values: &PyArrayLike1<'_, f64, AllowTypeChange>,
-        out: &mut [f64],
-    ) -> PyResult<()> {
+    /// Reads one state vector: any 1-D sequence of numbers (a float64 array is read in place,
+    /// anything else goes through `numpy.asarray`); its length must be the number of degrees of
+    /// freedom and every value finite (the CLI's `parse_list` rules). Copied into `out`.
+    fn read_vector(&self, py: Python<'_>, name: &str, values: &Bound<'_, PyAny>, out: &mut [f64]) -> PyResult<()> {
+        // NOTE: extracted here, inside the caller's guard, not as a typed argument: rust-numpy
+        // panics when the array is mutably borrowed by Rust code elsewhere (another extension).
+        let values: PyArrayLike1<'_, f64, AllowTypeChange> = values
+            .extract()
+            .map_err(|e| argument_error(py, format!("{name} must be a 1-D sequence of numbers ({e})")))?;
         let n = out.len();
         let array = values.as_array();
         if array.len() != n {
@@ -147,14 +149,24 @@ impl Mechanism {
 
     /// The joint-torque overrides as `(joint index, value)`, in the mapping's order.
     fn read_torques(&self, py: Python<'_>, torques: &Bound<'_, PyAny>) -> PyResult<Vec<(usize, f64)>> {
-        // A dict is read directly; any other mapping through its `items()`.
+        // A dict is read directly; any other mapping through its `items()`, whose own errors
+        // pass through unchanged.
         let items: Vec<Bound<'_, PyAny>> = match torques.cast::<PyDict>() {
             Ok(d) => d.items().iter().collect(),
+            Err(_) if !torques.hasattr("items")? => {
+                let type_name = torques.get_type().name()?;
+                return Err(argument_error(
+                    py,
+                    format!("joint_torques must be a mapping of joint names to numbers, not {type_name}"),
+                ));
+            }
             Err(_) => torques.call_method0("items")?.try_iter()?.collect::<PyResult<_>>()?,
         };
         let mut out = Vec::with_capacity(items.len());
         for item in items.iter() {
-            let (name, value): (String, f64) = item.extract()?;
+            let (name, value): (String, f64) = item.extract().map_err(|e| {
+                argument_error(py, format!("joint_torques must map joint names to numbers (N·m) ({e})"))
+            })?;
             let joint = self.mech.joint_index(name.trim()).ok_or_else(|| {
                 let names: Vec<&str> = self.mech.joints.iter().map(|j| j.name.as_str()).collect();
                 argument_error(py, format!("joint_torques: unknown joint `{name}` (joints: {})", names.join(", ")))
@@ -203,23 +215,29 @@ impl Cache {
         mech: &Mech,
         torques: &[(usize, f64)],
     ) -> PyResult<(&mut Kane, &mut Buffers)> {
-        if self.plain.is_none() {
-            self.plain = Some(Kane::new(mech).map_err(|e| to_py(py, &e))?);
+        let plain = match self.plain.take() {
+            Some(kane) => kane,
+            None => Kane::new(mech).map_err(|e| to_py(py, &e))?,
+        };
+        let plain = self.plain.insert(plain);
+        if torques.is_empty() {
+            return Ok((plain, &mut self.buffers));
         }
-        let kane = if torques.is_empty() {
-            self.plain.as_mut()
-        } else {
-            let key: Vec<(usize, u64)> = torques.iter().map(|&(j, v)| (j, v.to_bits())).collect();
-            if self.overridden.as_ref().is_none_or(|(k, _)| *k != key) {
-                let mut kane = self.plain.clone().expect("built above");
+        let key: Vec<(usize, u64)> = torques.iter().map(|&(j, v)| (j, v.to_bits())).collect();
+        // Taken out and put back (a move, not a copy of the buffers) so that the borrow returned
+        // is of the slot itself.
+        let entry = match self.overridden.take() {
+            Some(entry) if entry.0 == key => entry,
+            _ => {
+                let mut kane = plain.clone();
                 for &(joint, value) in torques {
                     kane.set_joint_torque(joint, Excitation::constant(value));
                 }
-                self.overridden = Some((key, kane));
+                (key, kane)
             }
-            self.overridden.as_mut().map(|(_, k)| k)
         };
-        Ok((kane.expect("built above"), &mut self.buffers))
+        let (_, kane) = self.overridden.insert(entry);
+        Ok((kane, &mut self.buffers))
     }
 }
 
@@ -242,17 +260,19 @@ pub fn evaluate(kane: &mut Kane, t: f64, out: &mut Buffers) -> Result<(), String
     out.f.extend(f.iter().copied());
     // The CLI refuses to print a non-finite number (JSON would carry it as `null`); the same
     // state is refused here with the same words, so both tools agree on what a valid state is.
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if finite(&out.m) && finite(&out.f) && finite(&out.xdot) {
+        return Ok(());
+    }
     let first_bad =
         |name: &str, v: &[f64]| v.iter().position(|x| !x.is_finite()).map(|i| format!("{name}[{i}] = {}", v[i]));
-    let bad = (0..n)
+    let what = (0..n)
         .find_map(|r| first_bad(&format!("M[{r}]"), &out.m[r * n..(r + 1) * n]))
         .or_else(|| first_bad("F", &out.f))
         .or_else(|| first_bad("q̇", &out.xdot[..n]))
-        .or_else(|| first_bad("u̇", &out.xdot[n..]));
-    if let Some(what) = bad {
-        return Err(format!("the equations of motion overflow at this state: {what} (values too large for f64?)"));
-    }
-    Ok(())
+        .or_else(|| first_bad("u̇", &out.xdot[n..]))
+        .unwrap_or_default();
+    Err(format!("the equations of motion overflow at this state: {what} (values too large for f64?)"))
 }
 
 /// A new 1-D float64 array holding `v`.
@@ -356,7 +376,7 @@ impl Mechanism {
         max_bodies: usize,
     ) -> PyResult<Self> {
         guard(|| {
-            let src = Source::from_text(&name, text);
+            let src = Source::from_text(name, text);
             let policy =
                 PolicyArgs { allow_read, allow_any_path, max_file_kb, max_bodies }.policy(folder_of(&src.file));
             let mech = Mech::from_source(&src, &policy).map_err(|e| to_py(py, &e))?;
@@ -508,12 +528,11 @@ impl Mechanism {
     /// >>> m = kanedyn.Mechanism.from_file("examples/cpva.ron")
     /// >>> M, F, qdot, udot = m.eom([12.5, -0.4], [104.7, -20.0], joint_torques={"spin": 250.0})
     #[pyo3(signature = (q, u, t = 0.0, joint_torques = None))]
-    #[allow(clippy::type_complexity)] // the four arrays, as Python unpacks them
     fn eom<'py>(
         &self,
         py: Python<'py>,
-        q: PyArrayLike1<'py, f64, AllowTypeChange>,
-        u: PyArrayLike1<'py, f64, AllowTypeChange>,
+        q: Bound<'py, PyAny>,
+        u: Bound<'py, PyAny>,
         t: f64,
         joint_torques: Option<Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
@@ -550,8 +569,8 @@ impl Mechanism {
     fn time_rust_eom(
         &self,
         py: Python<'_>,
-        q: PyArrayLike1<'_, f64, AllowTypeChange>,
-        u: PyArrayLike1<'_, f64, AllowTypeChange>,
+        q: Bound<'_, PyAny>,
+        u: Bound<'_, PyAny>,
         t: f64,
         calls: usize,
     ) -> PyResult<f64> {
