@@ -74,6 +74,8 @@ class _JointInfo(TypedDict):
     at: _Pair
     coordinate: Optional[int]
     unit: Optional[str]
+    damper_unit: Optional[str]
+    spring_unit: Optional[str]
     damper: float
     spring: Optional[_SpringInfo]
 

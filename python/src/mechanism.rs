@@ -421,9 +421,9 @@ impl Mechanism {
     ///     ``kind`` ("Revolute", "Prismatic" or "Fixed"), ``axis`` (the unit slide axis of a
     ///     prismatic joint, else None), ``parent`` ("ground" or a body), ``child``, ``at`` (x, y)
     ///     m in the parent frame, ``coordinate`` (its index in q, None for a fixed joint),
-    ///     ``unit`` of the coordinate ("rad" or "m", None without one), ``damper`` (N·m·s/rad
-    ///     or N·s/m), ``spring`` (None or a dict with ``stiffness`` N·m/rad or N/m and
-    ///     ``free_angle`` rad or m)), ``loads`` (a dict: ``gravity`` (x, y) m/s², and the counts
+    ///     ``unit`` of the coordinate ("rad" or "m", None without one), ``damper`` (in
+    ///     ``damper_unit``, "N·m·s/rad" or "N·s/m"), ``spring`` (None or a dict with
+    ///     ``stiffness`` in ``spring_unit``, "N·m/rad" or "N/m", and ``free_angle`` in ``unit``)), ``loads`` (a dict: ``gravity`` (x, y) m/s², and the counts
     ///     ``joint_torques``, ``ground_dampers``, ``point_forces``) and ``total_mass`` kg.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
@@ -459,8 +459,11 @@ impl Mechanism {
                 d.set_item("at", pair(j.at))?;
                 d.set_item("coordinate", j.coordinate)?;
                 // The CLI's rule: per radian for a turn, per metre for a slide.
-                let unit = if j.kind.rotates() { "rad" } else { "m" };
-                d.set_item("unit", j.coordinate.map(|_| unit))?;
+                let (per, unit) = if j.kind.rotates() { ("N·m", "rad") } else { ("N", "m") };
+                let has = |text: String| j.coordinate.map(|_| text);
+                d.set_item("unit", has(unit.to_string()))?;
+                d.set_item("damper_unit", has(format!("{per}·s/{unit}")))?;
+                d.set_item("spring_unit", has(format!("{per}/{unit}")))?;
                 d.set_item("damper", j.damper)?;
                 let spring = match j.spring {
                     Some(s) => {

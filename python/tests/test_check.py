@@ -48,14 +48,16 @@ def parse_check(text):
                 "at": (float(m[8]), float(m[9])),
                 "damper": 0.0,
                 "spring": None,
-                "units": set(),
+                "units": {},
             }
             if d := DAMPER.search(m[10]):
                 joint["damper"] = float(d[1])
-                joint["units"].add((d[2], d[3]))
+                joint["units"]["unit"] = d[3]
+                joint["units"]["damper_unit"] = f"{d[2]}·s/{d[3]}"
             if s := SPRING.search(m[10]):
                 joint["spring"] = {"stiffness": float(s[1]), "free_angle": float(s[4])}
-                joint["units"].add((s[2], s[3]))
+                joint["units"]["unit"] = s[5]
+                joint["units"]["spring_unit"] = f"{s[2]}/{s[3]}"
             out["joints"].append(joint)
         elif m := LOADS.match(line):
             out["loads"] = {
@@ -99,10 +101,16 @@ def test_check_holds_what_the_cli_prints(cli, name):
             assert g["axis"] == w["axis"]
         else:
             assert g["axis"] is None
-        # Where the CLI names a unit (damper, spring), it is the dict's coordinate unit.
-        for _, unit in w["units"]:
-            assert g["unit"] == unit, g
-        assert (g["unit"] is None) == (g["coordinate"] is None)
+        # Where the CLI names a unit (with a damper or a spring), the dict has the same.
+        for key, unit in w["units"].items():
+            assert g[key] == unit, (key, g)
+        for key in ("unit", "damper_unit", "spring_unit"):
+            assert (g[key] is None) == (g["coordinate"] is None)
+    # Each example shows the units of a revolute joint, and joint_kinds those of a slide too.
+    shown = {u for j in want["joints"] for u in j["units"].values()}
+    assert "N·m·s/rad" in shown or "N·m/rad" in shown, shown
+    if name == "joint_kinds":
+        assert {"N·s/m", "N/m", "m"} <= shown
     assert [j["coordinate"] for j in got["joints"] if j["coordinate"] is not None] == list(
         range(got["degrees_of_freedom"])
     )
