@@ -24,10 +24,11 @@ create_exception!(
     kanedyn,
     InputError,
     KanedynError,
-    "Bad input in a mechanism file or text: a syntax error, an unknown field, a wrong type or a \
-     semantic problem.\n\nAttributes: `file` (str), `line` and `column` (1-based int, or None \
-     when unknown), `field` (the field path such as `joints[1].parent`, empty for the whole \
-     file) and `reason` (the message without its location)."
+    "Bad input in a mechanism file or text: a syntax error, an unknown field, a wrong type, a\n\
+     semantic problem, a file too large or not a regular file.\n\n\
+     Attributes: `file` (str); `line` and `column` (1-based int, None when unknown); `field`\n\
+     (the field path such as `joints[1].parent`, empty for the whole file); `reason` (the\n\
+     message without its location)."
 );
 create_exception!(
     kanedyn,
@@ -52,17 +53,17 @@ create_exception!(
     kanedyn,
     InternalError,
     KanedynError,
-    "A bug in kanedyn: the Rust code panicked. The call had no effect on the objects it was \
-     given; please report the message."
+    "A bug in kanedyn: the Rust code panicked. The objects involved stay usable; please report\n\
+     the message with the input that caused it."
 );
 
 /// `kanedyn.ArgumentError`, built at module load because it has two bases (`KanedynError` and
 /// `ValueError`), which `create_exception!` cannot express.
 static ARGUMENT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
-const ARGUMENT_ERROR_DOC: &str = "A bad argument to a kanedyn call: an array of the wrong length, a \
-     non-finite number, an unknown joint name.\n\nIt is also a `ValueError`, so code that \
-     catches either works.";
+const ARGUMENT_ERROR_DOC: &str = "A bad argument to a kanedyn call: an array of the wrong length, a\n\
+     non-finite number, an unknown joint name.\n\n\
+     It is also a `ValueError`, so code that catches either works.";
 
 /// The `ArgumentError` type, created on first use.
 fn argument_error_type(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {

@@ -414,17 +414,27 @@ impl Mechanism {
     /// Returns
     /// -------
     /// dict
-    ///     ``name``, ``file`` (for text, the name given), ``degrees_of_freedom``, ``speeds`` (the choice of
-    ///     generalized speeds, "JointRates" or "AbsoluteAngularVelocities"), ``bodies`` (a list
-    ///     of dicts: ``name``, ``mass`` kg, ``com`` (x, y) m in the body frame, ``inertia``
-    ///     kg·m² about the centre of mass), ``joints`` in tree order (a list of dicts: ``name``,
-    ///     ``kind`` ("Revolute", "Prismatic" or "Fixed"), ``axis`` (the unit slide axis of a
-    ///     prismatic joint, else None), ``parent`` ("ground" or a body), ``child``, ``at`` (x, y)
-    ///     m in the parent frame, ``coordinate`` (its index in q, None for a fixed joint),
-    ///     ``unit`` of the coordinate ("rad" or "m", None without one), ``damper`` (in
-    ///     ``damper_unit``, "N·m·s/rad" or "N·s/m"), ``spring`` (None or a dict with
-    ///     ``stiffness`` in ``spring_unit``, "N·m/rad" or "N/m", and ``free_angle`` in ``unit``)), ``loads`` (a dict: ``gravity`` (x, y) m/s², and the counts
-    ///     ``joint_torques``, ``ground_dampers``, ``point_forces``) and ``total_mass`` kg.
+    ///     name : str
+    ///     file : str
+    ///         The file read; for `from_str`, the name given.
+    ///     degrees_of_freedom : int
+    ///     speeds : str
+    ///         The generalized speeds: "JointRates" or "AbsoluteAngularVelocities".
+    ///     bodies : list of dict
+    ///         ``name``; ``mass`` (kg); ``com`` ((x, y) m in the body frame); ``inertia``
+    ///         (kg·m² about the centre of mass).
+    ///     joints : list of dict, in tree order
+    ///         ``name``; ``kind`` ("Revolute", "Prismatic" or "Fixed"); ``axis`` (the unit slide
+    ///         axis of a prismatic joint, else None); ``parent`` ("ground" or a body name);
+    ///         ``child``; ``at`` ((x, y) m in the parent frame); ``coordinate`` (its index in q);
+    ///         ``unit`` ("rad" or "m"); ``damper`` (in ``damper_unit``, "N·m·s/rad" or "N·s/m");
+    ///         ``spring`` (None, or ``stiffness`` in ``spring_unit``, "N·m/rad" or "N/m", and
+    ///         ``free_angle`` in ``unit``). A fixed joint has None for the coordinate and units.
+    ///     loads : dict
+    ///         ``gravity`` ((x, y) m/s²) and the counts ``joint_torques``, ``ground_dampers``
+    ///         and ``point_forces``.
+    ///     total_mass : float
+    ///         kg.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let mech = &self.mech;
