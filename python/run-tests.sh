@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Builds the kanedyn Python package and the kanedyn CLI, then runs the Python tests.
+#
+#   python/run-tests.sh [pytest arguments…]
+#
+# On a clean machine it creates a virtual environment (python/.venv, or $KANEDYN_VENV) and
+# installs maturin, numpy, pytest and mypy (for the stub check) into it; later runs reuse it, and
+# cargo rebuilds only what changed, so a second run takes seconds. Needs python3 (≥ 3.9, with
+# venv) and cargo on PATH; $PYTHON picks another interpreter for a new environment.
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(dirname "$here")"
+venv="${KANEDYN_VENV:-$here/.venv}"
+py="$venv/bin/python"
+
+if [ ! -x "$py" ]; then
+    echo "run-tests: creating $venv"
+    "${PYTHON:-python3}" -m venv "$venv"
+fi
+# Installed once; checked by import so that a half-made environment is completed.
+if ! "$py" -c "import maturin, numpy, pytest, mypy" 2>/dev/null; then
+    echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check)"
+    "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy
+fi
+
+# The package, in release mode (the bit-for-bit tests compare against the release CLI, and the
+# overhead benchmark needs optimised code), installed into the environment in editable form.
+echo "run-tests: building the kanedyn package"
+VIRTUAL_ENV="$venv" "$venv/bin/maturin" develop --release --quiet --manifest-path "$here/Cargo.toml"
+
+# The CLI the tests compare against, from the same source tree.
+echo "run-tests: building the kanedyn CLI"
+cli="$(cd "$root" && cargo build --release --bin kanedyn --quiet --message-format=json-render-diagnostics |
+    "$py" -c 'import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "kanedyn" and m.get("executable"):
+        print(m["executable"])')"
+if [ -z "$cli" ]; then
+    echo "run-tests: cargo reported no kanedyn executable" >&2
+    exit 1
+fi
+
+cd "$here"
+KANEDYN_CLI="$cli" exec "$py" -m pytest "$@"
