@@ -1,7 +1,11 @@
 //! Campbell data ([`campbell`]): the eigen-analysis of [`LinearModel::modes`] repeated over spin
 //! speed, each speed linearised from the previous one's equilibrium, the modes tracked across
 //! speeds by the modal assurance criterion (MAC) of their coordinate shapes, with the
-//! engine-order lines `f = n·rpm/60`.
+//! engine-order lines `f = n·rpm/60` and their crossings with the modes: the resonance speeds
+//! of torsional practice, where order n excites a mode. A crossing is where the mode's
+//! eigen-order `f·60/rpm` equals n; it is bracketed on the speed grid and located by bisection
+//! on the eigen-order, each probe speed linearised afresh and its mode picked by MAC with the
+//! track's shape at the bracket.
 
 use super::{C64, Damping, LinResult, LinearModel, Spin};
 use crate::model::excitation::rpm_to_rad_s;
@@ -32,16 +36,37 @@ pub struct OrderLine {
     pub frequency_hz: Vec<f64>,
 }
 
+/// Where an order line crosses a mode: a resonance speed.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Crossing {
+    /// The order n of the line.
+    pub order: f64,
+    /// Index of the mode's track in [`Campbell::tracks`].
+    pub track: usize,
+    /// Spin speed of the crossing, rpm.
+    pub rpm: f64,
+    /// The mode's damped frequency there (= n·rpm/60), Hz.
+    pub frequency_hz: f64,
+    /// The mode's label at the crossing.
+    pub label: String,
+}
+
 /// Campbell data: natural frequencies against spin speed, with order lines.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Campbell {
     /// Spin speeds, rpm.
     pub rpm: Vec<f64>,
-    /// The n − 1 vibration modes, tracked across speeds.
+    /// The n − 1 vibration modes, tracked across speeds, in order of frequency at the first
+    /// speed.
     pub tracks: Vec<CampbellTrack>,
     /// The order lines.
     pub order_lines: Vec<OrderLine>,
+    /// Every crossing of an order line with a track inside the speed range, by speed.
+    pub crossings: Vec<Crossing>,
 }
+
+/// Relative speed tolerance of a located crossing (the bisection stops below it).
+pub const CROSSING_RTOL: f64 = 1e-9;
 
 /// Modal assurance criterion of two complex shapes, in [0, 1].
 fn mac(a: &[C64], b: &[C64]) -> f64 {
@@ -71,11 +96,16 @@ pub fn campbell(
     let mut guess: Option<Vec<f64>> = guess.map(<[f64]>::to_vec);
     let mut tracks: Vec<CampbellTrack> = Vec::new();
     let mut last: Vec<Vec<C64>> = Vec::new();
+    // Per speed: the equilibrium (a start for the bisection) and each track's shape.
+    let mut equilibria: Vec<Vec<f64>> = Vec::with_capacity(rpm.len());
+    let mut shapes: Vec<Vec<Vec<C64>>> = Vec::with_capacity(rpm.len());
     for (i, &r) in rpm.iter().enumerate() {
         let model = LinearModel::new(mech, spin_joint, rpm_to_rad_s(r), guess.as_deref())?;
         guess = Some(model.op.q.clone());
-        let modal = model.modes(spin, damping)?;
+        equilibria.push(model.op.q.clone());
+        let mut modal = model.modes(spin, damping)?;
         if i == 0 {
+            modal.modes.sort_by(|a, b| a.natural_frequency_rad_s.total_cmp(&b.natural_frequency_rad_s));
             for m in &modal.modes {
                 tracks.push(CampbellTrack {
                     label: String::new(),
@@ -86,6 +116,7 @@ pub fn campbell(
                 });
                 last.push(m.shape_q.clone());
             }
+            shapes.push(last.clone());
             continue;
         }
         let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
@@ -111,6 +142,7 @@ pub fn campbell(
             tr.damping_ratio.push(mode.damping_ratio);
             last[t] = mode.shape_q.clone();
         }
+        shapes.push(last.clone());
     }
     for tr in &mut tracks {
         let mut best = (0, String::new());
@@ -126,5 +158,100 @@ pub fn campbell(
         .iter()
         .map(|&n| OrderLine { order: n, frequency_hz: rpm.iter().map(|&r| n * r / 60.0).collect() })
         .collect();
-    Ok(Campbell { rpm: rpm.to_vec(), tracks, order_lines })
+    let mut crossings = Vec::new();
+    let ctx = Bisection { mech, spin_joint, spin, damping };
+    for (t, tr) in tracks.iter().enumerate() {
+        // Eigen-order at each grid speed; +∞ at standstill for a mode of non-zero frequency
+        // (every order line starts below it there).
+        let eo: Vec<f64> = rpm
+            .iter()
+            .zip(&tr.frequency_hz)
+            .map(|(&r, &f)| {
+                if r > 0.0 {
+                    f * 60.0 / r
+                } else if f > 0.0 {
+                    f64::INFINITY
+                } else {
+                    f64::NAN
+                }
+            })
+            .collect();
+        for &n in orders {
+            for i in 0..rpm.len().saturating_sub(1) {
+                let (g0, g1) = (eo[i] - n, eo[i + 1] - n);
+                if !(g0.is_finite() || g0 == f64::INFINITY) || !g1.is_finite() {
+                    continue;
+                }
+                // A crossing inside (i, i+1], or exactly at the first grid speed.
+                let at_start = i == 0 && g0 == 0.0;
+                if !(at_start || (g0 != 0.0 && g0.signum() != g1.signum())) {
+                    continue;
+                }
+                let (r, f, label) = if at_start {
+                    (rpm[0], tr.frequency_hz[0], tr.labels[0].clone())
+                } else if g1 == 0.0 {
+                    (rpm[i + 1], tr.frequency_hz[i + 1], tr.labels[i + 1].clone())
+                } else {
+                    let at = (equilibria[i].as_slice(), shapes[i][t].as_slice());
+                    ctx.locate(n, (rpm[i], g0 > 0.0), rpm[i + 1], at, tr.labels[i + 1].clone())?
+                };
+                crossings.push(Crossing { order: n, track: t, rpm: r, frequency_hz: f, label });
+            }
+        }
+    }
+    crossings.sort_by(|a, b| a.rpm.total_cmp(&b.rpm).then(a.order.total_cmp(&b.order)));
+    Ok(Campbell { rpm: rpm.to_vec(), tracks, order_lines, crossings })
+}
+
+/// What the bisection for a crossing needs to linearise at a probe speed.
+struct Bisection<'a> {
+    mech: &'a Mechanism,
+    spin_joint: &'a str,
+    spin: Spin,
+    damping: Damping,
+}
+
+impl Bisection<'_> {
+    /// The mode nearest (by MAC) to `shape` at `r` rpm, linearised from `guess`: its eigen-order
+    /// (damped frequency over speed) and label.
+    fn mode_at(&self, r: f64, guess: &[f64], shape: &[C64]) -> LinResult<(f64, String)> {
+        let model = LinearModel::new(self.mech, self.spin_joint, rpm_to_rad_s(r), Some(guess))?;
+        let modal = model.modes(self.spin, self.damping)?;
+        let best = modal
+            .modes
+            .iter()
+            .max_by(|a, b| mac(shape, &a.shape_q).total_cmp(&mac(shape, &b.shape_q)))
+            .ok_or_else(|| super::LinearError::Invalid(format!("no vibration mode at {r} rpm")))?;
+        Ok((best.frequency_hz * 60.0 / r, best.label.clone()))
+    }
+
+    /// Bisection on `eigen-order − n` between `lo` rpm (where the eigen-order is above n when
+    /// `above`) and `hi` rpm, to [`CROSSING_RTOL`] in speed: (rpm, frequency in Hz, label; the
+    /// label is `label` when the bracket needed no probe).
+    fn locate(
+        &self,
+        n: f64,
+        (mut lo, above): (f64, bool),
+        mut hi: f64,
+        (guess, shape): (&[f64], &[C64]),
+        mut label: String,
+    ) -> LinResult<(f64, f64, String)> {
+        for _ in 0..200 {
+            if hi - lo <= CROSSING_RTOL * hi {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let (eo, l) = self.mode_at(mid, guess, shape)?;
+            label = l;
+            if ((eo - n) > 0.0) == above {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        // The bracket's midpoint, with the line's frequency there (the mode's equals it to the
+        // bracket's width).
+        let r = 0.5 * (lo + hi);
+        Ok((r, n * r / 60.0, label))
+    }
 }

@@ -63,7 +63,7 @@ mod modes;
 mod multi_order;
 mod response;
 
-pub use campbell::{Campbell, CampbellTrack, OrderLine, campbell};
+pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell};
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
 pub use response::{Extremes, FrfPoint, OrderResponse, ResponseSpec};

@@ -65,7 +65,14 @@ pub struct Mode {
     /// Share of each body in the mode's kinetic energy `½(m|v|² + I|ω|²)` (sum 1; all 0 for the
     /// spin-angle mode, which has no velocity).
     pub body_energy_share: Vec<f64>,
-    /// Name of the joint with the largest coordinate share.
+    /// Share of each coordinate in the mode's potential energy, `K_jj |q_j|²` normalised to sum
+    /// 1 with `K = −Wᵀ F_q` (spring stiffness, and the centrifugal stiffness of a pendulum): where
+    /// the mode twists the mechanism. All 0 when no coordinate is stiff in the mode (a rigid or
+    /// zero-frequency mode).
+    pub strain_share: Vec<f64>,
+    /// Name of the joint that holds most of the mode's potential energy (the largest
+    /// `strain_share`: the shaft or spring a drivetrain mode twists, the pivot of an absorber);
+    /// the joint of the largest coordinate share when no joint is stiff in the mode.
     pub label: String,
 }
 
@@ -145,7 +152,8 @@ impl LinearModel {
             let (rep, other) = if a.abs() <= b.abs() { (a, b) } else { (b, a) };
             picks.push((C64::new(rep, 0.0), C64::new(other, 0.0), ModeKind::Vibration));
         }
-        let mq = self.second_order(damping).m;
+        let second = self.second_order(damping);
+        let (mq, kq) = (&second.m, &second.k);
         // The joint that owns each coordinate names the modes.
         let joints: Vec<String> = (0..n).map(|k| self.mech.joints[self.mech.joint_of(k)].name.clone()).collect();
         let nb = self.mech.bodies.len();
@@ -171,6 +179,7 @@ impl LinearModel {
                 shape_u: vec![C64::new(0.0, 0.0); n],
                 coordinate_share: share,
                 body_energy_share: vec![0.0; nb],
+                strain_share: vec![0.0; n],
                 label: joints[s].clone(),
             });
         }
@@ -228,7 +237,18 @@ impl LinearModel {
                 })
                 .collect();
             normalise(&mut energy);
-            let top = share.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
+            // Potential energy by coordinate (diagonal part; a tree's springs and pendulums
+            // each sit on their own coordinate). Negative diagonal stiffness (an unstable
+            // equilibrium) holds no energy to point at.
+            let mut strain: Vec<f64> = (0..n).map(|j| (kq[(j, j)] * q[j].norm_sqr()).max(0.0)).collect();
+            let stiff = strain.iter().sum::<f64>() > 0.0;
+            if stiff {
+                normalise(&mut strain);
+            } else {
+                strain.fill(0.0);
+            }
+            let argmax = |v: &[f64]| v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
+            let top = if stiff { argmax(&strain) } else { argmax(&share) };
             let (wn, zeta) = if rep.im != 0.0 {
                 (rep.norm(), if rep.norm() > 0.0 { -rep.re / rep.norm() } else { f64::NAN })
             } else {
@@ -250,6 +270,7 @@ impl LinearModel {
                 shape_u: u,
                 coordinate_share: share,
                 body_energy_share: energy,
+                strain_share: strain,
                 label: joints[top].clone(),
             };
             if kind == ModeKind::SpinSpeed {

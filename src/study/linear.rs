@@ -413,5 +413,24 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         );
     }
     md.push('\n');
-    Ok((md, vec![csv, svg]))
+    // The resonance table: where each order line crosses each mode.
+    let crossings_csv = dir.join(format!("{}_crossings.csv", spec.name));
+    let col = |f: &dyn Fn(&crate::linear::Crossing) -> f64| c.crossings.iter().map(f).collect::<Vec<f64>>();
+    write_csv(
+        &crossings_csv,
+        &["order", "mode", "rpm", "frequency_hz"],
+        &[&col(&|x| x.order), &col(&|x| (x.track + 1) as f64), &col(&|x| x.rpm), &col(&|x| x.frequency_hz)],
+    )?;
+    if c.crossings.is_empty() {
+        let _ = writeln!(md, "No order line crosses a mode between {} and {} rpm.\n", spec.rpm_min, spec.rpm_max);
+    } else {
+        let _ = writeln!(md, "Resonance speeds (order lines crossing modes, located to 1e-9 in speed):\n");
+        let _ = writeln!(md, "| speed (rpm) | order | mode | label | frequency (Hz) |\n|---|---|---|---|---|");
+        for x in &c.crossings {
+            let _ =
+                writeln!(md, "| {:.3} | {} | {} | {} | {:.4} |", x.rpm, x.order, x.track + 1, x.label, x.frequency_hz);
+        }
+        md.push('\n');
+    }
+    Ok((md, vec![csv, svg, crossings_csv]))
 }
