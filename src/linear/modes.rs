@@ -238,10 +238,12 @@ impl LinearModel {
                 .collect();
             normalise(&mut energy);
             // Potential energy by coordinate (diagonal part; a tree's springs and pendulums
-            // each sit on their own coordinate). Negative diagonal stiffness (an unstable
-            // equilibrium) holds no energy to point at.
-            let mut strain: Vec<f64> = (0..n).map(|j| (kq[(j, j)] * q[j].norm_sqr()).max(0.0)).collect();
+            // each sit on their own coordinate).
+            // A mode whose diagonal potential energy is not positive overall (a pendulum
+            // standing inward, a rigid mode) is named by its kinetic share instead.
+            let mut strain: Vec<f64> = (0..n).map(|j| kq[(j, j)] * q[j].norm_sqr()).collect();
             let stiff = strain.iter().sum::<f64>() > 0.0;
+            strain.iter_mut().for_each(|e| *e = e.max(0.0));
             if stiff {
                 normalise(&mut strain);
             } else {

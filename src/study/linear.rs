@@ -190,16 +190,23 @@ pub(crate) fn render_response(
 ) -> Result<(String, Vec<PathBuf>)> {
     let LinearResult { n_t, free_orders, variants: results, .. } = result;
     let n_t = *n_t;
+    // Without a locked twin the response is not normalised: ratios, n_t and the crossing of 1 do
+    // not apply, and none is written (they would read 1 and NaN).
+    let normalised = !study.spec.lock.is_empty();
     let scale = if spec.relative { n_t.unwrap_or(1.0) } else { 1.0 };
     let mut files = Vec::new();
     for r in results {
         let path = dir.join(format!("{}_{}.csv", spec.name, slug(&r.label)));
         let rel: Vec<f64> = r.orders.iter().map(|n| n / scale).collect();
-        write_csv(
-            &path,
-            &["order", "order_over_nt", "accel_per_torque_rad_s2_per_Nm", "locked_rad_s2_per_Nm", "ratio"],
-            &[&r.orders, &rel, &r.response, &r.locked, &r.ratio],
-        )?;
+        if normalised {
+            write_csv(
+                &path,
+                &["order", "order_over_nt", "accel_per_torque_rad_s2_per_Nm", "locked_rad_s2_per_Nm", "ratio"],
+                &[&r.orders, &rel, &r.response, &r.locked, &r.ratio],
+            )?;
+        } else {
+            write_csv(&path, &["order", "accel_per_torque_rad_s2_per_Nm"], &[&r.orders, &r.response])?;
+        }
         files.push(path);
     }
     let mut modal_md =
@@ -228,31 +235,43 @@ pub(crate) fn render_response(
     {
         markers.push((nr / scale, "n_r".to_string()));
     }
+    let body = &study.spec.response_body;
+    let mut series: Vec<Series> = results
+        .iter()
+        .enumerate()
+        .map(|(k, r)| Series {
+            label: r.label.clone(),
+            x: r.orders.iter().map(|n| n / scale).collect(),
+            y: if normalised { r.ratio.clone() } else { r.response.clone() },
+            color: k,
+            style: LineStyle::Solid,
+        })
+        .collect();
+    if normalised {
+        series.push(Series {
+            label: "unity".into(),
+            x: vec![spec.from, spec.to],
+            y: vec![1.0, 1.0],
+            color: 7,
+            style: LineStyle::Dotted,
+        });
+    }
     let panel = Panel {
-        title: format!("Linear response normalised by the locked twin, {} rpm", spec.rpm),
+        title: if normalised {
+            format!("Linear response normalised by the locked twin, {} rpm", spec.rpm)
+        } else {
+            format!("Linear response, {} rpm", spec.rpm)
+        },
         x_label: x_label.into(),
-        y_label: format!("{} acceleration / locked", study.spec.response_body),
+        y_label: if normalised {
+            format!("{body} acceleration / locked")
+        } else {
+            format!("{body} acceleration per torque, rad/s² per N·m")
+        },
         log_y: true,
         x_range: Some((spec.from, spec.to)),
         markers,
-        series: results
-            .iter()
-            .enumerate()
-            .map(|(k, r)| Series {
-                label: r.label.clone(),
-                x: r.orders.iter().map(|n| n / scale).collect(),
-                y: r.ratio.clone(),
-                color: k,
-                style: LineStyle::Solid,
-            })
-            .chain(std::iter::once(Series {
-                label: "unity".into(),
-                x: vec![spec.from, spec.to],
-                y: vec![1.0, 1.0],
-                color: 7,
-                style: LineStyle::Dotted,
-            }))
-            .collect(),
+        series,
         ..Panel::default()
     };
     let svg = dir.join(format!("{}.svg", spec.name));
@@ -262,31 +281,59 @@ pub(crate) fn render_response(
     let mut md = String::new();
     let _ = writeln!(md, "## Linear frequency response `{}`: {} rpm (eq. 22)\n", spec.name, spec.rpm);
     if let Some(nt) = n_t {
-        let _ = writeln!(md, "- tuning order n_t (spin held, undamped) = {nt:.10}");
+        let _ = writeln!(md, "- tuning order n_t (spin held, undamped) of `{}` = {nt:.10}", study.spec.lock[0]);
+    }
+    // Every absorber's own tuning order: each mode with the spin held, named by its joint.
+    let held: Vec<&ModeRow> = result.modes.iter().filter(|m| m.spin_held && !m.damped).collect();
+    if held.len() > 1 || n_t.is_none() {
+        for m in held {
+            let _ = writeln!(md, "- eigen-order with the spin held (undamped) {:.10} (mode `{}`)", m.order, m.label);
+        }
     }
     for (o, l) in free_orders {
         let _ = writeln!(md, "- free undamped eigen-order {o:.10} (mode `{l}`)");
     }
     let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
+    if !normalised {
+        let _ = writeln!(
+            md,
+            "No joint is locked, so the response is not normalised by a locked twin: ratios, n_t and \
+             the first amplification do not apply. Extremes on the order grid:\n"
+        );
+        let _ = writeln!(md, "| variant | min (rad/s² per N·m) | at n | max (rad/s² per N·m) | at n |");
+        let _ = writeln!(md, "|---|---|---|---|---|");
+        for r in results {
+            let pick = |better: fn(f64, f64) -> bool| {
+                r.orders.iter().zip(&r.response).fold((f64::NAN, f64::NAN), |best, (&n, &a)| {
+                    if best.1.is_nan() || better(a, best.1) { (n, a) } else { best }
+                })
+            };
+            let (lo, hi) = (pick(|a, b| a < b), pick(|a, b| a > b));
+            let _ = writeln!(md, "| {} | {:.6e} | {:.5} | {:.6e} | {:.5} |", r.label, lo.1, lo.0, hi.1, hi.0);
+        }
+        md.push('\n');
+        return Ok((md, files));
+    }
     let _ = writeln!(
         md,
         "\n| variant | min ratio | at n | at n/n_t | max ratio | at n | at n/n_t | first n > n_t with ratio > 1 | n/n_t | high-order asymptote |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
-    let nt = n_t.unwrap_or(f64::NAN);
+    // n/n_t is printed only where n_t exists (a locked joint with a held-spin mode).
+    let per_nt = |n: f64| n_t.map_or("–".to_string(), |nt| format!("{:.6}", n / nt));
     for r in results {
         let _ = writeln!(
             md,
-            "| {} | {:.5} | {:.5} | {:.6} | {:.4} | {:.5} | {:.6} | {} | {} | {} |",
+            "| {} | {:.5} | {:.5} | {} | {:.4} | {:.5} | {} | {} | {} | {} |",
             r.label,
             r.min.1,
             r.min.0,
-            r.min.0 / nt,
+            per_nt(r.min.0),
             r.max.1,
             r.max.0,
-            r.max.0 / nt,
+            per_nt(r.max.0),
             r.crossing.map_or("–".into(), |c| format!("{c:.8}")),
-            r.crossing.map_or("–".into(), |c| format!("{:.8}", c / nt)),
+            r.crossing.map_or("–".into(), |c| n_t.map_or("–".into(), |nt| format!("{:.8}", c / nt))),
             if r.asymptote.is_finite() { format!("{:.8}", r.asymptote) } else { "– (both tend to 0)".into() }
         );
     }
