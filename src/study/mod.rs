@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+mod elements;
 pub mod hbm;
 mod linear;
 mod multi;
@@ -36,8 +37,11 @@ pub struct Study {
     pub mechanism: Mechanism,
     /// The mechanism with the `lock` joints locked at q = 0, if any are named.
     pub locked: Option<Mechanism>,
-    /// Index of the spin joint (= its coordinate).
+    /// Index of the spin joint.
     pub spin: usize,
+    /// The joints reported element by element (`elements` of the spec, or every joint with a
+    /// coordinate but the spin joint), by index.
+    pub elements: Vec<usize>,
     /// Index of the response body.
     pub body: usize,
     /// Index of the response body in the locked twin.
@@ -183,9 +187,32 @@ impl Study {
             })?),
             None => None,
         };
+        let elements = if spec.elements.is_empty() {
+            (0..mechanism.joints.len()).filter(|&j| j != spin && mechanism.coordinate(j).is_some()).collect()
+        } else {
+            if spec.elements.len() > validate::MAX_LIST {
+                let n = spec.elements.len();
+                return Err(src.error("elements", format!("{n} elements; at most {}", validate::MAX_LIST)));
+            }
+            let mut out = Vec::with_capacity(spec.elements.len());
+            for (i, name) in spec.elements.iter().enumerate() {
+                let field = format!("elements[{i}]");
+                let j = mechanism
+                    .joint_index(name)
+                    .ok_or_else(|| src.error(&field, format!("unknown joint `{name}` (joints: {})", joint_names())))?;
+                if mechanism.coordinate(j).is_none() {
+                    return Err(src.error(&field, format!("joint `{name}` is Fixed: it has no motion to report")));
+                }
+                if out.contains(&j) {
+                    return Err(src.error(&field, format!("joint `{name}` is listed twice")));
+                }
+                out.push(j);
+            }
+            out
+        };
         validate::check(&spec, &mechanism, spin, &src)?;
         let file = src.file.clone();
-        let study = Study { spec, file, mechanism, locked, spin, body, locked_body, source: src };
+        let study = Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src };
         if let Some((k, driver, message)) = study.plan().exceeds(&opts.limits) {
             return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
         }

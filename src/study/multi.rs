@@ -2,6 +2,7 @@
 //! speed until the response is steady; the steady amplitude of each tracked order, with the locked
 //! twin for comparison.
 
+use super::elements::{ElementResponse, from_hbm, from_window};
 use super::sim::{self, Progress};
 use super::sweep::order_name;
 use super::{MultiOrderSpec, Output, Results, Study, cell, write_csv};
@@ -28,6 +29,8 @@ pub struct Steady {
     pub max_relative_angle: f64,
     /// Total mean-speed error removed after the ramp-in, rad/s (see `crate::time::steady`).
     pub speed_correction: f64,
+    /// Each reported element over the last window (none for the locked twin).
+    pub elements: Vec<ElementResponse>,
     /// The simulation's statistics and outcome.
     pub sim: Outcome,
 }
@@ -63,6 +66,8 @@ pub struct HbmState {
     pub stable: Option<bool>,
     /// Largest peak |relative angle| of the non-spin joints, rad.
     pub max_relative_angle: f64,
+    /// Each reported element, from the Fourier series.
+    pub elements: Vec<ElementResponse>,
 }
 
 impl SpeedResult {
@@ -248,6 +253,34 @@ pub(crate) fn render(
         cols.push(col(&|s| s.max_relative_angle));
         header.push("simulated_s".into());
         cols.push(col(&|s| s.time_s));
+        // Each reported element: its amplitude per order and peak, and its spring and damper's
+        // torque (N·m; N for a slide), over the last window.
+        for (e, &j) in study.elements.iter().enumerate() {
+            let joint = &study.mechanism.joints[j];
+            let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
+            let force = if joint.kind.rotates() { "Nm" } else { "N" };
+            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                result
+                    .speeds
+                    .iter()
+                    .map(|s| s.response.as_ref().and_then(|r| r.elements.get(e)).map_or(f64::NAN, f))
+                    .collect::<Vec<f64>>()
+            };
+            for (k, m) in spec.multiples.iter().enumerate() {
+                header.push(format!("{name}_{}x_{unit}", fmt_mult(*m)));
+                cols.push(el(&|x| x.amplitude[k]));
+            }
+            header.push(format!("{name}_peak_{unit}"));
+            cols.push(el(&|x| x.peak));
+            if joint.spring.is_some() || joint.damper != 0.0 {
+                for (k, m) in spec.multiples.iter().enumerate() {
+                    header.push(format!("{name}_torque_{}x_{force}", fmt_mult(*m)));
+                    cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k])));
+                }
+                header.push(format!("{name}_torque_peak_{force}"));
+                cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)));
+            }
+        }
     }
     let csv = dir.join(format!("{}.csv", spec.name));
     let h: Vec<&str> = header.iter().map(String::as_str).collect();
@@ -317,7 +350,8 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
             let amplitudes: Vec<f64> = spec.multiples.iter().map(|&m| super::hbm::body_accel(&sol, &path, m)).collect();
             let same = |h: &HbmState| (h.amplitudes[0] - amplitudes[0]).abs() <= 1e-6 * amplitudes[0].abs();
             if !out.iter().any(same) {
-                out.push(HbmState { amplitudes, stable, max_relative_angle: sol.max_peak_amplitude() });
+                let elements = from_hbm(&study.mechanism, &study.elements, &sol, &spec.multiples);
+                out.push(HbmState { amplitudes, stable, max_relative_angle: sol.max_peak_amplitude(), elements });
             }
         }
     }
@@ -385,7 +419,9 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     let fs = study.spec.integration.sample_hz;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
     let bar = progress.bar(spec.max_time_s, &label);
-    let mut rec = sim::recorder(mech, spin, body, false)?;
+    // The elements are the mechanism's joints; the locked twin reports none.
+    let elements: &[usize] = if locked { &[] } else { &study.elements };
+    let mut rec = sim::recorder(mech, spin, body, false, elements)?;
     let x0 = Study::initial_state(mech, spin, omega);
     let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
     let order = spec.order;
@@ -415,6 +451,12 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         &mut |t| bar.set_position((t * 1000.0) as u64),
     )?;
     bar.finish_and_clear();
+    let elements = if run.amplitudes.is_empty() || run.outcome.error.is_some() {
+        Vec::new()
+    } else {
+        let cols = sim::element_columns(&rec, elements.len());
+        from_window(mech, elements, &cols, run.window_samples, fs, (omega, order), &spec.multiples, &tracking)?
+    };
     let relative = &rec.columns[sim::RELATIVE];
     Ok(Steady {
         amplitudes: if run.amplitudes.is_empty() { vec![f64::NAN; spec.multiples.len()] } else { run.amplitudes },
@@ -422,6 +464,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         time_s: run.time_s,
         max_relative_angle: relative.iter().rev().take(run.window_samples).copied().fold(0.0, f64::max),
         speed_correction: run.speed_correction,
+        elements,
         sim: run.outcome,
     })
 }
@@ -481,6 +524,36 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');
+    // Element by element over the last window: every absorber and spring, not only the largest.
+    let tags: Vec<String> = spec.multiples.iter().map(|m| format!("{}n", fmt_mult(*m))).collect();
+    let mut element_rows = String::new();
+    for s in &r.speeds {
+        for e in s.response.iter().flat_map(|resp| &resp.elements) {
+            let amps: Vec<String> = e.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
+            let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
+                let per: Vec<String> = t.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
+                format!("{}; peak {:.4e}", per.join(", "), t.peak)
+            });
+            let _ = writeln!(
+                element_rows,
+                "| {} | `{}` | {} {} | {:.4e} | {torque} |",
+                s.rpm,
+                e.joint,
+                amps.join(", "),
+                e.unit,
+                e.peak
+            );
+        }
+    }
+    if !element_rows.is_empty() {
+        let _ = writeln!(
+            md,
+            "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
+             N·m, N for a slide):\n",
+            tags.join(", ")
+        );
+        let _ = writeln!(md, "| rpm | joint | amplitude | peak | torque |\n|---|---|---|---|---|\n{element_rows}");
+    }
     if spec.hbm {
         let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
         let _ = writeln!(

@@ -61,18 +61,38 @@ const SERIES: usize = 3;
 
 /// The study's recorder: the response body's angular acceleration, the spin rate and the largest
 /// relative excursion (always); with `time_series`, the body's angle and rate and every joint
-/// coordinate too.
-pub(crate) fn recorder(mech: &Mechanism, spin: usize, body: usize, time_series: bool) -> Result<Recorder> {
+/// coordinate too; last, each of `elements`' coordinate and rate ([`element_columns`]).
+pub(crate) fn recorder(
+    mech: &Mechanism,
+    spin: usize,
+    body: usize,
+    time_series: bool,
+    elements: &[usize],
+) -> Result<Recorder> {
     let mut probes = vec![Probe::BodyAccel(body), Probe::JointRate(spin), Probe::LargestJointAngle(spin)];
     if time_series {
         probes.extend([Probe::BodyAngle(body), Probe::BodyRate(body)]);
         probes.extend((0..mech.joints.len()).filter(|&j| mech.coordinate(j).is_some()).map(Probe::JointAngle));
     }
+    for &j in elements {
+        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
+    }
     Recorder::new(mech, &probes)
 }
 
-/// The time series of a [`recorder`] made with `time_series`, named for the CSV.
-pub(crate) fn time_series(mech: &Mechanism, body: usize, rec: Recorder) -> Option<TimeSeries> {
+/// The elements' (q, q̇) columns of a [`recorder`] made for `n_elements` elements.
+pub(crate) fn element_columns(rec: &Recorder, n_elements: usize) -> super::elements::ElementColumns<'_> {
+    let base = rec.columns.len() - 2 * n_elements;
+    let signals = (0..n_elements)
+        .map(|e| (rec.columns[base + 2 * e].as_slice(), rec.columns[base + 2 * e + 1].as_slice()))
+        .collect();
+    super::elements::ElementColumns { signals }
+}
+
+/// The time series of a [`recorder`] made with `time_series` for `n_elements` elements, named for
+/// the CSV.
+pub(crate) fn time_series(mech: &Mechanism, body: usize, mut rec: Recorder, n_elements: usize) -> Option<TimeSeries> {
+    rec.columns.truncate(rec.columns.len() - 2 * n_elements);
     if rec.columns.len() <= SERIES {
         return None;
     }

@@ -22,6 +22,11 @@ pub struct StudySpec {
     /// pendulum pivots: the paper's "locked pendulum" rotor. Empty: no locked comparison.
     #[serde(default)]
     pub lock: Vec<String>,
+    /// The joints reported element by element (their coordinate's amplitude per order and peak,
+    /// and the torque their spring and damper transmit). Empty (the default): every joint with a
+    /// coordinate other than the spin joint.
+    #[serde(default)]
+    pub elements: Vec<String>,
     /// Time-integration settings.
     #[serde(default)]
     pub integration: IntegrationSpec,

@@ -249,7 +249,7 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         if job.locked { " locked" } else { "" }
     );
     let bar = progress.bar(spec.duration_s, &label);
-    let mut rec = sim::recorder(mech, spin, body, spec.write_time_series)?;
+    let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, &[])?;
     let opts = sim::options(&study.spec.integration);
     let info =
         simulate(&mut kane, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| bar.set_position((t * 1000.0) as u64));
@@ -272,7 +272,7 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         traces,
         max_relative_angle: rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max),
         sim: info,
-        time_series: sim::time_series(mech, body, rec),
+        time_series: sim::time_series(mech, body, rec, 0),
     })
 }
 

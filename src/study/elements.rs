@@ -1,0 +1,127 @@
+//! Per-element results: for each reported joint (`Study::elements`), its coordinate's amplitude
+//! at each tracked order and the peak of its oscillation, and the torque its spring and damper
+//! transmit, `T = k (q − q_free) + c q̇` (N·m; N for a slide), per order and at its peak. From a
+//! harmonic-balance solution they are read off the Fourier series (peaks are the series' true
+//! maxima, [`HbmSolution::peak_amplitude`]); from a time run, by the study's order tracking over
+//! the last window, with the peak of the oscillating part over that window.
+
+use super::sim;
+use super::spec::TrackingSpec;
+use crate::error::Result;
+use crate::hbm::HbmSolution;
+use crate::model::mechanism::Mechanism;
+use serde::Serialize;
+
+/// The torque an element's spring and damper transmit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ElementTorque {
+    /// Amplitude per tracked multiple of the order, N·m (N for a slide).
+    pub amplitude: Vec<f64>,
+    /// Peak of the oscillating part, N·m (N for a slide).
+    pub peak: f64,
+}
+
+/// What one element does in a steady state.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ElementResponse {
+    /// The joint's name.
+    pub joint: String,
+    /// Unit of the coordinate: `rad`, or `m` for a slide.
+    pub unit: &'static str,
+    /// Amplitude of the coordinate per tracked multiple of the order.
+    pub amplitude: Vec<f64>,
+    /// Peak of the coordinate's oscillation about its mean.
+    pub peak: f64,
+    /// The transmitted torque, when the joint has a spring or a damper.
+    pub torque: Option<ElementTorque>,
+}
+
+/// The spring stiffness and damping of joint `j` (0 when absent).
+fn stiffness_damping(mech: &Mechanism, j: usize) -> (f64, f64) {
+    let joint = &mech.joints[j];
+    (joint.spring.map_or(0.0, |s| s.stiffness), joint.damper)
+}
+
+/// Per-element results of a harmonic-balance solution at the orders `multiples`·n.
+pub(crate) fn from_hbm(
+    mech: &Mechanism,
+    elements: &[usize],
+    sol: &HbmSolution,
+    multiples: &[f64],
+) -> Vec<ElementResponse> {
+    elements
+        .iter()
+        .filter_map(|&j| {
+            let k = mech.coordinate(j)?;
+            let (stiff, damp) = stiffness_damping(mech, j);
+            let amplitude = multiples
+                .iter()
+                .map(|&m| sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| sol.amplitude(k, h)))
+                .collect();
+            let torque = (stiff != 0.0 || damp != 0.0).then(|| {
+                let per: Vec<(f64, f64)> = multiples.iter().map(|&m| sol.element_torque(k, stiff, damp, m)).collect();
+                ElementTorque { amplitude: per.iter().map(|p| p.0).collect(), peak: per.first().map_or(0.0, |p| p.1) }
+            });
+            Some(ElementResponse {
+                joint: mech.joints[j].name.clone(),
+                unit: mech.joints[j].kind.coordinate_unit(),
+                amplitude,
+                peak: sol.peak_amplitude(k),
+                torque,
+            })
+        })
+        .collect()
+}
+
+/// The signals a time run records for the elements: per element its coordinate and its rate.
+pub(crate) struct ElementColumns<'a> {
+    /// Per element: (q, q̇) over the run's recorded samples.
+    pub signals: Vec<(&'a [f64], &'a [f64])>,
+}
+
+/// Per-element results over the last window of `window` samples of a steady run at mean speed
+/// `omega` (rad/s) and order `order`: amplitudes by the study's order tracking with the window
+/// as the block (as the steady-state test measures the response), peaks of the oscillating
+/// parts over that window.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn from_window(
+    mech: &Mechanism,
+    elements: &[usize],
+    cols: &ElementColumns<'_>,
+    window: usize,
+    fs: f64,
+    (omega, order): (f64, f64),
+    multiples: &[f64],
+    tracking: &TrackingSpec,
+) -> Result<Vec<ElementResponse>> {
+    let mut out = Vec::with_capacity(elements.len());
+    for (&j, &(q, qd)) in elements.iter().zip(&cols.signals) {
+        let (stiff, damp) = stiffness_damping(mech, j);
+        // The last two windows, as in the steady-state test; the amplitude of the later one.
+        let span = q.len().min(2 * window);
+        let (q2, qd2) = (&q[q.len() - span..], &qd[qd.len() - span..]);
+        let amplitudes = |signal: &[f64]| -> Result<Vec<f64>> {
+            let traces = sim::track(&mech.name, signal, fs, omega, &move |_| order, multiples, tracking)?;
+            Ok(traces.iter().map(|t| *t.amplitude.last().unwrap_or(&f64::NAN)).collect())
+        };
+        let peak = |signal: &[f64]| {
+            let last = &signal[signal.len().saturating_sub(window)..];
+            let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
+            last.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max)
+        };
+        let torque = if stiff != 0.0 || damp != 0.0 {
+            let t: Vec<f64> = q2.iter().zip(qd2).map(|(q, qd)| stiff * q + damp * qd).collect();
+            Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t) })
+        } else {
+            None
+        };
+        out.push(ElementResponse {
+            joint: mech.joints[j].name.clone(),
+            unit: mech.joints[j].kind.coordinate_unit(),
+            amplitude: amplitudes(q2)?,
+            peak: peak(q2),
+            torque,
+        });
+    }
+    Ok(out)
+}
