@@ -2,6 +2,7 @@
 //! order (or the mean speed, or the torque amplitude), stable and unstable, with their folds,
 //! drawn over the time-domain sweeps.
 
+use super::elements::{ElementResponse, from_hbm};
 use super::sweep::SweepRun;
 use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study, write_csv};
 use crate::error::{Error, Result};
@@ -26,6 +27,8 @@ pub struct HbmBranch {
     pub accel: Vec<Vec<f64>>,
     /// Largest peak |relative angle| of the non-spin joints, rad.
     pub relative_angle: Vec<f64>,
+    /// Each reported element at each branch point (outer index: point), from the Fourier series.
+    pub elements: Vec<Vec<ElementResponse>>,
     /// Floquet stability per point (None: not computed).
     pub stable: Vec<Option<bool>>,
     /// Largest Floquet multiplier modulus per point (NaN: not computed): the stability margin,
@@ -218,6 +221,10 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                     .map(|&m| p.iter().map(|x| body_accel(&x.solution, &path, m)).collect())
                     .collect(),
                 relative_angle: p.iter().map(|x| x.solution.max_peak_amplitude()).collect(),
+                elements: p
+                    .iter()
+                    .map(|x| from_hbm(&study.mechanism, &study.elements, &x.solution, &spec.multiples))
+                    .collect(),
                 stable: p.iter().map(|x| x.stable).collect(),
                 max_multiplier: p
                     .iter()
@@ -271,6 +278,29 @@ pub(crate) fn render(
         cols.push(br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect());
         header.push("max_floquet_modulus".into());
         cols.push(br.max_multiplier.clone());
+        // Element by element: amplitude per order and peak, and the spring-and-damper torque.
+        for (e, &j) in study.elements.iter().enumerate() {
+            let joint = &study.mechanism.joints[j];
+            let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
+            let force = if joint.kind.rotates() { "Nm" } else { "N" };
+            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                br.elements.iter().map(|pt| pt.get(e).map_or(f64::NAN, f)).collect::<Vec<f64>>()
+            };
+            for (k, m) in spec.multiples.iter().enumerate() {
+                header.push(format!("{name}_{m}x_{unit}"));
+                cols.push(el(&|x| x.amplitude[k]));
+            }
+            header.push(format!("{name}_peak_{unit}"));
+            cols.push(el(&|x| x.peak));
+            if joint.spring.is_some() || joint.damper != 0.0 {
+                for (k, m) in spec.multiples.iter().enumerate() {
+                    header.push(format!("{name}_torque_{m}x_{force}"));
+                    cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k])));
+                }
+                header.push(format!("{name}_torque_peak_{force}"));
+                cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)));
+            }
+        }
         let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
         let csv = if br.amplitude.is_nan() {
             dir.join(format!("{}_{dir_tag}.csv", spec.name))
