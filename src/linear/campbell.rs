@@ -9,7 +9,7 @@ use crate::model::mechanism::Mechanism;
 use std::f64::consts::PI;
 
 /// One tracked mode over the speeds of a Campbell diagram.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CampbellTrack {
     /// The most frequent label along the track (joint with the largest coordinate share).
     pub label: String,
@@ -24,7 +24,7 @@ pub struct CampbellTrack {
 }
 
 /// An engine-order line `f = n·rpm/60`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct OrderLine {
     /// The order n.
     pub order: f64,
@@ -33,7 +33,7 @@ pub struct OrderLine {
 }
 
 /// Campbell data: natural frequencies against spin speed, with order lines.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Campbell {
     /// Spin speeds, rpm.
     pub rpm: Vec<f64>,

@@ -17,7 +17,7 @@ pub(crate) fn slug(label: &str) -> String {
 }
 
 /// Linear results of one variant, for tests and reports.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct ResponseVariant {
     /// The variant's label.
     pub label: String,
@@ -40,7 +40,7 @@ pub struct ResponseVariant {
 }
 
 /// A linear frequency-response analysis.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct LinearResult {
     /// Analysis name.
     pub name: String,
@@ -55,7 +55,7 @@ pub struct LinearResult {
 }
 
 /// One mode of the modal table of a linear response analysis.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct ModeRow {
     /// Spin held (the absorbers alone) rather than free (coupled with the rotor).
     pub spin_held: bool,
