@@ -240,8 +240,8 @@ fn concurrent_runs_into_one_folder_never_mix() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
-    let first = ["first.svg", "first_as_built.csv", "summary.md"];
-    let second = ["second.csv", "second.svg", "second_crossings.csv", "summary.md"];
+    let first = ["first.svg", "first_as_built.csv", "results.json", "summary.md"];
+    let second = ["results.json", "second.csv", "second.svg", "second_crossings.csv", "summary.md"];
     assert!(files == first || files == second, "mixed folder: {files:?}");
     // No half-written folder is left posing as a result.
     let hidden: Vec<_> = std::fs::read_dir(&out)
@@ -276,7 +276,7 @@ fn a_failing_analysis_costs_the_others_nothing() {
     let o = kanedyn(&["run", p.to_str().unwrap(), "--out", s.out().to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(1), "{}", text(&o));
     let dir = s.out().join("iso");
-    for f in ["before_as_built.csv", "before.svg", "after.csv", "after.svg", "summary.md"] {
+    for f in ["before_as_built.csv", "before.svg", "after.csv", "after.svg", "summary.md", "results.json"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();

@@ -13,7 +13,7 @@ use crate::model::mechanism::Mechanism;
 use std::f64::consts::PI;
 
 /// One tracked mode over the speeds of a Campbell diagram.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct CampbellTrack {
     /// The most frequent label along the track (joint with the largest coordinate share).
     pub label: String,
@@ -28,7 +28,7 @@ pub struct CampbellTrack {
 }
 
 /// An engine-order line `f = n·rpm/60`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct OrderLine {
     /// The order n.
     pub order: f64,
@@ -37,7 +37,7 @@ pub struct OrderLine {
 }
 
 /// Where an order line crosses a mode: a resonance speed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Crossing {
     /// The order n of the line.
     pub order: f64,
@@ -52,7 +52,7 @@ pub struct Crossing {
 }
 
 /// Campbell data: natural frequencies against spin speed, with order lines.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Campbell {
     /// Spin speeds, rpm.
     pub rpm: Vec<f64>,

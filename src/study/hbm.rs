@@ -3,11 +3,13 @@
 //! drawn over the time-domain sweeps.
 
 use super::elements::{ElementResponse, from_hbm};
+use super::json::Table;
 use super::sweep::SweepRun;
-use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study, write_csv};
+use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
+use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use crate::signal::findings::jump_order;
@@ -15,8 +17,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// One branch of one amplitude.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct HbmBranch {
+    /// The analysis name.
+    pub analysis: String,
     /// Torque amplitude T_n, N·m (NaN on a torque branch).
     pub amplitude: f64,
     /// Orders of the branch points, in continuation order.
@@ -64,8 +68,10 @@ pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
     move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
 }
 
-/// Acceleration amplitude of the response body (Σ of its path's coordinates) at order m·n.
-pub(crate) fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f64 {
+/// Acceleration amplitude of the response body (Σ of its path's coordinates `path`, see
+/// [`crate::model::mechanism::Mechanism::rotation_coordinates`]) at order m·n, rad/s²; 0 when
+/// the solution has no harmonic at that multiple.
+pub fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f64 {
     let Some(h) = sol.harmonic_of(multiple) else { return 0.0 };
     let (a, b) = path.iter().fold((0.0, 0.0), |(a, b), &k| {
         let (ak, bk) = sol.coefficient(k, h);
@@ -119,22 +125,29 @@ struct Axis {
     to_unit: f64,
     label: &'static str,
     column: &'static str,
+    unit: &'static str,
 }
 
 fn axis(spec: &HbmSpec) -> Axis {
     match spec.parameter {
         HbmParameter::Order => {
-            Axis { range: (spec.order_min, spec.order_max), to_unit: 1.0, label: "excitation order n", column: "order" }
+            let range = (spec.order_min, spec.order_max);
+            Axis { range, to_unit: 1.0, label: "excitation order n", column: "order", unit: "1" }
         }
         HbmParameter::Speed { rpm_min, rpm_max, .. } => Axis {
             range: (rpm_min, rpm_max),
             to_unit: 1.0 / rpm_to_rad_s(1.0),
             label: "mean speed, rpm",
             column: "rpm",
+            unit: "rpm",
         },
-        HbmParameter::Torque { min, max, .. } => {
-            Axis { range: (min, max), to_unit: 1.0, label: "torque amplitude T_n, N·m", column: "torque_Nm" }
-        }
+        HbmParameter::Torque { min, max, .. } => Axis {
+            range: (min, max),
+            to_unit: 1.0,
+            label: "torque amplitude T_n, N·m",
+            column: "torque_Nm",
+            unit: "N·m",
+        },
     }
 }
 
@@ -209,6 +222,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 }
             }
             branches.push(HbmBranch {
+                analysis: spec.name.clone(),
                 curve_parameter,
                 curve_accel,
                 curve_stable,
@@ -254,6 +268,81 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
     (branches, failures)
 }
 
+/// One CSV table per branch: the continued parameter, the acceleration per reported multiple,
+/// the largest relative angle, stability (1 stable, 0 unstable, empty unknown) and the largest
+/// Floquet multiplier modulus at each solved point.
+pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) -> Vec<Table> {
+    let ax = axis(spec);
+    branches
+        .iter()
+        .map(|br| {
+            let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
+            let mut table = if br.amplitude.is_nan() {
+                Table::new(format!("{}_{dir_tag}", spec.name))
+            } else {
+                Table::new(format!("{}_{}Nm_{dir_tag}", spec.name, super::sweep::fmt_num(br.amplitude)))
+            };
+            table.push(ax.column, ax.unit, br.parameter.clone());
+            for (k, m) in spec.multiples.iter().enumerate() {
+                table.push(format!("accel_{m}x_rad_s2"), "rad/s²", br.accel[k].clone());
+            }
+            table.push("max_relative_angle_rad", "rad", br.relative_angle.clone());
+            let stable = br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect();
+            table.push("stable", "1", stable);
+            table.push("max_floquet_modulus", "1", br.max_multiplier.clone());
+            // Each reported element at every point, after the branch's own columns.
+            for (e, first) in br.elements.first().map_or(&[][..], Vec::as_slice).iter().enumerate() {
+                let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                    br.elements.iter().map(|pt| pt.get(e).map_or(f64::NAN, f)).collect::<Vec<f64>>()
+                };
+                if let Some(joint) = mech.joints.iter().find(|j| j.name == first.joint) {
+                    super::multi::push_element_columns(&mut table, joint, &spec.multiples, first.torque.is_some(), &el);
+                }
+            }
+            table
+        })
+        .collect()
+}
+
+/// What the summary counts per branch (also in `results.json`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct BranchFindings {
+    /// Solved points.
+    pub points: usize,
+    /// Points found stable.
+    pub stable: usize,
+    /// Points found unstable.
+    pub unstable: usize,
+    /// The orders where the overlaid up and down sweeps of the same amplitude jump (None: no
+    /// overlay with both directions; an inner None: that sweep does not jump).
+    pub sweep_jumps: Option<(Option<f64>, Option<f64>)>,
+}
+
+/// The summary's readings of each branch, in order ([`BranchFindings`]).
+pub fn findings(study: &Study, spec: &HbmSpec, branches: &[&HbmBranch], sweeps: &[SweepRun]) -> Vec<BranchFindings> {
+    let overlay = overlay(spec, sweeps);
+    // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
+    let t = study.spec.order_tracking;
+    let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
+    branches
+        .iter()
+        .map(|br| BranchFindings {
+            points: br.order.len(),
+            stable: br.stable.iter().filter(|s| **s == Some(true)).count(),
+            unstable: br.stable.iter().filter(|s| **s == Some(false)).count(),
+            sweep_jumps: jump_orders(&overlay, br.amplitude, lag),
+        })
+        .collect()
+}
+
+/// The sweeps drawn under the branches: the overlay analysis's runs, the locked twin left out.
+fn overlay<'a>(spec: &HbmSpec, sweeps: &'a [SweepRun]) -> Vec<&'a SweepRun> {
+    match &spec.overlay {
+        Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
+        None => Vec::new(),
+    }
+}
+
 /// Writes one CSV per branch and the figure with the overlaid sweeps (the paper's Figs. 3 and 4
 /// with every periodic state), and returns the summary section with the files written.
 pub(crate) fn render(
@@ -265,58 +354,12 @@ pub(crate) fn render(
 ) -> Result<(String, Vec<PathBuf>)> {
     let ax = axis(spec);
     let mut files = Vec::new();
-    for br in branches {
-        let mut header = vec![ax.column.to_string()];
-        let mut cols = vec![br.parameter.clone()];
-        for (k, m) in spec.multiples.iter().enumerate() {
-            header.push(format!("accel_{m}x_rad_s2"));
-            cols.push(br.accel[k].clone());
-        }
-        header.push("max_relative_angle_rad".into());
-        cols.push(br.relative_angle.clone());
-        header.push("stable".into());
-        cols.push(br.stable.iter().map(|s| s.map_or(f64::NAN, |s| if s { 1.0 } else { 0.0 })).collect());
-        header.push("max_floquet_modulus".into());
-        cols.push(br.max_multiplier.clone());
-        // Element by element: amplitude per order and peak, and the spring-and-damper torque.
-        for (e, &j) in study.elements.iter().enumerate() {
-            let joint = &study.mechanism.joints[j];
-            let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
-            let force = if joint.kind.rotates() { "Nm" } else { "N" };
-            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
-                br.elements.iter().map(|pt| pt.get(e).map_or(f64::NAN, f)).collect::<Vec<f64>>()
-            };
-            for (k, m) in spec.multiples.iter().enumerate() {
-                header.push(format!("{name}_{m}x_{unit}"));
-                cols.push(el(&|x| x.amplitude[k]));
-            }
-            header.push(format!("{name}_peak_{unit}"));
-            cols.push(el(&|x| x.peak));
-            if joint.spring.is_some() || joint.damper != 0.0 {
-                for (k, m) in spec.multiples.iter().enumerate() {
-                    header.push(format!("{name}_torque_{m}x_{force}"));
-                    cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k])));
-                }
-                header.push(format!("{name}_torque_peak_{force}"));
-                cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)));
-            }
-        }
-        let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
-        let csv = if br.amplitude.is_nan() {
-            dir.join(format!("{}_{dir_tag}.csv", spec.name))
-        } else {
-            dir.join(format!("{}_{}Nm_{dir_tag}.csv", spec.name, super::sweep::fmt_num(br.amplitude)))
-        };
-        let h: Vec<&str> = header.iter().map(String::as_str).collect();
-        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-        write_csv(&csv, &h, &c)?;
-        files.push(csv);
+    let refs: Vec<&HbmBranch> = branches.iter().collect();
+    for t in tables(&study.mechanism, spec, &refs) {
+        files.push(t.write_csv(dir)?);
     }
 
-    let overlay: Vec<&SweepRun> = match &spec.overlay {
-        Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
-        None => Vec::new(),
-    };
+    let overlay = overlay(spec, sweeps);
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
     let panels: Vec<Panel> = cases(spec)
         .into_iter()
@@ -384,26 +427,22 @@ pub(crate) fn render(
         ax.column
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
-    // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
-    let t = study.spec.order_tracking;
-    let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
-    for br in branches {
-        let stable = br.stable.iter().filter(|s| **s == Some(true)).count();
-        let unstable = br.stable.iter().filter(|s| **s == Some(false)).count();
-        let jumps = jump_orders(&overlay, br.amplitude, lag);
+    for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {stable} / {unstable} | {} | {} | {} | {:.1} | {} |",
+            "| {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
             if br.amplitude.is_nan() { "continued".to_string() } else { br.amplitude.to_string() },
             br.from,
-            br.order.len(),
+            f.points,
+            f.stable,
+            f.unstable,
             list(&br.folds),
             if br.bifurcations.is_empty() {
                 "none".into()
             } else {
                 br.bifurcations.iter().map(|(o, k)| format!("{k} at {o:.5}")).collect::<Vec<_>>().join(", ")
             },
-            jumps.map_or("–".into(), |(u, d)| format!(
+            f.sweep_jumps.map_or("–".into(), |(u, d)| format!(
                 "{}, {}",
                 u.map_or("none".into(), |v| format!("{v:.4}")),
                 d.map_or("none".into(), |v| format!("{v:.4}"))

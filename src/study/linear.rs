@@ -1,7 +1,8 @@
 //! The linear analyses of a study: the order-domain frequency response normalised by the locked
 //! twin (paper eq. 22, Fig. 2) and the Campbell diagram.
 
-use super::{CampbellSpec, LinearResponseSpec, Output, Results, Study, write_csv};
+use super::json::Table;
+use super::{CampbellSpec, LinearResponseSpec, Output, Results, Study};
 use crate::error::{Error, Result};
 use crate::linear::{Campbell, Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};
 use crate::model::excitation::rpm_to_rad_s;
@@ -17,7 +18,7 @@ pub(crate) fn slug(label: &str) -> String {
 }
 
 /// Linear results of one variant, for tests and reports.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct ResponseVariant {
     /// The variant's label.
     pub label: String,
@@ -40,7 +41,7 @@ pub struct ResponseVariant {
 }
 
 /// A linear frequency-response analysis.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct LinearResult {
     /// Analysis name.
     pub name: String,
@@ -55,7 +56,7 @@ pub struct LinearResult {
 }
 
 /// One mode of the modal table of a linear response analysis.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct ModeRow {
     /// Spin held (the absorbers alone) rather than free (coupled with the rotor).
     pub spin_held: bool,
@@ -180,6 +181,51 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     Ok((result, failures))
 }
 
+/// The linear response's CSV tables, one per variant: the order, and with a locked twin the
+/// order over n_t (over 1 when the orders are absolute), both responses per unit torque and
+/// their ratio; without one, the order and the response only (nothing to normalise by).
+pub(crate) fn response_tables(study: &Study, spec: &LinearResponseSpec, r: &LinearResult) -> Vec<Table> {
+    let normalised = !study.spec.lock.is_empty();
+    let scale = if spec.relative { r.n_t.unwrap_or(1.0) } else { 1.0 };
+    r.variants
+        .iter()
+        .map(|v| {
+            let mut t = Table::new(format!("{}_{}", spec.name, slug(&v.label)));
+            t.push("order", "1", v.orders.clone());
+            if normalised {
+                t.push("order_over_nt", "1", v.orders.iter().map(|n| n / scale).collect());
+            }
+            t.push("accel_per_torque_rad_s2_per_Nm", "rad/s² per N·m", v.response.clone());
+            if normalised {
+                t.push("locked_rad_s2_per_Nm", "rad/s² per N·m", v.locked.clone());
+                t.push("ratio", "1", v.ratio.clone());
+            }
+            t
+        })
+        .collect()
+}
+
+/// The Campbell CSV tables: the speeds with, per tracked mode, its frequency and damping ratio,
+/// then the order lines; and the resonance table `<name>_crossings` (order, mode number, rpm, Hz).
+pub(crate) fn campbell_tables(spec: &CampbellSpec, c: &Campbell) -> Vec<Table> {
+    let mut t = Table::new(spec.name.clone());
+    t.push("rpm", "rpm", c.rpm.clone());
+    for (k, tr) in c.tracks.iter().enumerate() {
+        t.push(format!("mode{}_{}_hz", k + 1, tr.label), "Hz", tr.frequency_hz.clone());
+        t.push(format!("mode{}_{}_damping_ratio", k + 1, tr.label), "1", tr.damping_ratio.clone());
+    }
+    for l in &c.order_lines {
+        t.push(format!("order_{}_hz", l.order), "Hz", l.frequency_hz.clone());
+    }
+    let mut x = Table::new(format!("{}_crossings", spec.name));
+    let col = |f: &dyn Fn(&crate::linear::Crossing) -> f64| c.crossings.iter().map(f).collect::<Vec<f64>>();
+    x.push("order", "1", col(&|x| x.order));
+    x.push("mode", "1", col(&|x| (x.track + 1) as f64));
+    x.push("rpm", "rpm", col(&|x| x.rpm));
+    x.push("frequency_hz", "Hz", col(&|x| x.frequency_hz));
+    vec![t, x]
+}
+
 /// Writes one CSV per variant and the figure (the paper's Fig. 2), and returns the summary
 /// section with the files written.
 pub(crate) fn render_response(
@@ -195,19 +241,8 @@ pub(crate) fn render_response(
     let normalised = !study.spec.lock.is_empty();
     let scale = if spec.relative { n_t.unwrap_or(1.0) } else { 1.0 };
     let mut files = Vec::new();
-    for r in results {
-        let path = dir.join(format!("{}_{}.csv", spec.name, slug(&r.label)));
-        let rel: Vec<f64> = r.orders.iter().map(|n| n / scale).collect();
-        if normalised {
-            write_csv(
-                &path,
-                &["order", "order_over_nt", "accel_per_torque_rad_s2_per_Nm", "locked_rad_s2_per_Nm", "ratio"],
-                &[&r.orders, &rel, &r.response, &r.locked, &r.ratio],
-            )?;
-        } else {
-            write_csv(&path, &["order", "accel_per_torque_rad_s2_per_Nm"], &[&r.orders, &r.response])?;
-        }
-        files.push(path);
+    for t in response_tables(study, spec, result) {
+        files.push(t.write_csv(dir)?);
     }
     let mut modal_md =
         String::from("| spin | damping | eigen-order | damping ratio | dominant joint |\n|---|---|---|---|---|\n");
@@ -376,22 +411,7 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
 /// Writes the Campbell CSV and figure, and returns the summary section with the files written.
 pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> Result<(String, Vec<PathBuf>)> {
     let steps = c.rpm.len();
-    let mut header = vec!["rpm".to_string()];
-    let mut cols: Vec<Vec<f64>> = vec![c.rpm.clone()];
-    for (k, t) in c.tracks.iter().enumerate() {
-        header.push(format!("mode{}_{}_hz", k + 1, t.label));
-        cols.push(t.frequency_hz.clone());
-        header.push(format!("mode{}_{}_damping_ratio", k + 1, t.label));
-        cols.push(t.damping_ratio.clone());
-    }
-    for l in &c.order_lines {
-        header.push(format!("order_{}_hz", l.order));
-        cols.push(l.frequency_hz.clone());
-    }
-    let csv = dir.join(format!("{}.csv", spec.name));
-    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    let cc: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    write_csv(&csv, &h, &cc)?;
+    let written: Vec<PathBuf> = campbell_tables(spec, c).iter().map(|t| t.write_csv(dir)).collect::<Result<_>>()?;
     let mut series: Vec<Series> = c
         .tracks
         .iter()
@@ -461,13 +481,6 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
     }
     md.push('\n');
     // The resonance table: where each order line crosses each mode.
-    let crossings_csv = dir.join(format!("{}_crossings.csv", spec.name));
-    let col = |f: &dyn Fn(&crate::linear::Crossing) -> f64| c.crossings.iter().map(f).collect::<Vec<f64>>();
-    write_csv(
-        &crossings_csv,
-        &["order", "mode", "rpm", "frequency_hz"],
-        &[&col(&|x| x.order), &col(&|x| (x.track + 1) as f64), &col(&|x| x.rpm), &col(&|x| x.frequency_hz)],
-    )?;
     if c.crossings.is_empty() {
         let _ = writeln!(md, "No order line crosses a mode between {} and {} rpm.\n", spec.rpm_min, spec.rpm_max);
     } else {
@@ -479,5 +492,7 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         }
         md.push('\n');
     }
-    Ok((md, vec![csv, svg, crossings_csv]))
+    let mut files = written;
+    files.insert(1, svg);
+    Ok((md, files))
 }

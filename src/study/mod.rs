@@ -8,6 +8,7 @@
 
 mod elements;
 pub mod hbm;
+pub mod json;
 mod linear;
 mod multi;
 mod output;
@@ -112,6 +113,9 @@ pub struct StudyReport {
     pub hbm: Vec<hbm::HbmBranch>,
     /// Campbell diagrams.
     pub campbell: Vec<crate::linear::Campbell>,
+    /// Per analysis of the study file, in its order: whether it ran to the end (its results are
+    /// in the fields above; single runs of it may still have failed) rather than failing whole.
+    pub completed: Vec<bool>,
 }
 
 pub use linear::{LinearResult, ResponseVariant};
@@ -269,7 +273,8 @@ pub struct RunOptions {
 /// or panics is listed under "Failures" in the summary and in [`StudyReport::failures`] with its
 /// file:line:column, its partial output is kept, and the remaining analyses still run. The
 /// outputs are written into a temporary folder that replaces `<out>/<name>/` only at the end
-/// (see `output`), and `summary.md` is always written.
+/// (see `output`), and `summary.md` is always written, with `results.json` (every number of
+/// the summary and the CSV files, see [`json`]) next to it.
 ///
 /// # Errors
 /// Only when the output folder cannot be prepared or moved into place, or another run holds it.
@@ -305,6 +310,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
         for f in &mut report.failures[before..] {
             *f = format!("{} `{}` ({where_}): {f}", a.kind(), a.name());
         }
+        report.completed.push(matches!(attempt, Ok(Ok(_))));
         let failure = match attempt {
             Ok(Ok(section)) => {
                 sections += &section;
@@ -344,6 +350,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     let path = dir.join("summary.md");
     write_file(&path, &md)?;
     report.files.push(path);
+    report.files.push(json::write(study, &report, &dir)?);
     report.summary = md;
     let final_dir = out.finish()?;
     for f in &mut report.files {

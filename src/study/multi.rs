@@ -3,9 +3,10 @@
 //! twin for comparison.
 
 use super::elements::{ElementResponse, from_hbm, from_window};
+use super::json::Table;
 use super::sim::{self, Progress};
 use super::sweep::order_name;
-use super::{MultiOrderSpec, Output, Results, Study, cell, write_csv};
+use super::{MultiOrderSpec, Output, Results, Study, cell};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -17,7 +18,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The steady state at one speed (of the mechanism or of its locked twin).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Steady {
     /// Amplitude of each tracked multiple over the last window, rad/s².
     pub amplitudes: Vec<f64>,
@@ -36,7 +37,7 @@ pub struct Steady {
 }
 
 /// One operating speed.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct SpeedResult {
     /// Mean speed, rpm.
     pub rpm: f64,
@@ -58,7 +59,7 @@ pub struct SpeedResult {
 }
 
 /// One periodic steady state by harmonic balance.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct HbmState {
     /// Amplitude per tracked multiple, rad/s².
     pub amplitudes: Vec<f64>,
@@ -99,6 +100,18 @@ impl SpeedResult {
     pub fn locked_amplitude(&self, k: usize) -> f64 {
         self.locked.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
     }
+    /// Nonlinear amplitude of multiple k over the locked twin's, NaN when undefined (see
+    /// `study::ratio`).
+    pub fn ratio(&self, k: usize) -> f64 {
+        super::ratio(self.amplitude(k), self.locked_amplitude(k), self.locked_scale())
+    }
+
+    /// Linear amplitude of multiple k over the locked twin's linear amplitude, NaN when undefined.
+    pub fn linear_ratio(&self, k: usize) -> f64 {
+        let scale = self.linear_locked.as_ref().map_or(0.0, |l| l.iter().copied().fold(0.0, f64::max));
+        super::ratio(self.linear_amplitude(k, false), self.linear_amplitude(k, true), scale)
+    }
+
     fn linear_amplitude(&self, k: usize, locked: bool) -> f64 {
         let v = if locked { &self.linear_locked } else { &self.linear };
         v.as_ref().map_or(f64::NAN, |v| v[k])
@@ -106,7 +119,7 @@ impl SpeedResult {
 }
 
 /// A multi-order analysis over speed.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct MultiOrderResult {
     /// Analysis name.
     pub name: String,
@@ -209,37 +222,26 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
     (result, failures)
 }
 
-/// Writes the CSV (one row per speed) and the figure (the paper's Fig. 5), and returns the
-/// summary section with the files written.
-pub(crate) fn render(
-    study: &Study,
-    spec: &MultiOrderSpec,
-    result: &MultiOrderResult,
-    dir: &Path,
-) -> Result<(String, Vec<PathBuf>)> {
-    // CSV: one row per speed.
-    let mut header = vec!["rpm".to_string()];
-    let mut cols: Vec<Vec<f64>> = vec![result.speeds.iter().map(|s| s.rpm).collect()];
+/// The CSV table: one row per speed, per multiple the nonlinear, locked and ratio columns and
+/// the linear ones as asked for, then the steadiness columns.
+pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Table {
+    let mut table = Table::new(spec.name.clone());
+    table.push("rpm", "rpm", result.speeds.iter().map(|s| s.rpm).collect());
     let has_locked = study.locked.is_some();
     for (k, m) in spec.multiples.iter().enumerate() {
         let tag = fmt_mult(*m);
         let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
         if spec.time_domain {
-            header.push(format!("amp_{tag}x_rad_s2"));
-            cols.push(col(&|s| s.amplitude(k)));
+            table.push(format!("amp_{tag}x_rad_s2"), "rad/s²", col(&|s| s.amplitude(k)));
             if has_locked {
-                header.push(format!("locked_{tag}x_rad_s2"));
-                cols.push(col(&|s| s.locked_amplitude(k)));
-                header.push(format!("ratio_{tag}x"));
-                cols.push(col(&|s| super::ratio(s.amplitude(k), s.locked_amplitude(k), s.locked_scale())));
+                table.push(format!("locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.locked_amplitude(k)));
+                table.push(format!("ratio_{tag}x"), "1", col(&|s| s.ratio(k)));
             }
         }
         if spec.linear {
-            header.push(format!("linear_{tag}x_rad_s2"));
-            cols.push(col(&|s| s.linear_amplitude(k, false)));
+            table.push(format!("linear_{tag}x_rad_s2"), "rad/s²", col(&|s| s.linear_amplitude(k, false)));
             if has_locked {
-                header.push(format!("linear_locked_{tag}x_rad_s2"));
-                cols.push(col(&|s| s.linear_amplitude(k, true)));
+                table.push(format!("linear_locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.linear_amplitude(k, true)));
             }
         }
     }
@@ -247,18 +249,12 @@ pub(crate) fn render(
         let col = |f: &dyn Fn(&Steady) -> f64| {
             result.speeds.iter().map(|s| s.response.as_ref().map_or(f64::NAN, f)).collect::<Vec<f64>>()
         };
-        header.push("steady_change".into());
-        cols.push(col(&|s| s.change));
-        header.push("max_relative_angle_rad".into());
-        cols.push(col(&|s| s.max_relative_angle));
-        header.push("simulated_s".into());
-        cols.push(col(&|s| s.time_s));
-        // Each reported element: its amplitude per order and peak, and its spring and damper's
-        // torque (N·m; N for a slide), over the last window.
+        table.push("steady_change", "1", col(&|s| s.change));
+        table.push("max_relative_angle_rad", "rad", col(&|s| s.max_relative_angle));
+        table.push("simulated_s", "s", col(&|s| s.time_s));
+        // Each reported element over the last window: its amplitude per order and peak, and its
+        // spring-and-damper torque (N·m; N for a slide).
         for (e, &j) in study.elements.iter().enumerate() {
-            let joint = &study.mechanism.joints[j];
-            let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
-            let force = if joint.kind.rotates() { "Nm" } else { "N" };
             let el = |f: &dyn Fn(&ElementResponse) -> f64| {
                 result
                     .speeds
@@ -266,26 +262,86 @@ pub(crate) fn render(
                     .map(|s| s.response.as_ref().and_then(|r| r.elements.get(e)).map_or(f64::NAN, f))
                     .collect::<Vec<f64>>()
             };
-            for (k, m) in spec.multiples.iter().enumerate() {
-                header.push(format!("{name}_{}x_{unit}", fmt_mult(*m)));
-                cols.push(el(&|x| x.amplitude[k]));
-            }
-            header.push(format!("{name}_peak_{unit}"));
-            cols.push(el(&|x| x.peak));
-            if joint.spring.is_some() || joint.damper != 0.0 {
-                for (k, m) in spec.multiples.iter().enumerate() {
-                    header.push(format!("{name}_torque_{}x_{force}", fmt_mult(*m)));
-                    cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k])));
-                }
-                header.push(format!("{name}_torque_peak_{force}"));
-                cols.push(el(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)));
-            }
+            let joint = &study.mechanism.joints[j];
+            let torque = joint.spring.is_some() || joint.damper != 0.0;
+            push_element_columns(&mut table, joint, &spec.multiples, torque, &el);
         }
     }
-    let csv = dir.join(format!("{}.csv", spec.name));
-    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    write_csv(&csv, &h, &c)?;
+    table
+}
+
+/// A column of one element over the table's rows, from a read-out of one [`ElementResponse`].
+pub(crate) type ElementColumn<'a> = dyn Fn(&dyn Fn(&ElementResponse) -> f64) -> Vec<f64> + 'a;
+
+/// Appends one element's columns to `table`: per multiple `<joint>_<m>x_<unit>`, then
+/// `<joint>_peak_<unit>`, and with `torque` the same for `<joint>_torque_…_Nm` (`_N` for a
+/// slide). `value` reads one number of an [`ElementResponse`] for every row.
+pub(crate) fn push_element_columns(
+    table: &mut Table,
+    joint: &crate::model::joint::Joint,
+    multiples: &[f64],
+    torque: bool,
+    value: &ElementColumn<'_>,
+) {
+    let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
+    let (force, force_unit) = if joint.kind.rotates() { ("Nm", "N·m") } else { ("N", "N") };
+    for (k, m) in multiples.iter().enumerate() {
+        table.push(format!("{name}_{}x_{unit}", fmt_mult(*m)), unit, value(&|x| x.amplitude[k]));
+    }
+    table.push(format!("{name}_peak_{unit}"), unit, value(&|x| x.peak));
+    if torque {
+        for (k, m) in multiples.iter().enumerate() {
+            let v = value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k]));
+            table.push(format!("{name}_torque_{}x_{force}", fmt_mult(*m)), force_unit, v);
+        }
+        table.push(
+            format!("{name}_torque_peak_{force}"),
+            force_unit,
+            value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)),
+        );
+    }
+}
+
+/// What the summary computes per speed beyond the results (also in `results.json`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SpeedFindings {
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// Per tracked multiple, the nonlinear amplitude over the locked twin's (NaN: undefined).
+    pub ratio: Vec<f64>,
+    /// Per tracked multiple, the linear amplitude over the locked twin's linear one (NaN:
+    /// undefined).
+    pub linear_ratio: Vec<f64>,
+    /// The largest relative difference of the tracked amplitudes between the time-domain steady
+    /// state and the nearest stable harmonic-balance state (None: either is missing).
+    pub hbm_match: Option<f64>,
+}
+
+/// The summary's per-speed readings (see [`SpeedFindings`]).
+pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
+    let k = result.multiples.len();
+    result
+        .speeds
+        .iter()
+        .map(|s| SpeedFindings {
+            rpm: s.rpm,
+            ratio: (0..k).map(|i| s.ratio(i)).collect(),
+            linear_ratio: (0..k).map(|i| s.linear_ratio(i)).collect(),
+            hbm_match: s.hbm_match().map(|(_, d)| d),
+        })
+        .collect()
+}
+
+/// Writes the CSV ([`table`]) and the figure (the paper's Fig. 5), and returns the summary
+/// section with the files written.
+pub(crate) fn render(
+    study: &Study,
+    spec: &MultiOrderSpec,
+    result: &MultiOrderResult,
+    dir: &Path,
+) -> Result<(String, Vec<PathBuf>)> {
+    let csv = table(study, spec, result).write_csv(dir)?;
+    let has_locked = study.locked.is_some();
 
     // Figure 5: each order vs speed, mechanism solid, locked twin dotted.
     let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
@@ -496,18 +552,11 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         for k in 0..spec.multiples.len() {
             if spec.time_domain {
                 let (a, l) = (s.amplitude(k), s.locked_amplitude(k));
-                let _ = write!(
-                    row,
-                    " {} | {} | {} |",
-                    cell(a, 4),
-                    cell(l, 4),
-                    cell(super::ratio(a, l, s.locked_scale()), 3)
-                );
+                let _ = write!(row, " {} | {} | {} |", cell(a, 4), cell(l, 4), cell(s.ratio(k), 3));
             }
             if spec.linear {
-                let (a, l) = (s.linear_amplitude(k, false), s.linear_amplitude(k, true));
-                let scale = s.linear_locked.as_ref().map_or(0.0, |l| l.iter().copied().fold(0.0, f64::max));
-                let _ = write!(row, " {} | {} |", cell(a, 4), cell(super::ratio(a, l, scale), 3));
+                let a = s.linear_amplitude(k, false);
+                let _ = write!(row, " {} | {} |", cell(a, 4), cell(s.linear_ratio(k), 3));
             }
         }
         if let Some(resp) = &s.response {

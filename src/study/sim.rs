@@ -45,6 +45,8 @@ impl Progress {
 pub struct TimeSeries {
     /// Column names (with units).
     pub names: Vec<String>,
+    /// The SI unit of each column.
+    pub units: Vec<&'static str>,
     /// Columns, all of the same length.
     pub columns: Vec<Vec<f64>>,
 }
@@ -99,12 +101,11 @@ pub(crate) fn time_series(mech: &Mechanism, body: usize, mut rec: Recorder, n_el
     let b = &mech.bodies[body].name;
     let mut names =
         vec!["time_s".into(), format!("{b}_angle_rad"), format!("{b}_rate_rad_s"), format!("{b}_accel_rad_s2")];
-    names.extend(
-        mech.joints
-            .iter()
-            .filter(|j| j.coordinate.is_some())
-            .map(|j| format!("{}_q_{}", j.name, j.kind.coordinate_unit())),
-    );
+    let mut units = vec!["s", "rad", "rad/s", "rad/s²"];
+    for j in mech.joints.iter().filter(|j| j.coordinate.is_some()) {
+        names.push(format!("{}_q_{}", j.name, j.kind.coordinate_unit()));
+        units.push(j.kind.coordinate_unit());
+    }
     let mut cols = rec.columns;
     let coordinates = cols.split_off(SERIES + 2);
     let rate = cols.pop().unwrap_or_default();
@@ -112,7 +113,7 @@ pub(crate) fn time_series(mech: &Mechanism, body: usize, mut rec: Recorder, n_el
     let accel = cols.swap_remove(ACCEL);
     let mut columns = vec![rec.time, angle, rate, accel];
     columns.extend(coordinates);
-    Some(TimeSeries { names, columns })
+    Some(TimeSeries { names, units, columns })
 }
 
 /// The study's integration options: its tolerances and sample rate, with `ẋ` at the samples.

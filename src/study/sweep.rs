@@ -1,8 +1,9 @@
 //! Load case 1 (paper section 4.1, Figs. 3 and 4): a single-order torque swept in order, up and
 //! down, at each amplitude; order traces of the response by the short-time FFT.
 
+use super::json::Table;
 use super::sim::{self, Progress};
-use super::{Direction, Output, Results, Study, SweepSpec, write_csv};
+use super::{Direction, Output, Results, Study, SweepSpec};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -13,8 +14,9 @@ use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// One sweep run: the order traces of the response and what the run did.
-#[derive(Debug, Clone)]
+/// One sweep run: the order traces of the response and what the run did. Serialised into
+/// `results.json` without the time series (which is there as a table, like its CSV).
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct SweepRun {
     /// The analysis name.
     pub analysis: String,
@@ -31,6 +33,7 @@ pub struct SweepRun {
     /// The simulation's statistics and outcome.
     pub sim: Outcome,
     /// The sampled time series, when asked for.
+    #[serde(skip)]
     pub time_series: Option<sim::TimeSeries>,
 }
 
@@ -40,7 +43,8 @@ impl SweepRun {
         self.traces.iter().find(|t| (t.multiple - m).abs() < 1e-12)
     }
 
-    fn label(&self) -> String {
+    /// The run's file label: `<analysis>_<amplitude>Nm_<up|down>[_locked]`.
+    pub fn label(&self) -> String {
         job_label(&self.analysis, self.amplitude, self.direction, self.locked)
     }
 }
@@ -123,49 +127,53 @@ pub(crate) fn compute(study: &Study, spec: &SweepSpec, progress: &Progress) -> (
     (runs, failures)
 }
 
-/// Writes the sweep's CSVs (traces with the locked reference and ratios; the time series when
-/// asked for), its figure (the paper's Figs. 3 and 4) and returns its summary section with the
-/// files written.
-pub(crate) fn render(study: &Study, spec: &SweepSpec, runs: &[SweepRun], dir: &Path) -> Result<(String, Vec<PathBuf>)> {
-    let mut files = Vec::new();
-    for r in runs {
+/// The sweep's CSV tables, in the order they are written: the time series of every run when
+/// asked for, then per run (the locked twin has none of its own) the traces side by side with
+/// the locked reference at the same orders and the ratios.
+pub(crate) fn tables(spec: &SweepSpec, runs: &[&SweepRun]) -> Vec<Table> {
+    let mut out = Vec::new();
+    for r in runs.iter().copied() {
         if let Some(ts) = &r.time_series
             && spec.write_time_series
         {
-            let path = dir.join(format!("{}_time_series.csv", r.label()));
-            let cols: Vec<&[f64]> = ts.columns.iter().map(Vec::as_slice).collect();
-            let header: Vec<&str> = ts.names.iter().map(String::as_str).collect();
-            write_csv(&path, &header, &cols)?;
-            files.push(path);
+            let mut t = Table::new(format!("{}_time_series", r.label()));
+            for ((name, unit), col) in ts.names.iter().zip(&ts.units).zip(&ts.columns) {
+                t.push(name, unit, col.clone());
+            }
+            out.push(t);
         }
     }
-    // One CSV per run: the traces side by side, with the locked reference and the ratios.
     for r in runs.iter().filter(|r| !r.locked) {
         let locked = runs.iter().find(|l| l.locked && l.amplitude == r.amplitude);
         let Some(main) = r.traces.first() else { continue };
-        let mut header = vec!["time_s".to_string(), "order".to_string()];
-        let mut cols: Vec<Vec<f64>> = vec![main.time_s.clone(), main.order.clone()];
+        let mut table = Table::new(r.label());
+        table.push("time_s", "s", main.time_s.clone());
+        table.push("order", "1", main.order.clone());
         for t in &r.traces {
-            header.push(format!("amp_{}x_rad_s2", fmt_num(t.multiple)));
-            cols.push(t.amplitude.clone());
+            table.push(format!("amp_{}x_rad_s2", fmt_num(t.multiple)), "rad/s²", t.amplitude.clone());
         }
         if let Some(l) = locked {
             let scale = l.traces.iter().flat_map(|t| t.amplitude.iter().copied()).fold(0.0, f64::max);
             for t in &r.traces {
                 let lt = l.trace(t.multiple);
                 let ref_amp: Vec<f64> = t.order.iter().map(|&n| lt.map_or(f64::NAN, |lt| at_order(lt, n))).collect();
-                header.push(format!("locked_{}x_rad_s2", fmt_num(t.multiple)));
-                header.push(format!("ratio_{}x", fmt_num(t.multiple)));
                 let ratio = t.amplitude.iter().zip(&ref_amp).map(|(a, b)| super::ratio(*a, *b, scale)).collect();
-                cols.push(ref_amp);
-                cols.push(ratio);
+                table.push(format!("locked_{}x_rad_s2", fmt_num(t.multiple)), "rad/s²", ref_amp);
+                table.push(format!("ratio_{}x", fmt_num(t.multiple)), "1", ratio);
             }
         }
-        let path = dir.join(format!("{}.csv", r.label()));
-        let h: Vec<&str> = header.iter().map(String::as_str).collect();
-        let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-        write_csv(&path, &h, &c)?;
-        files.push(path);
+        out.push(table);
+    }
+    out
+}
+
+/// Writes the sweep's CSVs ([`tables`]), its figure (the paper's Figs. 3 and 4) and returns its
+/// summary section with the files written.
+pub(crate) fn render(study: &Study, spec: &SweepSpec, runs: &[SweepRun], dir: &Path) -> Result<(String, Vec<PathBuf>)> {
+    let mut files = Vec::new();
+    let refs: Vec<&SweepRun> = runs.iter().collect();
+    for t in tables(spec, &refs) {
+        files.push(t.write_csv(dir)?);
     }
 
     // Figures 3 and 4: one panel per amplitude; main and second order, up solid, down dashed.
@@ -283,6 +291,72 @@ fn fmt_intervals(iv: &[(f64, f64)]) -> String {
     iv.iter().map(|(a, b)| format!("{a:.3}–{b:.3}")).collect::<Vec<_>>().join(", ")
 }
 
+/// What the summary reads off a sweep's traces (also in `results.json`). Order intervals are
+/// `(from, to)` pairs of excitation orders.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SweepFindings {
+    /// Windows centred before this time are left out (the ramp-in plus 1 s), s.
+    pub skip_before_s: f64,
+    /// One entry per run, in the order of the runs.
+    pub runs: Vec<RunFindings>,
+    /// One entry per amplitude that has both an up and a down run.
+    pub amplitudes: Vec<AmplitudeFindings>,
+}
+
+/// What the summary reads off one sweep run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunFindings {
+    /// The run's file label ([`SweepRun::label`]).
+    pub label: String,
+    /// Excitation order of the main-order trace's minimum, and that amplitude in rad/s² (None
+    /// without a main-order trace).
+    pub main_order_minimum: Option<(f64, f64)>,
+    /// Order intervals where the second-order trace lies above the main-order one (None unless
+    /// both are tracked).
+    pub second_over_main: Option<Vec<(f64, f64)>>,
+    /// Right-hand-side evaluations, the integrator's and those at the samples.
+    pub rhs_evals: usize,
+}
+
+/// Where the up and the down sweep of one amplitude differ.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AmplitudeFindings {
+    /// Torque amplitude T_n, N·m.
+    pub amplitude: f64,
+    /// Order intervals where the main-order traces differ by more than [`BRANCH_FACTOR`].
+    pub up_down_differ: Vec<(f64, f64)>,
+}
+
+/// Up and down traces "differ" when one is this many times the other.
+pub const BRANCH_FACTOR: f64 = 1.5;
+
+/// The summary's readings of the runs (see [`SweepFindings`]).
+pub fn findings(spec: &SweepSpec, runs: &[&SweepRun]) -> SweepFindings {
+    let skip = spec.ramp_s + 1.0;
+    let runs_out = runs
+        .iter()
+        .map(|r| RunFindings {
+            label: r.label(),
+            main_order_minimum: r.trace(1.0).and_then(|t| trace_minimum(t, skip)),
+            second_over_main: match (r.trace(1.0), r.trace(2.0)) {
+                (Some(m), Some(s)) => Some(exceeds(m, s, skip)),
+                _ => None,
+            },
+            rhs_evals: r.sim.rhs_evals(),
+        })
+        .collect();
+    let mut amplitudes = Vec::new();
+    for &amp in &spec.amplitudes {
+        let up = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Up);
+        let down = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Down);
+        if let (Some(u), Some(d)) = (up.and_then(|r| r.trace(1.0)), down.and_then(|r| r.trace(1.0))) {
+            let up_down_differ = branch_differences(&skip_ramp(u, skip), &skip_ramp(d, skip), BRANCH_FACTOR);
+            amplitudes.push(AmplitudeFindings { amplitude: amp, up_down_differ });
+        }
+    }
+    SweepFindings { skip_before_s: skip, runs: runs_out, amplitudes }
+}
+
 fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
     let mut md = String::new();
     let _ = writeln!(
@@ -299,39 +373,31 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
         "| run | max abs relative angle (rad) | main-order minimum at n | its amplitude (rad/s²) | orders where 2nd > main | RHS evaluations | steps (rejected) | wall time (s) |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
-    let skip = spec.ramp_s + 1.0;
-    for r in runs {
-        let min = r.trace(1.0).and_then(|t| trace_minimum(t, skip));
-        let second_over = match (r.trace(1.0), r.trace(2.0)) {
-            (Some(m), Some(s)) => fmt_intervals(&exceeds(m, s, skip)),
-            _ => "–".into(),
-        };
+    let found = findings(spec, &runs.iter().collect::<Vec<_>>());
+    for (r, f) in runs.iter().zip(&found.runs) {
+        let min = f.main_order_minimum;
         let _ = writeln!(
             md,
             "| {} | {:.4} | {} | {} | {} | {} | {} ({}) | {:.3} |",
-            r.label(),
+            f.label,
             r.max_relative_angle,
             min.map_or("–".into(), |m| format!("{:.4}", m.0)),
             min.map_or("–".into(), |m| format!("{:.4}", m.1)),
-            second_over,
-            r.sim.rhs_evals(),
+            f.second_over_main.as_deref().map_or("–".into(), fmt_intervals),
+            f.rhs_evals,
             r.sim.stats.accepted,
             r.sim.stats.rejected,
             r.sim.wall_s
         );
     }
     md.push('\n');
-    for &amp in &spec.amplitudes {
-        let up = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Up);
-        let down = runs.iter().find(|r| !r.locked && r.amplitude == amp && r.direction == Direction::Down);
-        if let (Some(u), Some(d)) = (up.and_then(|r| r.trace(1.0)), down.and_then(|r| r.trace(1.0))) {
-            let _ = writeln!(
-                md,
-                "- T_n = {} N·m: up and down main-order traces differ by more than 1.5× at n = {}",
-                fmt_num(amp),
-                fmt_intervals(&branch_differences(&skip_ramp(u, skip), &skip_ramp(d, skip), 1.5))
-            );
-        }
+    for a in &found.amplitudes {
+        let _ = writeln!(
+            md,
+            "- T_n = {} N·m: up and down main-order traces differ by more than {BRANCH_FACTOR}× at n = {}",
+            fmt_num(a.amplitude),
+            fmt_intervals(&a.up_down_differ)
+        );
     }
     md.push('\n');
     md

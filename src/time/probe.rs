@@ -294,8 +294,8 @@ impl Recorder {
 }
 
 /// How one run ended, with its counters (or the sum over consecutive chunks, see
-/// [`Outcome::absorb`]).
-#[derive(Debug, Clone, Default)]
+/// [`Outcome::absorb`]). Serialised (study results) with the error as its message.
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Outcome {
     /// Integration counters (also on failure).
     pub stats: IntegrateStats,
@@ -306,7 +306,16 @@ pub struct Outcome {
     /// State at the end time when the run completed.
     pub x_end: Option<Vec<f64>>,
     /// Why the run ended early, if it did; the samples recorded up to there are kept.
+    #[serde(serialize_with = "message_or_none")]
     pub error: Option<IntegrateError>,
+}
+
+/// An optional error as its message (`None` stays `None`).
+fn message_or_none<S: serde::Serializer>(e: &Option<IntegrateError>, s: S) -> std::result::Result<S::Ok, S::Error> {
+    match e {
+        Some(e) => s.serialize_some(&e.to_string()),
+        None => s.serialize_none(),
+    }
 }
 
 impl Outcome {

@@ -58,7 +58,7 @@ pub struct Sample<'a> {
 }
 
 /// Counters of one run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct IntegrateStats {
     /// Accepted steps.
     pub accepted: usize,
