@@ -10,6 +10,7 @@ use super::spec::TrackingSpec;
 use crate::error::Result;
 use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
+use crate::signal::OrderTrace;
 use serde::Serialize;
 
 /// The torque an element's spring and damper transmit.
@@ -121,6 +122,59 @@ pub(crate) fn from_window(
             amplitude: amplitudes(q2)?,
             peak: peak(q2),
             torque,
+        });
+    }
+    Ok(out)
+}
+
+/// One element's order traces over a sweep.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ElementTraces {
+    /// The joint's name.
+    pub joint: String,
+    /// Unit of the coordinate: `rad`, or `m` for a slide.
+    pub unit: &'static str,
+    /// The coordinate's order traces, one per tracked multiple (same windows as the response's).
+    pub traces: Vec<OrderTrace>,
+    /// Largest |q| after the ramp-in.
+    pub peak: f64,
+    /// The spring-and-damper torque's order traces (N·m; N for a slide), when the joint has one.
+    pub torque: Option<Vec<OrderTrace>>,
+    /// Largest |torque| after the ramp-in (its preload `−k·q_free` left out), N·m or N.
+    pub torque_peak: f64,
+}
+
+/// Per-element order traces of a sweep run, from its recorded (q, q̇) columns; `order_at` is the
+/// excitation order over time and samples before `skip` (the ramp-in) do not count for peaks.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn traces(
+    mech: &Mechanism,
+    elements: &[usize],
+    cols: &ElementColumns<'_>,
+    fs: f64,
+    omega: f64,
+    order_at: &dyn Fn(f64) -> f64,
+    multiples: &[f64],
+    tracking: &TrackingSpec,
+    skip: usize,
+) -> Result<Vec<ElementTraces>> {
+    let mut out = Vec::with_capacity(elements.len());
+    for (&j, &(q, qd)) in elements.iter().zip(&cols.signals) {
+        let (stiff, damp) = stiffness_damping(mech, j);
+        let peak = |v: &[f64]| v.iter().skip(skip).map(|x| x.abs()).fold(0.0, f64::max);
+        let (torque, torque_peak) = if stiff != 0.0 || damp != 0.0 {
+            let t: Vec<f64> = q.iter().zip(qd).map(|(q, qd)| stiff * q + damp * qd).collect();
+            (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t))
+        } else {
+            (None, 0.0)
+        };
+        out.push(ElementTraces {
+            joint: mech.joints[j].name.clone(),
+            unit: mech.joints[j].kind.coordinate_unit(),
+            traces: sim::track(&mech.name, q, fs, omega, order_at, multiples, tracking)?,
+            peak: peak(q),
+            torque,
+            torque_peak,
         });
     }
     Ok(out)

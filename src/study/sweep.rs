@@ -1,6 +1,7 @@
 //! Load case 1 (paper section 4.1, Figs. 3 and 4): a single-order torque swept in order, up and
 //! down, at each amplitude; order traces of the response by the short-time FFT.
 
+use super::elements::{self, ElementTraces};
 use super::json::Table;
 use super::sim::{self, Progress};
 use super::{Direction, Output, Results, Study, SweepSpec};
@@ -35,6 +36,8 @@ pub struct SweepRun {
     /// The sampled time series, when asked for.
     #[serde(skip)]
     pub time_series: Option<sim::TimeSeries>,
+    /// Each reported element's order traces (none for the locked twin).
+    pub elements: Vec<ElementTraces>,
 }
 
 impl SweepRun {
@@ -162,6 +165,18 @@ pub(crate) fn tables(spec: &SweepSpec, runs: &[&SweepRun]) -> Vec<Table> {
                 table.push(format!("ratio_{}x", fmt_num(t.multiple)), "1", ratio);
             }
         }
+        // Each reported element's traces on the same windows: coordinate per order, and the
+        // spring-and-damper torque per order (N·m; N for a slide).
+        for e in &r.elements {
+            let force = if e.unit == "m" { ("N", "N") } else { ("Nm", "N·m") };
+            for t in &e.traces {
+                table.push(format!("{}_{}x_{}", e.joint, fmt_num(t.multiple), e.unit), e.unit, t.amplitude.clone());
+            }
+            for t in e.torque.iter().flatten() {
+                let name = format!("{}_torque_{}x_{}", e.joint, fmt_num(t.multiple), force.0);
+                table.push(name, force.1, t.amplitude.clone());
+            }
+        }
         out.push(table);
     }
     out
@@ -257,7 +272,9 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         if job.locked { " locked" } else { "" }
     );
     let bar = progress.bar(spec.duration_s, &label);
-    let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, &[])?;
+    // The elements are the mechanism's joints; the locked twin reports none.
+    let elements: &[usize] = if job.locked { &[] } else { &study.elements };
+    let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, elements)?;
     let opts = sim::options(&study.spec.integration);
     let info =
         simulate(&mut kane, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| bar.set_position((t * 1000.0) as u64));
@@ -272,6 +289,12 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         &spec.multiples,
         &study.spec.order_tracking,
     )?;
+    let fs = study.spec.integration.sample_hz;
+    let cols = sim::element_columns(&rec, elements.len());
+    let skip = (spec.ramp_s * fs).ceil() as usize;
+    let tracking = &study.spec.order_tracking;
+    let element_traces =
+        elements::traces(mech, elements, &cols, fs, omega, &move |t| order.at(t), &spec.multiples, tracking, skip)?;
     Ok(SweepRun {
         analysis: spec.name.clone(),
         amplitude: job.amplitude,
@@ -280,7 +303,8 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         traces,
         max_relative_angle: rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max),
         sim: info,
-        time_series: sim::time_series(mech, body, rec, 0),
+        time_series: sim::time_series(mech, body, rec, elements.len()),
+        elements: element_traces,
     })
 }
 
@@ -400,5 +424,36 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
         );
     }
     md.push('\n');
+    // Element by element: every absorber and spring, not only the largest excursion.
+    let mut rows = String::new();
+    for r in runs.iter().filter(|r| !r.locked) {
+        for e in &r.elements {
+            let largest = |t: &OrderTrace| t.amplitude.iter().copied().filter(|a| a.is_finite()).fold(0.0, f64::max);
+            let amps: Vec<String> = e.traces.iter().map(|t| format!("{:.4e}", largest(t))).collect();
+            let torque = e.torque.as_ref().map_or("–".to_string(), |ts| {
+                let per: Vec<String> = ts.iter().map(|t| format!("{:.4e}", largest(t))).collect();
+                format!("{}; peak {:.4e}", per.join(", "), e.torque_peak)
+            });
+            let _ = writeln!(
+                rows,
+                "| {} | `{}` | {} {} | {:.4e} | {torque} |",
+                r.label(),
+                e.joint,
+                amps.join(", "),
+                e.unit,
+                e.peak
+            );
+        }
+    }
+    if !rows.is_empty() {
+        let orders: Vec<String> = spec.multiples.iter().map(|m| order_name(*m)).collect();
+        let _ = writeln!(
+            md,
+            "Elements over each sweep after the ramp-in: largest amplitude per order ({}), peak |q|, and \
+             their spring-and-damper torque (N·m; N for a slide):\n",
+            orders.join(", ")
+        );
+        let _ = writeln!(md, "| run | joint | largest amplitude | peak | torque |\n|---|---|---|---|---|\n{rows}");
+    }
     md
 }
