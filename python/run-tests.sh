@@ -4,9 +4,10 @@
 #   python/run-tests.sh [pytest arguments…]
 #
 # On a clean machine it creates a virtual environment (python/.venv, or $KANEDYN_VENV) and
-# installs maturin, numpy, pytest and mypy (for the stub check) into it; later runs reuse it, and
-# cargo rebuilds only what changed, so a second run takes seconds. Needs python3 (≥ 3.9, with
-# venv) and cargo on PATH; $PYTHON picks another interpreter for a new environment.
+# installs maturin, numpy, pytest, mypy (for the stub check) and jsonschema (for results.json)
+# into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
+# seconds. Needs python3 (≥ 3.9, with venv) and cargo on PATH; $PYTHON picks another
+# interpreter for a new environment.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -19,9 +20,9 @@ if [ ! -x "$py" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
 # Installed once; checked by import so that a half-made environment is completed.
-if ! "$py" -c "import maturin, numpy, pytest, mypy" 2>/dev/null; then
-    echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check)"
-    "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy
+if ! "$py" -c "import maturin, numpy, pytest, mypy, jsonschema" 2>/dev/null; then
+    echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json)"
+    "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy jsonschema
 fi
 
 # The package, in release mode (the bit-for-bit tests compare against the release CLI, and the

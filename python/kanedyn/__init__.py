@@ -1,37 +1,62 @@
 """kanedyn: planar multibody dynamics by Kane's method, for torsional vibration.
 
-Load a mechanism and evaluate its equations of motion ``M(q) u̇ = F(q, u, t)``, ``q̇ = W⁻¹ u``
-as NumPy arrays::
+Load a mechanism, evaluate its equations of motion ``M(q) u̇ = F(q, u, t)``, ``q̇ = W⁻¹ u``, run it
+in time, linearise it about a steady spin, continue its periodic steady states by harmonic
+balance, or run a whole study file, with NumPy arrays in and out::
 
     import kanedyn
     m = kanedyn.Mechanism.from_file("examples/cpva.ron")
-    print(m.check()["degrees_of_freedom"])
     M, F, qdot, udot = m.eom([12.5, -0.4], [104.7, -20.0], t=0.0)
+    run = kanedyn.simulate(m, [0.0, 0.0, 104.7, 104.7], 0.0, 10.0, [("BodyAccel", "rotor")])
+    modes = kanedyn.linearize(m, "spin", 1000.0).modes(spin="held", damped=False)
+    branch = kanedyn.hbm_branch(m, "spin", 1000.0, 40.0, 3.3, 2.9)
+    result = kanedyn.Study.from_file("examples/cpva_linear.ron").run()
 
-The numbers equal what the ``kanedyn`` command-line tool prints (``kanedyn check``,
-``kanedyn eom``), and every error is a ``kanedyn.KanedynError`` carrying the tool's message.
+The numbers equal what the ``kanedyn`` command-line tool prints and writes (``kanedyn eom``,
+the CSV files and ``results.json`` of ``kanedyn run``), and every error is a
+``kanedyn.KanedynError`` carrying the tool's message.
 """
 
 from ._kanedyn import (
     ArgumentError,
     EngineError,
+    HbmBranch,
     InputError,
     InternalError,
     KanedynError,
+    LinearModel,
     Mechanism,
     ModelError,
+    Modes,
+    OrderResponse,
     ReadError,
+    Simulation,
+    Study,
+    StudyResult,
     __version__,
+    hbm_branch,
+    linearize,
+    simulate,
 )
 
 __all__ = [
     "ArgumentError",
     "EngineError",
+    "HbmBranch",
     "InputError",
     "InternalError",
     "KanedynError",
+    "LinearModel",
     "Mechanism",
     "ModelError",
+    "Modes",
+    "OrderResponse",
     "ReadError",
+    "Simulation",
+    "Study",
+    "StudyResult",
     "__version__",
+    "hbm_branch",
+    "linearize",
+    "simulate",
 ]

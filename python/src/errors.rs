@@ -99,6 +99,14 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// A `kanedyn.ModelError` about mechanism `mechanism` (also its attribute), with `message`.
+pub fn model_error(py: Python<'_>, mechanism: &str, message: impl Into<String>) -> PyErr {
+    let err = ModelError::new_err(message.into());
+    // As in `to_py`: the attribute is a convenience; failing to set it must not hide the error.
+    let _ = err.value(py).setattr("mechanism", mechanism);
+    err
+}
+
 /// The error and its causes joined by `: `, leaving out a cause whose text is already there:
 /// the command-line tool's rule (`without_repeats` in src/bin/kanedyn.rs), so that a message
 /// reads the same in Python. An I/O error, for one, names its OS reason and also reports it as

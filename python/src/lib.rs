@@ -2,16 +2,22 @@
 //!
 //! One Python module built from one file per stage of kanedyn's pipeline (see the root crate's
 //! module doc); each stage's file has a `register` function that adds its classes and functions
-//! here, so a later stage (time runs, linear analysis, harmonic balance, studies) is one more file
-//! and one more line below. The pure-Python package `kanedyn` re-exports what is public.
+//! here: the mechanism and its equations of motion, time runs (`simulate`), linear analysis
+//! (`linear`), harmonic balance (`hbm`) and studies (`study`); `arrays` holds the NumPy
+//! conversions they share. The pure-Python package `kanedyn` re-exports what is public.
 //!
 //! Every entry point runs inside [`errors::guard`], so a Rust panic reaches Python as
 //! `kanedyn.InternalError`, never as PyO3's `PanicException`.
 
 use pyo3::prelude::*;
 
+pub mod arrays;
 pub mod errors;
+pub mod hbm;
+pub mod linear;
 pub mod mechanism;
+pub mod simulate;
+pub mod study;
 
 /// Native part of kanedyn: planar multibody dynamics by Kane's method, for torsional vibration.
 /// Import `kanedyn`, not this module.
@@ -20,6 +26,10 @@ fn _kanedyn(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     mechanism::register(m)?;
+    simulate::register(m)?;
+    linear::register(m)?;
+    hbm::register(m)?;
+    study::register(m)?;
     m.add_function(wrap_pyfunction!(panic_for_test, m)?)?;
     Ok(())
 }

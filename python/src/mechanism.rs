@@ -5,13 +5,14 @@
 //! tool (src/bin/kanedyn.rs), so that the arrays equal the CLI's JSON bit for bit; the Python
 //! tests hold it to that.
 
+use crate::arrays::vector;
 use crate::errors::{EngineError, argument_error, guard, to_py};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
 use kanedyn::model::joint::JointKind;
 use kanedyn::model::mechanism::Mechanism as Mech;
-use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1, PyArrayMethods};
+use numpy::{AllowTypeChange, PyArray2, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::{Path, PathBuf};
@@ -29,7 +30,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `Fixed`); `coordinate_names` lists them.
 #[pyclass(module = "kanedyn", frozen)]
 pub struct Mechanism {
-    mech: Mech,
+    /// The validated mechanism (the other modules' analyses read it).
+    pub(crate) mech: Mech,
     /// Evaluators reused across `eom` calls (building one allocates and factors M at q = 0).
     cache: Mutex<Cache>,
 }
@@ -87,7 +89,8 @@ fn folder_of(file: &Path) -> &Path {
 }
 
 impl Mechanism {
-    fn new(mech: Mech) -> Self {
+    /// Wraps a validated mechanism.
+    pub(crate) fn new(mech: Mech) -> Self {
         Self { mech, cache: Mutex::new(Cache::default()) }
     }
 
@@ -148,7 +151,7 @@ impl Mechanism {
     }
 
     /// The joint-torque overrides as `(joint index, value)`, in the mapping's order.
-    fn read_torques(&self, py: Python<'_>, torques: &Bound<'_, PyAny>) -> PyResult<Vec<(usize, f64)>> {
+    pub(crate) fn read_torques(&self, py: Python<'_>, torques: &Bound<'_, PyAny>) -> PyResult<Vec<(usize, f64)>> {
         // A dict is read directly; any other mapping through its `items()`, whose own errors
         // pass through unchanged.
         let items: Vec<Bound<'_, PyAny>> = match torques.cast::<PyDict>() {
@@ -273,11 +276,6 @@ pub fn evaluate(kane: &mut Kane, t: f64, out: &mut Buffers) -> Result<(), String
         .or_else(|| first_bad("u̇", &out.xdot[n..]))
         .unwrap_or_default();
     Err(format!("the equations of motion overflow at this state: {what} (values too large for f64?)"))
-}
-
-/// A new 1-D float64 array holding `v`.
-fn vector<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
-    PyArray1::from_slice(py, v)
 }
 
 /// A new n × n float64 array (C order) holding the row-major `m`.

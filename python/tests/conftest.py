@@ -62,3 +62,54 @@ class Cli:
 @pytest.fixture(scope="session")
 def cli(cli_path) -> Cli:
     return Cli(cli_path)
+
+
+class StudyRuns:
+    """`kanedyn run STUDY --out <tmp>` of the CLI, once per study file for the whole session."""
+
+    def __init__(self, cli: Cli, root: Path):
+        self.cli, self.root, self.done = cli, root, {}
+
+    def __call__(self, study: Path) -> Path:
+        """The CLI's output folder of `study` (its CSV, SVG, summary.md and results.json)."""
+        study = Path(study)
+        if study not in self.done:
+            out = self.root / f"run{len(self.done)}"
+            ok, stdout, err = self.cli("run", study, "--out", out)
+            assert ok, err
+            name = next(line for line in stdout.splitlines() if line.startswith("# Study `"))[len("# Study `") : -1]
+            self.done[study] = out / name
+        return self.done[study]
+
+
+@pytest.fixture(scope="session")
+def cli_run(cli, tmp_path_factory) -> StudyRuns:
+    return StudyRuns(cli, tmp_path_factory.mktemp("cli_runs"))
+
+
+def read_csv(path: Path) -> dict:
+    """A CSV file written by kanedyn as {header: float64 array}, an empty cell as NaN.
+
+    kanedyn prints every number with Rust's shortest round-trip form, so `float()` gives back the
+    very f64 it wrote."""
+    import csv
+
+    import numpy as np
+
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    return {h: np.array([float(r[k]) if r[k] != "" else np.nan for r in body]) for k, h in enumerate(header)}
+
+
+def same_bits(a, b) -> bool:
+    """Equal bit for bit (NaN with NaN, -0.0 apart from 0.0), shapes included."""
+    import numpy as np
+
+    a, b = np.ascontiguousarray(a, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64)
+    if a.shape != b.shape:
+        return False
+    # Every NaN kanedyn writes is an empty cell, read back as the canonical NaN: compare those as
+    # NaN, everything else by its bits.
+    nan = np.isnan(a) & np.isnan(b)
+    return bool(np.array_equal(a.view(np.uint64)[~nan], b.view(np.uint64)[~nan]) and np.array_equal(np.isnan(a), np.isnan(b)))
