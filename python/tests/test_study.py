@@ -39,7 +39,7 @@ def test_study_arrays_equal_the_cli_csvs(paper_from_python, cli_run):
     res = paper_from_python
     assert res.status == "complete" and res.failures == [] and res.files == [] and res.out_dir is None
     csv_files = sorted(p.name for p in out.glob("*.csv"))
-    assert sorted(f"{name}.csv" for name in res.tables) == csv_files and len(csv_files) == 13
+    assert sorted(f"{name}.csv" for name in res.tables) == csv_files and len(csv_files) == 14
     cells = 0
     for name, columns in res.tables.items():
         want = read_csv(out / f"{name}.csv")
@@ -131,7 +131,8 @@ def test_results_json_numbers_equal_the_summary(cli_run):
 
     # Order sweep: one row per run.
     sweep = by_name["sweep"]
-    _, [rows] = tables_of(summary, "Order sweep `sweep`")
+    # The first table is the runs'; the elements' table follows.
+    _, [rows, *_] = tables_of(summary, "Order sweep `sweep`")
     assert len(rows) == len(sweep["result"]["runs"]) == 6
     for row, run, f in zip(rows, sweep["result"]["runs"], sweep["findings"]["runs"]):
         n, a = f["main_order_minimum"]
@@ -175,7 +176,14 @@ def test_results_json_numbers_equal_the_summary(cli_run):
         ]
         assert row == expect
         compared += 1
-    for row, sp, f in zip(tables[1], multi["result"]["speeds"], multi["findings"]["speeds"]):
+    # The elements' table: one row per speed and reported joint, the peak as results.json has it.
+    element_rows = [(sp, e) for sp in multi["result"]["speeds"] for e in sp["response"]["elements"]]
+    assert len(tables[1]) == len(element_rows) > 0
+    for row, (sp, e) in zip(tables[1], element_rows):
+        assert row[0] == rust_display(sp["rpm"]) and row[1] == f"`{e['joint']}`"
+        assert row[3] == rust_exp(e["peak"], 4)
+        compared += 1
+    for row, sp, f in zip(tables[2], multi["result"]["speeds"], multi["findings"]["speeds"]):
         assert row[2] == f"{rust_exp(f['hbm_match'], 2)} relative"
         fold = sp["hbm_lower_fold"]
         assert (fold is None) == (row[3] == "reaches the full torques")
@@ -187,7 +195,7 @@ def test_results_json_numbers_equal_the_summary(cli_run):
     lin = by_name["figure2"]
     section, tables = tables_of(summary, "Linear frequency response `figure2`")
     nt = lin["result"]["n_t"]
-    assert f"- tuning order n_t (spin held, undamped) = {nt:.10f}" in section
+    assert f"- tuning order n_t (spin held, undamped) of `pivot` = {nt:.10f}" in section
     for o, label in lin["result"]["free_orders"]:
         assert f"- free undamped eigen-order {o:.10f} (mode `{label}`)" in section
     for row, v, f in zip(tables[1], lin["result"]["variants"], lin["findings"]["variants"]):
@@ -202,7 +210,7 @@ def test_results_json_numbers_equal_the_summary(cli_run):
 
     # Campbell: per mode, the frequencies at both ends and the order there.
     camp = by_name["campbell"]
-    _, [rows] = tables_of(summary, "Campbell diagram `campbell`")
+    _, [rows, *_] = tables_of(summary, "Campbell diagram `campbell`")
     for k, (row, f) in enumerate(zip(rows, camp["findings"]["modes"])):
         assert row == [
             str(k + 1), f["label"], f"{f['frequency_at_min_rpm_hz']:.4f}", f"{f['frequency_at_max_rpm_hz']:.4f}",
@@ -228,7 +236,8 @@ def test_results_json_numbers_equal_the_summary(cli_run):
         ]
         assert f["points"] == len(b["order"]) == f["stable"] + f["unstable"]
         compared += 1
-    assert compared == 6 + 2 + 7 + 7 + 3 + 1 + 4
+    # Sweep runs and findings, multi-order rows, element rows, HBM rows, linear, Campbell, branches.
+    assert compared == 6 + 2 + 7 + 7 + 7 + 3 + 1 + 4
 
 
 def test_the_python_result_is_the_data_of_results_json(tmp_path):
@@ -259,7 +268,7 @@ def test_a_run_without_out_leaves_nothing_behind():
     before = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("kanedyn-study-")}
     res = kanedyn.Study.from_file(EXAMPLES / "cpva_linear.ron").run()
     after = {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("kanedyn-study-")}
-    assert after <= before and res.status == "complete" and len(res.tables) == 4
+    assert after <= before and res.status == "complete" and len(res.tables) == 5
 
 
 def test_a_failing_analysis_is_reported_and_the_others_kept(tmp_path):
