@@ -5,13 +5,15 @@
 //! maxima, [`HbmSolution::peak_amplitude`]); from a time run, by the study's order tracking over
 //! the last window, with the peak of the oscillating part over that window.
 
-use super::sim;
+use super::sim::{self, ElementColumns};
 use super::spec::TrackingSpec;
+use super::table::{Table, fmt_num};
 use crate::error::Result;
 use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
 use crate::signal::OrderTrace;
 use serde::Serialize;
+use std::fmt::Write as _;
 
 /// The torque an element's spring and damper transmit.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -72,12 +74,6 @@ pub(crate) fn from_hbm(
             })
         })
         .collect()
-}
-
-/// The signals a time run records for the elements: per element its coordinate and its rate.
-pub(crate) struct ElementColumns<'a> {
-    /// Per element: (q, q̇) over the run's recorded samples.
-    pub signals: Vec<(&'a [f64], &'a [f64])>,
 }
 
 /// Per-element results over the last window of `window` samples of a steady run at mean speed
@@ -178,4 +174,60 @@ pub(crate) fn traces(
         });
     }
     Ok(out)
+}
+
+/// A column of one element over the table's rows, from a read-out of one [`ElementResponse`].
+pub(crate) type ElementColumn<'a> = dyn Fn(&dyn Fn(&ElementResponse) -> f64) -> Vec<f64> + 'a;
+
+/// Appends one element's columns to `table`: per multiple `<joint>_<m>x_<unit>`, then
+/// `<joint>_peak_<unit>`, and with `torque` the same for `<joint>_torque_…_Nm` (`_N` for a
+/// slide). `value` reads one number of an [`ElementResponse`] for every row.
+pub(crate) fn push_element_columns(
+    table: &mut Table,
+    joint: &crate::model::joint::Joint,
+    multiples: &[f64],
+    torque: bool,
+    value: &ElementColumn<'_>,
+) {
+    let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
+    let (force, force_unit) = if joint.kind.rotates() { ("Nm", "N·m") } else { ("N", "N") };
+    for (k, m) in multiples.iter().enumerate() {
+        table.push(format!("{name}_{}x_{unit}", fmt_num(*m)), unit, value(&|x| x.amplitude[k]));
+    }
+    table.push(format!("{name}_peak_{unit}"), unit, value(&|x| x.peak));
+    if torque {
+        for (k, m) in multiples.iter().enumerate() {
+            let v = value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k]));
+            table.push(format!("{name}_torque_{}x_{force}", fmt_num(*m)), force_unit, v);
+        }
+        table.push(
+            format!("{name}_torque_peak_{force}"),
+            force_unit,
+            value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)),
+        );
+    }
+}
+
+/// The summary's table of elements in steady states: one row per (speed in rpm, element), with
+/// the amplitudes at `multiples`·n, the peak and the torque; empty when there is no row.
+pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResponse)>, multiples: &[f64]) -> String {
+    let mut body = String::new();
+    for (rpm, e) in rows {
+        let amps: Vec<String> = e.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
+        let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
+            let per: Vec<String> = t.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
+            format!("{}; peak {:.4e}", per.join(", "), t.peak)
+        });
+        let _ =
+            writeln!(body, "| {rpm} | `{}` | {} {} | {:.4e} | {torque} |", e.joint, amps.join(", "), e.unit, e.peak);
+    }
+    if body.is_empty() {
+        return body;
+    }
+    let tags: Vec<String> = multiples.iter().map(|m| format!("{}n", fmt_num(*m))).collect();
+    format!(
+        "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
+         N·m, N for a slide):\n\n| rpm | joint | amplitude | peak | torque |\n|---|---|---|---|---|\n{body}\n",
+        tags.join(", ")
+    )
 }

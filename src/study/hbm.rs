@@ -3,8 +3,8 @@
 //! drawn over the time-domain sweeps.
 
 use super::elements::{ElementResponse, from_hbm};
-use super::json::Table;
 use super::sweep::SweepRun;
+use super::table::Table;
 use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
@@ -296,7 +296,13 @@ pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) 
                     br.elements.iter().map(|pt| pt.get(e).map_or(f64::NAN, f)).collect::<Vec<f64>>()
                 };
                 if let Some(joint) = mech.joints.iter().find(|j| j.name == first.joint) {
-                    super::multi::push_element_columns(&mut table, joint, &spec.multiples, first.torque.is_some(), &el);
+                    super::elements::push_element_columns(
+                        &mut table,
+                        joint,
+                        &spec.multiples,
+                        first.torque.is_some(),
+                        &el,
+                    );
                 }
             }
             table

@@ -26,7 +26,8 @@ use super::hbm::{self, BranchFindings, HbmBranch};
 use super::linear::{self, LinearResult};
 use super::multi::{self, MultiOrderResult, SpeedFindings};
 use super::sweep::{self, SweepFindings, SweepRun};
-use super::{AnalysisSpec, CampbellSpec, Study, StudyReport, StudySpec, write_csv};
+pub use super::table::{Column, Table};
+use super::{AnalysisSpec, CampbellSpec, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use crate::linear::Campbell;
 use serde::Serialize;
@@ -41,56 +42,6 @@ pub const FORMAT: &str = "kanedyn-results";
 /// The document's `format_version`: raised when a field changes meaning or is removed (adding
 /// fields keeps it).
 pub const FORMAT_VERSION: u32 = 1;
-
-/// The content of one CSV file: its columns, in order, with their units.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Table {
-    /// The file name without `.csv`.
-    pub name: String,
-    /// The file name.
-    pub file: String,
-    /// The columns, in the file's order.
-    pub columns: Vec<Column>,
-}
-
-/// One column of a [`Table`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Column {
-    /// The header, as in the CSV file (it carries the unit too, e.g. `amp_1x_rad_s2`).
-    pub name: String,
-    /// SI unit, `"1"` for a dimensionless number.
-    pub unit: &'static str,
-    /// The values; NaN (written as an empty cell, and as `null` in JSON) where none exists.
-    pub values: Vec<f64>,
-}
-
-impl Table {
-    /// An empty table for the file `<name>.csv`.
-    pub fn new(name: impl Into<String>) -> Self {
-        let name = name.into();
-        Self { file: format!("{name}.csv"), name, columns: Vec::new() }
-    }
-
-    /// Appends a column.
-    pub fn push(&mut self, name: impl Into<String>, unit: &'static str, values: Vec<f64>) {
-        self.columns.push(Column { name: name.into(), unit, values });
-    }
-
-    /// The column called `name`.
-    pub fn column(&self, name: &str) -> Option<&Column> {
-        self.columns.iter().find(|c| c.name == name)
-    }
-
-    /// Writes the table as `dir/<file>` (see `study::write_csv`: non-finite values become empty
-    /// cells) and returns the path.
-    pub fn write_csv(&self, dir: &Path) -> Result<PathBuf> {
-        let path = dir.join(&self.file);
-        let header: Vec<&str> = self.columns.iter().map(|c| c.name.as_str()).collect();
-        let columns: Vec<&[f64]> = self.columns.iter().map(|c| c.values.as_slice()).collect();
-        write_csv(&path, &header, &columns)?;
-        Ok(path)
-    }
-}
 
 /// The whole of `results.json`.
 #[derive(Debug, Clone, Serialize)]

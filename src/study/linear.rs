@@ -1,7 +1,7 @@
 //! The linear analyses of a study: the order-domain frequency response normalised by the locked
 //! twin (paper eq. 22, Fig. 2) and the Campbell diagram.
 
-use super::json::Table;
+use super::table::Table;
 use super::{CampbellSpec, LinearResponseSpec, Output, Results, Study};
 use crate::error::{Error, Result};
 use crate::linear::{Campbell, Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};

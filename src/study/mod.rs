@@ -16,6 +16,7 @@ pub mod plan;
 mod sim;
 pub mod spec;
 pub mod sweep;
+mod table;
 pub mod validate;
 
 use crate::error::{Error, Result};

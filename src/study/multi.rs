@@ -2,10 +2,10 @@
 //! speed until the response is steady; the steady amplitude of each tracked order, with the locked
 //! twin for comparison.
 
-use super::elements::{ElementResponse, from_hbm, from_window};
-use super::json::Table;
+use super::elements::{ElementResponse, element_table, from_hbm, from_window, push_element_columns};
 use super::sim::{self, Progress};
 use super::sweep::order_name;
+use super::table::Table;
 use super::{MultiOrderSpec, Output, Results, Study, cell};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
@@ -268,38 +268,6 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
         }
     }
     table
-}
-
-/// A column of one element over the table's rows, from a read-out of one [`ElementResponse`].
-pub(crate) type ElementColumn<'a> = dyn Fn(&dyn Fn(&ElementResponse) -> f64) -> Vec<f64> + 'a;
-
-/// Appends one element's columns to `table`: per multiple `<joint>_<m>x_<unit>`, then
-/// `<joint>_peak_<unit>`, and with `torque` the same for `<joint>_torque_…_Nm` (`_N` for a
-/// slide). `value` reads one number of an [`ElementResponse`] for every row.
-pub(crate) fn push_element_columns(
-    table: &mut Table,
-    joint: &crate::model::joint::Joint,
-    multiples: &[f64],
-    torque: bool,
-    value: &ElementColumn<'_>,
-) {
-    let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
-    let (force, force_unit) = if joint.kind.rotates() { ("Nm", "N·m") } else { ("N", "N") };
-    for (k, m) in multiples.iter().enumerate() {
-        table.push(format!("{name}_{}x_{unit}", fmt_mult(*m)), unit, value(&|x| x.amplitude[k]));
-    }
-    table.push(format!("{name}_peak_{unit}"), unit, value(&|x| x.peak));
-    if torque {
-        for (k, m) in multiples.iter().enumerate() {
-            let v = value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k]));
-            table.push(format!("{name}_torque_{}x_{force}", fmt_mult(*m)), force_unit, v);
-        }
-        table.push(
-            format!("{name}_torque_peak_{force}"),
-            force_unit,
-            value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)),
-        );
-    }
 }
 
 /// What the summary computes per speed beyond the results (also in `results.json`).
@@ -574,35 +542,11 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     }
     md.push('\n');
     // Element by element over the last window: every absorber and spring, not only the largest.
-    let tags: Vec<String> = spec.multiples.iter().map(|m| format!("{}n", fmt_mult(*m))).collect();
-    let mut element_rows = String::new();
-    for s in &r.speeds {
-        for e in s.response.iter().flat_map(|resp| &resp.elements) {
-            let amps: Vec<String> = e.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
-            let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
-                let per: Vec<String> = t.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
-                format!("{}; peak {:.4e}", per.join(", "), t.peak)
-            });
-            let _ = writeln!(
-                element_rows,
-                "| {} | `{}` | {} {} | {:.4e} | {torque} |",
-                s.rpm,
-                e.joint,
-                amps.join(", "),
-                e.unit,
-                e.peak
-            );
-        }
-    }
-    if !element_rows.is_empty() {
-        let _ = writeln!(
-            md,
-            "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
-             N·m, N for a slide):\n",
-            tags.join(", ")
-        );
-        let _ = writeln!(md, "| rpm | joint | amplitude | peak | torque |\n|---|---|---|---|---|\n{element_rows}");
-    }
+    let steady = r
+        .speeds
+        .iter()
+        .flat_map(|s| s.response.iter().flat_map(move |resp| resp.elements.iter().map(move |e| (s.rpm, e))));
+    md += &element_table(steady, &spec.multiples);
     if spec.hbm {
         let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
         let _ = writeln!(

@@ -82,13 +82,19 @@ pub(crate) fn recorder(
     Recorder::new(mech, &probes)
 }
 
+/// The signals a time run records for the elements: per element its coordinate and its rate.
+pub(crate) struct ElementColumns<'a> {
+    /// Per element: (q, q̇) over the run's recorded samples.
+    pub signals: Vec<(&'a [f64], &'a [f64])>,
+}
+
 /// The elements' (q, q̇) columns of a [`recorder`] made for `n_elements` elements.
-pub(crate) fn element_columns(rec: &Recorder, n_elements: usize) -> super::elements::ElementColumns<'_> {
+pub(crate) fn element_columns(rec: &Recorder, n_elements: usize) -> ElementColumns<'_> {
     let base = rec.columns.len() - 2 * n_elements;
     let signals = (0..n_elements)
         .map(|e| (rec.columns[base + 2 * e].as_slice(), rec.columns[base + 2 * e + 1].as_slice()))
         .collect();
-    super::elements::ElementColumns { signals }
+    ElementColumns { signals }
 }
 
 /// The time series of a [`recorder`] made with `time_series` for `n_elements` elements, named for

@@ -2,8 +2,8 @@
 //! down, at each amplitude; order traces of the response by the short-time FFT.
 
 use super::elements::{self, ElementTraces};
-use super::json::Table;
 use super::sim::{self, Progress};
+use super::table::Table;
 use super::{Direction, Output, Results, Study, SweepSpec};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
@@ -61,17 +61,7 @@ fn job_label(analysis: &str, amplitude: f64, direction: Direction, locked: bool)
     format!("{analysis}_{}Nm_{dir}{}", fmt_num(amplitude), if locked { "_locked" } else { "" })
 }
 
-/// A number for a file name or label: whole numbers plainly, tiny or huge ones in exponent form
-/// (`1e-300` would otherwise print 300 digits and make a file name too long).
-pub(crate) fn fmt_num(v: f64) -> String {
-    if v != 0.0 && !(1e-3..1e9).contains(&v.abs()) {
-        format!("{v:e}")
-    } else if v.fract() == 0.0 {
-        format!("{v:.0}")
-    } else {
-        format!("{v}")
-    }
-}
+pub(crate) use super::table::fmt_num;
 
 struct Job {
     amplitude: f64,
