@@ -59,11 +59,13 @@
 //! is the reaction torque); the CPVA's pendulum then vibrates at n_t (eq. 15).
 
 mod campbell;
+mod damping;
 mod modes;
 mod multi_order;
 mod response;
 
 pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell};
+pub use damping::ModalDamping;
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
 pub use response::{Extremes, FrfPoint, OrderResponse, ResponseSpec};

@@ -146,7 +146,13 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     let mut failures = Vec::new();
     for v in variants {
         let m = with_dampers(mech, &v.dampers);
-        let resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
+        let mut resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
+        // Modal damping replaces the dampers of both the mechanism and its locked twin (spin free,
+        // as the response is taken).
+        if let Some(z) = &spec.modal_damping {
+            resp.model = resp.model.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
+            resp.locked = resp.locked.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
+        }
         let pts = resp.sweep(&orders).map_err(lin(&m))?;
         let locked_max = pts.iter().map(|p| p.locked.abs()).fold(0.0, f64::max);
         let ratio: Vec<f64> = pts.iter().map(|p| super::ratio(p.response, p.locked, locked_max)).collect();
@@ -327,6 +333,9 @@ pub(crate) fn render_response(
     }
     for (o, l) in free_orders {
         let _ = writeln!(md, "- free undamped eigen-order {o:.10} (mode `{l}`)");
+    }
+    if let Some(z) = &spec.modal_damping {
+        let _ = writeln!(md, "- modal damping: {} (in place of the mechanism's dampers)", z.describe());
     }
     let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
     if !normalised {

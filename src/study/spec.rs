@@ -251,6 +251,11 @@ pub struct LinearResponseSpec {
     /// Damping variants (default: the mechanism as it is).
     #[serde(default)]
     pub variants: Vec<Variant>,
+    /// Modal damping in place of the mechanism's dampers: `All(ζ)` or `PerMode([ζ1, ζ2, …])`
+    /// (lowest frequency first; modes of the mechanism with the spin free, and of its locked
+    /// twin). Default: the dampers as built. Not together with damper variants.
+    #[serde(default)]
+    pub modal_damping: Option<crate::linear::ModalDamping>,
 }
 
 /// A Campbell diagram: damped natural frequencies over a speed range, modes tracked by shape.

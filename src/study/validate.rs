@@ -235,6 +235,24 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 if l.points < 2 || l.points > MAX_POINTS {
                     return Err(src.error(&at("points"), format!("need 2 to {MAX_POINTS} points")));
                 }
+                if let Some(z) = &l.modal_damping {
+                    let ratios = match z {
+                        crate::linear::ModalDamping::All(v) => std::slice::from_ref(v),
+                        crate::linear::ModalDamping::PerMode(v) => v.as_slice(),
+                    };
+                    if ratios.is_empty() || ratios.len() > MAX_LIST {
+                        return Err(src.error(&at("modal_damping"), format!("give 1 to {MAX_LIST} damping ratios")));
+                    }
+                    if let Some(bad) = ratios.iter().find(|z| !(z.is_finite() && (0.0..=10.0).contains(*z))) {
+                        return Err(src.error(&at("modal_damping"), format!("damping ratio {bad} must lie in 0..=10")));
+                    }
+                    if l.variants.iter().any(|v| !v.dampers.is_empty()) {
+                        return Err(src.error(
+                            &at("modal_damping"),
+                            "modal damping replaces the dampers, so variants that set dampers do not apply",
+                        ));
+                    }
+                }
                 if l.relative && spec.lock.is_empty() {
                     return Err(src.error(
                         &at("relative"),
