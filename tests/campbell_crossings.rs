@@ -58,7 +58,7 @@ fn every_order_line_crossing_is_listed_where_the_closed_form_puts_it() {
     let (rpm_min, rpm_max) = (100.0, 6000.0);
     let rpm: Vec<f64> = (0..60).map(|i| rpm_min + (rpm_max - rpm_min) * i as f64 / 59.0).collect();
     let orders = [1.0, 2.0, 3.0, 6.0, 12.0];
-    let c = campbell(&mech, "spin", &rpm, &orders, Spin::Held, Damping::Undamped, None).unwrap();
+    let c = campbell(&mech, "spin", &rpm, &orders, Spin::Held, Damping::Undamped, None, None).unwrap();
 
     // Modes in frequency order at every speed, each equal to the closed form to 1e-9 (the
     // operating point and the eigen-solver work near rounding here).

@@ -410,7 +410,7 @@ fn campbell_of_cpva_is_straight_order_lines_and_of_shaft_rotor_is_not() {
     let rpm = [200.0, 600.0, 1000.0, 1800.0];
     let mech = p.mechanism(None).unwrap();
     for (spin, order) in [(Spin::Free, k.n_r), (Spin::Held, k.n_t)] {
-        let c = campbell(&mech, "spin", &rpm, &[1.5, 3.0], spin, Damping::Undamped, None).unwrap();
+        let c = campbell(&mech, "spin", &rpm, &[1.5, 3.0], spin, Damping::Undamped, None, None).unwrap();
         assert_eq!(c.tracks.len(), 1);
         for (f, r) in c.tracks[0].frequency_hz.iter().zip(&rpm) {
             assert!(rel(*f, order * r / 60.0) < 1e-9, "{f} Hz at {r} rpm");
@@ -426,7 +426,7 @@ fn campbell_of_cpva_is_straight_order_lines_and_of_shaft_rotor_is_not() {
     let k_shaft = 2.0e5;
     let shaft = shaft_mechanism(k_shaft);
     let rpm = [0.0, 300.0, 1000.0, 3000.0, 6000.0];
-    let c = campbell(&shaft, "spin", &rpm, &[3.0], Spin::Held, Damping::Undamped, None).unwrap();
+    let c = campbell(&shaft, "spin", &rpm, &[3.0], Spin::Held, Damping::Undamped, None, None).unwrap();
     assert_eq!(c.tracks.len(), 2);
     let jl = k.a + k.c + 2.0 * k.b;
     let mut worst: f64 = 0.0;

@@ -5,7 +5,7 @@
 //! `J_a J_c ω⁴ − (J_a k_c + J_c (k_a + k_c)) ω² + k_a k_c = 0`.
 
 use kanedyn::io::{ReadPolicy, Source};
-use kanedyn::linear::{Damping, LinearModel, ModalDamping, Spin};
+use kanedyn::linear::{Damping, LinearModel, ModalDamping, Spin, campbell};
 use kanedyn::model::excitation::rpm_to_rad_s;
 use kanedyn::model::mechanism::Mechanism;
 
@@ -79,6 +79,24 @@ fn every_mode_gets_the_ratio_asked_for() {
     // Too few ratios is an error that says which mode lacks one.
     let e = model.with_modal_damping(Spin::Held, &ModalDamping::PerMode(vec![0.01])).unwrap_err().to_string();
     assert!(e.contains("vibration mode 2"), "{e}");
+}
+
+/// A Campbell diagram with modal damping: at every speed each mode has its ratio and the damped
+/// frequency ω_n √(1 − ζ²) of the closed form.
+#[test]
+fn a_campbell_diagram_takes_modal_damping() {
+    let mech = drivetrain();
+    let w = closed_form_rad_s();
+    let rpm: Vec<f64> = (0..11).map(|i| 500.0 + 300.0 * i as f64).collect();
+    let zeta = ModalDamping::PerMode(vec![0.02, 0.04, 0.06]);
+    let c = campbell(&mech, "spin", &rpm, &[3.0], Spin::Held, Damping::Undamped, Some(&zeta), None).unwrap();
+    for (t, (tr, z)) in c.tracks.iter().zip([0.02, 0.04, 0.06]).enumerate() {
+        for (i, (&f, &d)) in tr.frequency_hz.iter().zip(&tr.damping_ratio).enumerate() {
+            let want = w[t] * (1.0f64 - z * z).sqrt() / (2.0 * std::f64::consts::PI);
+            assert!((d - z).abs() <= 1e-9, "mode {t} at {} rpm: ζ {d}", rpm[i]);
+            assert!((f - want).abs() <= 1e-9 * want, "mode {t} at {} rpm: {f} Hz vs {want}", rpm[i]);
+        }
+    }
 }
 
 /// In a study: the summary states the modal damping, and damper variants beside it, a negative

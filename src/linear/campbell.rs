@@ -7,7 +7,7 @@
 //! on the eigen-order, each probe speed linearised afresh and its mode picked by MAC with the
 //! track's shape at the bracket.
 
-use super::{C64, Damping, LinResult, LinearModel, Spin};
+use super::{C64, Damping, LinResult, LinearModel, ModalDamping, Spin};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
 use std::f64::consts::PI;
@@ -84,6 +84,11 @@ fn mac(a: &[C64], b: &[C64]) -> f64 {
 /// previous shape (greedy, largest MAC first). This follows a mode through a crossing with
 /// another as long as the shapes stay distinct; repeated roots (identical pendulums) have no
 /// unique shapes and are tracked by order only.
+///
+/// With `modal` the mechanism's dampers are replaced by modal damping
+/// ([`LinearModel::with_modal_damping`], modes taken with the same `spin`) at every speed, and the
+/// frequencies are the damped ones whatever `damping` says.
+#[allow(clippy::too_many_arguments)]
 pub fn campbell(
     mech: &Mechanism,
     spin_joint: &str,
@@ -91,8 +96,10 @@ pub fn campbell(
     orders: &[f64],
     spin: Spin,
     damping: Damping,
+    modal: Option<&ModalDamping>,
     guess: Option<&[f64]>,
 ) -> LinResult<Campbell> {
+    let damping = if modal.is_some() { Damping::Damped } else { damping };
     let mut guess: Option<Vec<f64>> = guess.map(<[f64]>::to_vec);
     let mut tracks: Vec<CampbellTrack> = Vec::new();
     let mut last: Vec<Vec<C64>> = Vec::new();
@@ -102,6 +109,10 @@ pub fn campbell(
     for (i, &r) in rpm.iter().enumerate() {
         let model = LinearModel::new(mech, spin_joint, rpm_to_rad_s(r), guess.as_deref())?;
         guess = Some(model.op.q.clone());
+        let model = match modal {
+            Some(z) => model.with_modal_damping(spin, z)?,
+            None => model,
+        };
         equilibria.push(model.op.q.clone());
         let mut modal = model.modes(spin, damping)?;
         if i == 0 {
@@ -159,7 +170,7 @@ pub fn campbell(
         .map(|&n| OrderLine { order: n, frequency_hz: rpm.iter().map(|&r| n * r / 60.0).collect() })
         .collect();
     let mut crossings = Vec::new();
-    let ctx = Bisection { mech, spin_joint, spin, damping };
+    let ctx = Bisection { mech, spin_joint, spin, damping, modal };
     for (t, tr) in tracks.iter().enumerate() {
         // Eigen-order at each grid speed; +∞ at standstill for a mode of non-zero frequency
         // (every order line starts below it there).
@@ -209,6 +220,7 @@ struct Bisection<'a> {
     spin_joint: &'a str,
     spin: Spin,
     damping: Damping,
+    modal: Option<&'a ModalDamping>,
 }
 
 impl Bisection<'_> {
@@ -216,6 +228,10 @@ impl Bisection<'_> {
     /// (damped frequency over speed) and label.
     fn mode_at(&self, r: f64, guess: &[f64], shape: &[C64]) -> LinResult<(f64, String)> {
         let model = LinearModel::new(self.mech, self.spin_joint, rpm_to_rad_s(r), Some(guess))?;
+        let model = match self.modal {
+            Some(z) => model.with_modal_damping(self.spin, z)?,
+            None => model,
+        };
         let modal = model.modes(self.spin, self.damping)?;
         let best = modal
             .modes

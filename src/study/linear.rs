@@ -401,7 +401,9 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
         (0..steps).map(|i| spec.rpm_min + (spec.rpm_max - spec.rpm_min) * i as f64 / (steps - 1) as f64).collect();
     let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
-    let c = campbell(mech, &study.spec.spin_joint, &rpm, &spec.orders, spin, damping, None).map_err(lin(mech))?;
+    let modal = spec.modal_damping.as_ref();
+    let c =
+        campbell(mech, &study.spec.spin_joint, &rpm, &spec.orders, spin, damping, modal, None).map_err(lin(mech))?;
     let mut failures = Vec::new();
     for (k, t) in c.tracks.iter().enumerate() {
         if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {
@@ -464,6 +466,13 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         spec.rpm_max,
         if spec.spin_held { "held" } else { "free" }
     );
+    if let Some(z) = &spec.modal_damping {
+        let _ = writeln!(
+            md,
+            "Modal damping: {} (in place of the mechanism's dampers; damped frequencies).\n",
+            z.describe()
+        );
+    }
     let _ = writeln!(
         md,
         "| mode | label | f at {} rpm (Hz) | f at {} rpm (Hz) | order there | order line? |",

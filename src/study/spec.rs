@@ -281,6 +281,10 @@ pub struct CampbellSpec {
     /// a Campbell diagram shows the undamped ones, whose order lines are exact).
     #[serde(default)]
     pub damped: bool,
+    /// Modal damping in place of the mechanism's dampers (`All(ζ)` or `PerMode([…])`, modes
+    /// taken with the spin as `spin_held` says); the frequencies are then the damped ones.
+    #[serde(default)]
+    pub modal_damping: Option<crate::linear::ModalDamping>,
 }
 
 fn default_points() -> usize {

@@ -236,16 +236,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                     return Err(src.error(&at("points"), format!("need 2 to {MAX_POINTS} points")));
                 }
                 if let Some(z) = &l.modal_damping {
-                    let ratios = match z {
-                        crate::linear::ModalDamping::All(v) => std::slice::from_ref(v),
-                        crate::linear::ModalDamping::PerMode(v) => v.as_slice(),
-                    };
-                    if ratios.is_empty() || ratios.len() > MAX_LIST {
-                        return Err(src.error(&at("modal_damping"), format!("give 1 to {MAX_LIST} damping ratios")));
-                    }
-                    if let Some(bad) = ratios.iter().find(|z| !(z.is_finite() && (0.0..=10.0).contains(*z))) {
-                        return Err(src.error(&at("modal_damping"), format!("damping ratio {bad} must lie in 0..=10")));
-                    }
+                    modal_ratios(src, &at("modal_damping"), z)?;
                     if l.variants.iter().any(|v| !v.dampers.is_empty()) {
                         return Err(src.error(
                             &at("modal_damping"),
@@ -302,6 +293,9 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 }
                 if c.orders.len() > 64 {
                     return Err(src.error(&at("orders"), "at most 64 order lines"));
+                }
+                if let Some(z) = &c.modal_damping {
+                    modal_ratios(src, &at("modal_damping"), z)?;
                 }
                 for (j, &n) in c.orders.iter().enumerate() {
                     order(src, &format!("analyses[{k}].orders[{j}]"), n)?;
@@ -374,6 +368,21 @@ fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::HbmSpec) -> Re
         if !earlier {
             return Err(src.error(&at("overlay"), format!("no OrderSweep named `{o}` before this analysis")));
         }
+    }
+    Ok(())
+}
+
+/// Modal damping ratios: 1 to `MAX_LIST` of them, each finite in 0..=10.
+fn modal_ratios(src: &Source, path: &str, z: &crate::linear::ModalDamping) -> Result<()> {
+    let ratios = match z {
+        crate::linear::ModalDamping::All(v) => std::slice::from_ref(v),
+        crate::linear::ModalDamping::PerMode(v) => v.as_slice(),
+    };
+    if ratios.is_empty() || ratios.len() > MAX_LIST {
+        return Err(src.error(path, format!("give 1 to {MAX_LIST} damping ratios")));
+    }
+    if let Some(bad) = ratios.iter().find(|z| !(z.is_finite() && (0.0..=10.0).contains(*z))) {
+        return Err(src.error(path, format!("damping ratio {bad} must lie in 0..=10")));
     }
     Ok(())
 }
