@@ -240,8 +240,8 @@ fn concurrent_runs_into_one_folder_never_mix() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
-    let first = ["first.svg", "first_as_built.csv", "results.json", "summary.md"];
-    let second = ["results.json", "second.csv", "second.svg", "second_crossings.csv", "summary.md"];
+    let first = ["first.svg", "first_as_built.csv", "report.html", "results.json", "summary.md"];
+    let second = ["report.html", "results.json", "second.csv", "second.svg", "second_crossings.csv", "summary.md"];
     assert!(files == first || files == second, "mixed folder: {files:?}");
     // No half-written folder is left posing as a result.
     let hidden: Vec<_> = std::fs::read_dir(&out)

@@ -13,6 +13,7 @@ mod linear;
 mod multi;
 mod output;
 pub mod plan;
+mod report_html;
 mod sim;
 pub mod spec;
 pub mod sweep;
@@ -352,6 +353,8 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     write_file(&path, &md)?;
     report.files.push(path);
     report.files.push(json::write(study, &report, &dir)?);
+    let page = report_html::write(&dir, &study.spec.name, &md, &report.failures, &report.files)?;
+    report.files.push(page);
     report.summary = md;
     let final_dir = out.finish()?;
     for f in &mut report.files {
