@@ -1,58 +1,24 @@
 //! The resonance table of a Campbell diagram: every crossing of an order line with a mode,
 //! located by bisection on the eigen-orders. Reference: a branched drivetrain of coaxial discs on
 //! torsion shafts with the spin held, whose natural frequencies do not depend on speed and follow
-//! in closed form (below), so order n crosses mode i at exactly `rpm = 60 f_i / n`.
+//! in closed form (tests/support/branched.rs), so order n crosses mode i at exactly
+//! `rpm = 60 f_i / n`.
 
-use kanedyn::io::{ReadPolicy, Source};
+#[path = "support/branched.rs"]
+mod branched;
+
+use branched::{J_B, J_C, K_A, K_B, K_C, closed_form_rad_s, drivetrain};
 use kanedyn::linear::{Damping, Spin, campbell};
-use kanedyn::model::mechanism::Mechanism;
 use std::f64::consts::PI;
 
-// Inertias (kg·m²) and shaft stiffnesses (N·m/rad).
-const J_A: f64 = 0.8;
-const J_B: f64 = 0.3;
-const J_C: f64 = 0.5;
-const K_A: f64 = 4.0e4;
-const K_B: f64 = 2.5e4;
-const K_C: f64 = 1.5e4;
-
-/// A hub spun by the engine, with two branches: shaft a to disc a and on to disc c by shaft c
-/// (a chain), and shaft b to disc b. Every centre of mass on the axis, so no centrifugal effect.
-fn drivetrain() -> Mechanism {
-    let text = format!(
-        r#"Mechanism(
-    name: "branched",
-    speeds: JointRates,
-    bodies: [
-        Body(name: "hub", mass: 20.0, inertia: 1.2),
-        Body(name: "disc_a", mass: 10.0, inertia: {J_A}),
-        Body(name: "disc_b", mass: 5.0, inertia: {J_B}),
-        Body(name: "disc_c", mass: 8.0, inertia: {J_C}),
-    ],
-    joints: [
-        Joint(name: "spin", parent: "ground", child: "hub"),
-        Joint(name: "shaft_a", parent: "hub", child: "disc_a", spring: (stiffness: {K_A}, free_angle: 0.0)),
-        Joint(name: "shaft_b", parent: "hub", child: "disc_b", spring: (stiffness: {K_B}, free_angle: 0.0)),
-        Joint(name: "shaft_c", parent: "disc_a", child: "disc_c", spring: (stiffness: {K_C}, free_angle: 0.0)),
-    ],
-)"#
-    );
-    Mechanism::from_source(&Source::from_text("branched.ron", &text), &ReadPolicy::unrestricted()).unwrap()
-}
-
-/// Natural frequencies with the hub held, Hz, ascending: branch b alone, `ω² = k_b/J_b`; the
-/// chain a–c, `J_a J_c ω⁴ − (J_a k_c + J_c (k_a + k_c)) ω² + k_a k_c = 0`.
+/// Natural frequencies with the hub held, Hz, ascending ([`closed_form_rad_s`]).
 fn closed_form_hz() -> Vec<f64> {
-    let (a, b, c) = (J_A * J_C, -(J_A * K_C + J_C * (K_A + K_C)), K_A * K_C);
-    let disc = (b * b - 4.0 * a * c).sqrt();
-    let mut w2 = [K_B / J_B, (-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)];
-    w2.sort_by(f64::total_cmp);
-    w2.iter().map(|w| w.sqrt() / (2.0 * PI)).collect()
+    closed_form_rad_s().iter().map(|w| w / (2.0 * PI)).collect()
 }
 
 #[test]
 fn every_order_line_crossing_is_listed_where_the_closed_form_puts_it() {
-    let mech = drivetrain();
+    let mech = drivetrain("JointRates", false);
     let f = closed_form_hz();
     println!("closed-form frequencies {f:?} Hz");
     let (rpm_min, rpm_max) = (100.0, 6000.0);

@@ -4,51 +4,16 @@
 //! in closed form: branch b alone, `ω² = k_b/J_b`; the chain a–c,
 //! `J_a J_c ω⁴ − (J_a k_c + J_c (k_a + k_c)) ω² + k_a k_c = 0`.
 
-use kanedyn::io::{ReadPolicy, Source};
+#[path = "support/branched.rs"]
+mod branched;
+
+use branched::{closed_form_rad_s, drivetrain};
 use kanedyn::linear::{Damping, LinearModel, ModalDamping, Spin, campbell};
 use kanedyn::model::excitation::rpm_to_rad_s;
-use kanedyn::model::mechanism::Mechanism;
-
-const J_A: f64 = 0.8;
-const J_B: f64 = 0.3;
-const J_C: f64 = 0.5;
-const K_A: f64 = 4.0e4;
-const K_B: f64 = 2.5e4;
-const K_C: f64 = 1.5e4;
-
-fn drivetrain() -> Mechanism {
-    let text = format!(
-        r#"Mechanism(
-    name: "branched",
-    speeds: AbsoluteAngularVelocities,
-    bodies: [
-        Body(name: "hub", mass: 20.0, inertia: 1.2),
-        Body(name: "disc_a", mass: 10.0, inertia: {J_A}),
-        Body(name: "disc_b", mass: 5.0, inertia: {J_B}),
-        Body(name: "disc_c", mass: 8.0, inertia: {J_C}),
-    ],
-    joints: [
-        Joint(name: "spin", parent: "ground", child: "hub"),
-        Joint(name: "shaft_a", parent: "hub", child: "disc_a", spring: (stiffness: {K_A}, free_angle: 0.0), damper: 3.0),
-        Joint(name: "shaft_b", parent: "hub", child: "disc_b", spring: (stiffness: {K_B}, free_angle: 0.0)),
-        Joint(name: "shaft_c", parent: "disc_a", child: "disc_c", spring: (stiffness: {K_C}, free_angle: 0.0), damper: 1.0),
-    ],
-)"#
-    );
-    Mechanism::from_source(&Source::from_text("branched.ron", &text), &ReadPolicy::unrestricted()).unwrap()
-}
-
-fn closed_form_rad_s() -> Vec<f64> {
-    let (a, b, c) = (J_A * J_C, -(J_A * K_C + J_C * (K_A + K_C)), K_A * K_C);
-    let disc = (b * b - 4.0 * a * c).sqrt();
-    let mut w2 = [K_B / J_B, (-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)];
-    w2.sort_by(f64::total_cmp);
-    w2.iter().map(|w| w.sqrt()).collect()
-}
 
 #[test]
 fn every_mode_gets_the_ratio_asked_for() {
-    let mech = drivetrain();
+    let mech = drivetrain("AbsoluteAngularVelocities", true);
     let model = LinearModel::new(&mech, "spin", rpm_to_rad_s(1500.0), None).unwrap();
     let w = closed_form_rad_s();
     for zeta in [ModalDamping::PerMode(vec![0.01, 0.03, 0.05]), ModalDamping::All(0.02)] {
@@ -85,7 +50,7 @@ fn every_mode_gets_the_ratio_asked_for() {
 /// frequency ω_n √(1 − ζ²) of the closed form.
 #[test]
 fn a_campbell_diagram_takes_modal_damping() {
-    let mech = drivetrain();
+    let mech = drivetrain("AbsoluteAngularVelocities", true);
     let w = closed_form_rad_s();
     let rpm: Vec<f64> = (0..11).map(|i| 500.0 + 300.0 * i as f64).collect();
     let zeta = ModalDamping::PerMode(vec![0.02, 0.04, 0.06]);

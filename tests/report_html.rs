@@ -2,22 +2,16 @@
 //! figure inline, links to the data files, failures first. Checked on the page's text against
 //! what the run wrote; that a browser renders it is left to a headless-browser check.
 
-use kanedyn::study::{RunOptions, Study, run};
-use std::path::{Path, PathBuf};
+#[path = "support/examples.rs"]
+mod examples;
 
-fn copy_examples(dir: &Path) {
-    for sub in ["bodies", "joints"] {
-        std::fs::create_dir_all(dir.join(sub)).unwrap();
-        for e in std::fs::read_dir(Path::new("examples").join(sub)).unwrap().flatten() {
-            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
-        }
-    }
-    std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
-}
+use examples::copy_cpva;
+use kanedyn::study::{RunOptions, Study, run};
+use std::path::PathBuf;
 
 fn run_study(tag: &str, analyses: &str) -> (kanedyn::study::StudyReport, String, PathBuf) {
     let dir = std::env::temp_dir().join(format!("kanedyn_report_{tag}_{}", std::process::id()));
-    copy_examples(&dir);
+    copy_cpva(&dir);
     let file = dir.join("s.ron");
     std::fs::write(
         &file,

@@ -2,6 +2,10 @@
 //! equal to the CSV files cell by cell (an empty cell is `null`), every CSV file in it, and its
 //! statuses consistent with the failures; a study with a failing analysis keeps the others.
 
+#[path = "support/examples.rs"]
+mod examples;
+
+use examples::copy_cpva;
 use kanedyn::study::{RunOptions, Study, run};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -133,13 +137,7 @@ fn every_example_study_writes_strict_results_json_equal_to_its_csvs() {
 #[test]
 fn a_failing_analysis_is_reported_and_the_others_kept() {
     let dir = out_dir("iso_src");
-    for sub in ["bodies", "joints"] {
-        std::fs::create_dir_all(dir.join(sub)).unwrap();
-        for e in std::fs::read_dir(Path::new("examples").join(sub)).unwrap().flatten() {
-            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
-        }
-    }
-    std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
+    copy_cpva(&dir);
     let file = dir.join("iso.ron");
     std::fs::write(
         &file,

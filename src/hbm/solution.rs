@@ -152,12 +152,23 @@ impl HbmSolution {
     /// amplitude at the order `multiple·n` (0 when that order is not a harmonic of ω₀) and the
     /// true peak of its oscillating part over a period, N·m (N for a slide).
     pub fn element_torque(&self, j: usize, k: f64, c: f64, multiple: f64) -> (f64, f64) {
+        let (amps, peak) = self.element_torques(j, k, c, &[multiple]);
+        (amps[0], peak)
+    }
+
+    /// [`HbmSolution::element_torque`] at several orders `multiples·n` from one series: the
+    /// amplitude at each, and the peak once.
+    pub fn element_torques(&self, j: usize, k: f64, c: f64, multiples: &[f64]) -> (Vec<f64>, f64) {
         let series = self.element_torque_series(j, k, c);
-        let amp = self.harmonic_of(multiple).filter(|&h| h <= self.harmonics).map_or(0.0, |h| {
-            let (a, b) = (series[2 * h - 1], series[2 * h]);
-            a.hypot(b)
-        });
-        (amp, self.series_peak(&series))
+        let amps = multiples
+            .iter()
+            .map(|&m| {
+                self.harmonic_of(m)
+                    .filter(|&h| h <= self.harmonics)
+                    .map_or(0.0, |h| series[2 * h - 1].hypot(series[2 * h]))
+            })
+            .collect();
+        (amps, self.series_peak(&series))
     }
 
     /// `max_τ |Σ_{h≥1} c_{2h−1} cos hτ + c_{2h} sin hτ|` of a series laid out like one

@@ -62,8 +62,8 @@ pub(crate) fn from_hbm(
                 .map(|&m| sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| sol.amplitude(k, h)))
                 .collect();
             let torque = (stiff != 0.0 || damp != 0.0).then(|| {
-                let per: Vec<(f64, f64)> = multiples.iter().map(|&m| sol.element_torque(k, stiff, damp, m)).collect();
-                ElementTorque { amplitude: per.iter().map(|p| p.0).collect(), peak: per.first().map_or(0.0, |p| p.1) }
+                let (amplitude, peak) = sol.element_torques(k, stiff, damp, multiples);
+                ElementTorque { amplitude, peak }
             });
             Some(ElementResponse {
                 joint: mech.joints[j].name.clone(),
