@@ -27,6 +27,7 @@ use super::linear::{self, LinearResult};
 use super::multi::{self, MultiOrderResult, SpeedFindings};
 use super::sweep::{self, SweepFindings, SweepRun};
 pub use super::table::{Column, Table};
+use super::transient::{self, TransientResult};
 use super::{AnalysisSpec, CampbellSpec, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use crate::linear::Campbell;
@@ -128,6 +129,8 @@ pub enum AnalysisResult<'a> {
         /// The branches, two per amplitude (from each end of the range) unless one failed.
         branches: Vec<&'a HbmBranch>,
     },
+    /// A transient or run-up.
+    Transient(&'a TransientResult),
 }
 
 /// What the summary reads off one analysis's results, by kind.
@@ -156,6 +159,24 @@ pub enum AnalysisFindings {
         /// See [`BranchFindings`].
         branches: Vec<BranchFindings>,
     },
+    /// The peaks of the order cuts and the elements' largest excursions (as in the result).
+    Transient {
+        /// Per cut: signal, order, peak and its speed.
+        cuts: Vec<CutFindings>,
+    },
+}
+
+/// The summary's reading of one order cut of a transient.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CutFindings {
+    /// The signal cut.
+    pub signal: String,
+    /// The order, cycles/rev.
+    pub order: f64,
+    /// The largest amplitude along the cut, in the signal's unit.
+    pub peak: f64,
+    /// The speed of that block, rpm.
+    pub peak_rpm: f64,
 }
 
 /// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
@@ -300,6 +321,15 @@ fn parts<'a>(
                 AnalysisFindings::HarmonicBalance { branches: findings },
                 tables,
             )
+        }
+        AnalysisSpec::Transient(t) => {
+            let r = report.transient.iter().find(|r| r.name == t.name)?;
+            let cuts = r
+                .cuts
+                .iter()
+                .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
+                .collect();
+            (AnalysisResult::Transient(r), AnalysisFindings::Transient { cuts }, transient::tables(study, t, r))
         }
     })
 }

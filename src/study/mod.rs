@@ -18,6 +18,7 @@ mod sim;
 pub mod spec;
 pub mod sweep;
 mod table;
+pub mod transient;
 pub mod validate;
 
 use crate::error::{Error, Result};
@@ -115,6 +116,8 @@ pub struct StudyReport {
     pub hbm: Vec<hbm::HbmBranch>,
     /// Campbell diagrams.
     pub campbell: Vec<crate::linear::Campbell>,
+    /// Transients and run-ups.
+    pub transient: Vec<transient::TransientResult>,
     /// Per analysis of the study file, in its order: whether it ran to the end (its results are
     /// in the fields above; single runs of it may still have failed) rather than failing whole.
     pub completed: Vec<bool>,
@@ -381,6 +384,7 @@ pub(crate) enum Results {
     Linear(linear::LinearResult),
     Campbell(crate::linear::Campbell),
     Hbm(Vec<hbm::HbmBranch>),
+    Transient(Box<transient::TransientResult>),
 }
 
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
@@ -398,6 +402,7 @@ fn run_analysis(
         AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
         AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
+        AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
     };
     report.files.extend(out.files);
     report.failures.extend(out.failures);
@@ -407,6 +412,7 @@ fn run_analysis(
         Results::Linear(l) => report.linear.push(l),
         Results::Campbell(c) => report.campbell.push(c),
         Results::Hbm(b) => report.hbm.extend(b),
+        Results::Transient(t) => report.transient.push(*t),
     }
     Ok(out.markdown)
 }
