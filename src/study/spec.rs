@@ -175,6 +175,10 @@ pub struct HbmSpec {
     /// lower it to resolve short unstable stretches (see `ContinuationOptions::ds_max`).
     #[serde(default)]
     pub max_step: Option<f64>,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
@@ -261,6 +265,10 @@ pub struct LinearResponseSpec {
     /// twin). Default: the dampers as built. Not together with damper variants.
     #[serde(default)]
     pub modal_damping: Option<crate::linear::ModalDamping>,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// A Campbell diagram: damped natural frequencies over a speed range, modes tracked by shape.
@@ -336,6 +344,10 @@ pub struct SweepSpec {
     /// Write the sampled time series (time, rotor angle, rate, acceleration, joint angles) as CSV.
     #[serde(default)]
     pub write_time_series: bool,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// One operating speed of a multi-order load case.
@@ -392,6 +404,10 @@ pub struct MultiOrderSpec {
     /// operating order, so coexisting branches all appear) with their stability (default false).
     #[serde(default)]
     pub hbm: bool,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 fn both_directions() -> Vec<Direction> {
@@ -551,4 +567,24 @@ impl Default for OrderMapSpec {
     fn default() -> Self {
         Self { samples_per_rev: 64, revs_per_block: 32, hop_revs: 4.0, max_order: 12.0, cuts: Vec::new() }
     }
+}
+
+/// A joint an analysis's oscillating torque acts at: it carries `scale·T_k sin(m_k·n·Ω·t + α_k +
+/// phase)` for every harmonic T_k of the analysis (child against parent), e.g. a propeller's or a
+/// gearbox's share of the excitation next to the engine's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExciteAt {
+    /// The joint.
+    pub joint: String,
+    /// Its share of the torque (default 1).
+    #[serde(default = "default_scale")]
+    pub scale: f64,
+    /// Its phase lead, rad (default 0).
+    #[serde(default)]
+    pub phase: f64,
+}
+
+fn default_scale() -> f64 {
+    1.0
 }

@@ -154,6 +154,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
         }
         match a {
             AnalysisSpec::OrderSweep(s) => {
+                check_excite(src, spec, mech, &at("excite"), &s.excite)?;
                 rpm(src, &at("rpm"), s.rpm)?;
                 order_range(src, &at("order_min"), s.order_min, s.order_max)?;
                 if !pos(s.duration_s) {
@@ -187,6 +188,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 tracking(src, &at("multiples"), spec, o.window_s, o.half_width_bins, omega, s.order_max, &s.multiples)?;
             }
             AnalysisSpec::MultiOrder(m) => {
+                check_excite(src, spec, mech, &at("excite"), &m.excite)?;
                 order(src, &at("order"), m.order)?;
                 if m.speeds.is_empty() || m.speeds.len() > MAX_LIST {
                     return Err(src.error(&at("speeds"), format!("give 1 to {MAX_LIST} operating speeds")));
@@ -228,6 +230,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 }
             }
             AnalysisSpec::LinearResponse(l) => {
+                check_excite(src, spec, mech, &at("excite"), &l.excite)?;
                 rpm(src, &at("rpm"), l.rpm)?;
                 if !(pos(l.from) && l.to.is_finite() && l.from < l.to && l.to <= MAX_ORDER) {
                     return Err(src.error(&at("from"), format!("need 0 < from < to ≤ {MAX_ORDER}")));
@@ -282,7 +285,10 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                     }
                 }
             }
-            AnalysisSpec::HarmonicBalance(h) => check_hbm(src, spec, k, h)?,
+            AnalysisSpec::HarmonicBalance(h) => {
+                check_excite(src, spec, mech, &at("excite"), &h.excite)?;
+                check_hbm(src, spec, k, h)?
+            }
             AnalysisSpec::Transient(t) => check_transient(src, spec, mech, spin, k, t)?,
             AnalysisSpec::Campbell(c) => {
                 if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
@@ -461,6 +467,51 @@ fn check_transient(
         order(src, &p, c)?;
         if c > m.max_order {
             return Err(src.error(&p, format!("order {} lies above map.max_order = {}", g(c), g(m.max_order))));
+        }
+    }
+    Ok(())
+}
+
+/// An analysis's `excite` list: known joints with a coordinate, none locked in the twin (its
+/// torque would act inside a merged body there), each once, finite shares and phases.
+fn check_excite(src: &Source, spec: &StudySpec, mech: &Mechanism, path: &str, list: &[super::ExciteAt]) -> Result<()> {
+    if list.len() > MAX_LIST {
+        return Err(src.error(path, format!("at most {MAX_LIST} excited joints")));
+    }
+    for (i, e) in list.iter().enumerate() {
+        let p = format!("{path}[{i}]");
+        let Some(j) = mech.joint_index(&e.joint) else {
+            let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
+            return Err(
+                src.error(&format!("{p}.joint"), format!("unknown joint `{}` (joints: {})", e.joint, names.join(", ")))
+            );
+        };
+        if mech.coordinate(j).is_none() {
+            return Err(src
+                .error(&format!("{p}.joint"), format!("joint `{}` is Fixed: a torque there drives nothing", e.joint)));
+        }
+        if spec.lock.contains(&e.joint) {
+            return Err(src.error(
+                &format!("{p}.joint"),
+                format!(
+                    "joint `{}` is locked in the reference twin, where its torque would act inside one body",
+                    e.joint
+                ),
+            ));
+        }
+        if list[..i].iter().any(|o| o.joint == e.joint) {
+            return Err(src.error(&format!("{p}.joint"), format!("joint `{}` is listed twice", e.joint)));
+        }
+        if !(e.scale.is_finite() && e.scale.abs() <= 1e6) {
+            return Err(
+                src.error(&format!("{p}.scale"), format!("share must be finite, |scale| ≤ 1e6, got {}", g(e.scale)))
+            );
+        }
+        if !(e.phase.is_finite() && e.phase.abs() <= 1e3) {
+            return Err(src.error(
+                &format!("{p}.phase"),
+                format!("phase must be finite, |phase| ≤ 1000 rad, got {}", g(e.phase)),
+            ));
         }
     }
     Ok(())
