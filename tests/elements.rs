@@ -88,9 +88,12 @@ fn every_element_is_reported_and_both_routes_agree() {
             );
             assert!(e <= 1e-4, "{} order {}: {e:e}", t.joint, k + 1);
         }
-        // The time-domain peak is a sample maximum over 2000 samples per 2 s; the series' is
-        // exact: they agree to the sampling (½(2π·150 Hz/2 kHz)² ≈ 3 % of the top order's share).
-        assert!((t.peak - h.peak).abs() <= 0.03 * h.peak && t.peak <= h.peak * (1.0 + 1e-4));
+        // The time-domain peak is refined between the samples (Hermite with q̇, error
+        // ~(ωh)⁴/400 = 1e-4 of the 150 Hz share at 2 kHz); the series' is exact. Measured ≤ 1.2e-4
+        // (a sample maximum was off by up to 3 %); bound 1e-3.
+        let e = (t.peak - h.peak).abs() / h.peak;
+        println!("{} peak: time {:.6e} vs HBM {:.6e} ({e:.1e})", t.joint, t.peak, h.peak);
+        assert!(e <= 1e-3, "{} peak {e:e}", t.joint);
     }
 
     // The spring's torque is (k + i hω c) times its twist at each order, to rounding.

@@ -166,3 +166,85 @@ mod tests {
         assert_eq!(jump_order(&trace(&[1.0, 1.5, 2.0, 2.5]), 1, 0.0), None);
     }
 }
+
+/// The largest `|y(t) − mean|` of a sampled signal between its samples, not only at them: the
+/// largest sample, refined on the two intervals beside it by a cubic through the samples, Hermite
+/// with the given slopes `dy` (signal units per s, e.g. q̇ next to q: error O(h⁴)) or Catmull–Rom
+/// from the neighbours without them (O(h³)). `dt` is the sample step, s. A sample maximum alone
+/// misses a line at ω by up to `1 − cos(ωh/2)`: 2.7 % for 150 Hz at 2 kHz; the refined one by
+/// ~(ωh)⁴/400.
+pub fn refined_peak(y: &[f64], dy: Option<&[f64]>, dt: f64, mean: f64) -> f64 {
+    let Some((k, mut best)) =
+        y.iter().map(|v| (v - mean).abs()).enumerate().fold(None, |b: Option<(usize, f64)>, (i, v)| match b {
+            Some((_, m)) if m >= v => b,
+            _ => Some((i, v)),
+        })
+    else {
+        return f64::NAN;
+    };
+    let n = y.len();
+    // Slopes in sample-index units at i.
+    let slope = |i: usize| match dy {
+        Some(d) => d[i] * dt,
+        None if i == 0 => y[1.min(n - 1)] - y[0],
+        None if i + 1 == n => y[i] - y[i - 1],
+        None => 0.5 * (y[i + 1] - y[i - 1]),
+    };
+    for i in [k.wrapping_sub(1), k] {
+        if i >= n.saturating_sub(1) {
+            continue;
+        }
+        let (y0, y1, m0, m1) = (y[i], y[i + 1], slope(i), slope(i + 1));
+        // p'(u) = a u² + b u + c of the Hermite cubic on [0, 1].
+        let (a, b, c) = (6.0 * (y0 - y1) + 3.0 * (m0 + m1), -6.0 * (y0 - y1) - 4.0 * m0 - 2.0 * m1, m0);
+        let roots: Vec<f64> = if a.abs() < 1e-300 {
+            if b != 0.0 { vec![-c / b] } else { Vec::new() }
+        } else {
+            let disc = b * b - 4.0 * a * c;
+            if disc < 0.0 {
+                Vec::new()
+            } else {
+                let s = disc.sqrt();
+                vec![(-b + s) / (2.0 * a), (-b - s) / (2.0 * a)]
+            }
+        };
+        for u in roots.into_iter().filter(|u| (0.0..=1.0).contains(u)) {
+            let (u2, u3) = (u * u, u * u * u);
+            let p = (2.0 * u3 - 3.0 * u2 + 1.0) * y0
+                + (u3 - 2.0 * u2 + u) * m0
+                + (3.0 * u2 - 2.0 * u3) * y1
+                + (u3 - u2) * m1;
+            best = best.max((p - mean).abs());
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod peak_tests {
+    use super::refined_peak;
+
+    /// A 150 Hz sine sampled at 2 kHz with its crest between samples: the sample maximum misses
+    /// it by up to 1 − cos(ωh/2) (2.7 %); the Hermite refinement with the exact slopes is within
+    /// (ωh)⁴/384 ≈ 1.3e-4, Catmull–Rom within a few 1e-3.
+    #[test]
+    fn the_crest_between_samples_is_found() {
+        let (w, dt) = (2.0 * std::f64::consts::PI * 150.0, 5e-4);
+        let phase = 0.5 * w * dt + 1.3; // a crest halfway between two samples
+        let t: Vec<f64> = (0..200).map(|i| i as f64 * dt).collect();
+        let y: Vec<f64> = t.iter().map(|&t| 0.7 + 2.0 * (w * t + phase).sin()).collect();
+        let dy: Vec<f64> = t.iter().map(|&t| 2.0 * w * (w * t + phase).cos()).collect();
+        let sampled = y.iter().map(|v| (v - 0.7).abs()).fold(0.0, f64::max);
+        let hermite = refined_peak(&y, Some(&dy), dt, 0.7);
+        let catmull = refined_peak(&y, None, dt, 0.7);
+        println!(
+            "sampled {:.2e}, Hermite {:.2e}, Catmull–Rom {:.2e}",
+            1.0 - sampled / 2.0,
+            (hermite - 2.0).abs() / 2.0,
+            (catmull - 2.0).abs() / 2.0
+        );
+        assert!((hermite - 2.0).abs() <= 2e-4 * 2.0);
+        assert!((catmull - 2.0).abs() <= 1e-2 * 2.0);
+        assert!(hermite > sampled && catmull > sampled);
+    }
+}

@@ -3,7 +3,8 @@
 //! transmit, `T = k (q − q_free) + c q̇` (N·m; N for a slide), per order and at its peak. From a
 //! harmonic-balance solution they are read off the Fourier series (peaks are the series' true
 //! maxima, [`HbmSolution::peak_amplitude`]); from a time run, by the study's order tracking over
-//! the last window, with the peak of the oscillating part over that window.
+//! the last window, with the peak of the oscillating part over that window, refined between the
+//! samples ([`crate::signal::findings::refined_peak`]).
 
 use super::sim::{self, ElementColumns};
 use super::spec::TrackingSpec;
@@ -12,6 +13,7 @@ use crate::error::Result;
 use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
 use crate::signal::OrderTrace;
+use crate::signal::findings::refined_peak;
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -101,14 +103,17 @@ pub(crate) fn from_window(
             let traces = sim::track(&mech.name, signal, fs, omega, &move |_| order, multiples, tracking)?;
             Ok(traces.iter().map(|t| *t.amplitude.last().unwrap_or(&f64::NAN)).collect())
         };
-        let peak = |signal: &[f64]| {
-            let last = &signal[signal.len().saturating_sub(window)..];
+        // The peak of the oscillating part over the last window, between the samples too
+        // (`refined_peak`: Hermite with q̇ for the coordinate, Catmull–Rom for the torque).
+        let peak = |signal: &[f64], slope: Option<&[f64]>| {
+            let from = signal.len().saturating_sub(window);
+            let last = &signal[from..];
             let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
-            last.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max)
+            refined_peak(last, slope.map(|d| &d[from..]), 1.0 / fs, mean)
         };
         let torque = if stiff != 0.0 || damp != 0.0 {
             let t: Vec<f64> = q2.iter().zip(qd2).map(|(q, qd)| stiff * q + damp * qd).collect();
-            Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t) })
+            Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t, None) })
         } else {
             None
         };
@@ -116,7 +121,7 @@ pub(crate) fn from_window(
             joint: mech.joints[j].name.clone(),
             unit: mech.joints[j].kind.coordinate_unit(),
             amplitude: amplitudes(q2)?,
-            peak: peak(q2),
+            peak: peak(q2, Some(qd2)),
             torque,
         });
     }
@@ -157,10 +162,14 @@ pub(crate) fn traces(
     let mut out = Vec::with_capacity(elements.len());
     for (&j, &(q, qd)) in elements.iter().zip(&cols.signals) {
         let (stiff, damp) = stiffness_damping(mech, j);
-        let peak = |v: &[f64]| v.iter().skip(skip).map(|x| x.abs()).fold(0.0, f64::max);
+        // The largest |value| after the ramp-in, between the samples too (see `refined_peak`).
+        let peak = |v: &[f64], slope: Option<&[f64]>| {
+            let from = skip.min(v.len());
+            refined_peak(&v[from..], slope.map(|d| &d[from..]), 1.0 / fs, 0.0)
+        };
         let (torque, torque_peak) = if stiff != 0.0 || damp != 0.0 {
             let t: Vec<f64> = q.iter().zip(qd).map(|(q, qd)| stiff * q + damp * qd).collect();
-            (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t))
+            (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t, None))
         } else {
             (None, 0.0)
         };
@@ -168,7 +177,7 @@ pub(crate) fn traces(
             joint: mech.joints[j].name.clone(),
             unit: mech.joints[j].kind.coordinate_unit(),
             traces: sim::track(&mech.name, q, fs, omega, order_at, multiples, tracking)?,
-            peak: peak(q),
+            peak: peak(q, Some(qd)),
             torque,
             torque_peak,
         });

@@ -426,6 +426,46 @@ pub(crate) fn render(
     let svg = dir.join(format!("{}.svg", spec.name));
     crate::plot::write_svg(&svg, &panels, 640, 460)?;
     files.push(svg);
+    // The elements along each branch: their main-order amplitude (first reported multiple),
+    // one panel per amplitude, the branch from each end solid and dashed.
+    if branches.iter().any(|b| b.elements.iter().any(|p| !p.is_empty())) {
+        let panels: Vec<Panel> = cases(spec)
+            .into_iter()
+            .map(|amp| {
+                let mut series = Vec::new();
+                for (b, br) in branches.iter().filter(|b| same(b.amplitude, amp)).enumerate() {
+                    let names: Vec<&str> =
+                        br.elements.first().map(|p| p.iter().map(|e| e.joint.as_str()).collect()).unwrap_or_default();
+                    for (e, name) in names.iter().enumerate() {
+                        let y = br
+                            .elements
+                            .iter()
+                            .map(|p| p.get(e).and_then(|el| el.amplitude.first().copied()).unwrap_or(f64::NAN))
+                            .collect();
+                        series.push(Series {
+                            label: if b == 0 { (*name).to_string() } else { String::new() },
+                            x: br.parameter.clone(),
+                            y,
+                            color: e,
+                            style: if b == 0 { LineStyle::Solid } else { LineStyle::Dashed },
+                        });
+                    }
+                }
+                Panel {
+                    title: format!("Elements at the {}, T_n = {amp} N·m", super::sweep::order_name(spec.multiples[0])),
+                    x_label: ax.label.into(),
+                    y_label: "amplitude, rad (m for slides)".into(),
+                    log_y: true,
+                    x_range: Some(ax.range),
+                    series,
+                    ..Panel::default()
+                }
+            })
+            .collect();
+        let svg = dir.join(format!("{}_elements.svg", spec.name));
+        crate::plot::write_svg(&svg, &panels, 640, 460)?;
+        files.push(svg);
+    }
 
     let mut md = String::new();
     let head = match spec.parameter {

@@ -370,8 +370,34 @@ pub(crate) fn render_response(
         series,
         ..Panel::default()
     };
+    let mut panels = vec![panel];
+    // The elements' amplitudes per N·m: one curve per element and variant.
+    let element_series: Vec<Series> = results
+        .iter()
+        .enumerate()
+        .flat_map(|(v, r)| {
+            r.elements.iter().enumerate().map(move |(e, el)| Series {
+                label: if results.len() > 1 { format!("{} ({})", el.joint, r.label) } else { el.joint.clone() },
+                x: r.orders.iter().map(|n| n / scale).collect(),
+                y: el.amplitude.clone(),
+                color: e,
+                style: [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][v % 3],
+            })
+        })
+        .collect();
+    if !element_series.is_empty() {
+        panels.push(Panel {
+            title: format!("Elements per N·m, {} rpm", spec.rpm),
+            x_label: x_label.into(),
+            y_label: "amplitude per torque, rad per N·m (m per N·m for slides)".into(),
+            log_y: true,
+            x_range: Some((spec.from, spec.to)),
+            series: element_series,
+            ..Panel::default()
+        });
+    }
     let svg = dir.join(format!("{}.svg", spec.name));
-    crate::plot::write_svg(&svg, &[panel], 760, 500)?;
+    crate::plot::write_svg(&svg, &panels, 640, 480)?;
     files.push(svg);
 
     let mut md = String::new();

@@ -345,8 +345,48 @@ pub(crate) fn render(
         series,
         ..Panel::default()
     };
+    let mut panels = vec![panel];
+    // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
+    // from the first harmonic-balance state where there are none.
+    let names: Vec<String> = result
+        .speeds
+        .iter()
+        .find_map(|s| s.response.as_ref().map(|r| &r.elements).or_else(|| s.hbm.first().map(|h| &h.elements)))
+        .map(|els| els.iter().map(|e| e.joint.clone()).collect())
+        .unwrap_or_default();
+    let mut element_series = Vec::new();
+    for (e, name) in names.iter().enumerate() {
+        for (k, m) in spec.multiples.iter().enumerate() {
+            let y = result
+                .speeds
+                .iter()
+                .map(|s| {
+                    let els = s.response.as_ref().map(|r| &r.elements).or_else(|| s.hbm.first().map(|h| &h.elements));
+                    els.and_then(|els| els.get(e)).and_then(|el| el.amplitude.get(k).copied()).unwrap_or(f64::NAN)
+                })
+                .collect();
+            let style = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][k % 3];
+            element_series.push(Series {
+                label: format!("{name} {}", order_name(*m)),
+                x: rpm.clone(),
+                y,
+                color: e,
+                style,
+            });
+        }
+    }
+    if !element_series.is_empty() {
+        panels.push(Panel {
+            title: format!("Elements, n = {}", spec.order),
+            x_label: "mean speed, rpm".into(),
+            y_label: "amplitude, rad (m for slides)".into(),
+            log_y: true,
+            series: element_series,
+            ..Panel::default()
+        });
+    }
     let svg = dir.join(format!("{}.svg", spec.name));
-    crate::plot::write_svg(&svg, &[panel], 720, 480)?;
+    crate::plot::write_svg(&svg, &panels, 640, 480)?;
 
     Ok((summary(spec, result), vec![csv, svg]))
 }

@@ -222,6 +222,45 @@ pub(crate) fn render(study: &Study, spec: &SweepSpec, runs: &[SweepRun], dir: &P
     let svg = dir.join(format!("{}.svg", spec.name));
     crate::plot::write_svg(&svg, &panels, 640, 440)?;
     files.push(svg);
+    // The elements' main-order traces, one panel per amplitude, up solid and down dashed.
+    if runs.iter().any(|r| !r.elements.is_empty()) {
+        let panels: Vec<Panel> = spec
+            .amplitudes
+            .iter()
+            .map(|&amp| {
+                let mut series = Vec::new();
+                for r in runs.iter().filter(|r| r.amplitude == amp && !r.locked) {
+                    let (style, what) = match r.direction {
+                        Direction::Up => (LineStyle::Solid, "up"),
+                        Direction::Down => (LineStyle::Dashed, "down"),
+                    };
+                    for (e, el) in r.elements.iter().enumerate() {
+                        if let Some(t) = el.traces.first() {
+                            series.push(Series {
+                                label: format!("{} {what}", el.joint),
+                                x: t.order.clone(),
+                                y: t.amplitude.clone(),
+                                color: e,
+                                style,
+                            });
+                        }
+                    }
+                }
+                Panel {
+                    title: format!("Elements, {}, T_n = {} N·m", order_name(spec.multiples[0]), fmt_num(amp)),
+                    x_label: "excitation order n".into(),
+                    y_label: "amplitude, rad (m for slides)".into(),
+                    log_y: true,
+                    x_range: Some((spec.order_min, spec.order_max)),
+                    series,
+                    ..Panel::default()
+                }
+            })
+            .collect();
+        let svg = dir.join(format!("{}_elements.svg", spec.name));
+        crate::plot::write_svg(&svg, &panels, 640, 440)?;
+        files.push(svg);
+    }
 
     Ok((summary(spec, runs), files))
 }

@@ -287,12 +287,14 @@ pub(crate) fn compute(
         .elements
         .iter()
         .zip(&element_series)
-        .map(|(&j, (q, _))| {
-            let (k, peak) = q
+        .map(|(&j, (q, qd))| {
+            let (k, _) = q
                 .iter()
                 .enumerate()
                 .map(|(k, v)| (k, v.abs()))
                 .fold((0, f64::NAN), |a, b| if b.1 > a.1 || a.1.is_nan() { b } else { a });
+            // Between the samples too (Hermite with q̇).
+            let peak = crate::signal::findings::refined_peak(q, Some(qd), 1.0 / fs, 0.0);
             ElementPeak {
                 joint: mech.joints[j].name.clone(),
                 unit: mech.joints[j].kind.coordinate_unit(),
