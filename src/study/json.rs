@@ -128,6 +128,8 @@ pub enum AnalysisResult<'a> {
         /// The branches, two per amplitude (from each end of the range) unless one failed.
         branches: Vec<&'a HbmBranch>,
     },
+    /// A design study's case table: columns, and per case its values, results, status and error.
+    DesignStudy(&'a super::design::DesignResult),
 }
 
 /// What the summary reads off one analysis's results, by kind.
@@ -156,6 +158,8 @@ pub enum AnalysisFindings {
         /// See [`BranchFindings`].
         branches: Vec<BranchFindings>,
     },
+    /// See [`super::design::DesignFindings`].
+    DesignStudy(super::design::DesignFindings),
 }
 
 /// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
@@ -300,6 +304,10 @@ fn parts<'a>(
                 AnalysisFindings::HarmonicBalance { branches: findings },
                 tables,
             )
+        }
+        AnalysisSpec::DesignStudy(d) => {
+            let r = report.designs.iter().find(|r| r.name == d.name)?;
+            (AnalysisResult::DesignStudy(r), AnalysisFindings::DesignStudy(super::design::findings(r)), vec![r.table()])
         }
     })
 }

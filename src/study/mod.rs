@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+pub mod design;
 mod elements;
 pub mod hbm;
 pub mod json;
@@ -115,6 +116,8 @@ pub struct StudyReport {
     pub hbm: Vec<hbm::HbmBranch>,
     /// Campbell diagrams.
     pub campbell: Vec<crate::linear::Campbell>,
+    /// Design studies' case tables.
+    pub designs: Vec<design::DesignResult>,
     /// Per analysis of the study file, in its order: whether it ran to the end (its results are
     /// in the fields above; single runs of it may still have failed) rather than failing whole.
     pub completed: Vec<bool>,
@@ -381,6 +384,7 @@ pub(crate) enum Results {
     Linear(linear::LinearResult),
     Campbell(crate::linear::Campbell),
     Hbm(Vec<hbm::HbmBranch>),
+    Design(design::DesignResult),
 }
 
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
@@ -398,6 +402,7 @@ fn run_analysis(
         AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
         AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
+        AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
     };
     report.files.extend(out.files);
     report.failures.extend(out.failures);
@@ -407,6 +412,7 @@ fn run_analysis(
         Results::Linear(l) => report.linear.push(l),
         Results::Campbell(c) => report.campbell.push(c),
         Results::Hbm(b) => report.hbm.extend(b),
+        Results::Design(d) => report.designs.push(d),
     }
     Ok(out.markdown)
 }

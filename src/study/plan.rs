@@ -288,6 +288,7 @@ impl Study {
                             ..base
                         }
                     }
+                    AnalysisSpec::DesignStudy(d) => super::design::plan(self, d, base),
                 }
             })
             .map(|p| AnalysisPlan { output_bytes: p.output_bytes * (1.0 + JSON_PER_CSV_BYTE), ..p })

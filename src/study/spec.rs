@@ -105,6 +105,9 @@ pub enum AnalysisSpec {
     /// Periodic steady states by harmonic balance, continued in the excitation order, with
     /// stability: the branches behind the sweeps' jumps.
     HarmonicBalance(HbmSpec),
+    /// One analysis run over many cases of varied mechanism and excitation parameters (a grid, a
+    /// Latin hypercube or Monte Carlo), collected in one table (see [`super::design`]).
+    DesignStudy(super::design::DesignSpec),
 }
 
 impl AnalysisSpec {
@@ -116,6 +119,7 @@ impl AnalysisSpec {
             AnalysisSpec::LinearResponse(l) => &l.name,
             AnalysisSpec::Campbell(c) => &c.name,
             AnalysisSpec::HarmonicBalance(h) => &h.name,
+            AnalysisSpec::DesignStudy(d) => &d.name,
         }
     }
 
@@ -127,6 +131,7 @@ impl AnalysisSpec {
             AnalysisSpec::LinearResponse(_) => "LinearResponse",
             AnalysisSpec::Campbell(_) => "Campbell",
             AnalysisSpec::HarmonicBalance(_) => "HarmonicBalance",
+            AnalysisSpec::DesignStudy(_) => "DesignStudy",
         }
     }
 }

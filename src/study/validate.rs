@@ -283,6 +283,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 }
             }
             AnalysisSpec::HarmonicBalance(h) => check_hbm(src, spec, k, h)?,
+            AnalysisSpec::DesignStudy(d) => super::design::check(src, spec, mech, spin, k, d)?,
             AnalysisSpec::Campbell(c) => {
                 if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
                     return Err(src.error(&at("rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
