@@ -14,8 +14,9 @@ amplitude T_n: N × N cases (default 32 × 32 = 1024 ≥ 1000).
   started beforehand (its start-up is reported apart), study scattered, chunks of cases per task.
 
 Runs alternate local, dask, local, dask, … R times; throughput is cases per second of wall time,
-the ratio dask / local from the medians (target of issue 16: ≥ 0.8). Both tables are checked equal
-bit for bit.
+the ratio dask / local from the medians and from the best runs (target of issue 16: ≥ 0.8; on a
+machine shared with other work the best runs are the least disturbed). Both tables are checked
+equal bit for bit.
 """
 
 import argparse
@@ -52,7 +53,7 @@ def study_text(n: int) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--cases-per-side", type=int, default=32)
     args = ap.parse_args()
     from distributed import Client, LocalCluster
@@ -91,7 +92,10 @@ def main() -> None:
     print("| --- | --- | --- | --- |")
     print(f"| local rayon | {', '.join(f'{s:.2f}' for s in local_s)} | {lm:.2f} | {n / lm:.1f} |")
     print(f"| Dask 2 workers | {', '.join(f'{s:.2f}' for s in dask_s)} | {dm:.2f} | {n / dm:.1f} |")
-    print(f"throughput ratio dask / local: {lm / dm:.3f}; tables equal bit for bit: {same}")
+    lb, db = min(local_s), min(dask_s)
+    print(f"throughput ratio dask / local: {lm / dm:.3f} (medians), {lb / db:.3f} (best runs)")
+    print(f"with the cluster's start-up added to the dask median: {lm / (dm + startup):.3f}")
+    print(f"tables equal bit for bit: {same}")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ bit.
 
 A case is a pure function of the study and its index (``Study.run_cases``), so where it runs does
 not change its numbers. The study travels to the workers pickled (its text, file name and load
-options; ``Study.__reduce__``) and each worker reads the mechanism again from the file system:
+options; ``Study.__reduce__``) with each task, and each worker reads the mechanism again from the file system:
 on a cluster past one machine, the study's folder must be at the same path on every worker (a
 shared file system), and ``kanedyn`` installed there.
 
@@ -30,7 +30,13 @@ from ._kanedyn import Study
 __all__ = ["run", "table"]
 
 
-def _run_chunk(study: Study, name: str, indices: List[int]) -> List[Dict[str, Any]]:
+def _run_chunk(state: tuple, name: str, indices: List[int]) -> List[Dict[str, Any]]:
+    """Runs cases on a worker. The study is rebuilt here from its state for every task (about a
+    millisecond; never cached, so a mechanism file edited between runs is read afresh), and a
+    study that cannot be loaded on this worker fails the task with kanedyn's own message."""
+    from ._pickle import restore_study
+
+    study = restore_study(*state)
     # One worker thread per chunk: rayon would only compete with the other workers for cores.
     return study.run_cases(name, indices, parallel=False)
 
@@ -126,13 +132,16 @@ def run(
         own_client = True
     try:
         workers = max(1, len(client.scheduler_info().get("workers", {})))
-        remote = client.scatter(study, broadcast=True)
+        # The study goes with each task as its state (a few kB of text, parsed on the worker):
+        # a worker that cannot load it fails those tasks with kanedyn's message, which is
+        # reported row by row below instead of failing the whole run.
+        state = study.__reduce__()[1]
         tasks = []
         for name, n in counts.items():
             size = chunk_size or max(1, math.ceil(n / (8 * workers)))
             for start in range(0, n, size):
                 chunk = list(range(start, min(n, start + size)))
-                future = client.submit(_run_chunk, remote, name, chunk, pure=False)
+                future = client.submit(_run_chunk, state, name, chunk, pure=False)
                 tasks.append((name, chunk, future))
         futures = [f for _, _, f in tasks]
         if progress and futures:

@@ -167,3 +167,32 @@ def test_bad_design_input_is_a_located_input_error():
     line = bad.splitlines()[err.line - 1]
     assert line[err.column - 1 :].startswith('JointDamping("pivt")')
     assert "unknown joint `pivt` (joints: spin, pivot)" in str(err)
+
+
+def test_a_chunk_lost_on_the_workers_is_reported_row_by_row(tmp_path, client):
+    """Workers rebuild the study from its text and read the mechanism from the file system; with
+    the mechanism file gone, every task fails there, and each case becomes a failed row naming
+    the reason (nothing raised, the table complete)."""
+    from kanedyn import dask as kdask
+
+    (tmp_path / "rotor.ron").write_text(
+        'Mechanism(name: "rotor", speeds: AbsoluteAngularVelocities, bodies: ['
+        'Body(name: "rotor", mass: 110.0, inertia: 3.4435), '
+        'Body(name: "pendulum", mass: 6.0, com: (0.0152, 0.0), inertia: 2.16e-4)], joints: ['
+        'Joint(name: "spin", parent: "ground", child: "rotor", at: (0.0, 0.0)), '
+        'Joint(name: "pivot", parent: "rotor", child: "pendulum", at: (0.17, 0.0), damper: 5e-4)], '
+        'loads: [GroundDamper(body: "rotor", c: 5e-3)])'
+    )
+    (tmp_path / "s.ron").write_text(
+        STUDY.replace('"cpva.ron"', '"rotor.ron"').replace(", ".join(repr(t) for t in TORQUES), "10.0, 20.0, 30.0")
+    )
+    study = kanedyn.Study.from_file(tmp_path / "s.ron")
+    local = study.run_cases("torques")
+    assert [r["status"] for r in local] == ["ok"] * 3
+    (tmp_path / "rotor.ron").unlink()
+    t = kdask.run(study, client, progress=False, chunk_size=2)["torques"]
+    assert list(t["status"]) == ["failed"] * 3
+    assert np.array_equal(t["T_n_Nm"], [10.0, 20.0, 30.0])
+    assert np.isnan(t["peak_accel_1x_rad_s2"]).all()
+    assert "the Dask task for cases 0..1 failed" in t["error"][0] and "InputError" in t["error"][0] and "cannot read" in t["error"][0]
+    assert "the Dask task for cases 2..2 failed" in t["error"][2]
