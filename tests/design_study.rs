@@ -318,3 +318,83 @@ fn the_example_design_study_runs_complete() {
     assert_eq!(report.designs[0].cases.len(), 15);
     assert_eq!(report.designs[1].cases.len(), 24);
 }
+
+/// A mechanism like `examples/cpva.ron` with its numbers written in (no catalog parts): the
+/// pendulum's mass, inertia and centre-of-mass radius, the pivot's radius, spring and damper.
+fn cpva_text(m: f64, i_b: f64, l: f64, r: f64, k: f64, c: f64) -> String {
+    format!(
+        r#"Mechanism(
+    name: "cpva",
+    speeds: AbsoluteAngularVelocities,
+    bodies: [
+        Body(name: "rotor", mass: 110.0, com: (0.0, 0.0), inertia: 3.443504355127701),
+        Body(name: "pendulum", mass: {m:?}, com: ({l:?}, 0.0), inertia: {i_b:?}),
+    ],
+    joints: [
+        Joint(name: "spin", parent: "ground", child: "rotor", at: (0.0, 0.0)),
+        Joint(name: "pivot", parent: "rotor", child: "pendulum", at: ({r:?}, 0.0), damper: {c:?},
+              spring: (stiffness: {k:?}, free_angle: 0.0)),
+    ],
+    loads: [GroundDamper(body: "rotor", c: 5e-3)],
+)
+"#
+    )
+}
+
+#[test]
+fn every_quantity_substitutes_as_if_written_in_the_files() {
+    // One case of every quantity against the same harmonic balance of a study whose files hold
+    // these numbers: the substitution is checked by the loader's independent route.
+    let dir = out_dir("substitution");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (m, i_b, l, r, k, c, rpm, t_n) = (5.0, 2.0e-4, 0.016, 0.18, 0.5, 1e-3, 1200.0, 30.0);
+    let base = cpva_text(6.0, 2.16e-4, 0.0152093650768, 0.17, 0.0, 5e-4);
+    std::fs::write(dir.join("base.ron"), base).unwrap();
+    std::fs::write(dir.join("written.ron"), cpva_text(m, i_b, l, r, k, c)).unwrap();
+    let hbm = |rpm: f64, t: f64| {
+        format!(r#"HarmonicBalance(name: "h", rpm: {rpm:?}, order_min: 2.8, order_max: 3.5, amplitudes: [{t:?}])"#)
+    };
+    let design = format!(
+        r#"Study(name: "sub", mechanism: "base.ron", lock: ["pivot"], analyses: [DesignStudy(name: "d", parameters: [
+            (name: "m", quantity: BodyMass("pendulum"), values: [{m:?}]),
+            (name: "i", quantity: BodyInertia("pendulum"), values: [{i_b:?}]),
+            (name: "l", quantity: BodyComRadius("pendulum"), values: [{l:?}]),
+            (name: "r", quantity: JointRadius("pivot"), values: [{r:?}]),
+            (name: "k", quantity: JointStiffness("pivot"), values: [{k:?}]),
+            (name: "c", quantity: JointDamping("pivot"), values: [{c:?}]),
+            (name: "rpm", quantity: Rpm, values: [{rpm:?}]),
+            (name: "t", quantity: TorqueAmplitude, values: [{t_n:?}]),
+        ], analysis: {})])"#,
+        hbm(1000.0, 40.0)
+    );
+    let plain =
+        format!(r#"Study(name: "plain", mechanism: "written.ron", lock: ["pivot"], analyses: [{}])"#, hbm(rpm, t_n));
+    std::fs::write(dir.join("design.ron"), design).unwrap();
+    std::fs::write(dir.join("plain.ron"), plain).unwrap();
+    let opts = RunOptions { out: Some(dir.join("out")), progress: false };
+    let d = run(&Study::from_file(&dir.join("design.ron")).unwrap(), &opts).unwrap();
+    let p = run(&Study::from_file(&dir.join("plain.ron")).unwrap(), &opts).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(d.failures.is_empty() && p.failures.is_empty(), "{:?} {:?}", d.failures, p.failures);
+    let row = &d.designs[0].cases[0];
+    let cols = &d.designs[0].results;
+    let get = |name: &str| row.results[cols.iter().position(|c| c.name == name).unwrap()];
+    let max =
+        |f: &dyn Fn(&kanedyn::study::hbm::HbmBranch) -> Vec<f64>| p.hbm.iter().flat_map(f).fold(f64::NAN, f64::max);
+    // The substituted centre of mass and joint point are L·(l/L) and R·(r/R): a rounding or two
+    // away from the written l and r, so the branches agree to ~1e-13, not bit for bit; 1e-9 relative.
+    let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-9 * b.abs(), "{what}: {a} vs {b}");
+    close(get("peak_accel_1x_rad_s2"), max(&|b| b.accel[0].clone()), "main order");
+    close(get("peak_accel_2x_rad_s2"), max(&|b| b.accel[1].clone()), "second order");
+    close(get("max_relative_angle_rad"), max(&|b| b.relative_angle.clone()), "relative angle");
+    close(
+        get("pivot_torque_peak_Nm"),
+        max(&|b| b.elements.iter().filter_map(|e| e[0].torque.as_ref().map(|t| t.peak)).collect()),
+        "pivot torque",
+    );
+    let mut folds: Vec<f64> = p.hbm.iter().flat_map(|b| b.folds.clone()).collect();
+    folds.sort_by(f64::total_cmp);
+    folds.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * a.abs());
+    assert_eq!(get("folds"), folds.len() as f64);
+    assert_eq!(get("points"), p.hbm.iter().map(|b| b.order.len()).sum::<usize>() as f64);
+}
