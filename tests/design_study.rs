@@ -398,3 +398,32 @@ fn every_quantity_substitutes_as_if_written_in_the_files() {
     assert_eq!(get("folds"), folds.len() as f64);
     assert_eq!(get("points"), p.hbm.iter().map(|b| b.order.len()).sum::<usize>() as f64);
 }
+
+#[test]
+fn order_and_speed_substitute_into_a_torque_continuation_bit_for_bit() {
+    // The analysis's own numbers are assigned, not computed: the case equals the same analysis
+    // written with them, bit for bit.
+    let torque = |order: f64, rpm: f64| {
+        format!(
+            r#"HarmonicBalance(name: "h", rpm: {rpm:?}, parameter: Torque(order: {order:?}, min: 1.0, max: 120.0))"#
+        )
+    };
+    let varied = load(&study_text(&format!(
+        r#"        DesignStudy(name: "d", parameters: [
+            (name: "n", quantity: Order, values: [3.05, 3.2]),
+            (name: "rpm", quantity: Rpm, values: [900.0]),
+        ], analysis: {}),"#,
+        torque(3.0, 1000.0)
+    )))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let rows = design::run_cases(&varied, design(&varied), None, true, &|| {}).unwrap();
+    for (row, order) in rows.iter().zip([3.05, 3.2]) {
+        assert_eq!(row.status, CaseStatus::Ok, "{}", row.error);
+        let plain = load(&study_text(&format!("        {},", torque(order, 900.0)))).unwrap();
+        let out = out_dir(&format!("torque_{order}"));
+        let p = run(&plain, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+        std::fs::remove_dir_all(&out).ok();
+        let peak = p.hbm.iter().flat_map(|b| b.accel[0].iter().copied()).fold(f64::NAN, f64::max);
+        assert_eq!(row.results[0].to_bits(), peak.to_bits(), "order {order}");
+    }
+}
