@@ -41,7 +41,7 @@ pub struct Mechanism {
 
 /// Where a mechanism came from: enough to load it again (`Mechanism.from_str`).
 struct Origin {
-    /// The file name (for `from_str`, the name given).
+    /// The file name (for `from_str`, the name given), made absolute when it was loaded.
     name: String,
     /// The file's text.
     text: String,
@@ -96,6 +96,12 @@ impl PolicyArgs {
         };
         policy.with_max_file_bytes(self.max_file_kb.saturating_mul(1024)).with_max_bodies(self.max_bodies)
     }
+}
+
+/// `file` as an absolute path (the working folder joined to a relative one, nothing resolved on
+/// disk), as text: pickles name their files so, for processes with another working folder.
+pub(crate) fn absolute(file: &Path) -> String {
+    std::path::absolute(file).unwrap_or_else(|_| file.to_path_buf()).display().to_string()
 }
 
 /// The folder of `file`, empty (the current folder) for a bare name: where its parts are looked up.
@@ -201,7 +207,7 @@ impl Mechanism {
 impl Origin {
     fn new(src: &Source, args: PolicyArgs) -> Self {
         Self {
-            name: src.file.display().to_string(),
+            name: absolute(&src.file),
             text: src.text.clone(),
             allow_read: args.allow_read.unwrap_or_default(),
             allow_any_path: args.allow_any_path,
@@ -634,7 +640,8 @@ impl Mechanism {
         })
     }
 
-    /// Pickling: the mechanism's text, its file name and the read options; unpickling parses the
+    /// Pickling: the mechanism's text, its file name (made absolute when it was loaded, so that
+    /// parts resolve alike from another working folder) and the read options; unpickling parses the
     /// text again (`Mechanism.from_str`), so the copy equals the original bit for bit; catalog
     /// parts are read again relative to the file name (a worker elsewhere needs them at the same
     /// path). A study's mechanism (`Study.mechanism`) pickles with its study instead.
@@ -647,8 +654,9 @@ impl Mechanism {
         };
         let restore = py.import("kanedyn._pickle")?.getattr("restore_mechanism")?;
         let allow_read: Vec<String> = o.allow_read.iter().map(|p| p.display().to_string()).collect();
-        let args = (o.text.as_str(), o.name.as_str(), allow_read, o.allow_any_path, o.max_file_kb, o.max_bodies)
-            .into_pyobject(py)?;
+        let args =
+            (o.text.as_str(), absolute(Path::new(&o.name)), allow_read, o.allow_any_path, o.max_file_kb, o.max_bodies)
+                .into_pyobject(py)?;
         Ok((restore, args))
     }
 

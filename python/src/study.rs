@@ -39,6 +39,9 @@ pub struct Study {
 /// The keyword arguments of `from_file`/`from_str`, as given.
 #[derive(Clone)]
 struct PickleOptions {
+    /// The study file's name made absolute when it was loaded (a worker with another working
+    /// folder then resolves the mechanism the same way).
+    file: String,
     allow_read: Vec<PathBuf>,
     allow_any_path: bool,
     max_file_kb: u64,
@@ -128,6 +131,7 @@ impl Study {
     ) -> PyResult<Self> {
         guard(|| {
             let options = PickleOptions {
+                file: crate::mechanism::absolute(&path),
                 allow_read: allow_read.unwrap_or_default(),
                 allow_any_path,
                 max_file_kb,
@@ -181,6 +185,7 @@ impl Study {
     ) -> PyResult<Self> {
         guard(|| {
             let options = PickleOptions {
+                file: crate::mechanism::absolute(std::path::Path::new(name)),
                 allow_read: allow_read.unwrap_or_default(),
                 allow_any_path,
                 max_file_kb,
@@ -195,7 +200,9 @@ impl Study {
         })
     }
 
-    /// Pickling: the study's text, its file name and the load options; unpickling parses the
+    /// Pickling: the study's text, its file name (made absolute when it was loaded, so that a
+    /// worker with another working folder resolves the mechanism the same way) and the load
+    /// options; unpickling parses the
     /// text again (``Study.from_str``) and reads the mechanism from the file system relative to
     /// that name, so a worker on another machine needs the mechanism file at the same path (a
     /// shared file system).
@@ -205,7 +212,7 @@ impl Study {
         let allow_read: Vec<String> = o.allow_read.iter().map(|p| p.display().to_string()).collect();
         let args = (
             self.study.source.text.as_str(),
-            self.study.file.display().to_string(),
+            o.file.as_str(),
             allow_read,
             o.allow_any_path,
             o.max_file_kb,

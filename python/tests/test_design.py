@@ -4,6 +4,7 @@ reported and the other 49 kept, cases run by index, pickling, and located errors
 
 import csv
 import math
+import os
 import pickle
 
 import numpy as np
@@ -139,7 +140,7 @@ def test_the_default_local_cluster_runs_the_example(tmp_path):
         kdask.run(kanedyn.Study.from_file(EXAMPLES / "cpva_linear.ron"), progress=False)
 
 
-def test_mechanisms_and_studies_pickle(study):
+def test_mechanisms_and_studies_pickle(study, monkeypatch, tmp_path):
     for m in [
         kanedyn.Mechanism.from_file(EXAMPLES / "cpva.ron"),
         kanedyn.Mechanism.from_str((EXAMPLES / "cpva4.ron").read_text(), str(EXAMPLES / "cpva4.ron")),
@@ -154,6 +155,11 @@ def test_mechanisms_and_studies_pickle(study):
         pickle.dumps(study.mechanism)
     copy = pickle.loads(pickle.dumps(study))
     assert (copy.name, copy.file, copy.analyses) == (study.name, study.file, study.analyses)
+    # A relative file name is pickled absolute: another working folder finds the same files.
+    relative = kanedyn.Mechanism.from_file(os.path.relpath(EXAMPLES / "cpva.ron"))
+    monkeypatch.chdir(tmp_path)
+    moved = pickle.loads(pickle.dumps(relative))
+    assert os.path.normpath(moved.file) == str(EXAMPLES / "cpva.ron") and moved.check()["bodies"] == relative.check()["bodies"]
     a, b = study.run_cases("torques", [3]), copy.run_cases("torques", [3])
     assert bits(a[0]["results"]).tolist() == bits(b[0]["results"]).tolist()
 
