@@ -224,6 +224,9 @@ fn a_failed_case_is_reported_and_the_others_keep_their_results() {
     let lines: Vec<&str> = csv.lines().collect();
     assert!(lines[0].ends_with(",status,error") && lines[0].starts_with("case,m_p_kg,I_B_kg_m2,T_n_Nm,"));
     assert_eq!(lines.iter().filter(|l| l.contains(",failed,")).count(), 4);
+    // The figure: the failed cases' NaN results are left out, the others drawn.
+    let svg = std::fs::read_to_string(out.join("design_test").join("forced.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("Design study `forced`: 8 cases"));
     std::fs::remove_dir_all(&out).ok();
 
     // One case by index, alone and sequentially, equals its row of the parallel run bit for bit.

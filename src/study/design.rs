@@ -993,9 +993,81 @@ pub(crate) fn run(study: &Study, spec: &DesignSpec, dir: &Path, progress: &super
             spec.name
         ));
     }
-    let files = vec![write_csv(&r, dir)?];
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &[figure(spec, &r)], 760, 500)?;
+    let files = vec![write_csv(&r, dir)?, svg];
     let markdown = summary(study, spec, &r);
     Ok(Output { markdown, files, failures, results: Results::Design(r) })
+}
+
+/// Which group of the figure a case falls in.
+type Grouping = Box<dyn Fn(&CaseRow) -> usize>;
+
+/// Most groups of cases drawn apart in the figure (the palette's size).
+const GROUPS: usize = 8;
+
+/// The figure: the first result (a harmonic balance's peak main-order acceleration, on a log
+/// axis; a linear response's n_t) against the first parameter, one colour per value of the second
+/// parameter (a grid's values when there are at most eight, else eight equal bins of its range).
+/// A grid of at most two parameters is drawn as lines through the first parameter's values;
+/// anything else as points, which a line would join in no meaningful order.
+fn figure(spec: &DesignSpec, r: &DesignResult) -> crate::plot::Panel {
+    use crate::plot::{LineStyle, Panel, Series};
+    let x_col = &r.parameters[0];
+    let y_col = r.results.first().map_or(("", "1"), |c| (c.name.as_str(), c.unit));
+    let second = r.parameters.get(1).map(|c| c.name.clone());
+    let mut distinct: Vec<f64> = r.cases.iter().filter_map(|c| c.values.get(1).copied()).collect();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    let lines = spec.sampling == Sampling::Grid && r.parameters.len() <= 2 && distinct.len() <= GROUPS;
+    // Each case's group and the groups' labels.
+    let (group, labels): (Grouping, Vec<String>) = match &second {
+        None => (Box::new(|_| 0), vec![String::new()]),
+        Some(name) if distinct.len() <= GROUPS => {
+            let labels = distinct.iter().map(|v| format!("{name} = {v}")).collect();
+            let d = distinct.clone();
+            (Box::new(move |c: &CaseRow| d.iter().position(|v| *v == c.values[1]).unwrap_or(0)), labels)
+        }
+        Some(name) => {
+            let (lo, hi) = (distinct[0], distinct[distinct.len() - 1]);
+            let log = spec.parameters[1].log && lo > 0.0;
+            let t = move |v: f64| if log { (v / lo).ln() / (hi / lo).ln() } else { (v - lo) / (hi - lo) };
+            let edge = move |k: usize| {
+                let f = k as f64 / GROUPS as f64;
+                if log { lo * (hi / lo).powf(f) } else { lo + (hi - lo) * f }
+            };
+            let labels = (0..GROUPS).map(|k| format!("{name} {:.3e} to {:.3e}", edge(k), edge(k + 1))).collect();
+            (Box::new(move |c: &CaseRow| ((t(c.values[1]) * GROUPS as f64) as usize).min(GROUPS - 1)), labels)
+        }
+    };
+    let series = labels
+        .iter()
+        .enumerate()
+        .map(|(k, label)| {
+            let mut pts: Vec<(f64, f64)> = r
+                .cases
+                .iter()
+                .filter(|c| group(c) == k)
+                .map(|c| (c.values[0], c.results.first().copied().unwrap_or(f64::NAN)))
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            Series {
+                label: label.clone(),
+                x: pts.iter().map(|p| p.0).collect(),
+                y: pts.iter().map(|p| p.1).collect(),
+                color: k,
+                style: if lines { LineStyle::Solid } else { LineStyle::Points },
+            }
+        })
+        .collect();
+    Panel {
+        title: format!("Design study `{}`: {} cases", spec.name, r.cases.len()),
+        x_label: format!("{} ({})", x_col.name, x_col.unit),
+        y_label: format!("{} ({})", y_col.0, y_col.1),
+        log_y: matches!(spec.analysis.as_ref(), AnalysisSpec::HarmonicBalance(_)),
+        series,
+        ..Panel::default()
+    }
 }
 
 /// `name = value, …` of a case.
