@@ -74,3 +74,50 @@ fn every_order_line_crossing_is_listed_where_the_closed_form_puts_it() {
     }
     assert!(c.crossings.windows(2).all(|w| w[0].rpm <= w[1].rpm), "listed by speed");
 }
+
+/// Ranks by frequency when two modes cross: with the hub held, a pendulum on it (eigen-order
+/// n_t, so its frequency n_t·Ω/2π grows with speed) and a disc on a shaft from it (a constant
+/// √(k/J)/2π) are uncoupled, so their frequencies cross at Ω* = √(k/J)/n_t without veering. Each
+/// track keeps its own shape (and label) through the crossing while the ranks swap there.
+#[test]
+fn ranks_swap_where_two_tracks_cross() {
+    let (m, l, ic, r): (f64, f64, f64, f64) = (6.0, 0.015209365076836064, 0.000216, 0.17);
+    let (k, j): (f64, f64) = (2.0e3, 0.5);
+    let text = format!(
+        r#"Mechanism(
+    name: "crossing",
+    bodies: [
+        Body(name: "hub", mass: 20.0, inertia: 1.0),
+        Body(name: "disc", mass: 10.0, inertia: {j}),
+        Body(name: "pendulum", mass: {m}, com: ({l}, 0.0), inertia: {ic}),
+    ],
+    joints: [
+        Joint(name: "spin", parent: "ground", child: "hub"),
+        Joint(name: "shaft", parent: "hub", child: "disc", spring: (stiffness: {k})),
+        Joint(name: "pivot", parent: "hub", child: "pendulum", at: ({r}, 0.0)),
+    ],
+)"#
+    );
+    let mech = kanedyn::model::mechanism::Mechanism::from_source(
+        &kanedyn::io::Source::from_text("crossing.ron", &text),
+        &kanedyn::io::ReadPolicy::unrestricted(),
+    )
+    .unwrap();
+    // n_t² = m R L / (I_c + m L²) (the paper's eq. 15 with the pendulum's own inertia).
+    let nt = (m * r * l / (ic + m * l * l)).sqrt();
+    let cross_rpm = (k / j).sqrt() / nt * 60.0 / (2.0 * PI);
+    let rpm: Vec<f64> = (1..=40).map(|i| 50.0 * i as f64).collect();
+    assert!(cross_rpm > rpm[0] && cross_rpm < rpm[39], "{cross_rpm}");
+    let c = campbell(&mech, "spin", &rpm, &[], Spin::Held, Damping::Undamped, None, None).unwrap();
+    let pendulum = c.tracks.iter().position(|t| t.label == "pivot").unwrap();
+    let disc = c.tracks.iter().position(|t| t.label == "shaft").unwrap();
+    for (i, &s) in rpm.iter().enumerate() {
+        let fp = nt * s / 60.0;
+        // The pendulum track follows its shape: its frequency is n_t·rpm/60 at every speed.
+        assert!((c.tracks[pendulum].frequency_hz[i] - fp).abs() <= 1e-6 * fp);
+        assert!(c.tracks[pendulum].labels[i] == "pivot" && c.tracks[disc].labels[i] == "shaft");
+        let (rp, rd) = if s < cross_rpm { (1, 2) } else { (2, 1) };
+        assert_eq!((c.tracks[pendulum].rank[i], c.tracks[disc].rank[i]), (rp, rd), "at {s} rpm");
+    }
+    println!("pendulum n_t = {nt:.4}, crossing at {cross_rpm:.2} rpm: ranks swap there");
+}

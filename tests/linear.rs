@@ -57,7 +57,7 @@ fn cpva_spec(n: usize) -> ResponseSpec {
     let p = params(n, 0.0, 0.0);
     ResponseSpec {
         spin_joint: "spin".into(),
-        input_joint: "spin".into(),
+        inputs: vec![kanedyn::linear::Input::unit("spin")],
         body: "rotor".into(),
         lock: (0..n).map(|i| p.pivot_name(i)).collect(),
     }

@@ -300,7 +300,7 @@ impl Linearization {
             let err = |e: LinearError| linear_error(py, &self.mech, &e);
             let spec = ResponseSpec {
                 spin_joint: self.spin_joint().to_string(),
-                input_joint: input_joint.to_string(),
+                inputs: vec![kanedyn::linear::Input::unit(input_joint)],
                 body: body.to_string(),
                 lock: lock.clone(),
             };

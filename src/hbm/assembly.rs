@@ -46,7 +46,9 @@ impl Hbm {
             }
             self.q[spin] += omega * t;
             self.qd[spin] += omega;
-            let torque = tm + scale * self.exc[j];
+            // The mean torque acts at the spin joint (through the evaluator's g); the oscillating
+            // torques at their joints are subtracted below.
+            let torque = tm;
             if jacobian.is_some() {
                 self.ev.linearize(
                     t,
@@ -62,7 +64,7 @@ impl Hbm {
                 self.ev.residual(t, &self.q, &self.qd, &self.qdd, torque, &mut self.lin.r, None);
             }
             for i in 0..n {
-                self.rt[i * nt + j] = self.lin.r[i];
+                self.rt[i * nt + j] = self.lin.r[i] - scale * self.exc[i * nt + j];
             }
             let Some(param) = jacobian else { continue };
             let lin = &self.lin;
@@ -76,7 +78,7 @@ impl Hbm {
             // cyclic (its column of A is zero); s multiplies the oscillating torque only.
             for i in 0..n {
                 let dr = match param {
-                    Parameter::TorqueScale { .. } => -self.ev.g[i] * self.exc[j],
+                    Parameter::TorqueScale { .. } => -self.exc[i * nt + j],
                     Parameter::Order | Parameter::Speed { .. } => {
                         let mut s = 0.0;
                         for k in 0..n {

@@ -209,7 +209,8 @@ pub struct Hbm {
     opts: HbmOptions,
     nb: usize,
     aft: aft::Aft,
-    /// The oscillating excitation torque at the N_t samples, N·m.
+    /// The generalized force of the oscillating excitation torques at the N_t samples, per
+    /// equation (`exc[r·N_t + j]`), N·m.
     exc: Vec<f64>,
     // Work buffers: p, ṗ, p̈ per coordinate, R and ∂R/∂n per equation, each N_t samples.
     qt: Vec<f64>,
@@ -256,6 +257,22 @@ impl Hbm {
         harmonics: &[Harmonic],
         options: HbmOptions,
     ) -> Result<Self, HbmError> {
+        Self::with_inputs(kane, spin_joint, omega, harmonics, &[(spin_joint, 1.0, 0.0)], options)
+    }
+
+    /// [`Hbm::new`] with the oscillating torque acting at several joints: joint `j` of each
+    /// `(j, scale, phase)` of `inputs` carries `scale · T_k sin(m_k n Ω t + α_k + phase)` (child
+    /// against parent; the mean torque stays on the spin joint). Each joint's torque enters the
+    /// residual through its own generalized force `∂q̇_j/∂u`. The joints' own oscillating
+    /// torques, if any, are replaced.
+    pub fn with_inputs(
+        kane: &Kane,
+        spin_joint: usize,
+        omega: f64,
+        harmonics: &[Harmonic],
+        inputs: &[(usize, f64, f64)],
+        options: HbmOptions,
+    ) -> Result<Self, HbmError> {
         let bad = |m: String| Err(HbmError::Invalid(m));
         let mech = kane.mechanism();
         let n = kane.ndof();
@@ -282,8 +299,20 @@ impl Hbm {
         if !(omega.is_finite() && omega > 0.0) {
             return bad(format!("mean speed must be positive and finite, got {omega} rad/s"));
         }
+        for &(j, scale, phase) in inputs {
+            if mech.joints.get(j).and_then(|_| mech.coordinate(j)).is_none() {
+                return bad(format!("excitation input: joint #{j} has no coordinate (Fixed or out of range)"));
+            }
+            if !(scale.is_finite() && phase.is_finite()) {
+                return bad(format!(
+                    "excitation input at joint `{}`: scale and phase must be finite",
+                    mech.joints[j].name
+                ));
+            }
+        }
         for jt in kane.joint_torques() {
-            if jt.joint != spin_joint && jt.excitation.harmonics.iter().any(|h| h.amplitude != 0.0) {
+            let replaced = jt.joint == spin_joint || inputs.iter().any(|i| i.0 == jt.joint);
+            if !replaced && jt.excitation.harmonics.iter().any(|h| h.amplitude != 0.0) {
                 return bad(format!(
                     "joint `{}` carries an oscillating torque; only the spin joint may be excited",
                     mech.joints[jt.joint].name
@@ -331,6 +360,10 @@ impl Hbm {
         }
         let t_scale = harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>().max(1.0);
         let mut kane = kane.clone();
+        for &(j, _, _) in inputs {
+            let mean = kane.joint_torques().iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean);
+            kane.set_joint_torque(j, Excitation::constant(mean));
+        }
         kane.set_joint_torque(spin_joint, Excitation::constant(0.0));
         let parents = mech.speed_parents();
         let speeds = mech.speeds;
@@ -344,14 +377,28 @@ impl Hbm {
             speeds.qdot(&parents, &e, &mut qd);
             g[r] = qd[spin];
         }
+        // The oscillating torque's generalized force at every sample: Σ_inputs g_j · T_j(τ), with
+        // g_j[r] = ∂q̇_j/∂u_r (a torque τ at joint j does τ q̇_j of power).
+        let mut exc = vec![0.0; n * nt];
+        for &(joint, scale, phase) in inputs {
+            let c = mech.coordinate(joint).unwrap_or(spin);
+            let mut gj = vec![0.0; n];
+            for (r, g) in gj.iter_mut().enumerate() {
+                e.iter_mut().for_each(|x| *x = 0.0);
+                e[r] = 1.0;
+                speeds.qdot(&parents, &e, &mut qd);
+                *g = qd[c];
+            }
+            for j in 0..nt {
+                let tau = 2.0 * PI * j as f64 / nt as f64;
+                let t: f64 = terms.iter().map(|t| t.amplitude * (t.index * tau + t.phase + phase).sin()).sum();
+                for (r, g) in gj.iter().enumerate() {
+                    exc[r * nt + j] += scale * g * t;
+                }
+            }
+        }
         let nb = 2 * opts.harmonics + 1;
         let ev = Evaluator::new(kane, speeds, parents, (0..n * n).map(|i| w[(i / n, i % n)]).collect(), g);
-        let exc = (0..nt)
-            .map(|j| {
-                let tau = 2.0 * PI * j as f64 / nt as f64;
-                terms.iter().map(|t| t.amplitude * (t.index * tau + t.phase).sin()).sum()
-            })
-            .collect();
         Ok(Self {
             ev,
             n,

@@ -25,6 +25,10 @@ pub struct CampbellTrack {
     pub natural_frequency_hz: Vec<f64>,
     /// Damping ratio at each speed.
     pub damping_ratio: Vec<f64>,
+    /// The track's place in frequency order at each speed (1 = the lowest frequency there): the
+    /// mode number of a table sorted by frequency speed by speed, while the track itself follows
+    /// one mode shape.
+    pub rank: Vec<usize>,
 }
 
 /// An engine-order line `f = n·rpm/60`.
@@ -49,6 +53,9 @@ pub struct Crossing {
     pub frequency_hz: f64,
     /// The mode's label at the crossing.
     pub label: String,
+    /// The mode's place in frequency order at the crossing (1 = lowest), the other tracks'
+    /// frequencies interpolated linearly between the grid speeds.
+    pub rank: usize,
 }
 
 /// Campbell data: natural frequencies against spin speed, with order lines.
@@ -124,6 +131,7 @@ pub fn campbell(
                     frequency_hz: vec![m.frequency_hz],
                     natural_frequency_hz: vec![m.natural_frequency_rad_s / (2.0 * PI)],
                     damping_ratio: vec![m.damping_ratio],
+                    rank: Vec::new(),
                 });
                 last.push(m.shape_q.clone());
             }
@@ -206,12 +214,35 @@ pub fn campbell(
                     let at = (equilibria[i].as_slice(), shapes[i][t].as_slice());
                     ctx.locate(n, (rpm[i], g0 > 0.0), rpm[i + 1], at, tr.labels[i + 1].clone())?
                 };
-                crossings.push(Crossing { order: n, track: t, rpm: r, frequency_hz: f, label });
+                crossings.push(Crossing { order: n, track: t, rpm: r, frequency_hz: f, label, rank: 0 });
             }
         }
     }
     crossings.sort_by(|a, b| a.rpm.total_cmp(&b.rpm).then(a.order.total_cmp(&b.order)));
+    for i in 0..rpm.len() {
+        let mut by_f: Vec<usize> = (0..tracks.len()).collect();
+        by_f.sort_by(|&a, &b| tracks[a].frequency_hz[i].total_cmp(&tracks[b].frequency_hz[i]).then(a.cmp(&b)));
+        for (k, &t) in by_f.iter().enumerate() {
+            tracks[t].rank.push(k + 1);
+        }
+    }
+    for c in &mut crossings {
+        let at = |tr: &CampbellTrack| interpolate(rpm, &tr.frequency_hz, c.rpm);
+        c.rank = 1 + tracks.iter().enumerate().filter(|(t, tr)| *t != c.track && at(tr) < c.frequency_hz).count();
+    }
     Ok(Campbell { rpm: rpm.to_vec(), tracks, order_lines, crossings })
+}
+
+/// `y(x)` by linear interpolation on the increasing grid `xs` (clamped at its ends).
+fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    match xs.iter().position(|&v| v >= x) {
+        None => ys.last().copied().unwrap_or(f64::NAN),
+        Some(0) => ys[0],
+        Some(i) => {
+            let u = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
+            ys[i - 1] + u * (ys[i] - ys[i - 1])
+        }
+    }
 }
 
 /// What the bisection for a crossing needs to linearise at a probe speed.

@@ -68,7 +68,7 @@ pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, 
 pub use damping::ModalDamping;
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
-pub use response::{Extremes, FrfPoint, OrderResponse, ResponseSpec};
+pub use response::{Extremes, FrfPoint, Input, OrderResponse, ResponseSpec};
 
 use crate::error::Error;
 use crate::kane::Kane;

@@ -52,13 +52,37 @@ impl LinearModel {
     }
 }
 
-/// Which joint excites, which body is watched, and which joints are locked for the reference.
+/// One joint of the excitation: it carries `scale·e^{i·phase}` times the unit torque.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Input {
+    /// The joint (child against parent).
+    pub joint: String,
+    /// Its share of the torque (1 for the whole).
+    pub scale: f64,
+    /// Its phase lead, rad.
+    pub phase: f64,
+}
+
+impl Input {
+    /// The whole unit torque at `joint`.
+    pub fn unit(joint: impl Into<String>) -> Self {
+        Self { joint: joint.into(), scale: 1.0, phase: 0.0 }
+    }
+
+    fn weight(&self) -> C64 {
+        C64::from_polar(self.scale, self.phase)
+    }
+}
+
+/// Which joints excite, which body is watched, and which joints are locked for the reference.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResponseSpec {
     /// The spin joint (root joint turning at Ω).
     pub spin_joint: String,
-    /// The joint carrying the unit torque (e.g. the spin joint for the engine torque).
-    pub input_joint: String,
+    /// The joints carrying the torque, each with its share and phase (e.g. the spin joint alone
+    /// for the engine torque, or a propeller's joint as well): the response is the sum of each
+    /// joint's response times its weight `scale·e^{i·phase}`.
+    pub inputs: Vec<Input>,
     /// The body whose angular acceleration is the response (e.g. `rotor`).
     pub body: String,
     /// Joints locked (at their operating-point angles) to build the reference mechanism, e.g. the
@@ -101,9 +125,18 @@ pub struct OrderResponse {
     /// The locked mechanism.
     pub locked: LinearModel,
     body: usize,
-    input: usize,
+    input: Vec<(usize, C64)>,
     body_locked: usize,
-    input_locked: usize,
+    input_locked: Vec<(usize, C64)>,
+}
+
+/// `Σ w_j · f(joint_j)`.
+fn weighted(inputs: &[(usize, C64)], mut f: impl FnMut(usize) -> LinResult<C64>) -> LinResult<C64> {
+    let mut sum = C64::new(0.0, 0.0);
+    for &(j, w) in inputs {
+        sum += w * f(j)?;
+    }
+    Ok(sum)
 }
 
 impl OrderResponse {
@@ -111,11 +144,12 @@ impl OrderResponse {
     pub fn new(mech: &Mechanism, spec: &ResponseSpec, omega_rad_s: f64, guess: Option<&[f64]>) -> LinResult<Self> {
         let model = LinearModel::new(mech, &spec.spin_joint, omega_rad_s, guess)?;
         let body = body_of(mech, &spec.body)?;
-        let input = joint_of(mech, &spec.input_joint)?;
+        let input =
+            spec.inputs.iter().map(|i| Ok((joint_of(mech, &i.joint)?, i.weight()))).collect::<LinResult<Vec<_>>>()?;
         let mut lm = mech.clone();
         let mut watched = spec.body.clone();
         for name in &spec.lock {
-            if *name == spec.input_joint {
+            if spec.inputs.iter().any(|i| i.joint == *name) {
                 return Err(LinearError::LockedInput { joint: name.clone() });
             }
             let c = joint_of(&lm, name)?;
@@ -135,18 +169,19 @@ impl OrderResponse {
             .collect();
         let locked = LinearModel::new(&lm, &spec.spin_joint, omega_rad_s, Some(&guess_l))?;
         let body_locked = body_of(&lm, &watched)?;
-        let input_locked = joint_of(&lm, &spec.input_joint)?;
+        let input_locked =
+            spec.inputs.iter().map(|i| Ok((joint_of(&lm, &i.joint)?, i.weight()))).collect::<LinResult<Vec<_>>>()?;
         Ok(Self { model, locked, body, input, body_locked, input_locked })
     }
 
     /// Complex α̂ of the body per N·m at order n.
     pub fn response(&self, order: f64) -> LinResult<C64> {
-        self.model.acceleration_response(self.body, self.input, order)
+        weighted(&self.input, |j| self.model.acceleration_response(self.body, j, order))
     }
 
     /// Complex α̂ of the locked mechanism's body per N·m at order n.
     pub fn locked_response(&self, order: f64) -> LinResult<C64> {
-        self.locked.acceleration_response(self.body_locked, self.input_locked, order)
+        weighted(&self.input_locked, |j| self.locked.acceleration_response(self.body_locked, j, order))
     }
 
     /// Both magnitudes and their ratio at order n.
@@ -164,8 +199,10 @@ impl OrderResponse {
     /// The normalised response as n → ∞: the ratio of the inertia-only responses
     /// ([`LinearModel::acceleration_limit`]); for the CPVA `(Ĩ + 1 + 2n_t²)/(Ĩ − n_t⁴)`.
     pub fn asymptote(&self) -> LinResult<f64> {
-        Ok(self.model.acceleration_limit(self.body, self.input)?.abs()
-            / self.locked.acceleration_limit(self.body_locked, self.input_locked)?.abs())
+        let limit = |m: &LinearModel, body: usize, inputs: &[(usize, C64)]| {
+            weighted(inputs, |j| Ok(C64::new(m.acceleration_limit(body, j)?, 0.0))).map(|v| v.norm())
+        };
+        Ok(limit(&self.model, self.body, &self.input)? / limit(&self.locked, self.body_locked, &self.input_locked)?)
     }
 
     fn ratio(&self, n: f64) -> f64 {

@@ -26,9 +26,11 @@
 
 mod angle;
 pub mod findings;
+mod order_map;
 mod stft;
 
 pub use angle::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};
+pub use order_map::{OrderMap, order_rpm_map};
 pub use stft::{StftOptions, stft_order_traces};
 
 /// The most points one analysis window (STFT window, angle-domain block) or one angle-resampled

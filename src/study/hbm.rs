@@ -82,15 +82,17 @@ pub fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f64 {
 }
 
 /// Continues the periodic solution in order from `from` to `to` for the excitation `harmonics`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn branch(
     study: &Study,
     omega: f64,
     harmonics: &[Harmonic],
+    excite: &[super::ExciteAt],
     h: usize,
     from: f64,
     to: f64,
 ) -> Result<(Hbm, Branch, f64)> {
-    branch_in(study, omega, harmonics, h, Parameter::Order, from, to, None)
+    branch_in(study, omega, harmonics, excite, h, Parameter::Order, from, to, None)
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
@@ -101,6 +103,7 @@ pub(crate) fn branch_in(
     study: &Study,
     omega: f64,
     harmonics: &[Harmonic],
+    excite: &[super::ExciteAt],
     h: usize,
     parameter: Parameter,
     from: f64,
@@ -109,7 +112,8 @@ pub(crate) fn branch_in(
 ) -> Result<(Hbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
-    let mut hbm = Hbm::new(&kane, study.spin, omega, harmonics, opts).map_err(hbm_error(study))?;
+    let inputs = study.excited_joints(&study.mechanism, excite);
+    let mut hbm = Hbm::with_inputs(&kane, study.spin, omega, harmonics, &inputs, opts).map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);
@@ -189,8 +193,17 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
         // lies outside the range, each reaches sheets the other cannot.
         let (lo, hi) = ax.range;
         for (from, to) in [(hi, lo), (lo, hi)] {
-            let solved =
-                branch_in(study, omega, &harmonics, spec.harmonics, parameter, from * scale, to * scale, spec.max_step);
+            let solved = branch_in(
+                study,
+                omega,
+                &harmonics,
+                &spec.excite,
+                spec.harmonics,
+                parameter,
+                from * scale,
+                to * scale,
+                spec.max_step,
+            );
             let (_, b, wall_s) = match solved {
                 Ok(x) => x,
                 Err(e) => {

@@ -27,6 +27,7 @@ use super::linear::{self, LinearResult};
 use super::multi::{self, MultiOrderResult, SpeedFindings};
 use super::sweep::{self, SweepFindings, SweepRun};
 pub use super::table::{Column, Table};
+use super::transient::{self, TransientResult};
 use super::{AnalysisSpec, CampbellSpec, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use crate::linear::Campbell;
@@ -130,6 +131,8 @@ pub enum AnalysisResult<'a> {
     },
     /// A design study's case table: columns, and per case its values, results, status and error.
     DesignStudy(&'a super::design::DesignResult),
+    /// A transient or run-up.
+    Transient(&'a TransientResult),
 }
 
 /// What the summary reads off one analysis's results, by kind.
@@ -160,6 +163,24 @@ pub enum AnalysisFindings {
     },
     /// See [`super::design::DesignFindings`].
     DesignStudy(super::design::DesignFindings),
+    /// The peaks of the order cuts and the elements' largest excursions (as in the result).
+    Transient {
+        /// Per cut: signal, order, peak and its speed.
+        cuts: Vec<CutFindings>,
+    },
+}
+
+/// The summary's reading of one order cut of a transient.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CutFindings {
+    /// The signal cut.
+    pub signal: String,
+    /// The order, cycles/rev.
+    pub order: f64,
+    /// The largest amplitude along the cut, in the signal's unit.
+    pub peak: f64,
+    /// The speed of that block, rpm.
+    pub peak_rpm: f64,
 }
 
 /// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
@@ -308,6 +329,15 @@ fn parts<'a>(
         AnalysisSpec::DesignStudy(d) => {
             let r = report.designs.iter().find(|r| r.name == d.name)?;
             (AnalysisResult::DesignStudy(r), AnalysisFindings::DesignStudy(super::design::findings(r)), vec![r.table()])
+        }
+        AnalysisSpec::Transient(t) => {
+            let r = report.transient.iter().find(|r| r.name == t.name)?;
+            let cuts = r
+                .cuts
+                .iter()
+                .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
+                .collect();
+            (AnalysisResult::Transient(r), AnalysisFindings::Transient { cuts }, transient::tables(study, t, r))
         }
     })
 }

@@ -133,7 +133,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     let free_orders: Vec<(f64, String)> = free.modes.iter().map(|m| (m.order, m.label.clone())).collect();
     let rspec = ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
-        input_joint: study.spec.spin_joint.clone(),
+        inputs: study.inputs(&spec.excite),
         body: study.spec.response_body.clone(),
         lock: study.spec.lock.clone(),
     };
@@ -223,12 +223,18 @@ pub(crate) fn campbell_tables(spec: &CampbellSpec, c: &Campbell) -> Vec<Table> {
     for l in &c.order_lines {
         t.push(format!("order_{}_hz", l.order), "Hz", l.frequency_hz.clone());
     }
+    // Each tracked mode's place in frequency order at each speed (1 = lowest): read the table
+    // sorted by frequency speed by speed through these.
+    for (k, tr) in c.tracks.iter().enumerate() {
+        t.push(format!("mode{}_{}_rank", k + 1, tr.label), "1", tr.rank.iter().map(|&r| r as f64).collect());
+    }
     let mut x = Table::new(format!("{}_crossings", spec.name));
     let col = |f: &dyn Fn(&crate::linear::Crossing) -> f64| c.crossings.iter().map(f).collect::<Vec<f64>>();
     x.push("order", "1", col(&|x| x.order));
     x.push("mode", "1", col(&|x| (x.track + 1) as f64));
     x.push("rpm", "rpm", col(&|x| x.rpm));
     x.push("frequency_hz", "Hz", col(&|x| x.frequency_hz));
+    x.push("rank", "1", col(&|x| x.rank as f64));
     vec![t, x]
 }
 
@@ -503,10 +509,21 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         let _ = writeln!(md, "No order line crosses a mode between {} and {} rpm.\n", spec.rpm_min, spec.rpm_max);
     } else {
         let _ = writeln!(md, "Resonance speeds (order lines crossing modes, located to 1e-9 in speed):\n");
-        let _ = writeln!(md, "| speed (rpm) | order | mode | label | frequency (Hz) |\n|---|---|---|---|---|");
+        let _ = writeln!(
+            md,
+            "| speed (rpm) | order | mode | label | frequency (Hz) | rank there |\n|---|---|---|---|---|---|"
+        );
         for x in &c.crossings {
-            let _ =
-                writeln!(md, "| {:.3} | {} | {} | {} | {:.4} |", x.rpm, x.order, x.track + 1, x.label, x.frequency_hz);
+            let _ = writeln!(
+                md,
+                "| {:.3} | {} | {} | {} | {:.4} | {} |",
+                x.rpm,
+                x.order,
+                x.track + 1,
+                x.label,
+                x.frequency_hz,
+                x.rank
+            );
         }
         md.push('\n');
     }

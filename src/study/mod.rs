@@ -19,6 +19,7 @@ mod sim;
 pub mod spec;
 pub mod sweep;
 mod table;
+pub mod transient;
 pub mod validate;
 
 use crate::error::{Error, Result};
@@ -118,6 +119,8 @@ pub struct StudyReport {
     pub campbell: Vec<crate::linear::Campbell>,
     /// Design studies' case tables.
     pub designs: Vec<design::DesignResult>,
+    /// Transients and run-ups.
+    pub transient: Vec<transient::TransientResult>,
     /// Per analysis of the study file, in its order: whether it ran to the end (its results are
     /// in the fields above; single runs of it may still have failed) rather than failing whole.
     pub completed: Vec<bool>,
@@ -254,6 +257,55 @@ impl Study {
         x
     }
 
+    /// The linear analyses' inputs for an analysis's `excite` list: its joints with their shares
+    /// and phases, or the spin joint alone.
+    pub(crate) fn inputs(&self, excite: &[ExciteAt]) -> Vec<crate::linear::Input> {
+        if excite.is_empty() {
+            return vec![crate::linear::Input::unit(self.spec.spin_joint.clone())];
+        }
+        excite.iter().map(|e| crate::linear::Input { joint: e.joint.clone(), scale: e.scale, phase: e.phase }).collect()
+    }
+
+    /// An analysis's `excite` list resolved in `mech` (the mechanism or its locked twin) as
+    /// `(joint, scale, phase)`; the spin joint alone when the list is empty. The names were
+    /// checked at load (and none is locked, see `validate`).
+    pub(crate) fn excited_joints(&self, mech: &Mechanism, excite: &[ExciteAt]) -> Vec<(usize, f64, f64)> {
+        let spin = mech.joint_index(&self.spec.spin_joint).unwrap_or(self.spin);
+        if excite.is_empty() {
+            return vec![(spin, 1.0, 0.0)];
+        }
+        excite.iter().filter_map(|e| mech.joint_index(&e.joint).map(|j| (j, e.scale, e.phase))).collect()
+    }
+
+    /// Sets `kane`'s joint torques for an order excitation: `base`'s mean on the spin joint and
+    /// its harmonics, scaled and phase-shifted, at each excited joint (see [`ExciteAt`]).
+    pub(crate) fn apply_excitation(
+        &self,
+        kane: &mut Kane,
+        mech: &Mechanism,
+        excite: &[ExciteAt],
+        base: &crate::model::excitation::Excitation,
+    ) {
+        let spin = mech.joint_index(&self.spec.spin_joint).unwrap_or(self.spin);
+        let joints = self.excited_joints(mech, excite);
+        if !joints.iter().any(|j| j.0 == spin) {
+            kane.set_joint_torque(spin, crate::model::excitation::Excitation { harmonics: Vec::new(), ..base.clone() });
+        }
+        for (j, scale, phase) in joints {
+            let harmonics = base
+                .harmonics
+                .iter()
+                .map(|h| crate::model::excitation::Harmonic {
+                    amplitude: scale * h.amplitude,
+                    phase: h.phase + phase,
+                    ..*h
+                })
+                .collect();
+            let mean = if j == spin { base.mean } else { 0.0 };
+            kane.set_joint_torque(j, crate::model::excitation::Excitation { mean, harmonics, ..base.clone() });
+        }
+    }
+
     /// Builds the evaluator of the mechanism (or the locked twin).
     pub(crate) fn kane(&self, locked: bool) -> Result<Kane> {
         match (locked, &self.locked) {
@@ -385,6 +437,7 @@ pub(crate) enum Results {
     Campbell(crate::linear::Campbell),
     Hbm(Vec<hbm::HbmBranch>),
     Design(design::DesignResult),
+    Transient(Box<transient::TransientResult>),
 }
 
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
@@ -403,6 +456,7 @@ fn run_analysis(
         AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
         AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
+        AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
     };
     report.files.extend(out.files);
     report.failures.extend(out.failures);
@@ -413,6 +467,7 @@ fn run_analysis(
         Results::Campbell(c) => report.campbell.push(c),
         Results::Hbm(b) => report.hbm.extend(b),
         Results::Design(d) => report.designs.push(d),
+        Results::Transient(t) => report.transient.push(*t),
     }
     Ok(out.markdown)
 }

@@ -367,7 +367,7 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
     let mut out: Vec<HbmState> = Vec::new();
     let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
     for (from, to) in [(hi, lo), (lo, hi)] {
-        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, 10, from, to)?;
+        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, &spec.excite, 10, from, to)?;
         for guess in branch.guesses_at(spec.order) {
             let sol = hbm.solve(spec.order, Some(guess)).map_err(super::hbm::hbm_error(study))?;
             let stable = hbm.stability(&sol).ok().map(|s| s.stable);
@@ -382,7 +382,7 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
     // Both torques scaled together from nearly nothing (the linear response) up to the table's.
     let param = crate::hbm::Parameter::TorqueScale { order: spec.order };
-    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, 10, param, 0.01, 1.0, None)?;
+    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, &spec.excite, 10, param, 0.01, 1.0, None)?;
     let fold = up.folds.first().filter(|f| f.kind == crate::hbm::FoldKind::Maximum).map(|f| f.parameter);
     Ok((out, fold))
 }
@@ -395,7 +395,7 @@ type PerSpeed = Vec<Vec<f64>>;
 fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, PerSpeed)> {
     let rspec = crate::linear::ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
-        input_joint: study.spec.spin_joint.clone(),
+        inputs: study.inputs(&spec.excite),
         body: study.spec.response_body.clone(),
         lock: study.spec.lock.clone(),
     };
@@ -439,7 +439,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         ramp_s: spec.ramp_s,
     };
     let mut kane = study.kane(locked)?;
-    kane.set_joint_torque(spin, excitation);
+    study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
     let fs = study.spec.integration.sample_hz;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
     let bar = progress.bar(spec.max_time_s, &label);

@@ -289,6 +289,32 @@ impl Study {
                         }
                     }
                     AnalysisSpec::DesignStudy(d) => super::design::plan(self, d, base),
+                    AnalysisSpec::Transient(t) => {
+                        let samples = t.duration_s * fs + 1.0;
+                        let e = self.elements.len() as f64;
+                        let (a, b) = t.speed.rpm_range();
+                        let revs = t.duration_s * a.max(b) / 60.0;
+                        let blocks = revs / t.map.hop_revs.max(1e-9) + 1.0;
+                        let columns = t.map.max_order * t.map.revs_per_block as f64;
+                        let series_cols = if t.write_time_series { 4.0 + 2.0 * e } else { 0.0 };
+                        let top = t
+                            .torques
+                            .iter()
+                            .flat_map(|q| q.harmonics.iter().map(move |h| h.multiple * q.order))
+                            .fold(1.0, f64::max);
+                        AnalysisPlan {
+                            runs: 1,
+                            samples_per_run: samples,
+                            memory_bytes: samples * 8.0 * (4.0 + 2.0 * e) + blocks * columns * 8.0 * 2.0,
+                            output_bytes: samples * series_cols * CSV_CELL_BYTES
+                                + blocks * columns * 4.0 * CSV_CELL_BYTES,
+                            // The driven equations solve with nalgebra's dense Cholesky: a few
+                            // times the engine's own right-hand side.
+                            cpu_s: 4.0 * time_run_s(self, t.duration_s, top * a.max(b) / 60.0),
+                            driver: "duration_s",
+                            ..base
+                        }
+                    }
                 }
             })
             .map(|p| AnalysisPlan { output_bytes: p.output_bytes * (1.0 + JSON_PER_CSV_BYTE), ..p })

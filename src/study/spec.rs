@@ -108,6 +108,9 @@ pub enum AnalysisSpec {
     /// One analysis run over many cases of varied mechanism and excitation parameters (a grid, a
     /// Latin hypercube or Monte Carlo), collected in one table (see [`super::design`]).
     DesignStudy(super::design::DesignSpec),
+    /// A transient from a given state: free, or through a run-up or run-down of the spin speed
+    /// (driven by a torque or prescribed), with an order–rpm map of the response.
+    Transient(TransientSpec),
 }
 
 impl AnalysisSpec {
@@ -120,6 +123,7 @@ impl AnalysisSpec {
             AnalysisSpec::Campbell(c) => &c.name,
             AnalysisSpec::HarmonicBalance(h) => &h.name,
             AnalysisSpec::DesignStudy(d) => &d.name,
+            AnalysisSpec::Transient(t) => &t.name,
         }
     }
 
@@ -132,6 +136,7 @@ impl AnalysisSpec {
             AnalysisSpec::Campbell(_) => "Campbell",
             AnalysisSpec::HarmonicBalance(_) => "HarmonicBalance",
             AnalysisSpec::DesignStudy(_) => "DesignStudy",
+            AnalysisSpec::Transient(_) => "Transient",
         }
     }
 }
@@ -175,6 +180,10 @@ pub struct HbmSpec {
     /// lower it to resolve short unstable stretches (see `ContinuationOptions::ds_max`).
     #[serde(default)]
     pub max_step: Option<f64>,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
@@ -261,6 +270,10 @@ pub struct LinearResponseSpec {
     /// twin). Default: the dampers as built. Not together with damper variants.
     #[serde(default)]
     pub modal_damping: Option<crate::linear::ModalDamping>,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// A Campbell diagram: damped natural frequencies over a speed range, modes tracked by shape.
@@ -336,6 +349,10 @@ pub struct SweepSpec {
     /// Write the sampled time series (time, rotor angle, rate, acceleration, joint angles) as CSV.
     #[serde(default)]
     pub write_time_series: bool,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 /// One operating speed of a multi-order load case.
@@ -392,6 +409,10 @@ pub struct MultiOrderSpec {
     /// operating order, so coexisting branches all appear) with their stability (default false).
     #[serde(default)]
     pub hbm: bool,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
 }
 
 fn both_directions() -> Vec<Direction> {
@@ -414,4 +435,161 @@ fn default_min_time() -> f64 {
 }
 fn default_max_time() -> f64 {
     400.0
+}
+
+/// A transient: the nonlinear equations integrated from a given initial state over
+/// `duration_s`, the spin speed free or run up (or down) linearly, with torques at any joints
+/// whose orders follow the spin joint's angle, and the response tracked into an order–rpm map.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransientSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Simulated time, s.
+    pub duration_s: f64,
+    /// How the spin speed evolves.
+    pub speed: SpeedProfile,
+    /// Initial joint coordinates `(joint, q)`, rad (m for a slide); joints not named start at 0.
+    #[serde(default)]
+    pub angles: Vec<(String, f64)>,
+    /// Initial joint rates `(joint, q̇)` relative to the parent, rad/s (m/s for a slide); joints
+    /// not named start at rest relative to their parent. The spin joint starts at the speed
+    /// profile's first speed and is not named here.
+    #[serde(default)]
+    pub rates: Vec<(String, f64)>,
+    /// Torques at joints (child against parent), each with its own base order, harmonics and
+    /// phases, the orders counted per revolution of the spin joint (locked to its angle). They
+    /// replace the mechanism's own joint torques.
+    #[serde(default)]
+    pub torques: Vec<JointTorqueSpec>,
+    /// Order–rpm map and order cuts of the response (default: as `OrderMapSpec`'s defaults).
+    #[serde(default)]
+    pub map: OrderMapSpec,
+    /// Write the sampled time series (time, spin speed, response, elements) as CSV (default
+    /// true).
+    #[serde(default = "default_true")]
+    pub write_time_series: bool,
+}
+
+/// The spin speed of a [`TransientSpec`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum SpeedProfile {
+    /// The spin joint starts at `rpm` and then moves as the torques and the mechanism drive it.
+    Free {
+        /// Initial speed, rpm.
+        rpm: f64,
+    },
+    /// A run-up or run-down driven by a mean torque on the spin joint: the rigid-rotation
+    /// feed-forward `J·α + Σc·Ω_ref(t)` that takes the mean speed linearly from `rpm_from` to
+    /// `rpm_to` over `ramp_s` (default: the whole run) and holds `rpm_to` after; the speed
+    /// itself stays free (it wavers with the torsional motion and the absorbers' mean torques).
+    Torque {
+        /// Speed at t = 0, rpm.
+        rpm_from: f64,
+        /// Speed at the end of the ramp, rpm.
+        rpm_to: f64,
+        /// Length of the ramp, s (default: the whole run).
+        #[serde(default)]
+        ramp_s: Option<f64>,
+        /// Time constant of a proportional speed governor, s: adds `J/τ·(Ω_ref − Ω)` to the
+        /// torque so that the mean speed follows the ramp through resonances that would
+        /// otherwise hold it back (the Sommerfeld effect). It acts on the instantaneous spin
+        /// rate, so it also damps the spin joint against ground (`J/τ` N·m·s/rad). Default:
+        /// none (pure feed-forward).
+        #[serde(default)]
+        governor_s: Option<f64>,
+    },
+    /// The spin joint's speed prescribed (a test-bench drive): linear from `rpm_from` to
+    /// `rpm_to` over `ramp_s` (default: the whole run), then constant. Its torque is the drive's
+    /// reaction, reported.
+    Prescribed {
+        /// Speed at t = 0, rpm.
+        rpm_from: f64,
+        /// Speed at the end of the ramp, rpm.
+        rpm_to: f64,
+        /// Length of the ramp, s (default: the whole run).
+        #[serde(default)]
+        ramp_s: Option<f64>,
+    },
+}
+
+impl SpeedProfile {
+    /// `(first, last)` speed, rpm.
+    pub fn rpm_range(&self) -> (f64, f64) {
+        match *self {
+            SpeedProfile::Free { rpm } => (rpm, rpm),
+            SpeedProfile::Torque { rpm_from, rpm_to, .. } | SpeedProfile::Prescribed { rpm_from, rpm_to, .. } => {
+                (rpm_from, rpm_to)
+            }
+        }
+    }
+}
+
+/// A torque at a joint whose orders are locked to the spin joint's angle:
+/// `T = mean + r(t)·Σ T_k sin(m_k·order·θ_spin + α_k)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointTorqueSpec {
+    /// The joint it acts at.
+    pub joint: String,
+    /// Mean torque, N·m (default 0; on the spin joint of a `Free` or `Torque` profile it adds to
+    /// the losses at the first speed, which the run always gets).
+    #[serde(default)]
+    pub mean: f64,
+    /// Base order n, cycles per revolution of the spin joint (default 1).
+    #[serde(default = "default_order_one")]
+    pub order: f64,
+    /// Harmonics of n: `(multiple, amplitude N·m, phase rad)`.
+    #[serde(default)]
+    pub harmonics: Vec<Harmonic>,
+    /// Ramp-in of the oscillating part, s (default 0: none).
+    #[serde(default)]
+    pub ramp_s: f64,
+}
+
+fn default_order_one() -> f64 {
+    1.0
+}
+
+/// The order–rpm map of a transient: angle-domain blocks of whole revolutions of the spin joint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OrderMapSpec {
+    /// Resampled points per revolution (default 64).
+    pub samples_per_rev: usize,
+    /// Revolutions per block: the order resolution is 1/R (default 32).
+    pub revs_per_block: usize,
+    /// Revolutions between blocks (default 4).
+    pub hop_revs: f64,
+    /// Highest order shown in the map (default 12).
+    pub max_order: f64,
+    /// Orders cut out of the map and plotted against speed (default: every harmonic of every
+    /// torque, at most 8).
+    pub cuts: Vec<f64>,
+}
+
+impl Default for OrderMapSpec {
+    fn default() -> Self {
+        Self { samples_per_rev: 64, revs_per_block: 32, hop_revs: 4.0, max_order: 12.0, cuts: Vec::new() }
+    }
+}
+
+/// A joint an analysis's oscillating torque acts at: it carries `scale·T_k sin(m_k·n·Ω·t + α_k +
+/// phase)` for every harmonic T_k of the analysis (child against parent), e.g. a propeller's or a
+/// gearbox's share of the excitation next to the engine's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExciteAt {
+    /// The joint.
+    pub joint: String,
+    /// Its share of the torque (default 1).
+    #[serde(default = "default_scale")]
+    pub scale: f64,
+    /// Its phase lead, rad (default 0).
+    #[serde(default)]
+    pub phase: f64,
+}
+
+fn default_scale() -> f64 {
+    1.0
 }

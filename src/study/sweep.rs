@@ -252,7 +252,7 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         ramp_s: spec.ramp_s,
     };
     let mut kane = study.kane(job.locked)?;
-    kane.set_joint_torque(spin, excitation.clone());
+    study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
     let x0 = Study::initial_state(mech, spin, omega);
     let label = format!(
         "{} {} N·m {}{}",

@@ -2,6 +2,7 @@
 //! ([`integrate`]), the probes that turn sampled states into named signals and the one
 //! `simulate` ([`probe`]), and steady-state detection by windows ([`steady`]).
 
+pub mod drive;
 mod driver;
 pub mod integrate;
 pub mod probe;

@@ -358,9 +358,26 @@ pub fn simulate(
     rec: &mut Recorder,
     progress: &mut dyn FnMut(f64),
 ) -> Outcome {
+    let n = kane.ndof();
+    simulate_rhs(|t, x, dx| kane.rhs(t, x, dx), n, x0, t0, t1, opts, rec, progress)
+}
+
+/// [`simulate`] for any right-hand side of a mechanism with `n` degrees of freedom, such as a
+/// [`crate::time::drive::Drive`]'s.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_rhs(
+    mut rhs: impl FnMut(f64, &[f64], &mut [f64]) -> std::result::Result<(), crate::error::EngineError>,
+    n: usize,
+    x0: &[f64],
+    t0: f64,
+    t1: f64,
+    opts: &IntegrateOptions,
+    rec: &mut Recorder,
+    progress: &mut dyn FnMut(f64),
+) -> Outcome {
     let start = std::time::Instant::now();
-    if x0.len() != 2 * kane.ndof() {
-        let message = format!("x0 has length {}, the mechanism needs 2n = {}", x0.len(), 2 * kane.ndof());
+    if x0.len() != 2 * n {
+        let message = format!("x0 has length {}, the mechanism needs 2n = {}", x0.len(), 2 * n);
         return Outcome { t_end: t0, error: Some(IntegrateError::InvalidInput { message }), ..Outcome::default() };
     }
     let mut opts = opts.clone();
@@ -376,19 +393,12 @@ pub fn simulate(
             rec.reserve(((t1 - t0) * fs) as usize + 2);
         }
     }
-    let run = integrate(
-        |t, x, dx| kane.rhs(t, x, dx),
-        x0,
-        t0,
-        t1,
-        &opts,
-        |s| {
-            rec.record(s.t, s.x, s.xdot);
-            if s.k.is_multiple_of(tick) {
-                progress(s.t);
-            }
-        },
-    );
+    let run = integrate(&mut rhs, x0, t0, t1, &opts, |s| {
+        rec.record(s.t, s.x, s.xdot);
+        if s.k.is_multiple_of(tick) {
+            progress(s.t);
+        }
+    });
     let wall_s = start.elapsed().as_secs_f64();
     match run {
         Ok(done) => Outcome { stats: done.stats, wall_s, t_end: done.t_end, x_end: Some(done.x_end), error: None },

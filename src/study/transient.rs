@@ -1,0 +1,618 @@
+//! Transients and run-ups: the nonlinear equations integrated from a given initial state, the
+//! spin speed free, driven through a linear run-up (or run-down) by a feed-forward torque, or
+//! prescribed (`time::drive`), with torques at any joints whose orders are locked to the spin
+//! joint's angle; the response and every element tracked into an order–rpm map
+//! (`signal::order_rpm_map`: angle-domain blocks of whole revolutions) and cut along orders.
+//!
+//! The feed-forward torque of a `Torque` run-up is the rigid-rotation torque
+//! `T(t) = J·α + Σc·Ω_ref(t)`: J the polar inertia of everything the spin joint carries turning
+//! rigidly (`uᵀMu` at the initial configuration), α the ramp's acceleration and `Σc·Ω` the
+//! viscous losses of rigid rotation (`Study::loss_torque`).
+
+use super::sim::Progress;
+use super::table::{Table, fmt_num};
+use super::{JointTorqueSpec, Output, Results, SpeedProfile, Study, TransientSpec, cell};
+use crate::error::Result;
+use crate::model::excitation::{Excitation, rpm_to_rad_s};
+use crate::plot::{Heatmap, LineStyle, Panel, Series};
+use crate::signal::{AngleOptions, OrderMap, order_rpm_map};
+use crate::time::drive::{Drive, Governor, LockedTorque, Prescribed};
+use crate::time::probe::{Outcome, Probe, Recorder, simulate_rhs};
+use serde::Serialize;
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// One order cut of the map: the amplitude of one signal at one order against the blocks' speed.
+#[derive(Debug, Clone, Serialize)]
+pub struct OrderCut {
+    /// The signal: the response body's acceleration (`<body>_accel`) or an element's coordinate
+    /// (`<joint>_q`).
+    pub signal: String,
+    /// Its unit (rad/s² for the response, rad or m for an element).
+    pub unit: &'static str,
+    /// The order cut, cycles per spin revolution.
+    pub order: f64,
+    /// Amplitude per block, signal units.
+    pub amplitude: Vec<f64>,
+    /// The largest amplitude of the cut.
+    pub peak: f64,
+    /// The blocks' mean speed at that peak, rpm.
+    pub peak_rpm: f64,
+}
+
+/// An element's largest excursion over the run.
+#[derive(Debug, Clone, Serialize)]
+pub struct ElementPeak {
+    /// The joint.
+    pub joint: String,
+    /// Unit of its coordinate (rad or m).
+    pub unit: &'static str,
+    /// Largest |q| over the run.
+    pub peak: f64,
+    /// When it occurred, s.
+    pub at_time_s: f64,
+    /// The spin speed then, rpm.
+    pub at_rpm: f64,
+}
+
+/// What a transient produced. Serialised into `results.json` without the sampled signals and the
+/// map's cells (which are there as tables, like their CSV files).
+#[derive(Debug, Clone, Serialize)]
+pub struct TransientResult {
+    /// The analysis name.
+    pub name: String,
+    /// Polar moment of inertia of the spin joint's load in rigid rotation, kg·m² (the
+    /// feed-forward's J).
+    pub rigid_inertia_kg_m2: f64,
+    /// Spin speed at the start and at the end of the run (as reached), rpm.
+    pub rpm_start: f64,
+    /// See `rpm_start`.
+    pub rpm_end: f64,
+    /// The map's speed resolution: the widest spread of speeds inside one block, rpm.
+    pub map_speed_resolution_rpm: f64,
+    /// The map's order resolution 1/R, cycles/rev.
+    pub map_order_resolution: f64,
+    /// The order cuts of the response, then of each element.
+    pub cuts: Vec<OrderCut>,
+    /// Each element's largest excursion.
+    pub elements: Vec<ElementPeak>,
+    /// The simulation's statistics and outcome.
+    pub sim: Outcome,
+    /// Sample times, s.
+    #[serde(skip)]
+    pub time_s: Vec<f64>,
+    /// Spin speed at the samples, rpm.
+    #[serde(skip)]
+    pub spin_rpm: Vec<f64>,
+    /// The response body's angular acceleration at the samples, rad/s².
+    #[serde(skip)]
+    pub response: Vec<f64>,
+    /// Per element: (q, q̇) at the samples.
+    #[serde(skip)]
+    pub element_series: Vec<(Vec<f64>, Vec<f64>)>,
+    /// The prescribed drive's torque at the samples, N·m (empty unless `Prescribed`).
+    #[serde(skip)]
+    pub drive_torque: Vec<f64>,
+    /// The response's order–rpm map (None when the run did not give one block).
+    #[serde(skip)]
+    pub map: Option<OrderMap>,
+    /// Block speeds of the map, rpm.
+    pub block_rpm: Vec<f64>,
+    /// Block centre times of the map, s.
+    pub block_time_s: Vec<f64>,
+}
+
+/// Runs the transient ([`compute`]) and writes its outputs ([`render`]).
+pub(crate) fn run(study: &Study, spec: &TransientSpec, dir: &Path, progress: &Progress) -> Result<Output> {
+    let (result, failures) = compute(study, spec, progress)?;
+    let (markdown, files) = render(study, spec, &result, dir)?;
+    Ok(Output { markdown, files, failures, results: Results::Transient(Box::new(result)) })
+}
+
+/// The cut orders: as given, or every harmonic of every torque (at most 8, lowest first).
+pub(crate) fn cut_orders(spec: &TransientSpec) -> Vec<f64> {
+    if !spec.map.cuts.is_empty() {
+        return spec.map.cuts.clone();
+    }
+    let mut orders: Vec<f64> =
+        spec.torques.iter().flat_map(|t| t.harmonics.iter().map(move |h| h.multiple * t.order)).collect();
+    orders.sort_by(f64::total_cmp);
+    orders.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    orders.truncate(8);
+    orders
+}
+
+/// `(α in rad/s², ramp length in s)` of a run-up profile; zero for `Free`.
+fn ramp(spec: &TransientSpec) -> (f64, f64) {
+    match spec.speed {
+        SpeedProfile::Free { .. } => (0.0, 0.0),
+        SpeedProfile::Torque { rpm_from, rpm_to, ramp_s, .. }
+        | SpeedProfile::Prescribed { rpm_from, rpm_to, ramp_s } => {
+            let d = ramp_s.unwrap_or(spec.duration_s);
+            ((rpm_to_rad_s(rpm_to) - rpm_to_rad_s(rpm_from)) / d, d)
+        }
+    }
+}
+
+/// The initial state `[q; u]`: the named angles, the spin joint at the profile's first speed,
+/// the named rates relative to their parents, every other joint at rest relative to its parent.
+pub(crate) fn initial_state(study: &Study, spec: &TransientSpec) -> Vec<f64> {
+    let mech = &study.mechanism;
+    let n = mech.ndof();
+    let coord = |name: &str| mech.joint_index(name).and_then(|j| mech.coordinate(j));
+    let mut x = vec![0.0; 2 * n];
+    let mut qdot = vec![0.0; n];
+    for (name, q) in &spec.angles {
+        if let Some(c) = coord(name) {
+            x[c] = *q;
+        }
+    }
+    for (name, r) in &spec.rates {
+        if let Some(c) = coord(name) {
+            qdot[c] = *r;
+        }
+    }
+    if let Some(c) = mech.coordinate(study.spin) {
+        qdot[c] = rpm_to_rad_s(spec.speed.rpm_range().0);
+    }
+    mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut x[n..]);
+    x
+}
+
+/// A torque of the study file as the drive's crank-locked torque.
+fn locked(study: &Study, t: &JointTorqueSpec) -> LockedTorque {
+    LockedTorque {
+        joint: study.mechanism.joint_index(&t.joint).unwrap_or(study.spin),
+        mean_nm: t.mean,
+        mean_slope_nm_s: 0.0,
+        mean_until_s: 0.0,
+        order: t.order,
+        harmonics: t.harmonics.clone(),
+        ramp_s: t.ramp_s,
+    }
+}
+
+/// Integrates the transient and tracks its map; the run's failure (if any) is listed and its
+/// samples up to there kept, and a map that cannot be made is listed without costing the time
+/// series.
+pub(crate) fn compute(
+    study: &Study,
+    spec: &TransientSpec,
+    progress: &Progress,
+) -> Result<(TransientResult, Vec<String>)> {
+    let mech = &study.mechanism;
+    let spin = study.spin;
+    let mut kane = study.kane(false)?;
+    // The analysis's torques replace the mechanism's own.
+    for jt in kane.joint_torques().to_vec() {
+        kane.set_joint_torque(jt.joint, Excitation::constant(0.0));
+    }
+    let x0 = initial_state(study, spec);
+    let n = mech.ndof();
+    let (alpha, ramp_s) = ramp(spec);
+    let omega0 = rpm_to_rad_s(spec.speed.rpm_range().0);
+    let mut torques: Vec<LockedTorque> = spec.torques.iter().map(|t| locked(study, t)).collect();
+    let prescribed = match spec.speed {
+        SpeedProfile::Prescribed { .. } => Some(Prescribed { joint: spin, accel: alpha, until_s: ramp_s }),
+        _ => None,
+    };
+    let mut drive = Drive::new(kane, spin, Vec::new(), prescribed)?;
+    let inertia = drive.rigid_inertia(spin, &x0[..n]).unwrap_or(f64::NAN);
+    if prescribed.is_none() {
+        // The losses of rigid rotation at the reference speed, plus J·α through the ramp.
+        let c = Study::loss_torque(mech, spin, 1.0);
+        torques.push(LockedTorque {
+            joint: spin,
+            mean_nm: c * omega0 + inertia * alpha,
+            mean_slope_nm_s: c * alpha,
+            mean_until_s: ramp_s,
+            order: 1.0,
+            harmonics: Vec::new(),
+            ramp_s: 0.0,
+        });
+    }
+    let mut drive = Drive::new(drive.into_kane(), spin, torques, prescribed)?;
+    if let SpeedProfile::Torque { governor_s: Some(tau), .. } = spec.speed {
+        drive = drive.with_governor(Governor {
+            joint: spin,
+            gain: inertia / tau,
+            rate0: omega0,
+            accel: alpha,
+            until_s: ramp_s,
+        })?;
+    }
+
+    let mut probes = vec![Probe::BodyAccel(study.body), Probe::JointAngle(spin), Probe::JointRate(spin)];
+    for &j in &study.elements {
+        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
+    }
+    let mut rec = Recorder::new(mech, &probes)?;
+    let opts = super::sim::options(&study.spec.integration);
+    let bar = progress.bar(spec.duration_s, &spec.name);
+    let sim = simulate_rhs(|t, x, dx| drive.rhs(t, x, dx), n, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| {
+        bar.set_position((t * 1000.0) as u64)
+    });
+    bar.finish_and_clear();
+    let mut failures = Vec::new();
+    if let Some(e) = &sim.error {
+        failures.push(format!("{}: {e} (the samples up to there are kept)", spec.name));
+    }
+    let to_rpm = 60.0 / (2.0 * PI);
+    let time_s = std::mem::take(&mut rec.time);
+    let mut cols = std::mem::take(&mut rec.columns).into_iter();
+    let response = cols.next().unwrap_or_default();
+    let theta = cols.next().unwrap_or_default();
+    let spin_rpm: Vec<f64> = cols.next().unwrap_or_default().iter().map(|w| w * to_rpm).collect();
+    let element_series: Vec<(Vec<f64>, Vec<f64>)> =
+        study.elements.iter().map(|_| (cols.next().unwrap_or_default(), cols.next().unwrap_or_default())).collect();
+
+    // The drive's torque at the samples, from the state rebuilt out of every joint's (q, q̇)
+    // would need them all; the recorded ones are the spin and the elements, so it is evaluated
+    // from a full state only when every coordinate is recorded.
+    let mut drive_torque = Vec::new();
+    if prescribed.is_some() {
+        drive_torque = reaction(&mut drive, study, &time_s, &theta, &spin_rpm, &element_series);
+    }
+
+    let fs = study.spec.integration.sample_hz;
+    let opts_map = AngleOptions {
+        samples_per_rev: spec.map.samples_per_rev,
+        revs_per_block: spec.map.revs_per_block,
+        hop_revs: spec.map.hop_revs,
+        half_width_bins: study.spec.order_tracking.half_width_bins,
+    };
+    let orders = cut_orders(spec);
+    let mut cuts = Vec::new();
+    let mut map = None;
+    let body = &study.spec.response_body;
+    match order_rpm_map(&response, &theta, fs, spec.map.max_order, &opts_map) {
+        Ok(m) => {
+            cuts.extend(cuts_of(&m, &orders, &format!("{body}_accel"), "rad/s²"));
+            for (e, &j) in study.elements.iter().enumerate() {
+                let joint = &mech.joints[j];
+                match order_rpm_map(&element_series[e].0, &theta, fs, spec.map.max_order, &opts_map) {
+                    Ok(em) => cuts.extend(cuts_of(&em, &orders, &format!("{}_q", joint.name), joint.kind.coordinate_unit())),
+                    Err(err) => failures.push(format!("{}: order map of `{}`: {err}", spec.name, joint.name)),
+                }
+            }
+            map = Some(m);
+        }
+        Err(e) => failures.push(format!(
+            "{}: no order–rpm map ({e}); it needs the spin joint turning forwards through at least one block of {} revolutions",
+            spec.name, spec.map.revs_per_block
+        )),
+    }
+    let elements = study
+        .elements
+        .iter()
+        .zip(&element_series)
+        .map(|(&j, (q, _))| {
+            let (k, peak) = q
+                .iter()
+                .enumerate()
+                .map(|(k, v)| (k, v.abs()))
+                .fold((0, f64::NAN), |a, b| if b.1 > a.1 || a.1.is_nan() { b } else { a });
+            ElementPeak {
+                joint: mech.joints[j].name.clone(),
+                unit: mech.joints[j].kind.coordinate_unit(),
+                peak,
+                at_time_s: time_s.get(k).copied().unwrap_or(f64::NAN),
+                at_rpm: spin_rpm.get(k).copied().unwrap_or(f64::NAN),
+            }
+        })
+        .collect();
+    let result = TransientResult {
+        name: spec.name.clone(),
+        rigid_inertia_kg_m2: inertia,
+        rpm_start: spin_rpm.first().copied().unwrap_or(f64::NAN),
+        rpm_end: spin_rpm.last().copied().unwrap_or(f64::NAN),
+        map_speed_resolution_rpm: map.as_ref().map_or(f64::NAN, OrderMap::speed_resolution_rpm),
+        map_order_resolution: 1.0 / spec.map.revs_per_block as f64,
+        cuts,
+        elements,
+        sim,
+        block_rpm: map.as_ref().map(|m| m.rpm.clone()).unwrap_or_default(),
+        block_time_s: map.as_ref().map(|m| m.time_s.clone()).unwrap_or_default(),
+        time_s,
+        spin_rpm,
+        response,
+        element_series,
+        drive_torque,
+        map,
+    };
+    Ok((result, failures))
+}
+
+/// The drive's torque at every sample, when the recorded joints (spin and elements) are all the
+/// mechanism's coordinates; otherwise empty.
+fn reaction(
+    drive: &mut Drive,
+    study: &Study,
+    time_s: &[f64],
+    theta: &[f64],
+    spin_rpm: &[f64],
+    element_series: &[(Vec<f64>, Vec<f64>)],
+) -> Vec<f64> {
+    let mech = &study.mechanism;
+    let n = mech.ndof();
+    if study.elements.len() + 1 != n {
+        return Vec::new();
+    }
+    let parents = mech.speed_parents();
+    let mut coords = vec![mech.coordinate(study.spin).unwrap_or(0)];
+    coords.extend(study.elements.iter().map(|&j| mech.coordinate(j).unwrap_or(0)));
+    let mut x = vec![0.0; 2 * n];
+    let mut qdot = vec![0.0; n];
+    (0..time_s.len())
+        .map(|k| {
+            x[coords[0]] = theta[k];
+            qdot[coords[0]] = spin_rpm[k] * 2.0 * PI / 60.0;
+            for (e, (q, qd)) in element_series.iter().enumerate() {
+                x[coords[e + 1]] = q[k];
+                qdot[coords[e + 1]] = qd[k];
+            }
+            mech.speeds.u_from_qdot(&parents, &qdot, &mut x[n..]);
+            drive.drive_torque(time_s[k], &x).unwrap_or(f64::NAN)
+        })
+        .collect()
+}
+
+/// The cuts of `map` at `orders` for one signal.
+fn cuts_of(map: &OrderMap, orders: &[f64], signal: &str, unit: &'static str) -> Vec<OrderCut> {
+    orders
+        .iter()
+        .filter_map(|&order| {
+            let amplitude = map.cut(order)?;
+            let (k, peak) = amplitude
+                .iter()
+                .copied()
+                .enumerate()
+                .fold((0, f64::NAN), |a, b| if b.1 > a.1 || a.1.is_nan() { b } else { a });
+            Some(OrderCut { signal: signal.to_string(), unit, order, peak, peak_rpm: map.rpm[k], amplitude })
+        })
+        .collect()
+}
+
+/// The transient's CSV tables: the time series (when asked for), the map in long form (one row
+/// per block and order) and the order cuts side by side.
+pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -> Vec<Table> {
+    let mut out = Vec::new();
+    let mech = &study.mechanism;
+    if spec.write_time_series {
+        let mut t = Table::new(format!("{}_series", spec.name));
+        t.push("time_s", "s", r.time_s.clone());
+        t.push("spin_rpm", "rpm", r.spin_rpm.clone());
+        t.push(format!("{}_accel_rad_s2", study.spec.response_body), "rad/s²", r.response.clone());
+        for (&j, (q, qd)) in study.elements.iter().zip(&r.element_series) {
+            let joint = &mech.joints[j];
+            let u = joint.kind.coordinate_unit();
+            let (qu, ru) = if u == "m" { ("m", "m/s") } else { ("rad", "rad/s") };
+            t.push(format!("{}_q_{}", joint.name, qu), u, q.clone());
+            t.push(format!("{}_qdot_{}", joint.name, ru.replace('/', "_")), ru_static(ru), qd.clone());
+        }
+        if !r.drive_torque.is_empty() {
+            t.push("drive_torque_Nm", "N·m", r.drive_torque.clone());
+        }
+        out.push(t);
+    }
+    if let Some(m) = &r.map {
+        let mut t = Table::new(format!("{}_map", spec.name));
+        let cells = m.rpm.len() * m.orders.len();
+        let (mut time, mut rpm, mut order, mut amp) = (
+            Vec::with_capacity(cells),
+            Vec::with_capacity(cells),
+            Vec::with_capacity(cells),
+            Vec::with_capacity(cells),
+        );
+        for (b, row) in m.amplitude.iter().enumerate() {
+            for (o, &a) in m.orders.iter().zip(row) {
+                time.push(m.time_s[b]);
+                rpm.push(m.rpm[b]);
+                order.push(*o);
+                amp.push(a);
+            }
+        }
+        t.push("time_s", "s", time);
+        t.push("rpm", "rpm", rpm);
+        t.push("order", "1", order);
+        t.push(format!("{}_accel_rad_s2", study.spec.response_body), "rad/s²", amp);
+        out.push(t);
+        let mut c = Table::new(format!("{}_cuts", spec.name));
+        c.push("time_s", "s", m.time_s.clone());
+        c.push("rpm", "rpm", m.rpm.clone());
+        for cut in &r.cuts {
+            c.push(
+                format!("{}_{}x_{}", cut.signal, fmt_num(cut.order), unit_tag(cut.unit)),
+                cut.unit,
+                cut.amplitude.clone(),
+            );
+        }
+        out.push(c);
+    }
+    out
+}
+
+fn ru_static(u: &str) -> &'static str {
+    if u == "m/s" { "m/s" } else { "rad/s" }
+}
+
+/// A unit for a CSV header: `rad/s²` → `rad_s2`.
+fn unit_tag(u: &str) -> String {
+    u.replace("/s²", "_s2").replace('/', "_").replace('·', "")
+}
+
+/// Writes the tables, the map and the cuts and returns the summary section.
+pub(crate) fn render(
+    study: &Study,
+    spec: &TransientSpec,
+    r: &TransientResult,
+    dir: &Path,
+) -> Result<(String, Vec<PathBuf>)> {
+    let mut files = Vec::new();
+    for t in tables(study, spec, r) {
+        files.push(t.write_csv(dir)?);
+    }
+    let body = &study.spec.response_body;
+    if let Some(m) = &r.map {
+        let heat = Heatmap {
+            title: format!("{}: order–rpm map of the {body} acceleration", spec.name),
+            x_label: "spin speed, rpm".into(),
+            y_label: "order".into(),
+            z_label: "rad/s²".into(),
+            x: m.rpm.clone(),
+            y: m.orders.clone(),
+            z: m.amplitude.clone(),
+            db_range: 60.0,
+            y_markers: cut_orders(spec).iter().map(|&o| (o, fmt_num(o))).collect(),
+        };
+        if increasing(&m.rpm) {
+            let svg = dir.join(format!("{}_map.svg", spec.name));
+            crate::plot::write_heatmap_svg(&svg, &heat, 760, 460)?;
+            files.push(svg);
+        }
+    }
+    let mut panels = vec![Panel {
+        title: format!("{}: spin speed", spec.name),
+        x_label: "time, s".into(),
+        y_label: "speed, rpm".into(),
+        series: vec![Series {
+            label: "spin joint".into(),
+            x: thin(&r.time_s),
+            y: thin(&r.spin_rpm),
+            ..Series::default()
+        }],
+        ..Panel::default()
+    }];
+    let signals: Vec<&str> = {
+        let mut s: Vec<&str> = r.cuts.iter().map(|c| c.signal.as_str()).collect();
+        s.dedup();
+        s
+    };
+    for sig in signals {
+        let series = r
+            .cuts
+            .iter()
+            .filter(|c| c.signal == sig)
+            .enumerate()
+            .map(|(k, c)| Series {
+                label: format!("order {}", fmt_num(c.order)),
+                x: r.block_rpm.clone(),
+                y: c.amplitude.clone(),
+                color: k,
+                style: LineStyle::Solid,
+            })
+            .collect();
+        let unit = r.cuts.iter().find(|c| c.signal == sig).map_or("", |c| c.unit);
+        panels.push(Panel {
+            title: format!("{sig}: order cuts"),
+            x_label: "spin speed, rpm".into(),
+            y_label: format!("amplitude, {unit}"),
+            log_y: true,
+            series,
+            ..Panel::default()
+        });
+    }
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 560, 400)?;
+    files.push(svg);
+    Ok((summary(study, spec, r), files))
+}
+
+/// Every k-th value, at most 2000: a line plot of 10⁵ samples would weigh megabytes and show no
+/// more than its pixels.
+fn thin(v: &[f64]) -> Vec<f64> {
+    let step = v.len().div_ceil(2000).max(1);
+    v.iter().step_by(step).copied().collect()
+}
+
+fn increasing(v: &[f64]) -> bool {
+    v.windows(2).all(|w| w[1] > w[0])
+}
+
+fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
+    let mut md = String::new();
+    let profile = match spec.speed {
+        SpeedProfile::Free { rpm } => format!("spin free from {} rpm", fmt_num(rpm)),
+        SpeedProfile::Torque { rpm_from, rpm_to, .. } => {
+            format!(
+                "run {} → {} rpm driven by the feed-forward torque J·α + losses{}",
+                fmt_num(rpm_from),
+                fmt_num(rpm_to),
+                match spec.speed {
+                    SpeedProfile::Torque { governor_s: Some(tau), .. } =>
+                        format!(" and a speed governor (τ = {} s)", fmt_num(tau)),
+                    _ => String::new(),
+                }
+            )
+        }
+        SpeedProfile::Prescribed { rpm_from, rpm_to, .. } => {
+            format!("spin speed prescribed {} → {} rpm", fmt_num(rpm_from), fmt_num(rpm_to))
+        }
+    };
+    let _ = writeln!(md, "## Transient `{}`: {} s, {profile}\n", spec.name, fmt_num(spec.duration_s));
+    let _ = writeln!(
+        md,
+        "Rigid-rotation inertia of the spin joint's load J = {} kg·m²; speed {} → {} rpm as reached; {} steps, {} right-hand sides.\n",
+        cell(r.rigid_inertia_kg_m2, 6),
+        cell(r.rpm_start, 2),
+        cell(r.rpm_end, 2),
+        r.sim.stats.accepted,
+        r.sim.rhs_evals()
+    );
+    let target = spec.speed.rpm_range().1;
+    if !matches!(spec.speed, SpeedProfile::Free { .. })
+        && r.sim.error.is_none()
+        && (r.rpm_end - target).abs() > 0.05 * target.max(1.0)
+    {
+        let _ = writeln!(
+            md,
+            "**The speed did not follow the ramp**: it ended at {} rpm against {} rpm. Power drawn by a resonance \
+             held the mean speed back (the Sommerfeld effect of a torque-limited drive); a speed governor \
+             (`governor_s`) or a prescribed speed takes the run through.\n",
+            cell(r.rpm_end, 1),
+            fmt_num(target)
+        );
+    }
+    if r.map.is_some() {
+        let _ = writeln!(
+            md,
+            "Order–rpm map of the `{}` acceleration: blocks of {} revolutions (order resolution {}), speed resolution {} rpm (the widest spread of speeds inside one block).\n",
+            study.spec.response_body,
+            spec.map.revs_per_block,
+            fmt_num(r.map_order_resolution),
+            cell(r.map_speed_resolution_rpm, 2)
+        );
+    }
+    if !r.cuts.is_empty() {
+        md += "| signal | order | peak amplitude | unit | at (rpm) |\n|---|---|---|---|---|\n";
+        for c in &r.cuts {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                c.signal,
+                fmt_num(c.order),
+                cell(c.peak, 6),
+                c.unit,
+                cell(c.peak_rpm, 1)
+            );
+        }
+        md.push('\n');
+    }
+    if !r.elements.is_empty() {
+        md += "| element | largest excursion | unit | at time (s) | at speed (rpm) |\n|---|---|---|---|---|\n";
+        for e in &r.elements {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                e.joint,
+                cell(e.peak, 6),
+                e.unit,
+                cell(e.at_time_s, 3),
+                cell(e.at_rpm, 1)
+            );
+        }
+        md.push('\n');
+    }
+    md
+}
