@@ -202,3 +202,17 @@ def test_a_chunk_lost_on_the_workers_is_reported_row_by_row(tmp_path, client):
     assert np.isnan(t["peak_accel_1x_rad_s2"]).all()
     assert "the Dask task for cases 0..1 failed" in t["error"][0] and "InputError" in t["error"][0] and "cannot read" in t["error"][0]
     assert "the Dask task for cases 2..2 failed" in t["error"][2]
+
+
+def test_a_scheduler_address_takes_the_cases_to_that_cluster(client):
+    """Given as an address, the scheduler is connected to for this run and let go after; the
+    cluster stays up for its owner."""
+    from kanedyn import dask as kdask
+
+    ex = kanedyn.Study.from_file(EXAMPLES / "design_study.ron")
+    here = kdask.table(ex, "tuning", ex.run_cases("tuning"))
+    remote = kdask.run(ex, client.scheduler.address, names=["tuning"], progress=False)["tuning"]
+    for name, column in here.items():
+        if column.dtype.kind == "f":
+            assert np.array_equal(bits(remote[name]), bits(column)), name
+    assert len(client.scheduler_info()["workers"]) == 2
