@@ -6,8 +6,9 @@
 
 use kanedyn::hbm::{Hbm, HbmOptions};
 use kanedyn::kane::Kane;
-use kanedyn::model::excitation::Harmonic;
+use kanedyn::model::excitation::{Excitation, Harmonic, Order};
 use kanedyn::study::{RunOptions, Study, run};
+use kanedyn::time::integrate::{IntegrateOptions, integrate};
 
 const K: f64 = 2.0e3; // arc spring, N·m/rad
 const C: f64 = 1.0; // its damping, N·m·s/rad
@@ -127,4 +128,110 @@ fn every_element_is_reported_and_both_routes_agree() {
         }
     }
     println!("branch elements vs an independent solve: worst {worst:.1e}");
+
+    // The periodic orbit by shooting, written below: the time run's and the harmonic balance's
+    // element amplitudes must both equal its own, order by order. The time run settles to 1e-6
+    // between whole-period windows: measured ≤ 1.1e-5 against the orbit; bound 1e-4, as issue 13
+    // asks. The harmonic balance (H = 10) is exact to its truncation: measured ≤ 1.8e-8; bound
+    // 1e-6.
+    let spin = mech.joint_index("spin").unwrap();
+    let mut kane = Kane::new(mech).unwrap();
+    let harmonics = vec![
+        Harmonic { multiple: 1.0, amplitude: 60.0, phase: 0.0 },
+        Harmonic { multiple: 2.0, amplitude: 30.0, phase: 0.4 },
+    ];
+    // The study's default mean torque: the secondary's loss to ground at Ω.
+    let mean = 5e-3 * omega;
+    kane.set_joint_torque(spin, Excitation { mean, rpm: 1500.0, order: Order::Fixed(3.0), harmonics, ramp_s: 0.0 });
+    let period = 2.0 * std::f64::consts::PI / (3.0 * omega);
+    let x_end = td.sim.x_end.as_ref().expect("the time run completed");
+    let orbit = periodic_orbit(&mut kane, x_end, td.sim.t_end, period, omega, mech.coordinate(spin).unwrap());
+    let (mut worst_td, mut worst_hbm) = (0.0f64, 0.0f64);
+    let (state, _) = s.hbm_match().expect("a stable periodic state");
+    for (t, h) in td.elements.iter().zip(&state.elements) {
+        let k = mech.coordinate_index(&t.joint).unwrap();
+        let series: Vec<f64> = orbit.iter().map(|q| q[k]).collect();
+        for m in 0..2 {
+            let reference = harmonic_amplitude(&series, m + 1);
+            let (e_td, e_hbm) =
+                ((t.amplitude[m] - reference).abs() / reference, (h.amplitude[m] - reference).abs() / reference);
+            println!("{} order {}n vs shooting {reference:.6e}: time run {e_td:.1e}, HBM {e_hbm:.1e}", t.joint, m + 1);
+            worst_td = worst_td.max(e_td);
+            worst_hbm = worst_hbm.max(e_hbm);
+        }
+    }
+    assert!(worst_td <= 1e-4, "time run vs shooting {worst_td:e}");
+    assert!(worst_hbm <= 1e-6, "harmonic balance vs shooting {worst_hbm:e}");
+}
+
+/// A periodic orbit of the driveline by shooting, written here apart from the library's harmonic
+/// balance and the study's time runs: under `T(t) = c·Ω + Σ T_k sin(k·nΩt + α_k)` (period
+/// P = 2π/(nΩ)) with the spin angle cyclic, the orbit satisfies `x(t0 + P) = x(t0) + ΩP·e_spin`.
+/// Newton on every state but the spin angle (a gauge), the Jacobian by central differences of
+/// one-period integrations (DOP853 at 1e-12), from the study's end state. Returns the orbit's
+/// coordinates at N equally spaced instants of one period.
+fn periodic_orbit(kane: &mut Kane, x_start: &[f64], t0: f64, period: f64, omega: f64, spin: usize) -> Vec<Vec<f64>> {
+    const N: usize = 256;
+    let opts = |fs: Option<f64>| IntegrateOptions {
+        rtol: 1e-12,
+        atol: 1e-12,
+        sample_rate_hz: fs,
+        ..IntegrateOptions::default()
+    };
+    let dim = x_start.len();
+    let free: Vec<usize> = (0..dim).filter(|&i| i != spin).collect();
+    let mut flow = |x: &[f64]| -> Vec<f64> {
+        integrate(|t, x, dx| kane.rhs(t, x, dx), x, t0, t0 + period, &opts(None), |_| {}).unwrap().x_end
+    };
+    let residual = |x: &[f64], end: &[f64]| -> Vec<f64> {
+        free.iter().map(|&i| end[i] - x[i] - if i == spin { omega * period } else { 0.0 }).collect()
+    };
+    let mut x = x_start.to_vec();
+    for _ in 0..8 {
+        let r = residual(&x, &flow(&x));
+        let norm = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if norm < 1e-12 {
+            break;
+        }
+        let m = free.len();
+        let mut jac = nalgebra::DMatrix::zeros(m, m);
+        for (c, &i) in free.iter().enumerate() {
+            let h = 1e-6 * (1.0 + x[i].abs());
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[i] += h;
+            xm[i] -= h;
+            let (rp, rm) = (residual(&xp, &flow(&xp)), residual(&xm, &flow(&xm)));
+            for row in 0..m {
+                jac[(row, c)] = (rp[row] - rm[row]) / (2.0 * h);
+            }
+        }
+        let dx = jac.lu().solve(&nalgebra::DVector::from_vec(r)).expect("a regular shooting Jacobian");
+        for (c, &i) in free.iter().enumerate() {
+            x[i] -= dx[c];
+        }
+    }
+    let mut samples = Vec::with_capacity(N + 1);
+    integrate(
+        |t, x, dx| kane.rhs(t, x, dx),
+        &x,
+        t0,
+        t0 + period,
+        &opts(Some(N as f64 / period)),
+        |s| samples.push(s.x[..dim / 2].to_vec()),
+    )
+    .unwrap();
+    samples.truncate(N);
+    samples
+}
+
+/// Amplitude of harmonic h of one period sampled at N equal steps (discrete Fourier transform).
+fn harmonic_amplitude(v: &[f64], h: usize) -> f64 {
+    let n = v.len() as f64;
+    let (mut re, mut im) = (0.0, 0.0);
+    for (j, x) in v.iter().enumerate() {
+        let a = 2.0 * std::f64::consts::PI * (h * j) as f64 / n;
+        re += x * a.cos();
+        im -= x * a.sin();
+    }
+    2.0 * re.hypot(im) / n
 }

@@ -53,6 +53,14 @@ const STUDY: &str = r#"Study(
     ],
 )"#;
 
+/// The shaft's twist φ̂ (rad, complex) for torques `t_spin`, `t_shaft` at ω (rad/s).
+fn closed_form_twist(w: f64, t_spin: C, t_shaft: C) -> C {
+    let i = C::new(0.0, 1.0);
+    let (a, b) = (-w * w * (J_H + J_R) + i * w * C_R, -w * w * J_R + i * w * C_R);
+    let d = -w * w * J_R + i * w * (C_S + C_R) + K;
+    (a * t_shaft - b * t_spin) / (a * d - b * b)
+}
+
 /// The flywheel's angular acceleration (rad/s², complex) for torques `t_spin`, `t_shaft` (N·m,
 /// complex amplitudes) at ω (rad/s).
 fn closed_form(w: f64, t_spin: C, t_shaft: C) -> C {
@@ -89,6 +97,20 @@ fn torques_at_any_joint_give_the_closed_form_in_every_analysis() {
         }
     }
     println!("linear response vs closed form: {worst:.1e}");
+    assert!(worst <= 1e-9, "{worst:e}");
+    // The shaft's twist per N·m and the torque its spring and damper transmit, (k + iωc)·φ̂,
+    // for the torque at the shaft alone: φ̂ from the same 2 × 2 system.
+    let v = &report.linear[0].variants[0];
+    let e = &v.elements[0];
+    assert_eq!(e.joint, "shaft");
+    let mut worst: f64 = 0.0;
+    for (i, &n) in v.orders.iter().enumerate() {
+        let phi = closed_form_twist(n * omega, zero, one);
+        let torque = (C::new(K, n * omega * C_S) * phi).norm();
+        worst = worst.max((e.amplitude[i] - phi.norm()).abs() / phi.norm());
+        worst = worst.max((e.torque[i] - torque).abs() / torque);
+    }
+    println!("linear shaft twist and torque vs closed form: {worst:.1e}");
     assert!(worst <= 1e-9, "{worst:e}");
 
     // Harmonic balance of a linear system: the main-order amplitude is |H|·T at every point of

@@ -16,6 +16,21 @@ impl LinearModel {
     pub fn acceleration_response(&self, body: usize, joint: usize, order: f64) -> LinResult<C64> {
         let n = self.ndof();
         let w = self.op.omega * order;
+        let x = self.state_response(joint, order)?;
+        let c = self.angular_velocity_row(body);
+        let mut om = C64::new(0.0, 0.0);
+        for r in 0..n {
+            om += x[n + r] * c[r];
+        }
+        Ok(C64::new(0.0, w) * om)
+    }
+
+    /// The complex amplitudes `x̂ = [q̂; û]` of the whole first-order state (rad and rad/s per
+    /// N·m; m and m/s for slides) for a unit torque `e^{iΩnt}` in joint `joint`, spin free
+    /// (eq. 22).
+    pub fn state_response(&self, joint: usize, order: f64) -> LinResult<DVector<C64>> {
+        let n = self.ndof();
+        let w = self.op.omega * order;
         let iw = C64::new(0.0, w);
         let mut k = DMatrix::from_element(2 * n, 2 * n, C64::new(0.0, 0.0));
         for i in 0..n {
@@ -32,12 +47,7 @@ impl LinearModel {
         if x.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
             return Err(LinearError::Singular { order });
         }
-        let c = self.angular_velocity_row(body);
-        let mut om = C64::new(0.0, 0.0);
-        for r in 0..n {
-            om += x[n + r] * c[r];
-        }
-        Ok(iw * om)
+        Ok(x)
     }
 
     /// The high-order limit of the acceleration response: `c·M⁰⁻¹·g`, rad/s² per N·m (inertia
@@ -177,6 +187,12 @@ impl OrderResponse {
     /// Complex α̂ of the body per N·m at order n.
     pub fn response(&self, order: f64) -> LinResult<C64> {
         weighted(&self.input, |j| self.model.acceleration_response(self.body, j, order))
+    }
+
+    /// Complex amplitude of coordinate `k` of the mechanism (rad per N·m, m per N·m for a slide)
+    /// at order n, under the weighted inputs.
+    pub fn coordinate_response(&self, k: usize, order: f64) -> LinResult<C64> {
+        weighted(&self.input, |j| Ok(self.model.state_response(j, order)?[k]))
     }
 
     /// Complex α̂ of the locked mechanism's body per N·m at order n.

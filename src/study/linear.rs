@@ -38,6 +38,22 @@ pub struct ResponseVariant {
     pub crossing: Option<f64>,
     /// High-order limit of the ratio.
     pub asymptote: f64,
+    /// Each reported element's response per unit torque at each order.
+    pub elements: Vec<ElementFrf>,
+}
+
+/// One element's linear response per unit excitation torque over the orders of a variant.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ElementFrf {
+    /// The joint.
+    pub joint: String,
+    /// Unit of its coordinate (rad or m).
+    pub unit: &'static str,
+    /// |q̂| per N·m at each order (rad or m per N·m).
+    pub amplitude: Vec<f64>,
+    /// |(k + iωc)·q̂| per N·m at each order: the torque its spring and damper transmit (N·m per
+    /// N·m; N per N·m for a slide). Under modal damping, the spring's alone.
+    pub torque: Vec<f64>,
 }
 
 /// A linear frequency-response analysis.
@@ -171,6 +187,29 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
                 spec.name, v.label, orders[i]
             ));
         }
+        let mut elements = Vec::with_capacity(study.elements.len());
+        for &j in &study.elements {
+            let joint = &m.joints[j];
+            let Some(c) = m.coordinate(j) else { continue };
+            let k = joint.spring.map_or(0.0, |s| s.stiffness);
+            let damper = if spec.modal_damping.is_some() { 0.0 } else { joint.damper };
+            let mut amplitude = Vec::with_capacity(orders.len());
+            let mut torque = Vec::with_capacity(orders.len());
+            for &n in &orders {
+                let (a, t) = match resp.coordinate_response(c, n) {
+                    Ok(q) => (q.norm(), (crate::linear::C64::new(k, n * omega * damper) * q).norm()),
+                    Err(_) => (f64::NAN, f64::NAN),
+                };
+                amplitude.push(a);
+                torque.push(t);
+            }
+            elements.push(ElementFrf {
+                joint: joint.name.clone(),
+                unit: joint.kind.coordinate_unit(),
+                amplitude,
+                torque,
+            });
+        }
         results.push(ResponseVariant {
             label: v.label.clone(),
             orders: orders.clone(),
@@ -181,6 +220,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             max: (ext.max_order, ext.max_ratio),
             crossing,
             asymptote,
+            elements,
         });
     }
     let result = LinearResult { name: spec.name.clone(), n_t, free_orders, modes, variants: results };
@@ -205,6 +245,15 @@ pub(crate) fn response_tables(study: &Study, spec: &LinearResponseSpec, r: &Line
             if normalised {
                 t.push("locked_rad_s2_per_Nm", "rad/s² per N·m", v.locked.clone());
                 t.push("ratio", "1", v.ratio.clone());
+            }
+            for e in &v.elements {
+                let (q, tq, qu, tu) = if e.unit == "m" {
+                    ("m_per_Nm", "torque_N_per_Nm", "m per N·m", "N per N·m")
+                } else {
+                    ("rad_per_Nm", "torque_Nm_per_Nm", "rad per N·m", "1")
+                };
+                t.push(format!("{}_{q}", e.joint), qu, e.amplitude.clone());
+                t.push(format!("{}_{tq}", e.joint), tu, e.torque.clone());
             }
             t
         })
@@ -362,6 +411,7 @@ pub(crate) fn render_response(
             let _ = writeln!(md, "| {} | {:.6e} | {:.5} | {:.6e} | {:.5} |", r.label, lo.1, lo.0, hi.1, hi.0);
         }
         md.push('\n');
+        md += &element_table(results);
         return Ok((md, files));
     }
     let _ = writeln!(
@@ -388,7 +438,45 @@ pub(crate) fn render_response(
         );
     }
     md.push('\n');
+    md += &element_table(results);
     Ok((md, files))
+}
+
+/// A number in exponent form with six digits, or `undefined`.
+fn sci(v: f64) -> String {
+    if v.is_finite() { format!("{v:.6e}") } else { "undefined".into() }
+}
+
+/// The elements' largest response per unit torque over the order range, per variant.
+fn element_table(results: &[ResponseVariant]) -> String {
+    let mut md = String::new();
+    if results.iter().all(|r| r.elements.is_empty()) {
+        return md;
+    }
+    md += "Elements, per N·m of excitation (largest over the orders evaluated):\n\n";
+    md += "| variant | element | amplitude per N·m | at n | spring + damper torque per N·m | at n |\n|---|---|---|---|---|---|\n";
+    let top = |orders: &[f64], v: &[f64]| {
+        orders.iter().zip(v).fold((f64::NAN, f64::NAN), |b, (&n, &a)| if b.1.is_nan() || a > b.1 { (n, a) } else { b })
+    };
+    for r in results {
+        for e in &r.elements {
+            let (na, a) = top(&r.orders, &e.amplitude);
+            let (nt, t) = top(&r.orders, &e.torque);
+            let _ = writeln!(
+                md,
+                "| {} | `{}` | {} {} | {} | {} | {} |",
+                r.label,
+                e.joint,
+                sci(a),
+                if e.unit == "m" { "m" } else { "rad" },
+                super::cell(na, 5),
+                sci(t),
+                super::cell(nt, 5)
+            );
+        }
+    }
+    md.push('\n');
+    md
 }
 
 /// Runs the Campbell analysis ([`compute_campbell`]) and writes its outputs
