@@ -4,8 +4,9 @@
 #   python/run-tests.sh [pytest arguments…]
 #
 # On a clean machine it creates a virtual environment (python/.venv, or $KANEDYN_VENV) and
-# installs maturin, numpy, pytest, mypy (for the stub check) and jsonschema (for results.json)
-# into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
+# installs maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json),
+# dask[distributed] (design studies on a cluster) and nbclient, nbformat, ipykernel and matplotlib
+# (the notebook example, executed by a test) into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
 # seconds. Needs python3 (≥ 3.9, with venv) and cargo on PATH; $PYTHON picks another
 # interpreter for a new environment.
 set -euo pipefail
@@ -20,9 +21,11 @@ if [ ! -x "$py" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
 # Installed once; checked by import so that a half-made environment is completed.
-if ! "$py" -c "import maturin, numpy, pytest, mypy, jsonschema" 2>/dev/null; then
-    echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json)"
-    "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy jsonschema
+if ! "$py" -c "import maturin, numpy, pytest, mypy, jsonschema, distributed, nbclient, nbformat, ipykernel, matplotlib" 2>/dev/null; then
+    echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json)," \
+        "dask[distributed] (design studies on a cluster), nbclient, nbformat, ipykernel, matplotlib (the notebook)"
+    "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy jsonschema \
+        "dask[distributed]" nbclient nbformat ipykernel matplotlib
 fi
 
 # The package, in release mode (the bit-for-bit tests compare against the release CLI, and the

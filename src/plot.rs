@@ -20,6 +20,8 @@ pub enum LineStyle {
     Dashed,
     /// Dots (the paper's locked-rotor references).
     Dotted,
+    /// A filled circle at each point and no line (cases of a design study drawn at random).
+    Points,
 }
 
 /// One curve: points `(x[i], y[i])`, a legend label, a colour index into a fixed palette and a
@@ -278,6 +280,7 @@ where
             LineStyle::Solid => chart.draw_series(LineSeries::new(pts, style))?,
             LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?,
             LineStyle::Dotted => chart.draw_series(DashedLineSeries::new(pts, 2, 4, style))?,
+            LineStyle::Points => chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))?,
         };
         if !s.label.is_empty() {
             // NOTE: a legend sample is one path; a short stub for dashed/dotted lines reads well
@@ -285,7 +288,7 @@ where
             let len = match s.style {
                 LineStyle::Solid => 20,
                 LineStyle::Dashed => 8,
-                LineStyle::Dotted => 3,
+                LineStyle::Dotted | LineStyle::Points => 3,
             };
             anno.label(&s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(2)));
         }

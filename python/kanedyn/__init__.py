@@ -11,6 +11,10 @@ balance, or run a whole study file, with NumPy arrays in and out::
     modes = kanedyn.linearize(m, "spin", 1000.0).modes(spin="held", damped=False)
     branch = kanedyn.hbm_branch(m, "spin", 1000.0, 40.0, 3.3, 2.9)
     result = kanedyn.Study.from_file("examples/cpva_linear.ron").run()
+    cases = kanedyn.Study.from_file("examples/design_study.ron").run().designs["tuning"]
+
+Design studies can also run on a Dask cluster (``kanedyn.dask.run(study)``, equal bit for bit);
+mechanisms and studies pickle (they are rebuilt from their text).
 
 The numbers equal what the ``kanedyn`` command-line tool prints and writes (``kanedyn eom``,
 the CSV files and ``results.json`` of ``kanedyn run``), and every error is a

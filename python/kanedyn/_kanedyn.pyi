@@ -153,6 +153,8 @@ class Mechanism:
     ]:
         """`(M, F, qdot, udot)` at one state, bit for bit what `kanedyn eom` prints."""
     def _time_rust_eom(self, q: _Vector, u: _Vector, t: float, calls: int) -> float: ...
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        """Pickles as its text, file name and read options (rebuilt by `Mechanism.from_str`)."""
 
 @final
 class Simulation:
@@ -424,6 +426,9 @@ class StudyResult:
     def tables(self) -> Dict[str, Dict[str, _F64]]: ...
     @property
     def units(self) -> Dict[str, Dict[str, str]]: ...
+    @property
+    def designs(self) -> Dict[str, Dict[str, npt.NDArray[Any]]]:
+        """Each design study's case table: float64 columns, `status` and `error` string arrays."""
     def to_json(self) -> str:
         """The content of results.json."""
     def analysis(self, name: str) -> Dict[str, Any]:
@@ -446,6 +451,34 @@ class Study:
         max_cpu_hours: float = 12.0,
     ) -> "Study":
         """Reads and checks a study file and its mechanism."""
+    @staticmethod
+    def from_str(
+        text: str,
+        name: str = "<string>",
+        *,
+        allow_read: Optional[Iterable[_Path]] = None,
+        allow_any_path: bool = False,
+        max_file_kb: int = 1024,
+        max_bodies: int = 1000,
+        max_memory_mb: float = 2048.0,
+        max_output_mb: float = 2048.0,
+        max_cpu_hours: float = 12.0,
+    ) -> "Study":
+        """Parses and checks study text; its mechanism is read relative to `name`."""
+    def __reduce__(self) -> Tuple[Any, Tuple[Any, ...]]:
+        """Pickles as its text, file name and load options (rebuilt by `Study.from_str`)."""
+    @property
+    def design_studies(self) -> List[str]: ...
+    def design_columns(self, name: str) -> Dict[str, List[Tuple[str, str]]]:
+        """`parameters` and `results`: the case table's `(column, unit)` pairs."""
+    def case_count(self, name: str) -> int:
+        """The number of cases of a design study."""
+    def case_values(self, name: str) -> _F64:
+        """Every case's parameter values, shape (cases, parameters)."""
+    def run_cases(
+        self, name: str, indices: Optional[Sequence[int]] = None, *, parallel: bool = True
+    ) -> List[Dict[str, Any]]:
+        """Runs cases by index: `case`, `values`, `results`, `status`, `error` per case."""
     @property
     def name(self) -> str: ...
     @property

@@ -3,7 +3,7 @@
 //! One Python module built from one file per stage of kanedyn's pipeline (see the root crate's
 //! module doc); each stage's file has a `register` function that adds its classes and functions
 //! here: the mechanism and its equations of motion, time runs (`simulate`), linear analysis
-//! (`linear`), harmonic balance (`hbm`) and studies (`study`); `arrays` holds the NumPy
+//! (`linear`), harmonic balance (`hbm`), studies (`study`) and their design studies' cases (`design`); `arrays` holds the NumPy
 //! conversions they share. The pure-Python package `kanedyn` re-exports what is public.
 //!
 //! Every entry point runs inside [`errors::guard`], so a Rust panic reaches Python as
@@ -12,6 +12,7 @@
 use pyo3::prelude::*;
 
 pub mod arrays;
+pub mod design;
 pub mod errors;
 pub mod hbm;
 pub mod linear;

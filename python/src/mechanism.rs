@@ -34,6 +34,21 @@ pub struct Mechanism {
     pub(crate) mech: Mech,
     /// Evaluators reused across `eom` calls (building one allocates and factors M at q = 0).
     cache: Mutex<Cache>,
+    /// The text it was read from, its file name and the read options, for pickling (None for a
+    /// study's mechanism, which pickles with its study).
+    origin: Option<Origin>,
+}
+
+/// Where a mechanism came from: enough to load it again (`Mechanism.from_str`).
+struct Origin {
+    /// The file name (for `from_str`, the name given), made absolute when it was loaded.
+    name: String,
+    /// The file's text.
+    text: String,
+    allow_read: Vec<PathBuf>,
+    allow_any_path: bool,
+    max_file_kb: u64,
+    max_bodies: usize,
 }
 
 /// Evaluators kept between calls, and their work buffers.
@@ -83,6 +98,12 @@ impl PolicyArgs {
     }
 }
 
+/// `file` as an absolute path (the working folder joined to a relative one, nothing resolved on
+/// disk), as text: pickles name their files so, for processes with another working folder.
+pub(crate) fn absolute(file: &Path) -> String {
+    std::path::absolute(file).unwrap_or_else(|_| file.to_path_buf()).display().to_string()
+}
+
 /// The folder of `file`, empty (the current folder) for a bare name: where its parts are looked up.
 fn folder_of(file: &Path) -> &Path {
     file.parent().unwrap_or(Path::new(""))
@@ -91,7 +112,7 @@ fn folder_of(file: &Path) -> &Path {
 impl Mechanism {
     /// Wraps a validated mechanism.
     pub(crate) fn new(mech: Mech) -> Self {
-        Self { mech, cache: Mutex::new(Cache::default()) }
+        Self { mech, cache: Mutex::new(Cache::default()), origin: None }
     }
 
     /// The cache, or a fresh private one when it is in use, so that a call never waits while
@@ -180,6 +201,19 @@ impl Mechanism {
             out.push((joint, value));
         }
         Ok(out)
+    }
+}
+
+impl Origin {
+    fn new(src: &Source, args: PolicyArgs) -> Self {
+        Self {
+            name: absolute(&src.file),
+            text: src.text.clone(),
+            allow_read: args.allow_read.unwrap_or_default(),
+            allow_any_path: args.allow_any_path,
+            max_file_kb: args.max_file_kb,
+            max_bodies: args.max_bodies,
+        }
     }
 }
 
@@ -336,9 +370,12 @@ impl Mechanism {
         max_bodies: usize,
     ) -> PyResult<Self> {
         guard(|| {
-            let policy = PolicyArgs { allow_read, allow_any_path, max_file_kb, max_bodies }.policy(folder_of(&path));
-            let mech = Mech::from_file_with(&path, &policy).map_err(|e| to_py(py, &e))?;
-            Ok(Self::new(mech))
+            let args = PolicyArgs { allow_read, allow_any_path, max_file_kb, max_bodies };
+            let policy = args.policy(folder_of(&path));
+            // `Mech::from_file_with` in two steps, to keep the text for pickling.
+            let src = Source::read_with(&path, &policy).map_err(|e| to_py(py, &e))?;
+            let mech = Mech::from_source(&src, &policy).map_err(|e| to_py(py, &e))?;
+            Ok(Self { origin: Some(Origin::new(&src, args)), ..Self::new(mech) })
         })
     }
 
@@ -375,10 +412,10 @@ impl Mechanism {
     ) -> PyResult<Self> {
         guard(|| {
             let src = Source::from_text(name, text);
-            let policy =
-                PolicyArgs { allow_read, allow_any_path, max_file_kb, max_bodies }.policy(folder_of(&src.file));
+            let args = PolicyArgs { allow_read, allow_any_path, max_file_kb, max_bodies };
+            let policy = args.policy(folder_of(&src.file));
             let mech = Mech::from_source(&src, &policy).map_err(|e| to_py(py, &e))?;
-            Ok(Self::new(mech))
+            Ok(Self { origin: Some(Origin::new(&src, args)), ..Self::new(mech) })
         })
     }
 
@@ -601,6 +638,26 @@ impl Mechanism {
             }
             Ok(start.elapsed().as_secs_f64() / calls.max(1) as f64)
         })
+    }
+
+    /// Pickling: the mechanism's text, its file name (made absolute when it was loaded, so that
+    /// parts resolve alike from another working folder) and the read options; unpickling parses the
+    /// text again (`Mechanism.from_str`), so the copy equals the original bit for bit; catalog
+    /// parts are read again relative to the file name (a worker elsewhere needs them at the same
+    /// path). A study's mechanism (`Study.mechanism`) pickles with its study instead.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let Some(o) = &self.origin else {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "mechanism `{}` is a study's: pickle the study, or load the mechanism with Mechanism.from_file",
+                self.mech.name
+            )));
+        };
+        let restore = py.import("kanedyn._pickle")?.getattr("restore_mechanism")?;
+        let allow_read: Vec<String> = o.allow_read.iter().map(|p| p.display().to_string()).collect();
+        let args =
+            (o.text.as_str(), absolute(Path::new(&o.name)), allow_read, o.allow_any_path, o.max_file_kb, o.max_bodies)
+                .into_pyobject(py)?;
+        Ok((restore, args))
     }
 
     fn __repr__(&self) -> String {

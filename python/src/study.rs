@@ -13,7 +13,7 @@ use kanedyn::study::json::{Document, document};
 use kanedyn::study::{Limits, LoadOptions, RunOptions, Study as LibStudy, run};
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use serde_json::Value;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -32,6 +32,51 @@ const _: () = assert!(ReadPolicy::DEFAULT_MAX_BODIES == 1000 && ReadPolicy::DEFA
 #[pyclass(module = "kanedyn", frozen)]
 pub struct Study {
     study: LibStudy,
+    /// The load options, kept so that a pickled study loads the same way again.
+    options: PickleOptions,
+}
+
+/// The keyword arguments of `from_file`/`from_str`, as given.
+#[derive(Clone)]
+struct PickleOptions {
+    /// The study file's name made absolute when it was loaded (a worker with another working
+    /// folder then resolves the mechanism the same way).
+    file: String,
+    allow_read: Vec<PathBuf>,
+    allow_any_path: bool,
+    max_file_kb: u64,
+    max_bodies: usize,
+    max_memory_mb: f64,
+    max_output_mb: f64,
+    max_cpu_hours: f64,
+}
+
+impl PickleOptions {
+    /// The library's load options (limits in bytes and seconds); refuses a limit that is not a
+    /// finite, positive number, as the CLI does (LimitArgs::options in src/bin/kanedyn.rs).
+    fn load_options(&self, py: Python<'_>) -> PyResult<LoadOptions> {
+        for (name, v) in [
+            ("max_memory_mb", self.max_memory_mb),
+            ("max_output_mb", self.max_output_mb),
+            ("max_cpu_hours", self.max_cpu_hours),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(argument_error(py, format!("{name} must be a finite, positive number, got {v}")));
+            }
+        }
+        let mb = 1024.0 * 1024.0;
+        Ok(LoadOptions {
+            limits: Limits {
+                max_memory_bytes: self.max_memory_mb * mb,
+                max_output_bytes: self.max_output_mb * mb,
+                max_cpu_s: self.max_cpu_hours * 3600.0,
+            },
+            allow_read: self.allow_read.clone(),
+            allow_any_path: self.allow_any_path,
+            max_file_bytes: self.max_file_kb.saturating_mul(1024),
+            max_bodies: self.max_bodies,
+        })
+    }
 }
 
 #[pymethods]
@@ -85,29 +130,171 @@ impl Study {
         max_cpu_hours: f64,
     ) -> PyResult<Self> {
         guard(|| {
-            // The CLI's rule (LimitArgs::options in src/bin/kanedyn.rs).
-            for (name, v) in
-                [("max_memory_mb", max_memory_mb), ("max_output_mb", max_output_mb), ("max_cpu_hours", max_cpu_hours)]
-            {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(argument_error(py, format!("{name} must be a finite, positive number, got {v}")));
-                }
-            }
-            let mb = 1024.0 * 1024.0;
-            let opts = LoadOptions {
-                limits: Limits {
-                    max_memory_bytes: max_memory_mb * mb,
-                    max_output_bytes: max_output_mb * mb,
-                    max_cpu_s: max_cpu_hours * 3600.0,
-                },
+            let options = PickleOptions {
+                file: crate::mechanism::absolute(&path),
                 allow_read: allow_read.unwrap_or_default(),
                 allow_any_path,
-                max_file_bytes: max_file_kb.saturating_mul(1024),
+                max_file_kb,
                 max_bodies,
+                max_memory_mb,
+                max_output_mb,
+                max_cpu_hours,
             };
-            let study = LibStudy::from_file_with(&path, &opts).map_err(|e| to_py(py, &e))?;
-            Ok(Self { study })
+            let study = LibStudy::from_file_with(&path, &options.load_options(py)?).map_err(|e| to_py(py, &e))?;
+            Ok(Self { study, options })
         })
+    }
+
+    /// Parses and checks study text as ``from_file`` checks a file; its mechanism is read
+    /// relative to ``name``'s folder (the current folder for a bare name).
+    ///
+    /// Parameters
+    /// ----------
+    /// text : str
+    ///     The study, as a file would hold it.
+    /// name : str, default "<string>"
+    ///     The file name that messages give and the mechanism is found from.
+    /// allow_read, allow_any_path, max_file_kb, max_bodies, max_memory_mb, max_output_mb, max_cpu_hours
+    ///     As for ``Study.from_file``.
+    ///
+    /// Returns
+    /// -------
+    /// Study
+    ///
+    /// Raises
+    /// ------
+    /// ReadError, InputError, ModelError, ArgumentError
+    ///     As for ``Study.from_file``.
+    #[staticmethod]
+    #[pyo3(name = "from_str", signature = (
+        text, name = "<string>", *, allow_read = None, allow_any_path = false, max_file_kb = 1024,
+        max_bodies = 1000, max_memory_mb = 2048.0, max_output_mb = 2048.0, max_cpu_hours = 12.0
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_text(
+        py: Python<'_>,
+        text: &str,
+        name: &str,
+        allow_read: Option<Vec<PathBuf>>,
+        allow_any_path: bool,
+        max_file_kb: u64,
+        max_bodies: usize,
+        max_memory_mb: f64,
+        max_output_mb: f64,
+        max_cpu_hours: f64,
+    ) -> PyResult<Self> {
+        guard(|| {
+            let options = PickleOptions {
+                file: crate::mechanism::absolute(std::path::Path::new(name)),
+                allow_read: allow_read.unwrap_or_default(),
+                allow_any_path,
+                max_file_kb,
+                max_bodies,
+                max_memory_mb,
+                max_output_mb,
+                max_cpu_hours,
+            };
+            let src = kanedyn::io::Source::from_text(name, text);
+            let study = LibStudy::from_source(src, &options.load_options(py)?).map_err(|e| to_py(py, &e))?;
+            Ok(Self { study, options })
+        })
+    }
+
+    /// Pickling: the study's text, its file name (made absolute when it was loaded, so that a
+    /// worker with another working folder resolves the mechanism the same way) and the load
+    /// options; unpickling parses the
+    /// text again (``Study.from_str``) and reads the mechanism from the file system relative to
+    /// that name, so a worker on another machine needs the mechanism file at the same path (a
+    /// shared file system).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let restore = py.import("kanedyn._pickle")?.getattr("restore_study")?;
+        let o = &self.options;
+        let allow_read: Vec<String> = o.allow_read.iter().map(|p| p.display().to_string()).collect();
+        let args = (
+            self.study.source.text.as_str(),
+            o.file.as_str(),
+            allow_read,
+            o.allow_any_path,
+            o.max_file_kb,
+            o.max_bodies,
+            o.max_memory_mb,
+            o.max_output_mb,
+            o.max_cpu_hours,
+        )
+            .into_pyobject(py)?;
+        Ok((restore, args))
+    }
+
+    /// The names of the study's design studies (``DesignStudy`` analyses), in file order.
+    #[getter]
+    fn design_studies(&self) -> Vec<String> {
+        crate::design::names(&self.study)
+    }
+
+    /// The columns of a design study's case table.
+    ///
+    /// Returns
+    /// -------
+    /// dict
+    ///     ``parameters`` and ``results``: lists of ``(column, unit)`` in the table's order
+    ///     (after ``case``; ``status`` and ``error`` follow).
+    fn design_columns<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
+        guard(|| crate::design::columns(py, &self.study, crate::design::spec(py, &self.study, name)?))
+    }
+
+    /// The number of cases of a design study.
+    fn case_count(&self, py: Python<'_>, name: &str) -> PyResult<usize> {
+        guard(|| Ok(kanedyn::study::design::case_count(crate::design::spec(py, &self.study, name)?)))
+    }
+
+    /// Every case's parameter values, in the parameters' units: an array of shape (cases,
+    /// parameters), row i the values of case i (the grid's combinations in order, or the seeded
+    /// draws of a Latin hypercube or Monte Carlo).
+    fn case_values<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        guard(|| {
+            let spec = crate::design::spec(py, &self.study, name)?;
+            let rows = kanedyn::study::design::case_values(spec);
+            let d = spec.parameters.len();
+            crate::arrays::matrix(py, rows.len(), d, rows.into_iter().flatten().collect())
+        })
+    }
+
+    /// Runs cases of a design study by index, without writing anything: what ``run`` computes
+    /// for them, bit for bit (a case depends on its index alone). ``kanedyn.dask`` maps chunks
+    /// of indices to workers with it.
+    ///
+    /// Parameters
+    /// ----------
+    /// name : str
+    ///     The design study.
+    /// indices : list of int, optional
+    ///     Case indices from 0; every case when None.
+    /// parallel : bool, default True
+    ///     Run them in parallel with rayon (False: one after the other on this thread).
+    ///
+    /// Returns
+    /// -------
+    /// list of dict
+    ///     One per index, in the order given: ``case``, ``values`` (the parameter values),
+    ///     ``results`` (NaN where none exists), ``status`` (``ok``, ``partial``, ``failed``),
+    ///     ``error`` (why, empty when ok). A failed case never raises.
+    ///
+    /// Raises
+    /// ------
+    /// ArgumentError
+    ///     No design study of that name.
+    /// ModelError
+    ///     An index beyond the last case.
+    #[pyo3(signature = (name, indices = None, *, parallel = true))]
+    fn run_cases<'py>(
+        &self,
+        py: Python<'py>,
+        name: &str,
+        indices: Option<Vec<usize>>,
+        parallel: bool,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let spec = guard(|| crate::design::spec(py, &self.study, name))?;
+        crate::design::run_cases(py, &self.study, spec, indices, parallel)
     }
 
     /// The study's name (its output folder).
@@ -272,6 +459,12 @@ pub struct StudyResult {
     /// The SI unit of every column: ``units[name][column]`` (``"1"``: dimensionless).
     #[pyo3(get)]
     units: Py<PyDict>,
+    /// Every design study's case table: ``designs[name][column]`` is an array, ``case``, the
+    /// parameter columns and the result columns float64 (NaN where none exists), ``status``
+    /// (``ok``, ``partial``, ``failed``) and ``error`` (why) string arrays; the CSV file's
+    /// columns. ``pandas.DataFrame(designs[name])`` makes the table.
+    #[pyo3(get)]
+    designs: Py<PyDict>,
     /// The document as JSON text, the content of ``results.json``.
     json: String,
 }
@@ -310,6 +503,7 @@ impl StudyResult {
             data: data.unbind(),
             tables: tables.unbind(),
             units: units.unbind(),
+            designs: crate::design::tables(py, doc)?.unbind(),
             json,
         })
     }

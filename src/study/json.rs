@@ -129,6 +129,8 @@ pub enum AnalysisResult<'a> {
         /// The branches, two per amplitude (from each end of the range) unless one failed.
         branches: Vec<&'a HbmBranch>,
     },
+    /// A design study's case table: columns, and per case its values, results, status and error.
+    DesignStudy(&'a super::design::DesignResult),
     /// A transient or run-up.
     Transient(&'a TransientResult),
 }
@@ -159,6 +161,8 @@ pub enum AnalysisFindings {
         /// See [`BranchFindings`].
         branches: Vec<BranchFindings>,
     },
+    /// See [`super::design::DesignFindings`].
+    DesignStudy(super::design::DesignFindings),
     /// The peaks of the order cuts and the elements' largest excursions (as in the result).
     Transient {
         /// Per cut: signal, order, peak and its speed.
@@ -321,6 +325,10 @@ fn parts<'a>(
                 AnalysisFindings::HarmonicBalance { branches: findings },
                 tables,
             )
+        }
+        AnalysisSpec::DesignStudy(d) => {
+            let r = report.designs.iter().find(|r| r.name == d.name)?;
+            (AnalysisResult::DesignStudy(r), AnalysisFindings::DesignStudy(super::design::findings(r)), vec![r.table()])
         }
         AnalysisSpec::Transient(t) => {
             let r = report.transient.iter().find(|r| r.name == t.name)?;

@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+pub mod design;
 mod elements;
 pub mod hbm;
 pub mod json;
@@ -116,6 +117,8 @@ pub struct StudyReport {
     pub hbm: Vec<hbm::HbmBranch>,
     /// Campbell diagrams.
     pub campbell: Vec<crate::linear::Campbell>,
+    /// Design studies' case tables.
+    pub designs: Vec<design::DesignResult>,
     /// Transients and run-ups.
     pub transient: Vec<transient::TransientResult>,
     /// Per analysis of the study file, in its order: whether it ran to the end (its results are
@@ -433,6 +436,7 @@ pub(crate) enum Results {
     Linear(linear::LinearResult),
     Campbell(crate::linear::Campbell),
     Hbm(Vec<hbm::HbmBranch>),
+    Design(design::DesignResult),
     Transient(Box<transient::TransientResult>),
 }
 
@@ -451,6 +455,7 @@ fn run_analysis(
         AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
         AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
+        AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
         AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
     };
     report.files.extend(out.files);
@@ -461,6 +466,7 @@ fn run_analysis(
         Results::Linear(l) => report.linear.push(l),
         Results::Campbell(c) => report.campbell.push(c),
         Results::Hbm(b) => report.hbm.extend(b),
+        Results::Design(d) => report.designs.push(d),
         Results::Transient(t) => report.transient.push(*t),
     }
     Ok(out.markdown)

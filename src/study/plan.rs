@@ -288,6 +288,7 @@ impl Study {
                             ..base
                         }
                     }
+                    AnalysisSpec::DesignStudy(d) => super::design::plan(self, d, base),
                     AnalysisSpec::Transient(t) => {
                         let samples = t.duration_s * fs + 1.0;
                         let e = self.elements.len() as f64;

@@ -105,6 +105,9 @@ pub enum AnalysisSpec {
     /// Periodic steady states by harmonic balance, continued in the excitation order, with
     /// stability: the branches behind the sweeps' jumps.
     HarmonicBalance(HbmSpec),
+    /// One analysis run over many cases of varied mechanism and excitation parameters (a grid, a
+    /// Latin hypercube or Monte Carlo), collected in one table (see [`super::design`]).
+    DesignStudy(super::design::DesignSpec),
     /// A transient from a given state: free, or through a run-up or run-down of the spin speed
     /// (driven by a torque or prescribed), with an order–rpm map of the response.
     Transient(TransientSpec),
@@ -119,6 +122,7 @@ impl AnalysisSpec {
             AnalysisSpec::LinearResponse(l) => &l.name,
             AnalysisSpec::Campbell(c) => &c.name,
             AnalysisSpec::HarmonicBalance(h) => &h.name,
+            AnalysisSpec::DesignStudy(d) => &d.name,
             AnalysisSpec::Transient(t) => &t.name,
         }
     }
@@ -131,6 +135,7 @@ impl AnalysisSpec {
             AnalysisSpec::LinearResponse(_) => "LinearResponse",
             AnalysisSpec::Campbell(_) => "Campbell",
             AnalysisSpec::HarmonicBalance(_) => "HarmonicBalance",
+            AnalysisSpec::DesignStudy(_) => "DesignStudy",
             AnalysisSpec::Transient(_) => "Transient",
         }
     }

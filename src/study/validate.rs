@@ -285,6 +285,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                     }
                 }
             }
+            AnalysisSpec::DesignStudy(d) => super::design::check(src, spec, mech, spin, k, d)?,
             AnalysisSpec::HarmonicBalance(h) => {
                 check_excite(src, spec, mech, &at("excite"), &h.excite)?;
                 check_hbm(src, spec, k, h)?

@@ -1,0 +1,243 @@
+//! Validation of a design study at load: names resolved, quantities that apply to the mechanism
+//! and the analysis, values in their physical ranges, the analysis valid by itself; every error
+//! located at its field.
+
+use super::sampling::case_count;
+use super::{
+    DesignParameter, DesignSpec, MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES, Quantity, Sampling,
+};
+use crate::error::{Error, Result};
+use crate::io::Source;
+use crate::model::joint::JointKind;
+use crate::model::mechanism::Mechanism;
+use crate::study::validate::{MAX_ORDER, MAX_RPM, MAX_TORQUE_NM, check_file_name};
+use crate::study::{AnalysisSpec, HbmParameter, StudySpec};
+
+/// Checks a design study (analysis `k` of the study file) against the mechanism; errors are
+/// located at the offending field (`analyses[k].parameters[j].from`, …).
+pub(crate) fn check(
+    src: &Source,
+    spec: &StudySpec,
+    mech: &Mechanism,
+    spin: usize,
+    k: usize,
+    d: &DesignSpec,
+) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    let inner = d.analysis.as_ref();
+    match inner {
+        AnalysisSpec::HarmonicBalance(h) if h.overlay.is_some() => {
+            return Err(src.error(&at("analysis.overlay"), "a design study's cases draw no figure to overlay"));
+        }
+        AnalysisSpec::HarmonicBalance(_) => {}
+        AnalysisSpec::LinearResponse(l) => {
+            if !l.variants.is_empty() {
+                return Err(src.error(
+                    &at("analysis.variants"),
+                    "a design study takes no damping variants: vary `JointDamping(…)` as a parameter instead",
+                ));
+            }
+            if spec.lock.is_empty() {
+                return Err(src.error(
+                    &at("analysis"),
+                    "a linear response in a design study needs a locked joint (`lock`): its results are n_t and \
+                     ratios to the locked twin",
+                ));
+            }
+        }
+        other => {
+            return Err(src.error(
+                &at("analysis"),
+                format!("a design study runs HarmonicBalance or LinearResponse per case, not {}", other.kind()),
+            ));
+        }
+    }
+    // The analysis as written must be valid by itself: checked by the study's own rules on a
+    // study holding it alone, errors moved to their place inside this entry.
+    let alone = StudySpec { analyses: vec![inner.clone()], ..spec.clone() };
+    if let Err(e) = crate::study::validate::check(&alone, mech, spin, src) {
+        return Err(match e {
+            Error::Input { location, message } if location.path.starts_with("analyses[0]") => {
+                let rest = &location.path["analyses[0]".len()..];
+                src.error(&format!("analyses[{k}].analysis{rest}"), message)
+            }
+            other => other,
+        });
+    }
+    if d.parameters.is_empty() || d.parameters.len() > MAX_PARAMETERS {
+        return Err(src.error(&at("parameters"), format!("give 1 to {MAX_PARAMETERS} parameters")));
+    }
+    let mut names = std::collections::HashSet::new();
+    for (j, p) in d.parameters.iter().enumerate() {
+        let pat = |field: &str| format!("analyses[{k}].parameters[{j}].{field}");
+        if let Err(m) = check_file_name(&p.name) {
+            return Err(src.error(&pat("name"), m));
+        }
+        if !names.insert(p.name.as_str()) {
+            return Err(src.error(&pat("name"), format!("parameter `{}` is named twice", p.name)));
+        }
+        if d.parameters[..j].iter().any(|q| q.quantity == p.quantity) {
+            return Err(src.error(&pat("quantity"), format!("the {} is varied twice", p.quantity.describe())));
+        }
+        check_quantity(src, &pat("quantity"), mech, spin, inner, &p.quantity)?;
+        check_values(src, &pat(""), d.sampling, p, |v| value_ok(&p.quantity, inner, v))?;
+    }
+    match d.sampling {
+        Sampling::Grid => {}
+        Sampling::LatinHypercube { n, .. } | Sampling::MonteCarlo { n, .. } => {
+            if n == 0 || n > MAX_CASES {
+                return Err(src.error(&at("sampling"), format!("give 1 to {MAX_CASES} cases")));
+            }
+        }
+    }
+    let n = case_count(d);
+    if n > MAX_CASES {
+        return Err(src.error(
+            &at("parameters"),
+            format!("the grid has {n} cases; at most {MAX_CASES} (sample it with LatinHypercube or MonteCarlo)"),
+        ));
+    }
+    Ok(())
+}
+
+/// The quantity's name exists and the quantity applies to this mechanism and analysis.
+fn check_quantity(
+    src: &Source,
+    path: &str,
+    mech: &Mechanism,
+    spin: usize,
+    inner: &AnalysisSpec,
+    q: &Quantity,
+) -> Result<()> {
+    if let Some(b) = q.body() {
+        let Some(i) = mech.body_index(b) else {
+            let names: Vec<&str> = mech.bodies.iter().map(|b| b.name.as_str()).collect();
+            return Err(src.error(path, format!("unknown body `{b}` (bodies: {})", names.join(", "))));
+        };
+        if matches!(q, Quantity::BodyComRadius(_)) && mech.bodies[i].inertia.com.norm() == 0.0 {
+            return Err(src.error(
+                path,
+                format!("body `{b}` has its centre of mass at its origin: no direction to move it along"),
+            ));
+        }
+    }
+    if let Some(jn) = q.joint() {
+        let Some(j) = mech.joint_index(jn) else {
+            let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
+            return Err(src.error(path, format!("unknown joint `{jn}` (joints: {})", names.join(", "))));
+        };
+        let joint = &mech.joints[j];
+        if joint.kind == JointKind::Fixed && !matches!(q, Quantity::JointRadius(_)) {
+            return Err(src.error(path, format!("joint `{jn}` is Fixed: it has no spring or damper")));
+        }
+        if matches!(q, Quantity::JointStiffness(_)) && j == spin {
+            return Err(src.error(path, format!("`{jn}` is the spin joint: a spinning rotor cannot wind a spring")));
+        }
+        if matches!(q, Quantity::JointRadius(_)) && joint.at.norm() == 0.0 {
+            return Err(
+                src.error(path, format!("joint `{jn}` sits at its parent's origin: no direction to move it along"))
+            );
+        }
+    }
+    let applies = match (q, inner) {
+        (Quantity::Rpm, AnalysisSpec::HarmonicBalance(h)) => !matches!(h.parameter, HbmParameter::Speed { .. }),
+        (Quantity::TorqueAmplitude, AnalysisSpec::HarmonicBalance(h)) => {
+            !matches!(h.parameter, HbmParameter::Torque { .. })
+        }
+        (Quantity::Order, AnalysisSpec::HarmonicBalance(h)) => !matches!(h.parameter, HbmParameter::Order),
+        (Quantity::Rpm, _) => true,
+        (Quantity::TorqueAmplitude | Quantity::Order, _) => false,
+        _ => true,
+    };
+    if !applies {
+        return Err(src.error(
+            path,
+            format!(
+                "the {} is not a parameter of this {}: {}",
+                q.describe(),
+                inner.kind(),
+                match q {
+                    Quantity::Rpm => "a Speed continuation continues it",
+                    Quantity::TorqueAmplitude =>
+                        "a linear response is per unit torque, and a Torque continuation \
+                                                  continues it",
+                    _ => "a linear response and an Order continuation sweep the order themselves",
+                }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Whether `v` is an admissible value of `q` in `inner`, and if not, the admissible range.
+fn value_ok(q: &Quantity, inner: &AnalysisSpec, v: f64) -> std::result::Result<(), String> {
+    let within = |lo: f64, hi: f64, lo_open: bool| {
+        let above = if lo_open { v > lo } else { v >= lo };
+        v.is_finite() && above && v <= hi
+    };
+    let (ok, range) = match q {
+        Quantity::BodyMass(_) | Quantity::BodyInertia(_) | Quantity::JointStiffness(_) | Quantity::JointDamping(_) => {
+            (within(0.0, MAX_MECHANISM_VALUE, false), format!("0 ≤ value ≤ {MAX_MECHANISM_VALUE:e}"))
+        }
+        Quantity::BodyComRadius(_) | Quantity::JointRadius(_) => {
+            (within(0.0, MAX_MECHANISM_VALUE, true), format!("0 < value ≤ {MAX_MECHANISM_VALUE:e} m"))
+        }
+        Quantity::Rpm => (within(0.0, MAX_RPM, true), format!("0 < rpm ≤ {MAX_RPM:e}")),
+        Quantity::Order => (within(0.0, MAX_ORDER, true), format!("0 < order ≤ {MAX_ORDER}")),
+        Quantity::TorqueAmplitude => {
+            // Harmonic balance has no periodic response to continue at zero torque.
+            let zero_ok = !matches!(inner, AnalysisSpec::HarmonicBalance(_));
+            (
+                v.is_finite() && v.abs() <= MAX_TORQUE_NM && (zero_ok || v != 0.0),
+                format!("0 < |T_n| ≤ {MAX_TORQUE_NM:e} N·m"),
+            )
+        }
+    };
+    if ok { Ok(()) } else { Err(format!("{} must satisfy {range}, got {v}", q.describe())) }
+}
+
+/// The values of one parameter: a list or a range for a grid, a range for random sampling, every
+/// value (for a grid) or both ends admissible. `prefix` ends with a dot.
+fn check_values(
+    src: &Source,
+    prefix: &str,
+    sampling: Sampling,
+    p: &DesignParameter,
+    ok: impl Fn(f64) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let field = |f: &str| format!("{prefix}{f}");
+    let grid = sampling == Sampling::Grid;
+    if let Some(values) = &p.values {
+        if !grid {
+            return Err(src.error(&field("values"), "random sampling draws from `from`..`to`: give those instead"));
+        }
+        if p.from.is_some() || p.to.is_some() || p.points.is_some() || p.log {
+            return Err(src.error(&field("values"), "give either `values` or `from`, `to` and `points`, not both"));
+        }
+        if values.is_empty() || values.len() > MAX_VALUES {
+            return Err(src.error(&field("values"), format!("give 1 to {MAX_VALUES} values")));
+        }
+        for (i, &v) in values.iter().enumerate() {
+            ok(v).map_err(|m| src.error(&field(&format!("values[{i}]")), m))?;
+        }
+        return Ok(());
+    }
+    let (Some(a), Some(b)) = (p.from, p.to) else {
+        let what = if grid { "`values`, or `from`, `to` and `points`" } else { "`from` and `to`" };
+        return Err(src.error(&field(if p.from.is_none() { "from" } else { "to" }), format!("give {what}")));
+    };
+    ok(a).map_err(|m| src.error(&field("from"), m))?;
+    ok(b).map_err(|m| src.error(&field("to"), m))?;
+    if a >= b {
+        return Err(src.error(&field("to"), format!("need from < to, got {a} and {b}")));
+    }
+    if p.log && a <= 0.0 {
+        return Err(src.error(&field("log"), "log spacing needs from > 0"));
+    }
+    match (grid, p.points) {
+        (true, Some(n)) if (2..=MAX_VALUES).contains(&n) => Ok(()),
+        (true, _) => Err(src.error(&field("points"), format!("give 2 to {MAX_VALUES} points from `from` to `to`"))),
+        (false, Some(_)) => Err(src.error(&field("points"), "random sampling takes its count from `sampling`'s `n`")),
+        (false, None) => Ok(()),
+    }
+}

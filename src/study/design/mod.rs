@@ -1,0 +1,531 @@
+//! Design studies: one analysis (harmonic balance or the linear order response) run over many
+//! variants of the mechanism and its excitation, collected in one table with a row per case.
+//!
+//! A design study names its parameters (a body's mass, inertia or centre-of-mass radius, a
+//! joint's stiffness, damping or radius, the speed, torque amplitude or order of the analysis),
+//! how they are sampled, and the analysis to run per case:
+//! - `Grid`: the full factorial product of each parameter's values (a list, or `points` values
+//!   spaced evenly, or geometrically with `log: true`, from `from` to `to`); case `i` is the
+//!   mixed-radix decomposition of `i` with the first parameter varying slowest, as nested loops
+//!   in file order;
+//! - `LatinHypercube(n, seed)`: McKay, Beckman and Conover's Latin hypercube sampling: each
+//!   parameter's range is cut into `n` equal strata (equal in the logarithm with `log: true`)
+//!   and every stratum is hit by exactly one case, the strata of the parameters paired by
+//!   independent random permutations, each case uniform inside its stratum;
+//! - `MonteCarlo(n, seed)`: `n` independent uniform draws per parameter.
+//!
+//! The random numbers are ChaCha8 (`rand_chacha::ChaCha8Rng`, whose stream rand_chacha keeps
+//! value-stable) seeded by `ChaCha8Rng::seed_from_u64(seed)` (rand_core's documented PCG32
+//! expansion of the seed), read as `next_u64` only: a uniform number in [0, 1) is the top 53
+//! bits times 2⁻⁵³, an integer in 0..k is `next_u64 mod k` after rejecting draws at or above the
+//! largest multiple of k (no modulo bias). Latin hypercube: per parameter in file order, a
+//! Fisher–Yates shuffle of the strata 0..n (for j from n − 1 down to 1, swap j with a draw in
+//! 0..=j), then the n in-stratum offsets, case by case. Monte Carlo: case by case, one draw per
+//! parameter in file order. The same seed gives the same cases on every machine.
+//!
+//! Each case substitutes its values into the typed mechanism and analysis (never a text
+//! round-trip), rebuilds the locked twin, checks the mass matrix, and runs the analysis alone; its
+//! row holds a small set of scalars read off the results (see [`result_columns`]) and a status.
+//! A case is a pure function of the study and its index, so the local rayon run, a run of one case
+//! by index ([`run_case`]) and a run spread over a cluster give the same numbers bit for bit. One
+//! failed case (an invalid mechanism, a harmonic balance that does not converge, a panic) never
+//! costs the others their results: its row says why.
+
+mod check;
+mod report;
+mod sampling;
+mod spec;
+
+pub(crate) use check::check;
+pub use sampling::{below, case_count, case_values, uniform};
+pub use spec::{DesignParameter, DesignSpec, Quantity, Sampling};
+
+use crate::error::{Error, Result};
+use crate::kane::Kane;
+use crate::model::joint::{JointKind, Spring};
+use crate::study::plan::AnalysisPlan;
+use crate::study::table::{Table, fmt_num};
+use crate::study::{AnalysisSpec, HbmParameter, Output, Results, Study, StudySpec};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// Most parameters of one design study.
+pub const MAX_PARAMETERS: usize = 16;
+/// Most cases of one design study (a grid's product, or `n`).
+pub const MAX_CASES: usize = 100_000;
+/// Most values of one grid parameter.
+pub const MAX_VALUES: usize = 1000;
+/// Largest magnitude of a mechanism parameter (kg, kg·m², m, N·m/rad, N·m·s/rad): far beyond any
+/// machine, small enough that its squares stay finite.
+pub const MAX_MECHANISM_VALUE: f64 = 1e12;
+/// Relative distance below which two folds of a case's branches count as one (the branches from
+/// each end of the range pass the same folds and locate them to about 1e-9).
+pub const FOLD_MERGE_TOL: f64 = 1e-6;
+
+/// The status of one case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CaseStatus {
+    /// Every run of the case's analysis succeeded.
+    Ok,
+    /// Some runs failed (a branch of a harmonic balance); the row holds the others' results.
+    Partial,
+    /// The case gave no result (its results are NaN).
+    Failed,
+}
+
+impl CaseStatus {
+    /// `ok`, `partial` or `failed`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CaseStatus::Ok => "ok",
+            CaseStatus::Partial => "partial",
+            CaseStatus::Failed => "failed",
+        }
+    }
+}
+
+/// One case's row of the table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CaseRow {
+    /// Case index, from 0.
+    pub index: usize,
+    /// The parameter values, in the parameters' order and units.
+    pub values: Vec<f64>,
+    /// The results, in [`DesignResult::results`]'s order (NaN where none exists).
+    pub results: Vec<f64>,
+    /// Whether it ran.
+    pub status: CaseStatus,
+    /// Why it failed or is partial (empty when ok).
+    pub error: String,
+}
+
+/// A column of the case table: CSV header and SI unit.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ColumnInfo {
+    /// The CSV header.
+    pub name: String,
+    /// SI unit, `"1"` when dimensionless.
+    pub unit: &'static str,
+}
+
+/// The results of a design study.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DesignResult {
+    /// Analysis name.
+    pub name: String,
+    /// The parameter columns.
+    pub parameters: Vec<ColumnInfo>,
+    /// The result columns.
+    pub results: Vec<ColumnInfo>,
+    /// One row per case, in case order.
+    pub cases: Vec<CaseRow>,
+}
+
+impl DesignResult {
+    /// The numeric columns as a table `<name>`: `case`, the parameters, the results (the CSV's
+    /// columns but `status` and `error`).
+    pub fn table(&self) -> Table {
+        let mut t = Table::new(self.name.clone());
+        t.push("case", "1", self.cases.iter().map(|c| c.index as f64).collect());
+        for (k, p) in self.parameters.iter().enumerate() {
+            t.push(p.name.clone(), p.unit, self.cases.iter().map(|c| c.values[k]).collect());
+        }
+        for (k, r) in self.results.iter().enumerate() {
+            t.push(r.name.clone(), r.unit, self.cases.iter().map(|c| c.results[k]).collect());
+        }
+        t
+    }
+
+    /// Cases by status: (ok, partial, failed).
+    pub fn counts(&self) -> (usize, usize, usize) {
+        let n = |s: CaseStatus| self.cases.iter().filter(|c| c.status == s).count();
+        (n(CaseStatus::Ok), n(CaseStatus::Partial), n(CaseStatus::Failed))
+    }
+}
+
+/// What the summary reads off a design study (also in `results.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DesignFindings {
+    /// Cases run.
+    pub cases: usize,
+    /// Cases complete.
+    pub ok: usize,
+    /// Cases with some runs failed.
+    pub partial: usize,
+    /// Cases without results.
+    pub failed: usize,
+}
+
+/// The findings of `r`.
+pub fn findings(r: &DesignResult) -> DesignFindings {
+    let (ok, partial, failed) = r.counts();
+    DesignFindings { cases: r.cases.len(), ok, partial, failed }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plan
+
+/// The estimated work of a design study: the analysis's estimate once per case (its cost does
+/// not depend on the varied values: a harmonic-balance branch is bounded by its points, a linear
+/// response by its order grid), its memory once per case running at a time, and the table.
+pub(crate) fn plan(study: &Study, spec: &DesignSpec, base: AnalysisPlan) -> AnalysisPlan {
+    let mut alone = study.clone();
+    alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
+    let inner = alone.plan().analyses.into_iter().next();
+    let n = case_count(spec) as f64;
+    let parallel = std::thread::available_parallelism().map_or(1, |p| p.get()) as f64;
+    let columns = (1 + spec.parameters.len() + result_columns(study, spec).len()) as f64;
+    // A row's cells, plus the status and a message of up to ~200 characters.
+    let table_bytes = n * (columns * 22.0 + 200.0);
+    match inner {
+        Some(a) => AnalysisPlan {
+            runs: case_count(spec).saturating_mul(a.runs),
+            samples_per_run: a.samples_per_run,
+            memory_bytes: a.memory_bytes * n.min(parallel) + table_bytes,
+            output_bytes: table_bytes,
+            cpu_s: n * a.cpu_s,
+            driver: "sampling",
+            ..base
+        },
+        None => base,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cases
+
+/// The parameter columns: `<name>_<unit>` (just the name for an order).
+pub fn parameter_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
+    spec.parameters
+        .iter()
+        .map(|p| {
+            let slide = p
+                .quantity
+                .joint()
+                .and_then(|j| study.mechanism.joint_index(j))
+                .is_some_and(|j| matches!(study.mechanism.joints[j].kind, JointKind::Prismatic { .. }));
+            let suffix = p.quantity.suffix(slide);
+            let name = if suffix.is_empty() { p.name.clone() } else { format!("{}_{suffix}", p.name) };
+            ColumnInfo { name, unit: p.quantity.unit(slide) }
+        })
+        .collect()
+}
+
+/// The result columns of each case, by analysis:
+/// - harmonic balance: `peak_accel_<m>x_rad_s2` per reported multiple m (the largest response
+///   acceleration amplitude at order m·n over every solved point of every branch, stable or
+///   not), `max_relative_angle_rad` (the largest peak relative angle), per reported element
+///   `<joint>_peak_rad` (`_m` for a slide; the largest peak of its coordinate) and
+///   `<joint>_torque_peak_Nm` (`_N`; its spring-and-damper torque's, NaN without either),
+///   `folds` (distinct folds over the branches, merged within [`FOLD_MERGE_TOL`]), `unstable`
+///   (1 when some point is unstable, else 0) and `points` (solved points);
+/// - linear response: `n_t` (tuning order: the first locked joint's eigen-order, spin held,
+///   undamped), `n_r` (the free undamped eigen-order nearest n_t), `min_ratio`,
+///   `min_ratio_order`, `max_ratio` (the peak of the response over the locked twin's),
+///   `max_ratio_order`, `crossing_order` (first order above n_t with ratio > 1, NaN if none)
+///   and `asymptote` (the ratio's high-order limit); orders are absolute.
+pub fn result_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
+    let c = |name: String, unit: &'static str| ColumnInfo { name, unit };
+    match spec.analysis.as_ref() {
+        AnalysisSpec::HarmonicBalance(h) => {
+            let mut out: Vec<ColumnInfo> =
+                h.multiples.iter().map(|m| c(format!("peak_accel_{}x_rad_s2", fmt_num(*m)), "rad/s²")).collect();
+            out.push(c("max_relative_angle_rad".into(), "rad"));
+            for &j in &study.elements {
+                let joint = &study.mechanism.joints[j];
+                let slide = !joint.kind.rotates();
+                out.push(c(
+                    format!("{}_peak_{}", joint.name, if slide { "m" } else { "rad" }),
+                    if slide { "m" } else { "rad" },
+                ));
+                out.push(c(
+                    format!("{}_torque_peak_{}", joint.name, if slide { "N" } else { "Nm" }),
+                    if slide { "N" } else { "N·m" },
+                ));
+            }
+            out.push(c("folds".into(), "1"));
+            out.push(c("unstable".into(), "1"));
+            out.push(c("points".into(), "1"));
+            out
+        }
+        _ => [
+            "n_t",
+            "n_r",
+            "min_ratio",
+            "min_ratio_order",
+            "max_ratio",
+            "max_ratio_order",
+            "crossing_order",
+            "asymptote",
+        ]
+        .into_iter()
+        .map(|n| c(n.into(), "1"))
+        .collect(),
+    }
+}
+
+/// The mechanism and analysis of one case: `values` substituted.
+fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study, AnalysisSpec)> {
+    let mut mech = study.mechanism.clone();
+    let mut analysis = spec.analysis.as_ref().clone();
+    let err = |m: String| Error::Model { mechanism: mech_name(study), message: m };
+    for (p, &v) in spec.parameters.iter().zip(values) {
+        // Names were resolved when the study was loaded.
+        let body = p.quantity.body().and_then(|b| mech.body_index(b));
+        let joint = p.quantity.joint().and_then(|j| mech.joint_index(j));
+        match (&p.quantity, body, joint) {
+            (Quantity::BodyMass(_), Some(b), _) => mech.bodies[b].inertia.mass = v,
+            (Quantity::BodyInertia(_), Some(b), _) => mech.bodies[b].inertia.i_com = v,
+            (Quantity::BodyComRadius(_), Some(b), _) => {
+                let com = mech.bodies[b].inertia.com;
+                mech.bodies[b].inertia.com = com * (v / com.norm());
+            }
+            (Quantity::JointStiffness(_), _, Some(j)) => {
+                let free_angle = mech.joints[j].spring.map_or(0.0, |s| s.free_angle);
+                mech.joints[j].spring = Some(Spring { stiffness: v, free_angle });
+            }
+            (Quantity::JointDamping(_), _, Some(j)) => mech.joints[j].damper = v,
+            (Quantity::JointRadius(_), _, Some(j)) => {
+                let at = mech.joints[j].at;
+                mech.joints[j].at = at * (v / at.norm());
+            }
+            (Quantity::Rpm, ..) => match &mut analysis {
+                AnalysisSpec::HarmonicBalance(h) => h.rpm = v,
+                AnalysisSpec::LinearResponse(l) => l.rpm = v,
+                _ => {}
+            },
+            (Quantity::TorqueAmplitude, ..) => {
+                if let AnalysisSpec::HarmonicBalance(h) = &mut analysis {
+                    h.amplitudes = vec![v];
+                }
+            }
+            (Quantity::Order, ..) => {
+                if let AnalysisSpec::HarmonicBalance(h) = &mut analysis {
+                    match &mut h.parameter {
+                        HbmParameter::Speed { order, .. } | HbmParameter::Torque { order, .. } => *order = v,
+                        HbmParameter::Order => {}
+                    }
+                }
+            }
+            (q, ..) => return Err(err(format!("internal: the {} names nothing in the mechanism", q.describe()))),
+        }
+    }
+    for (i, b) in mech.bodies.iter().enumerate() {
+        if b.inertia.mass == 0.0 && b.inertia.i_com == 0.0 {
+            return Err(err(format!("body `{}` (bodies[{i}]) has no mass and no inertia in this case", b.name)));
+        }
+    }
+    // The engine's own check of M at q = 0 (positive definite, finite), as at load.
+    Kane::new(&mech)?;
+    let mut locked = None;
+    for j in &study.spec.lock {
+        let m = locked.as_ref().unwrap_or(&mech);
+        locked = Some(m.lock(j, 0.0)?);
+    }
+    let locked_body = match &locked {
+        Some(m) => Some(
+            m.body_index(&study.spec.response_body).ok_or_else(|| err("locking merges the response body".into()))?,
+        ),
+        None => None,
+    };
+    if let Some(m) = &locked {
+        Kane::new(m)?;
+    }
+    let spec_alone = StudySpec { analyses: Vec::new(), ..study.spec.clone() };
+    let case = Study {
+        spec: spec_alone,
+        file: study.file.clone(),
+        mechanism: mech,
+        locked,
+        spin: study.spin,
+        elements: study.elements.clone(),
+        body: study.body,
+        locked_body,
+        source: study.source.clone(),
+    };
+    Ok((case, analysis))
+}
+
+fn mech_name(study: &Study) -> String {
+    study.mechanism.name.clone()
+}
+
+/// The largest finite value of `v`, NaN when there is none.
+fn finite_max(v: impl IntoIterator<Item = f64>) -> f64 {
+    v.into_iter().filter(|x| x.is_finite()).fold(f64::NAN, f64::max)
+}
+
+/// Runs one case: `values` are its parameter values (a row of [`case_values`]). Never panics
+/// into the caller: a panic becomes a failed row.
+pub fn run_case(study: &Study, spec: &DesignSpec, index: usize, values: &[f64]) -> CaseRow {
+    let n_results = result_columns(study, spec).len();
+    let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| case_results(study, spec, values)));
+    let (results, status, error) = match attempt {
+        Ok(Ok((results, failures))) if failures.is_empty() => (results, CaseStatus::Ok, String::new()),
+        Ok(Ok((results, failures))) => (results, CaseStatus::Partial, failures.join("; ")),
+        Ok(Err(e)) => (vec![f64::NAN; n_results], CaseStatus::Failed, e.to_string()),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            (vec![f64::NAN; n_results], CaseStatus::Failed, format!("internal error (please report): {what}"))
+        }
+    };
+    CaseRow { index, values: values.to_vec(), results, status, error }
+}
+
+/// The result columns' values of one case and the failures of its runs.
+fn case_results(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Vec<f64>, Vec<String>)> {
+    let (case, analysis) = substitute(study, spec, values)?;
+    match &analysis {
+        AnalysisSpec::HarmonicBalance(h) => {
+            let (branches, failures) = crate::study::hbm::compute(&case, h);
+            if branches.is_empty() {
+                return Err(Error::Model {
+                    mechanism: mech_name(study),
+                    message: format!("no branch solved: {}", failures.join("; ")),
+                });
+            }
+            let mut out: Vec<f64> = (0..h.multiples.len())
+                .map(|k| finite_max(branches.iter().flat_map(|b| b.accel[k].iter().copied())))
+                .collect();
+            out.push(finite_max(branches.iter().flat_map(|b| b.relative_angle.iter().copied())));
+            for e in 0..case.elements.len() {
+                let points = || branches.iter().flat_map(|b| b.elements.iter().filter_map(move |pt| pt.get(e)));
+                out.push(finite_max(points().map(|r| r.peak)));
+                out.push(finite_max(points().filter_map(|r| r.torque.as_ref().map(|t| t.peak))));
+            }
+            let mut folds: Vec<f64> = branches.iter().flat_map(|b| b.folds.iter().copied()).collect();
+            folds.sort_by(f64::total_cmp);
+            folds.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+            out.push(folds.len() as f64);
+            let stability: Vec<Option<bool>> = branches.iter().flat_map(|b| b.stable.iter().copied()).collect();
+            out.push(if stability.iter().all(Option::is_none) {
+                f64::NAN
+            } else {
+                f64::from(u8::from(stability.contains(&Some(false))))
+            });
+            out.push(branches.iter().map(|b| b.order.len()).sum::<usize>() as f64);
+            Ok((out, failures))
+        }
+        AnalysisSpec::LinearResponse(l) => {
+            let (r, failures) = crate::study::linear::compute_response(&case, l)?;
+            let nt = r.n_t.unwrap_or(f64::NAN);
+            let n_r = r
+                .free_orders
+                .iter()
+                .map(|(o, _)| *o)
+                .min_by(|a, b| (a - nt).abs().total_cmp(&(b - nt).abs()))
+                .filter(|_| nt.is_finite())
+                .unwrap_or(f64::NAN);
+            let v = r.variants.first().ok_or_else(|| Error::Model {
+                mechanism: mech_name(study),
+                message: "internal: a linear response without its variant".into(),
+            })?;
+            let out = vec![nt, n_r, v.min.1, v.min.0, v.max.1, v.max.0, v.crossing.unwrap_or(f64::NAN), v.asymptote];
+            Ok((out, failures))
+        }
+        other => Err(Error::Model {
+            mechanism: mech_name(study),
+            message: format!("internal: {} is not run per case (refused at load)", other.kind()),
+        }),
+    }
+}
+
+/// Runs the cases `indices` of the design study (every case when None), in parallel with rayon
+/// when `parallel`, and returns their rows in the order asked. `on_case` is called after each
+/// case (from the worker threads), for progress.
+///
+/// # Errors
+/// An index beyond the last case.
+pub fn run_cases(
+    study: &Study,
+    spec: &DesignSpec,
+    indices: Option<&[usize]>,
+    parallel: bool,
+    on_case: &(dyn Fn() + Sync),
+) -> Result<Vec<CaseRow>> {
+    let values = case_values(spec);
+    let all: Vec<usize>;
+    let indices = match indices {
+        Some(i) => i,
+        None => {
+            all = (0..values.len()).collect();
+            &all
+        }
+    };
+    if let Some(&bad) = indices.iter().find(|&&i| i >= values.len()) {
+        return Err(Error::Model {
+            mechanism: mech_name(study),
+            message: format!(
+                "design study `{}` has {} cases (0..{}); no case {bad}",
+                spec.name,
+                values.len(),
+                values.len()
+            ),
+        });
+    }
+    let one = |&i: &usize| {
+        let row = run_case(study, spec, i, &values[i]);
+        on_case();
+        row
+    };
+    Ok(if parallel { indices.par_iter().map(one).collect() } else { indices.iter().map(one).collect() })
+}
+
+/// The design study named `name` of the study, if there is one.
+pub fn find<'a>(study: &'a Study, name: &str) -> Option<&'a DesignSpec> {
+    study.spec.analyses.iter().find_map(|a| match a {
+        AnalysisSpec::DesignStudy(d) if d.name == name => Some(d),
+        _ => None,
+    })
+}
+
+/// Assembles the result of a design study from its rows (in case order).
+pub fn result(study: &Study, spec: &DesignSpec, cases: Vec<CaseRow>) -> DesignResult {
+    DesignResult {
+        name: spec.name.clone(),
+        parameters: parameter_columns(study, spec),
+        results: result_columns(study, spec),
+        cases,
+    }
+}
+
+/// Most case failures listed one by one in the study's failures; the rest are counted.
+const LISTED_FAILURES: usize = 20;
+
+/// Runs every case in parallel, writes `<name>.csv` and returns the summary section.
+pub(crate) fn run(
+    study: &Study,
+    spec: &DesignSpec,
+    dir: &Path,
+    progress: &crate::study::sim::Progress,
+) -> Result<Output> {
+    let n = case_count(spec);
+    let bar = progress.bar(n as f64 / 1000.0, &format!("{} ({n} cases)", spec.name));
+    let rows = run_cases(study, spec, None, true, &|| bar.inc(1))?;
+    bar.finish_and_clear();
+    let r = result(study, spec, rows);
+    let mut failures = Vec::new();
+    let bad: Vec<&CaseRow> = r.cases.iter().filter(|c| c.status != CaseStatus::Ok).collect();
+    for c in bad.iter().take(LISTED_FAILURES) {
+        failures.push(format!("{} case {} ({}): {}", spec.name, c.index, report::describe_case(&r, c), c.error));
+    }
+    if bad.len() > LISTED_FAILURES {
+        failures.push(format!(
+            "{}: {} more cases failed or are partial (see the status and error columns of {}.csv)",
+            spec.name,
+            bad.len() - LISTED_FAILURES,
+            spec.name
+        ));
+    }
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &[report::figure(spec, &r)], 760, 500)?;
+    let files = vec![report::write_csv(&r, dir)?, svg];
+    let markdown = report::summary(study, spec, &r);
+    Ok(Output { markdown, files, failures, results: Results::Design(r) })
+}
