@@ -43,5 +43,6 @@ pub mod time;
 pub mod signal;
 
 pub mod cpva;
+pub mod engine;
 pub mod plot;
 pub mod study;
