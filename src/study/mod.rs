@@ -149,12 +149,13 @@ impl Study {
     /// Parses and validates a study from its text; its mechanism is read relative to
     /// `src.file`'s folder.
     pub fn from_source(src: Source, opts: &LoadOptions) -> Result<Self> {
-        let spec: StudySpec = src.parse_as("Study")?;
+        let mut spec: StudySpec = src.parse_as("Study")?;
         if let Err(m) = validate::check_file_name(&spec.name) {
             return Err(src.error("name", format!("{m} (the study name is its output folder)")));
         }
         let policy = opts.policy_for(&src.file);
         let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
+        engine_harmonics(&mut spec, &src, &policy, &base)?;
         let mech_path = policy.resolve(&base, &spec.mechanism).map_err(|m| src.error("mechanism", m))?;
         let mechanism = Mechanism::from_file_with(&mech_path, &policy).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
@@ -313,6 +314,60 @@ impl Study {
             _ => Kane::new(&self.mechanism),
         }
     }
+}
+
+/// Fills the harmonics of every multi-order analysis that names an `engine` from the engine's
+/// torque at each speed (the orders that are whole multiples of the analysis's base order, up to
+/// `engine_multiples`); errors are located in the study file or in the engine file.
+fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, base: &Path) -> Result<()> {
+    for (k, a) in spec.analyses.iter_mut().enumerate() {
+        let AnalysisSpec::MultiOrder(m) = a else { continue };
+        let Some(file) = &m.engine else { continue };
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let path = policy.resolve(base, file).map_err(|e| src.error(&at("engine"), e))?;
+        let esrc = Source::read_with(&path, policy).map_err(|e| match e {
+            Error::Io { .. } => src.error(&at("engine"), format!("cannot read engine file: {e}")),
+            other => other,
+        })?;
+        let engine = crate::engine::Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
+        if !(1..=validate::MAX_LIST).contains(&m.engine_multiples) {
+            return Err(src.error(&at("engine_multiples"), format!("need 1 to {} multiples", validate::MAX_LIST)));
+        }
+        if !(m.order.is_finite() && m.order > 0.0 && (2.0 * m.order).fract() == 0.0) {
+            return Err(src.error(
+                &at("order"),
+                format!("with an engine the base order must be a multiple of ½ (its orders are), got {}", m.order),
+            ));
+        }
+        for (i, p) in m.speeds.iter_mut().enumerate() {
+            if !p.harmonics.is_empty() {
+                return Err(src.error(
+                    &at(&format!("speeds[{i}].harmonics")),
+                    "give either the harmonics or the analysis's engine, not both",
+                ));
+            }
+            if !(p.rpm.is_finite() && p.rpm > 0.0 && p.rpm <= validate::MAX_RPM) {
+                return Err(src.error(&at(&format!("speeds[{i}].rpm")), "speed must be within 0 < rpm ≤ 1e6"));
+            }
+            let top = m.order * m.engine_multiples as f64;
+            let series = engine.orders(crate::model::excitation::rpm_to_rad_s(p.rpm), top);
+            p.harmonics = series
+                .harmonics
+                .iter()
+                .filter_map(|h| {
+                    let multiple = 0.5 * h.multiple / m.order;
+                    ((multiple - multiple.round()).abs() < 1e-9 && multiple >= 1.0).then(|| {
+                        crate::model::excitation::Harmonic {
+                            multiple: multiple.round(),
+                            amplitude: h.amplitude,
+                            phase: h.phase,
+                        }
+                    })
+                })
+                .collect();
+        }
+    }
+    Ok(())
 }
 
 /// Options of [`run`].

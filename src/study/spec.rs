@@ -361,7 +361,9 @@ pub struct SweepSpec {
 pub struct SpeedPoint {
     /// Mean speed, rpm.
     pub rpm: f64,
-    /// The order harmonics at this speed (`multiple` 1 = order n, 2 = 2n), N·m and rad.
+    /// The order harmonics at this speed (`multiple` 1 = order n, 2 = 2n), N·m and rad. Left
+    /// out when the analysis names an `engine`, which gives them.
+    #[serde(default)]
     pub harmonics: Vec<Harmonic>,
 }
 
@@ -398,6 +400,16 @@ pub struct MultiOrderSpec {
     /// Mean torque T_m, N·m; default: the losses at each operating speed.
     #[serde(default)]
     pub mean_torque: Option<f64>,
+    /// An engine file (RON `Engine(...)`, relative to the study file, see `kanedyn::engine`)
+    /// whose torque from cylinder pressure gives every speed's harmonics: its orders that are the
+    /// multiples 1..=`engine_multiples` of `order`, with their phases, computed when the study is
+    /// loaded (results.json's spec shows them). The engine's mean torque is not applied: the
+    /// driven load holds the speed, as `mean_torque` (default the losses) says.
+    #[serde(default)]
+    pub engine: Option<String>,
+    /// Highest multiple of `order` taken from the engine (default 4).
+    #[serde(default = "default_engine_multiples")]
+    pub engine_multiples: usize,
     /// Integrate the nonlinear equations to steady state at each speed (default true).
     #[serde(default = "default_true")]
     pub time_domain: bool,
@@ -545,6 +557,10 @@ pub struct JointTorqueSpec {
     /// Ramp-in of the oscillating part, s (default 0: none).
     #[serde(default)]
     pub ramp_s: f64,
+}
+
+fn default_engine_multiples() -> usize {
+    4
 }
 
 fn default_order_one() -> f64 {
