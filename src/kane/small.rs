@@ -2,12 +2,15 @@
 //! storage: absolute angular velocities on a revolute tree of at most [`SMALL`] speeds without
 //! point forces (any topology, springs, dampers, ground dampers, joint torques and gravity).
 //!
-//! The terms are those of `Kane::evaluate_absolute` (summed in another order, so the two agree
-//! to rounding); what differs is where they live. Everything the evaluation reads is packed at
-//! construction into arrays indexed by speed (parents, the constant diagonal, the pair
-//! coefficients by (k, j) rather than in walk order, the path between every ancestor pair, each
-//! speed's excitation), M and F stay in local arrays the compiler keeps in registers, and the
-//! solve is unrolled for the literal n: Cramer's rule for n = 2, LDLᵀ above.
+//! The terms are those of `Kane::evaluate_absolute`, summed in the same order, and the solve
+//! is `Kane::factor_solve`'s LDLᵀ in the same order, so the results are identical to the general
+//! path's whenever the joint torques are listed in joint order (every example; otherwise their
+//! sum is ordered by joint, a difference of rounding). What differs is where the data live.
+//! Everything the evaluation reads is packed at construction into arrays indexed by speed
+//! (parents, the constant diagonal, the pair coefficients by (k, j) rather than in walk order,
+//! the path between every ancestor pair, each speed's excitation), M and F stay in local arrays
+//! the compiler keeps in registers, and the loops, the factorisation's included, unroll for the
+//! literal n.
 //!
 //! NOTE: a fast path beside the general pair form rather than a change to it: the general form
 //! writes M and F into the engine's buffers (read back by `mass_matrix_and_forcing_rows` and the
@@ -151,10 +154,10 @@ impl Kane {
         let ud = &mut ud[..N];
         // The calls into libm first, the excitation torques before the joints' angles: the
         // excitation's chain (phase, `sin`, F, solve) is the longest of the evaluation.
-        let mut tau = [0.0; N];
-        for (j, tau) in tau.iter_mut().enumerate() {
+        let mut exc = [0.0; N];
+        for (j, exc) in exc.iter_mut().enumerate() {
             if s.torque[j] != NONE {
-                *tau = self.torques[s.torque[j]].excitation.torque(t);
+                *exc = self.torques[s.torque[j]].excitation.torque(t);
             }
         }
         let mut jt = [(1.0, 0.0); N];
@@ -175,23 +178,28 @@ impl Kane {
             // A root's parent is past the end of u: its speed reads as zero.
             let qdot = wj - u.get(s.parent[j]).map_or(0.0, |&w| w);
             qd[j] = qdot;
-            // The joint's torque acts +τ on j and −τ on its parent (below, with the pair).
-            tau[j] -= s.k_spring[j] * (q[j] - s.q_free[j]) + s.c_joint[j] * qdot;
-            f[j] += tau[j] - s.c_ground[j] * wj;
+            let tau = -s.k_spring[j] * (q[j] - s.q_free[j]) - s.c_joint[j] * qdot;
+            f[j] = tau - s.c_ground[j] * wj;
             m[j][j] = s.diag[j];
+            if let Some(g) = s.gravity {
+                for k in 0..j {
+                    if s.parent[j] == k {
+                        ori[j] = compose(ori[k], jt[j]);
+                    }
+                }
+                let (c, sn) = ori[j];
+                f[j] += cross2(rotate_cs(c, sn, s.first[j]), g);
+            }
             // Ancestors k of j, nearest first (descending index), as `evaluate_absolute` walks them.
-            let (jc, js) = jt[j];
             for k in (0..j).rev() {
                 let via = s.via[k][j];
                 if via == NOT_ANCESTOR {
                     continue;
                 }
                 let (rc, rs) = if via == j {
-                    f[k] -= tau[j];
-                    if s.gravity.is_some() {
-                        ori[j] = compose(ori[k], jt[j]);
-                    }
-                    (jc, js)
+                    // k is j's parent: the joint's torque acts +τ on j and −τ on k.
+                    f[k] -= tau;
+                    jt[j]
                 } else {
                     // Δ_kj = q_c + Δ_cj for the child c of k on the path; c is found by
                     // comparison so that every index stays literal.
@@ -212,32 +220,27 @@ impl Kane {
                 f[k] += wj * wj * d;
                 f[j] -= u[k] * u[k] * d;
             }
-            if let Some(g) = s.gravity {
-                let (c, sn) = ori[j];
-                f[j] += cross2(rotate_cs(c, sn, s.first[j]), g);
-            }
         }
-        match N {
-            1 => ud[0] = f[0] * s.diag0_inv,
-            2 => {
-                // Cramer's rule: both unknowns are one division after the determinant, where the
-                // LDLᵀ substitution would chain a multiplication and a subtraction after it.
-                let (m00, m01, m11) = (m[0][0], m[0][1], m[1][1]);
-                let det = m00 * m11 - m01 * m01;
-                // `d_1 = det / M_00` is the second pivot of LDLᵀ.
-                if det.is_nan() || det <= s.pivot_min * m00 {
-                    return Err(self.pivot_error(1, det * s.diag0_inv));
+        for j in 0..N {
+            if s.torque[j] != NONE {
+                f[j] += exc[j];
+                for k in 0..j {
+                    if s.parent[j] == k {
+                        f[k] -= exc[j];
+                    }
                 }
-                ud[0] = (m11 * f[0] - m01 * f[1]) / det;
-                ud[1] = (m00 * f[1] - m01 * f[0]) / det;
             }
-            _ => self.ldlt_small::<N>(&m, &f, s, ud)?,
         }
-        Ok(())
+        self.ldlt_small::<N>(&m, &f, s, ud)
     }
 
-    /// `M x = F` by LDLᵀ on the local arrays of [`Kane::rhs_small`], fused with the forward
-    /// substitution as in `Kane::factor_solve`; the first pivot is the constant `M_00`.
+    /// `M x = F` by LDLᵀ on the local arrays of [`Kane::rhs_small`]: `Kane::factor_solve` with
+    /// every sum in the same order (the same results), unrolled; the first pivot is the constant
+    /// `M_00`.
+    ///
+    /// NOTE: by hand rather than nalgebra's fixed-size Cholesky, for the reasons of
+    /// `Kane::factor_solve` (no square roots, a failure names the joint) and to keep the general
+    /// path's results; Cramer's rule for n = 2 measured no faster (BENCHMARKS.md).
     #[inline(always)]
     fn ldlt_small<const N: usize>(
         &self,
@@ -248,38 +251,38 @@ impl Kane {
     ) -> Result<(), EngineError> {
         let mut l = [[0.0; N]; N];
         let mut d_inv = [0.0; N];
-        let mut y = [0.0; N];
         d_inv[0] = s.diag0_inv;
-        y[0] = f[0];
+        x[0] = f[0];
         for i in 1..N {
-            // a_j = L_ij d_j, then L_ij, d_i and y_i.
+            // a_j = L_ij d_j, then L_ij, d_i and y_i, each sum in `factor_solve`'s order.
             let mut a = [0.0; N];
             for j in 0..i {
-                let mut aj = m[i][j];
+                let mut dot = 0.0;
                 for k in 0..j {
-                    aj -= a[k] * l[j][k];
+                    dot += a[k] * l[j][k];
                 }
-                a[j] = aj;
+                a[j] = m[i][j] - dot;
             }
-            let (mut d, mut yi) = (m[i][i], f[i]);
+            let (mut d, mut y) = (m[i][i], f[i]);
             for j in 0..i {
                 let lij = a[j] * d_inv[j];
                 l[i][j] = lij;
                 d -= a[j] * lij;
-                yi -= lij * y[j];
+                y -= lij * x[j];
             }
             if d.is_nan() || d <= s.pivot_min {
                 return Err(self.pivot_error(i, d));
             }
             d_inv[i] = 1.0 / d;
-            y[i] = yi;
+            x[i] = y;
+        }
+        for i in 0..N {
+            x[i] *= d_inv[i];
         }
         for i in (0..N).rev() {
-            let mut xi = y[i] * d_inv[i];
-            for k in i + 1..N {
-                xi -= l[k][i] * x[k];
+            for k in 0..i {
+                x[k] -= l[i][k] * x[i];
             }
-            x[i] = xi;
         }
         Ok(())
     }
