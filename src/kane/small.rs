@@ -142,18 +142,21 @@ impl Kane {
     /// [`Kane::rhs`] by the fixed-size path for `N` speeds (`N = self.n ≤ SMALL`, `self.small`
     /// set; the caller has checked the lengths of `x` and `xdot`).
     ///
-    /// NOTE: every local array is indexed by literal indices only (the loops over N unroll), so
-    /// the compiler keeps M, F and the angles in registers; the tree's topology enters as tests
-    /// of constant data (`via`, `torque`) instead of run-time indices, which had put F on the
-    /// stack and read it back across stores (measured, BENCHMARKS.md).
+    /// NOTE: every local array has the literal length N (not `SMALL`: initialising the larger
+    /// ones cost more than the evaluation's arithmetic) and is indexed by literal indices only
+    /// (the loops over N unroll), so the compiler keeps M, F and the angles in registers; the
+    /// tree's topology enters as tests of constant data (`via`, `torque`, `parent`) instead of
+    /// run-time indices, which had put F on the stack and read it back across stores. Out of
+    /// line, one function per N, called through `Small::rhs` (measured, BENCHMARKS.md).
     #[inline(never)]
     fn rhs_small<const N: usize>(&self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
         let s = self.small.as_ref().expect("the fixed-size path is chosen with its data");
         let (q, u) = (&x[..N], &x[N..2 * N]);
         let (qd, ud) = xdot.split_at_mut(N);
         let ud = &mut ud[..N];
-        // The calls into libm first, the excitation torques before the joints' angles: the
-        // excitation's chain (phase, `sin`, F, solve) is the longest of the evaluation.
+        // NOTE: the calls into libm first, so that no value is live (spilled) across them, and
+        // the excitation torques before the joints' angles: the excitation's chain (phase, `sin`,
+        // F, solve) is the longest of the evaluation (measured, BENCHMARKS.md).
         let mut exc = [0.0; N];
         for (j, exc) in exc.iter_mut().enumerate() {
             if s.torque[j] != NONE {
