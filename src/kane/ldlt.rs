@@ -42,15 +42,7 @@ impl Kane {
             }
             // NaN must fail too, so test for "not greater" rather than "less or equal".
             if d.is_nan() || d <= PIVOT_TOL * scale {
-                return Err(if d.is_nan() {
-                    EngineError::NonFinite { what: "mass matrix", index: i }
-                } else {
-                    EngineError::NotPositiveDefinite {
-                        dof: i,
-                        joint: self.mech.joints[self.joint_of[i]].name.clone(),
-                        pivot: d,
-                    }
-                });
+                return Err(self.pivot_error(i, d));
             }
             d_inv[i] = 1.0 / d;
             x[i] = y;
@@ -67,5 +59,20 @@ impl Kane {
             }
         }
         Ok(())
+    }
+
+    /// The error of a vanished (or NaN) pivot `d` of speed `i`.
+    #[cold]
+    #[inline(never)]
+    pub(super) fn pivot_error(&self, i: usize, d: f64) -> EngineError {
+        if d.is_nan() {
+            EngineError::NonFinite { what: "mass matrix", index: i }
+        } else {
+            EngineError::NotPositiveDefinite {
+                dof: i,
+                joint: self.mech.joints[self.joint_of[i]].name.clone(),
+                pivot: d,
+            }
+        }
     }
 }

@@ -68,6 +68,7 @@ pub mod kinematics;
 pub mod ldlt;
 pub mod rates;
 pub mod reference;
+mod small;
 
 /// `Σ a_k b_k` over the shorter of the two slices.
 #[inline(always)]
@@ -175,6 +176,8 @@ pub struct Kane {
     /// order the forward pass walks them (j ascending, then k from j's parent up to the root); see
     /// `Kane::evaluate_absolute`.
     pairs: Vec<(f64, f64)>,
+    /// The data of the fixed-size right-hand side, when it applies ([`small`]).
+    small: Option<small::Small>,
     // Work buffers.
     /// The joints of one ancestor walk, for [`Kane::residual_jacobian`] (capacity n).
     walk: Vec<usize>,
@@ -285,6 +288,7 @@ impl Kane {
         let mut k = Kane {
             mech: mech.clone(),
             pairs,
+            small: None,
             n,
             nb,
             speed_parent: mech.speed_parents(),
@@ -310,6 +314,7 @@ impl Kane {
         let mut zeros = vec![0.0; n];
         k.evaluate(0.0, &zeros, &zeros, false);
         k.factor_solve(&mut zeros)?;
+        k.small = small::Small::new(&k);
         Ok(k)
     }
 
@@ -333,6 +338,10 @@ impl Kane {
         match self.torques.iter_mut().find(|t| t.joint == joint) {
             Some(t) => t.excitation = excitation,
             None => self.torques.push(JointTorque { joint, excitation }),
+        }
+        // The fixed-size path maps each speed to its torque's place in the list.
+        if self.small.is_some() {
+            self.small = small::Small::new(self);
         }
     }
 
@@ -387,13 +396,36 @@ impl Kane {
 
     /// The state derivative `ẋ = [W⁻¹u; M⁻¹F]` for `x = [q; u]`. No heap allocation.
     pub fn rhs(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+        self.check_lengths(x, xdot)?;
+        // NOTE: the fixed-size path's instance for this n was chosen at build: one indirect call
+        // instead of a dispatch on n per call (measured, BENCHMARKS.md).
+        if let Some(s) = &self.small {
+            return (s.rhs)(self, t, x, xdot);
+        }
+        self.rhs_general(t, x, xdot)
+    }
+
+    #[inline(always)]
+    fn check_lengths(&self, x: &[f64], xdot: &[f64]) -> Result<(), EngineError> {
         let n = self.n;
         if x.len() != 2 * n || xdot.len() != 2 * n {
             let (what, got) = if x.len() != 2 * n { ("state x", x.len()) } else { ("derivative ẋ", xdot.len()) };
             return Err(EngineError::Dimension { what, got, expected: 2 * n });
         }
-        // NOTE: dispatched on n itself (not on a copy of it), so the compiler knows x has 2N
-        // entries in the literal instances and drops the slices' range checks.
+        Ok(())
+    }
+
+    /// [`Kane::rhs`] by the general forms.
+    ///
+    /// NOTE: out of line, so that its large frame (every form, for every literal n) is not set
+    /// up and torn down around the fixed-size path (measured, BENCHMARKS.md).
+    #[inline(never)]
+    fn rhs_general(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+        // Checked again here so the compiler knows x has 2N entries in the literal instances
+        // and drops the slices' range checks.
+        self.check_lengths(x, xdot)?;
+        // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
+        let n = self.n;
         if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) }
     }
 
