@@ -86,6 +86,10 @@ pub struct Engine {
     lambda: f64,
     offsets_rad: Vec<f64>,
     spline: Option<PeriodicSpline>,
+    /// Mean and (cos, sin) coefficients in θ/2 of the gas torque and of the inertia torque at
+    /// Ω = 1 rad/s, computed once: the series at any speed combines them.
+    gas: (f64, Vec<(f64, f64)>),
+    inertia: (f64, Vec<(f64, f64)>),
 }
 
 /// An engine's torque as orders at one speed: `T(θ) = mean + Σ amplitude·sin(multiple·θ/2 + phase)`.
@@ -176,14 +180,19 @@ impl Engine {
                 None
             }
         };
-        Ok(Self {
+        let mut engine = Self {
             area_m2: 0.25 * PI * spec.bore_m * spec.bore_m,
             r,
             lambda: r / spec.rod_m,
             offsets_rad: offsets_deg.iter().map(|d| d.to_radians()).collect(),
             spline,
             spec,
-        })
+            gas: (0.0, Vec::new()),
+            inertia: (0.0, Vec::new()),
+        };
+        engine.gas = coefficients(|t| engine.gas_torque(t));
+        engine.inertia = coefficients(|t| engine.inertia_torque(t, 1.0));
+        Ok(engine)
     }
 
     /// The spec as given.
@@ -260,27 +269,34 @@ impl Engine {
     /// `max_order` (a balanced engine's cancelled orders appear with rounding-level amplitudes;
     /// [`EngineOrders::significant`] leaves them out).
     pub fn orders(&self, omega: f64, max_order: f64) -> EngineOrders {
-        let n = CYCLE_SAMPLES;
-        let samples: Vec<f64> = (0..n).map(|i| self.torque(4.0 * PI * i as f64 / n as f64, omega)).collect();
-        let mut input = samples;
-        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
-        let mut spectrum = fft.make_output_vec();
-        // The lengths come from the plan itself, so the transform cannot fail.
-        fft.process(&mut input, &mut spectrum).expect("buffers made by the plan");
-        let mean_nm = spectrum[0].re / n as f64;
-        let top = ((2.0 * max_order).floor() as usize).min(n / 2 - 1);
-        // x_i = a₀ + Σ_j (a_j cos jφ_i + b_j sin jφ_i), φ = θ/2: X_j = (n/2)(a_j − i b_j).
-        let raw: Vec<(usize, f64, f64)> = (1..=top)
-            .map(|j| {
-                let (a, b) = (2.0 * spectrum[j].re / n as f64, -2.0 * spectrum[j].im / n as f64);
+        let w2 = omega * omega;
+        let top = ((2.0 * max_order).floor().max(0.0) as usize).min(self.gas.1.len());
+        let harmonics = (0..top)
+            .map(|k| {
+                let (ga, gb) = self.gas.1[k];
+                let (ia, ib) = self.inertia.1[k];
+                let (a, b) = (ga + w2 * ia, gb + w2 * ib);
                 // a cos + b sin = A sin(jφ + α) with A = √(a² + b²), α = atan2(a, b).
-                (j, a.hypot(b), a.atan2(b))
+                Harmonic { multiple: (k + 1) as f64, amplitude: a.hypot(b), phase: a.atan2(b) }
             })
             .collect();
-        let harmonics =
-            raw.into_iter().map(|(j, amplitude, phase)| Harmonic { multiple: j as f64, amplitude, phase }).collect();
-        EngineOrders { mean_nm, harmonics }
+        EngineOrders { mean_nm: self.gas.0 + w2 * self.inertia.0, harmonics }
     }
+}
+
+/// The mean and the (cos, sin) coefficients of harmonics j = 1..N/2 − 1 in φ = θ/2 of a torque
+/// over the 720° cycle, by a real FFT of [`CYCLE_SAMPLES`] samples:
+/// `x_i = a₀ + Σ_j (a_j cos jφ_i + b_j sin jφ_i)` gives `X_j = (N/2)(a_j − i b_j)`.
+fn coefficients(torque: impl Fn(f64) -> f64) -> (f64, Vec<(f64, f64)>) {
+    let n = CYCLE_SAMPLES;
+    let mut input: Vec<f64> = (0..n).map(|i| torque(4.0 * PI * i as f64 / n as f64)).collect();
+    let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+    let mut spectrum = fft.make_output_vec();
+    // The lengths come from the plan itself, so the transform cannot fail.
+    fft.process(&mut input, &mut spectrum).expect("buffers made by the plan");
+    let scale = 2.0 / n as f64;
+    let coefficients = (1..n / 2).map(|j| (scale * spectrum[j].re, -scale * spectrum[j].im)).collect();
+    (spectrum[0].re / n as f64, coefficients)
 }
 
 impl EngineOrders {

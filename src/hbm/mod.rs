@@ -3,7 +3,8 @@
 //! stability: the faster route to the steady responses that the paper obtains by long time
 //! integration (sections 4 and 5; its conclusion names harmonic balance as the method to come).
 //!
-//! This module holds the problem ([`Hbm`]) and Newton's method at fixed parameters; the parts
+//! This module holds the problem ([`Hbm`]) and Newton's method at fixed parameters (one idea: a
+//! third of its length is the formulation below, written where the code that follows it is); the parts
 //! are in submodules, their public items re-exported here: `solution` ([`HbmSolution`] and its
 //! read-outs), `sample` (the residual and its derivatives at one time sample), `assembly` (the
 //! AFT residual and the spectral Jacobian), `aft` (the real FFTs), `branch` (the branch data

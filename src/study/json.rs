@@ -313,7 +313,7 @@ fn parts<'a>(
             (
                 AnalysisResult::Campbell(r),
                 AnalysisFindings::Campbell { modes: campbell_findings(c, r) },
-                linear::campbell_tables(c, r),
+                super::campbell::campbell_tables(c, r),
             )
         }
         AnalysisSpec::HarmonicBalance(h) => {

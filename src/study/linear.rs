@@ -1,10 +1,11 @@
-//! The linear analyses of a study: the order-domain frequency response normalised by the locked
-//! twin (paper eq. 22, Fig. 2) and the Campbell diagram.
+//! The linear response of a study: the order-domain frequency response normalised by the locked
+//! twin (paper eq. 22, Fig. 2), per damping variant, with each element's response (the Campbell
+//! diagram is in `campbell`).
 
 use super::table::Table;
-use super::{CampbellSpec, LinearResponseSpec, Output, Results, Study};
+use super::{LinearResponseSpec, Output, Results, Study};
 use crate::error::{Error, Result};
-use crate::linear::{Campbell, Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin, campbell};
+use crate::linear::{Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
@@ -86,7 +87,7 @@ pub struct ModeRow {
     pub label: String,
 }
 
-fn lin(mech: &Mechanism) -> impl Fn(LinearError) -> Error + '_ {
+pub(crate) fn lin(mech: &Mechanism) -> impl Fn(LinearError) -> Error + '_ {
     move |e| Error::Model { mechanism: mech.name.clone(), message: format!("linear analysis: {e}") }
 }
 
@@ -258,33 +259,6 @@ pub(crate) fn response_tables(study: &Study, spec: &LinearResponseSpec, r: &Line
             t
         })
         .collect()
-}
-
-/// The Campbell CSV tables: the speeds with, per tracked mode, its frequency and damping ratio,
-/// then the order lines; and the resonance table `<name>_crossings` (order, mode number, rpm, Hz).
-pub(crate) fn campbell_tables(spec: &CampbellSpec, c: &Campbell) -> Vec<Table> {
-    let mut t = Table::new(spec.name.clone());
-    t.push("rpm", "rpm", c.rpm.clone());
-    for (k, tr) in c.tracks.iter().enumerate() {
-        t.push(format!("mode{}_{}_hz", k + 1, tr.label), "Hz", tr.frequency_hz.clone());
-        t.push(format!("mode{}_{}_damping_ratio", k + 1, tr.label), "1", tr.damping_ratio.clone());
-    }
-    for l in &c.order_lines {
-        t.push(format!("order_{}_hz", l.order), "Hz", l.frequency_hz.clone());
-    }
-    // Each tracked mode's place in frequency order at each speed (1 = lowest): read the table
-    // sorted by frequency speed by speed through these.
-    for (k, tr) in c.tracks.iter().enumerate() {
-        t.push(format!("mode{}_{}_rank", k + 1, tr.label), "1", tr.rank.iter().map(|&r| r as f64).collect());
-    }
-    let mut x = Table::new(format!("{}_crossings", spec.name));
-    let col = |f: &dyn Fn(&crate::linear::Crossing) -> f64| c.crossings.iter().map(f).collect::<Vec<f64>>();
-    x.push("order", "1", col(&|x| x.order));
-    x.push("mode", "1", col(&|x| (x.track + 1) as f64));
-    x.push("rpm", "rpm", col(&|x| x.rpm));
-    x.push("frequency_hz", "Hz", col(&|x| x.frequency_hz));
-    x.push("rank", "1", col(&|x| x.rank as f64));
-    vec![t, x]
 }
 
 /// Writes one CSV per variant and the figure (the paper's Fig. 2), and returns the summary
@@ -503,145 +477,4 @@ fn element_table(results: &[ResponseVariant]) -> String {
     }
     md.push('\n');
     md
-}
-
-/// Runs the Campbell analysis ([`compute_campbell`]) and writes its outputs
-/// ([`render_campbell`]).
-pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Result<Output> {
-    let (c, failures) = compute_campbell(study, spec)?;
-    let (markdown, files) = render_campbell(spec, &c, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Campbell(c) })
-}
-
-/// The natural frequencies over the speed range, tracked by mode shape, with the order lines.
-pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Campbell, Vec<String>)> {
-    let mech = &study.mechanism;
-    let steps = spec.points.max(2);
-    let rpm: Vec<f64> =
-        (0..steps).map(|i| spec.rpm_min + (spec.rpm_max - spec.rpm_min) * i as f64 / (steps - 1) as f64).collect();
-    let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
-    let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
-    let modal = spec.modal_damping.as_ref();
-    let c =
-        campbell(mech, &study.spec.spin_joint, &rpm, &spec.orders, spin, damping, modal, None).map_err(lin(mech))?;
-    let mut failures = Vec::new();
-    for (k, t) in c.tracks.iter().enumerate() {
-        if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {
-            failures.push(format!(
-                "{} mode {} (`{}`): the frequency is not finite at {} rpm (left empty)",
-                spec.name,
-                k + 1,
-                t.label,
-                c.rpm[i]
-            ));
-        }
-    }
-    Ok((c, failures))
-}
-
-/// Writes the Campbell CSV and figure, and returns the summary section with the files written.
-pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> Result<(String, Vec<PathBuf>)> {
-    let steps = c.rpm.len();
-    let written: Vec<PathBuf> = campbell_tables(spec, c).iter().map(|t| t.write_csv(dir)).collect::<Result<_>>()?;
-    let mut series: Vec<Series> = c
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(k, t)| Series {
-            label: format!("mode {} ({})", k + 1, t.label),
-            x: c.rpm.clone(),
-            y: t.frequency_hz.clone(),
-            color: k,
-            style: LineStyle::Solid,
-        })
-        .collect();
-    for l in &c.order_lines {
-        series.push(Series {
-            label: format!("order {}", l.order),
-            x: c.rpm.clone(),
-            y: l.frequency_hz.clone(),
-            color: 7,
-            style: LineStyle::Dotted,
-        });
-    }
-    let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
-    let panel = Panel {
-        title: format!("Campbell diagram ({})", if spec.spin_held { "spin held" } else { "spin free" }),
-        x_label: "spin speed, rpm".into(),
-        y_label: "frequency, Hz".into(),
-        x_range: Some((spec.rpm_min, spec.rpm_max)),
-        y_range: Some((0.0, 1.05 * top.max(f64::MIN_POSITIVE))),
-        series,
-        ..Panel::default()
-    };
-    let svg = dir.join(format!("{}.svg", spec.name));
-    crate::plot::write_svg(&svg, &[panel], 760, 520)?;
-
-    let mut md = String::new();
-    let _ = writeln!(
-        md,
-        "## Campbell diagram `{}`: {}–{} rpm, spin {}\n",
-        spec.name,
-        spec.rpm_min,
-        spec.rpm_max,
-        if spec.spin_held { "held" } else { "free" }
-    );
-    if let Some(z) = &spec.modal_damping {
-        let _ = writeln!(
-            md,
-            "Modal damping: {} (in place of the mechanism's dampers; damped frequencies).\n",
-            z.describe()
-        );
-    }
-    let _ = writeln!(
-        md,
-        "| mode | label | f at {} rpm (Hz) | f at {} rpm (Hz) | order there | order line? |",
-        spec.rpm_min, spec.rpm_max
-    );
-    let _ = writeln!(md, "|---|---|---|---|---|---|");
-    for (k, t) in c.tracks.iter().enumerate() {
-        let (f0, f1) = (t.frequency_hz[0], t.frequency_hz[steps - 1]);
-        let order = |f: f64, r: f64| if r > 0.0 { f / (r / 60.0) } else { f64::NAN };
-        // A mode is an order line when its order is the same at every non-zero speed (1e-6).
-        let orders: Vec<f64> =
-            c.rpm.iter().zip(&t.frequency_hz).filter(|(r, _)| **r > 0.0).map(|(&r, &f)| order(f, r)).collect();
-        let straight = orders.iter().all(|o| (o - orders[0]).abs() <= 1e-6 * orders[0].abs());
-        let _ = writeln!(
-            md,
-            "| {} | {} | {:.4} | {:.4} | {:.6} | {} |",
-            k + 1,
-            t.label,
-            f0,
-            f1,
-            order(f1, spec.rpm_max),
-            if straight { "yes" } else { "no" }
-        );
-    }
-    md.push('\n');
-    // The resonance table: where each order line crosses each mode.
-    if c.crossings.is_empty() {
-        let _ = writeln!(md, "No order line crosses a mode between {} and {} rpm.\n", spec.rpm_min, spec.rpm_max);
-    } else {
-        let _ = writeln!(md, "Resonance speeds (order lines crossing modes, located to 1e-9 in speed):\n");
-        let _ = writeln!(
-            md,
-            "| speed (rpm) | order | mode | label | frequency (Hz) | rank there |\n|---|---|---|---|---|---|"
-        );
-        for x in &c.crossings {
-            let _ = writeln!(
-                md,
-                "| {:.3} | {} | {} | {} | {:.4} | {} |",
-                x.rpm,
-                x.order,
-                x.track + 1,
-                x.label,
-                x.frequency_hz,
-                x.rank
-            );
-        }
-        md.push('\n');
-    }
-    let mut files = written;
-    files.insert(1, svg);
-    Ok((md, files))
 }

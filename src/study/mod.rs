@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+mod campbell;
 pub mod design;
 mod elements;
 pub mod hbm;
@@ -320,16 +321,27 @@ impl Study {
 /// torque at each speed (the orders that are whole multiples of the analysis's base order, up to
 /// `engine_multiples`); errors are located in the study file or in the engine file.
 fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, base: &Path) -> Result<()> {
+    // Too many analyses is `validate`'s error; no engine work is spent on such a file.
+    if spec.analyses.len() > validate::MAX_ANALYSES {
+        return Ok(());
+    }
+    // Each engine file is read and prepared once, however many analyses name it.
+    let mut engines: std::collections::HashMap<PathBuf, crate::engine::Engine> = std::collections::HashMap::new();
     for (k, a) in spec.analyses.iter_mut().enumerate() {
         let AnalysisSpec::MultiOrder(m) = a else { continue };
         let Some(file) = &m.engine else { continue };
         let at = |f: &str| format!("analyses[{k}].{f}");
         let path = policy.resolve(base, file).map_err(|e| src.error(&at("engine"), e))?;
-        let esrc = Source::read_with(&path, policy).map_err(|e| match e {
-            Error::Io { .. } => src.error(&at("engine"), format!("cannot read engine file: {e}")),
-            other => other,
-        })?;
-        let engine = crate::engine::Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
+        if !engines.contains_key(&path) {
+            let esrc = Source::read_with(&path, policy).map_err(|e| match e {
+                Error::Io { .. } => src.error(&at("engine"), format!("cannot read engine file: {e}")),
+                other => other,
+            })?;
+            let engine =
+                crate::engine::Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
+            engines.insert(path.clone(), engine);
+        }
+        let engine = &engines[&path];
         if !(1..=validate::MAX_LIST).contains(&m.engine_multiples) {
             return Err(src.error(&at("engine_multiples"), format!("need 1 to {} multiples", validate::MAX_LIST)));
         }
@@ -338,6 +350,9 @@ fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, bas
                 &at("order"),
                 format!("with an engine the base order must be a multiple of ½ (its orders are), got {}", m.order),
             ));
+        }
+        if m.speeds.len() > validate::MAX_LIST {
+            return Err(src.error(&at("speeds"), format!("{} speeds; at most {}", m.speeds.len(), validate::MAX_LIST)));
         }
         for (i, p) in m.speeds.iter_mut().enumerate() {
             if !p.harmonics.is_empty() {
@@ -508,7 +523,7 @@ fn run_analysis(
         AnalysisSpec::OrderSweep(s) => sweep::run(study, s, dir, progress)?,
         AnalysisSpec::MultiOrder(m) => multi::run(study, m, dir, progress)?,
         AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
-        AnalysisSpec::Campbell(c) => linear::run_campbell(study, c, dir)?,
+        AnalysisSpec::Campbell(c) => campbell::run_campbell(study, c, dir)?,
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
         AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
         AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
