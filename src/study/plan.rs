@@ -288,7 +288,7 @@ impl Study {
                             ..base
                         }
                     }
-                    AnalysisSpec::DesignStudy(d) => super::design::plan(self, d, base),
+                    AnalysisSpec::DesignStudy(d) => design_plan(self, d, base),
                     AnalysisSpec::Transient(t) => {
                         let samples = t.duration_s * fs + 1.0;
                         let e = self.elements.len() as f64;
@@ -332,4 +332,30 @@ fn hbm_branch_s(n: f64, h: f64) -> f64 {
     let newton = u * u * u / 3.0 * 1e-9 + 4.0 * (h + 1.0) * rhs_s(n) * 2.0 * n;
     let floquet = 256.0 * 4.0 * 2.0 * n * rhs_s(n) * 2.0 * n;
     points * (5.0 * newton + floquet)
+}
+
+/// The estimated work of a design study: the analysis's estimate once per case (its cost does
+/// not depend on the varied values: a harmonic-balance branch is bounded by its points, a linear
+/// response by its order grid), its memory once per case running at a time, and the table.
+fn design_plan(study: &Study, spec: &super::DesignSpec, base: AnalysisPlan) -> AnalysisPlan {
+    let mut alone = study.clone();
+    alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
+    let inner = alone.plan().analyses.into_iter().next();
+    let n = super::design::case_count(spec) as f64;
+    let parallel = std::thread::available_parallelism().map_or(1, |p| p.get()) as f64;
+    let columns = (1 + spec.parameters.len() + super::design::result_columns(study, spec).len()) as f64;
+    // A row's cells, plus the status and a message of up to ~200 characters.
+    let table_bytes = n * (columns * 22.0 + 200.0);
+    match inner {
+        Some(a) => AnalysisPlan {
+            runs: super::design::case_count(spec).saturating_mul(a.runs),
+            samples_per_run: a.samples_per_run,
+            memory_bytes: a.memory_bytes * n.min(parallel) + table_bytes,
+            output_bytes: table_bytes,
+            cpu_s: n * a.cpu_s,
+            driver: "sampling",
+            ..base
+        },
+        None => base,
+    }
 }

@@ -3,26 +3,20 @@
 //! located at its field.
 
 use super::sampling::case_count;
-use super::{
-    DesignParameter, DesignSpec, MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES, Quantity, Sampling,
-};
-use crate::error::{Error, Result};
+use super::{MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES};
+use crate::error::Result;
 use crate::io::Source;
 use crate::model::joint::JointKind;
 use crate::model::mechanism::Mechanism;
-use crate::study::validate::{MAX_ORDER, MAX_RPM, MAX_TORQUE_NM, check_file_name};
+use crate::study::spec::{DesignParameter, DesignSpec, Quantity, Sampling};
+use crate::study::validate::limits::{MAX_ORDER, MAX_RPM, MAX_TORQUE_NM, check_file_name};
 use crate::study::{AnalysisSpec, HbmParameter, StudySpec};
 
-/// Checks a design study (analysis `k` of the study file) against the mechanism; errors are
-/// located at the offending field (`analyses[k].parameters[j].from`, …).
-pub(crate) fn check(
-    src: &Source,
-    spec: &StudySpec,
-    mech: &Mechanism,
-    spin: usize,
-    k: usize,
-    d: &DesignSpec,
-) -> Result<()> {
+/// Checks the kind of analysis a design study runs (analysis `k` of the study file); errors
+/// are located at the offending field. Then `validate` checks that analysis by itself, and
+/// [`check_parameters`] the parameters.
+pub(crate) fn check(src: &Source, spec: &StudySpec, mech: &Mechanism, k: usize, d: &DesignSpec) -> Result<()> {
+    let _ = mech;
     let at = |field: &str| format!("analyses[{k}].{field}");
     let inner = d.analysis.as_ref();
     match inner {
@@ -52,18 +46,14 @@ pub(crate) fn check(
             ));
         }
     }
-    // The analysis as written must be valid by itself: checked by the study's own rules on a
-    // study holding it alone, errors moved to their place inside this entry.
-    let alone = StudySpec { analyses: vec![inner.clone()], ..spec.clone() };
-    if let Err(e) = crate::study::validate::check(&alone, mech, spin, src) {
-        return Err(match e {
-            Error::Input { location, message } if location.path.starts_with("analyses[0]") => {
-                let rest = &location.path["analyses[0]".len()..];
-                src.error(&format!("analyses[{k}].analysis{rest}"), message)
-            }
-            other => other,
-        });
-    }
+    Ok(())
+}
+
+/// Checks a design study's parameters and sampling (analysis `k` of the study file) against the
+/// mechanism, after its analysis was checked by itself; errors located at the offending field.
+pub(crate) fn check_parameters(src: &Source, mech: &Mechanism, spin: usize, k: usize, d: &DesignSpec) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    let inner = d.analysis.as_ref();
     if d.parameters.is_empty() || d.parameters.len() > MAX_PARAMETERS {
         return Err(src.error(&at("parameters"), format!("give 1 to {MAX_PARAMETERS} parameters")));
     }

@@ -34,16 +34,14 @@
 mod check;
 mod report;
 mod sampling;
-mod spec;
 
-pub(crate) use check::check;
+pub use crate::study::spec::{DesignParameter, DesignSpec, Quantity, Sampling};
+pub(crate) use check::{check, check_parameters};
 pub use sampling::{below, case_count, case_values, uniform};
-pub use spec::{DesignParameter, DesignSpec, Quantity, Sampling};
 
 use crate::error::{Error, Result};
 use crate::kane::Kane;
 use crate::model::joint::{JointKind, Spring};
-use crate::study::plan::AnalysisPlan;
 use crate::study::table::{Table, fmt_num};
 use crate::study::{AnalysisSpec, HbmParameter, Output, Results, Study, StudySpec};
 use rayon::prelude::*;
@@ -166,32 +164,6 @@ pub fn findings(r: &DesignResult) -> DesignFindings {
 
 // ---------------------------------------------------------------------------------------------
 // Plan
-
-/// The estimated work of a design study: the analysis's estimate once per case (its cost does
-/// not depend on the varied values: a harmonic-balance branch is bounded by its points, a linear
-/// response by its order grid), its memory once per case running at a time, and the table.
-pub(crate) fn plan(study: &Study, spec: &DesignSpec, base: AnalysisPlan) -> AnalysisPlan {
-    let mut alone = study.clone();
-    alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
-    let inner = alone.plan().analyses.into_iter().next();
-    let n = case_count(spec) as f64;
-    let parallel = std::thread::available_parallelism().map_or(1, |p| p.get()) as f64;
-    let columns = (1 + spec.parameters.len() + result_columns(study, spec).len()) as f64;
-    // A row's cells, plus the status and a message of up to ~200 characters.
-    let table_bytes = n * (columns * 22.0 + 200.0);
-    match inner {
-        Some(a) => AnalysisPlan {
-            runs: case_count(spec).saturating_mul(a.runs),
-            samples_per_run: a.samples_per_run,
-            memory_bytes: a.memory_bytes * n.min(parallel) + table_bytes,
-            output_bytes: table_bytes,
-            cpu_s: n * a.cpu_s,
-            driver: "sampling",
-            ..base
-        },
-        None => base,
-    }
-}
 
 // ---------------------------------------------------------------------------------------------
 // Cases
