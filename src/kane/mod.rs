@@ -394,7 +394,13 @@ impl Kane {
         }
         // NOTE: dispatched on n itself (not on a copy of it), so the compiler knows x has 2N
         // entries in the literal instances and drops the slices' range checks.
-        if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) }
+        let out = if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) };
+        // NOTE: a path evaluated beyond its end gives NaN (`PathShape::at`); only on that failure
+        // is the state searched for the joint to name, so a successful call pays nothing.
+        out.map_err(|e| match e {
+            EngineError::NonFinite { .. } => self.mech.path_out_of_travel(&x[..n]).unwrap_or(e),
+            e => e,
+        })
     }
 
     /// The body of [`Kane::rhs`] for `N` degrees of freedom (`N = 0`: any).
