@@ -87,6 +87,19 @@ pub enum EngineError {
         /// Its index.
         index: usize,
     },
+    /// A path joint's coordinate left the path (beyond its end of travel, where the path is
+    /// singular, e.g. the epicycloid's cusp).
+    #[error(
+        "joint `{joint}` left its path: arc length {coordinate:e} m, the path ends at ±{travel:e} m (the absorber's amplitude exceeds its travel)"
+    )]
+    OutOfTravel {
+        /// Name of the path joint.
+        joint: String,
+        /// Its coordinate, m.
+        coordinate: f64,
+        /// Its end of travel, m.
+        travel: f64,
+    },
     /// A state vector of the wrong length was passed.
     #[error("{what} has length {got}, the mechanism needs {expected}")]
     Dimension {

@@ -14,6 +14,7 @@ use kanedyn::model::joint::{JointKind, JointSpec, Spring};
 use kanedyn::model::loads::{ForceFrame, LoadSpec};
 use kanedyn::model::math::{Vec2, rot2};
 use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
+use kanedyn::model::path::PathShape;
 use kanedyn::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
@@ -24,9 +25,27 @@ const TREES: u64 = 60;
 /// Seeds at or above this make trees that mix the joint kinds.
 const MIXED: u64 = 1000;
 
-/// The seeds of every test: 60 revolute trees and 60 mixed ones.
+/// Seeds at or above this make mixed trees in which path joints (issue 14) also appear.
+const PATHS: u64 = 2000;
+
+/// The seeds of every test: 60 revolute trees, 60 mixed ones and 60 mixed with path joints.
 fn seeds() -> impl Iterator<Item = u64> {
-    (0..TREES).chain(MIXED..MIXED + TREES)
+    (0..TREES).chain(MIXED..MIXED + TREES).chain(PATHS..PATHS + TREES)
+}
+
+/// A random absorber path: circle, bifilar or epicycloid (with a rotation law half the time),
+/// mounted at a random angle.
+fn random_path(rng: &mut StdRng) -> JointKind {
+    let shape = match rng.random_range(0..3) {
+        0 => PathShape::Circle { radius: rng.random_range(0.1..1.0), length: rng.random_range(0.2..1.0) },
+        1 => PathShape::Bifilar { radius: rng.random_range(0.1..1.0), length: rng.random_range(0.2..1.0) },
+        _ => PathShape::Epicycloid {
+            rho0: rng.random_range(0.3..1.0),
+            n_tilde: rng.random_range(0.5..3.0),
+            alpha1: if rng.random_bool(0.5) { rng.random_range(-2.0..2.0) } else { 0.0 },
+        },
+    };
+    JointKind::Path { shape, mount: rng.random_range(-3.0..3.0) }
 }
 
 fn random_tree(seed: u64) -> Mechanism {
@@ -36,6 +55,7 @@ fn random_tree(seed: u64) -> Mechanism {
 fn random_spec(seed: u64) -> MechanismSpec {
     let mut rng = StdRng::seed_from_u64(seed);
     let mixed = seed >= MIXED;
+    let paths = seed >= PATHS;
     let n = rng.random_range(1..=10);
     let name = |i: usize| format!("b{i}");
     let mut bodies = Vec::new();
@@ -53,12 +73,14 @@ fn random_spec(seed: u64) -> MechanismSpec {
         // Roughly one tree in five has a second root on ground.
         let parent = if i == 0 || rng.random_bool(0.1) { "ground".to_string() } else { name(rng.random_range(0..i)) };
         // Mixed trees: a fifth of the joints slide along a random (not unit) axis, a sixth are
-        // welded; the first joint always has a coordinate.
+        // welded; in path trees a quarter follow a random absorber path; the first joint always has a
+        // coordinate.
         let kind = match rng.random_range(0.0..1.0) {
             x if mixed && x < 0.2 => {
                 JointKind::Prismatic { axis: (rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0)) }
             }
             x if mixed && i > 0 && x > 5.0 / 6.0 => JointKind::Fixed,
+            x if paths && x < 0.45 => random_path(&mut rng),
             _ => JointKind::Revolute,
         };
         let moves = kind != JointKind::Fixed;
@@ -99,7 +121,15 @@ fn random_spec(seed: u64) -> MechanismSpec {
 
 fn random_state(mech: &Mechanism, rng: &mut StdRng) -> (Vec<f64>, Vec<f64>) {
     let n = mech.ndof();
-    let q = (0..n).map(|_| rng.random_range(-3.0..3.0)).collect();
+    // A path's arc length is drawn inside 90 % of its travel (of ±3 m for a circle): the same
+    // draw, scaled, so the other trees keep their states.
+    let q = (0..n)
+        .map(|k| {
+            let x = rng.random_range(-3.0..3.0);
+            let travel = mech.joints[mech.joint_of(k)].kind.travel();
+            if travel.is_finite() { 0.3 * x * travel } else { x }
+        })
+        .collect();
     let u = (0..n).map(|_| rng.random_range(-5.0..5.0)).collect();
     (q, u)
 }
@@ -182,7 +212,11 @@ fn partial_velocities_equal_finite_differences_of_body_velocities() {
 /// `Q = −d/dt(∂T/∂q̇)|_{q̈=0} + ∂T/∂q − ∂V/∂q + Q_nc`.
 fn lagrange_forcing(mech: &Mechanism, t: f64, q: &[f64], qd: &[f64]) -> DVector<f64> {
     let n = q.len();
-    let h = 1e-5;
+    // The step resolves the shortest length over which the kinematics change: 1 rad, 1 m, or a
+    // path's length scale (an epicycloid of a few cm ends within its travel; with 1e-5 m and
+    // rates of 5 m/s, the truncation error would reach 1e-6 there).
+    let scale = mech.joints.iter().map(|j| j.kind.coordinate_scale()).fold(1.0, f64::min);
+    let h = 1e-5 * scale;
     let t_of = |q: &[f64], qd: &[f64]| kinetic_energy(mech, q, qd);
     // ∂T/∂q̇ by central differences (T is quadratic in q̇, so exact up to rounding).
     let dt_dqd = |q: &[f64], qd: &[f64]| -> Vec<f64> {
@@ -404,6 +438,14 @@ fn fast_forms_equal_the_reference() {
         "fast forms vs reference: worst {worst:.1e}; mixed trees with prismatic {prismatic}, fixed {fixed}, all three {all_three}"
     );
     assert!(prismatic >= 20 && fixed >= 20 && all_three >= 10);
+    let with_path = (PATHS..PATHS + TREES)
+        .filter(|&s| random_tree(s).joints.iter().any(|j| matches!(j.kind, JointKind::Path { .. })))
+        .count();
+    let path_joints: usize = (PATHS..PATHS + TREES)
+        .map(|s| random_tree(s).joints.iter().filter(|j| matches!(j.kind, JointKind::Path { .. })).count())
+        .sum();
+    println!("trees with path joints: {with_path} of {TREES}, {path_joints} path joints");
+    assert!(with_path >= 30);
 }
 
 /// `Kane::residual_jacobian` (closed-form derivatives of the pair terms) against central

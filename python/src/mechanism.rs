@@ -496,6 +496,7 @@ impl Mechanism {
                     JointKind::Revolute => ("Revolute", None),
                     JointKind::Prismatic { axis } => ("Prismatic", Some(axis)),
                     JointKind::Fixed => ("Fixed", None),
+                    JointKind::Path { .. } => ("Path", None),
                 };
                 d.set_item("kind", kind)?;
                 d.set_item("axis", axis)?;

@@ -23,7 +23,9 @@ pub fn world_poses(mech: &Mechanism, q: &[f64]) -> Vec<Pose> {
     let mut out: Vec<Pose> = Vec::with_capacity(mech.bodies.len());
     for (j, joint) in mech.joints.iter().enumerate() {
         let mo = joint.kind.motion(joint.at, joint.coordinate.map_or(0.0, |k| q[k]));
-        let turn = joint.coordinate.filter(|_| joint.kind.rotates()).map_or(0.0, |k| q[k]);
+        // The unwrapped relative rotation (q itself for a revolute joint, α(s) on a path), so an
+        // angle keeps counting past ±π.
+        let turn = joint.coordinate.map_or(0.0, |k| joint.kind.turn(q[k]));
         let (angle, origin) = match joint.parent {
             None => (turn, mo.origin),
             Some(p) => (out[p].angle + turn, out[p].origin + rot2(out[p].angle) * mo.origin),

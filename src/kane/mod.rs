@@ -426,7 +426,14 @@ impl Kane {
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) }
+        let out = if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) };
+        // NOTE: a path evaluated beyond its end gives NaN (`PathShape::at`); only on that failure
+        // is the state searched for the joint to name, so a successful call pays nothing. Path
+        // joints never take the fixed-size path (revolute trees only).
+        out.map_err(|e| match e {
+            EngineError::NonFinite { .. } => self.mech.path_out_of_travel(&x[..n]).unwrap_or(e),
+            e => e,
+        })
     }
 
     /// The body of [`Kane::rhs`] for `N` degrees of freedom (`N = 0`: any).

@@ -281,24 +281,30 @@ pub struct LinearModel {
 
 /// The Jacobians `(∂F/∂q, ∂F/∂u)` of the engine's forcing at `(q, u)`, t = 0, by central
 /// differences with two Richardson extrapolations (steps h, h/2, h/4, error O(h⁶)): h = 0.05 rad
-/// for the angles, h = 0.05·max(1, |u|) for the speeds (F is quadratic in u, so the central
+/// for the angles (0.05 m for slides, 0.05 times [`crate::model::joint::JointKind::coordinate_scale`] for a path's arc
+/// length), h = 0.05·max(1, |u|) for the speeds (F is quadratic in u, so the central
 /// difference is exact there up to rounding). Time-dependent torques are frozen at t = 0.
 pub fn forcing_jacobians(kane: &mut Kane, q: &[f64], u: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
     let h_u = H_SPEED_REL * u.iter().fold(1.0f64, |a, &b| a.max(b.abs()));
-    let f_q = richardson_jacobian(q, H_ANGLE, |x| kane.forcing(0.0, x, u).clone());
-    let f_u = richardson_jacobian(u, h_u, |x| kane.forcing(0.0, q, x).clone());
+    // Steps in each coordinate's own scale: H_ANGLE rad for an angle or a slide, H_ANGLE times a
+    // path's length scale for an arc length (a path of 15 mm would be left, or badly resolved, by
+    // a step of 0.05 m).
+    let mech = kane.mechanism();
+    let h_q: Vec<f64> = (0..q.len()).map(|k| H_ANGLE * mech.joints[mech.joint_of(k)].kind.coordinate_scale()).collect();
+    let f_q = richardson_jacobian(q, &h_q, |x| kane.forcing(0.0, x, u).clone());
+    let f_u = richardson_jacobian(u, &vec![h_u; u.len()], |x| kane.forcing(0.0, q, x).clone());
     (f_q, f_u)
 }
 
 /// Central differences at h, h/2, h/4 combined as `R2 = (16 R1(h/2) − R1(h))/15` with
 /// `R1(h) = (4 D(h/2) − D(h))/3`: the h² and h⁴ error terms cancel.
-fn richardson_jacobian(x0: &[f64], h: f64, mut f: impl FnMut(&[f64]) -> DVector<f64>) -> DMatrix<f64> {
+fn richardson_jacobian(x0: &[f64], h: &[f64], mut f: impl FnMut(&[f64]) -> DVector<f64>) -> DMatrix<f64> {
     let mut x = x0.to_vec();
     let mut cols = Vec::with_capacity(x0.len());
     for j in 0..x0.len() {
         let mut d: Vec<DVector<f64>> = Vec::with_capacity(3);
         for level in 0..3 {
-            let hl = h / f64::from(1u32 << level);
+            let hl = h[j] / f64::from(1u32 << level);
             x[j] = x0[j] + hl;
             let xp = x[j];
             let fp = f(&x);

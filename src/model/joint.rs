@@ -2,7 +2,8 @@
 
 use crate::error::Result;
 use crate::io::Source;
-use crate::model::math::Vec2;
+use crate::model::math::{Vec2, rotate_cs};
+use crate::model::path::PathShape;
 use serde::{Deserialize, Serialize};
 
 /// The joint vocabulary: how a child body's frame may move relative to its parent's.
@@ -14,7 +15,12 @@ use serde::{Deserialize, Serialize};
 /// bias terms). The engine's general forms ([`crate::kane`]'s reference and joint-rate forms) use
 /// nothing else about a joint.
 ///
-/// In RON: `Revolute`, `Prismatic(axis: (1.0, 0.0))`, `Fixed`.
+/// In RON: `Revolute`, `Prismatic(axis: (1.0, 0.0))`, `Fixed`,
+/// `Path(shape: Epicycloid(rho0: 0.185, n_tilde: 3.11), mount: 0.0)`.
+///
+/// The enum stays `Copy`: a path kind carries only the few numbers of its closed form
+/// ([`PathShape`]), so passing a kind by value into the engine's per-body records costs nothing
+/// new and no caller had to change.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub enum JointKind {
     /// Rotation about z through the joint point; one coordinate, the relative angle (rad).
@@ -28,6 +34,23 @@ pub enum JointKind {
     },
     /// Welded: the child frame sits at the joint point, parallel to the parent's; no coordinate.
     Fixed,
+    /// An absorber path: the child frame's origin follows the curve `shape` drawn about the
+    /// joint point `at` (the rotor axis, in the parent frame) and turned by `mount`, and the
+    /// child turns by the shape's rotation law α(s); one coordinate, the arc length s of the
+    /// origin along the path (m). The child's centre of mass must sit at its frame origin
+    /// (`com: (0.0, 0.0)`) for s to be the centre of mass's arc length, as the absorber formulas
+    /// assume; another `com` is carried along, turning with α.
+    ///
+    /// # Common mistake
+    /// `at` is the centre the path is drawn about (the rotor axis), not the path's vertex: at
+    /// s = 0 the child's origin is at `at + ρ₀ (cos mount, sin mount)`.
+    Path {
+        /// The curve and rotation law.
+        shape: PathShape,
+        /// Mounting angle: direction of the vertex (s = 0) from `at` in the parent frame, rad.
+        #[serde(default)]
+        mount: f64,
+    },
 }
 
 /// A joint's kinematics at one value `q` of its coordinate, in the parent frame.
@@ -60,7 +83,7 @@ impl JointKind {
     /// Number of coordinates (and generalized speeds) the joint owns: 1, or 0 for `Fixed`.
     pub fn dof(self) -> usize {
         match self {
-            JointKind::Revolute | JointKind::Prismatic { .. } => 1,
+            JointKind::Revolute | JointKind::Prismatic { .. } | JointKind::Path { .. } => 1,
             JointKind::Fixed => 0,
         }
     }
@@ -68,6 +91,34 @@ impl JointKind {
     /// True when the coordinate is an angle that adds to the child's absolute rotation.
     pub fn rotates(self) -> bool {
         matches!(self, JointKind::Revolute)
+    }
+
+    /// The child's rotation relative to the parent at coordinate `q`, rad, not wrapped: q for a
+    /// revolute joint, α(s) for a path, 0 otherwise.
+    pub fn turn(self, q: f64) -> f64 {
+        match self {
+            JointKind::Revolute => q,
+            JointKind::Path { shape, .. } => shape.alpha(q),
+            JointKind::Prismatic { .. } | JointKind::Fixed => 0.0,
+        }
+    }
+
+    /// The end of travel of the coordinate: |q| must stay below it (m for a path; infinite for
+    /// the other kinds).
+    pub fn travel(self) -> f64 {
+        match self {
+            JointKind::Path { shape, .. } => shape.travel(),
+            _ => f64::INFINITY,
+        }
+    }
+
+    /// A typical size of the coordinate (1 rad, 1 m; a path's [`PathShape::length_scale`]), for
+    /// finite-difference steps taken in it.
+    pub fn coordinate_scale(self) -> f64 {
+        match self {
+            JointKind::Path { shape, .. } => shape.length_scale(),
+            _ => 1.0,
+        }
     }
 
     /// The joint's transform, motion columns and bias terms at coordinate `q` (ignored without a
@@ -93,6 +144,21 @@ impl JointKind {
                 JointMotion { origin: at + q * axis, velocity: axis, ..still }
             }
             JointKind::Fixed => still,
+            JointKind::Path { shape, mount } => {
+                // The path's own frame (vertex on +x) turned by the mounting angle.
+                let (ms, mc) = mount.sin_cos();
+                let p = shape.at(q);
+                let (sin, cos) = p.alpha.sin_cos();
+                JointMotion {
+                    cos,
+                    sin,
+                    origin: at + rotate_cs(mc, ms, p.position),
+                    omega: p.dalpha,
+                    velocity: rotate_cs(mc, ms, p.tangent),
+                    bias_alpha: p.ddalpha,
+                    bias_acc: rotate_cs(mc, ms, p.curvature),
+                }
+            }
         }
     }
 
@@ -110,6 +176,24 @@ impl JointKind {
                 }
                 Ok(JointKind::Prismatic { axis: (x / len, y / len) })
             }
+            JointKind::Path { shape, mount } => {
+                if !mount.is_finite() {
+                    return Err(("mount", format!("the mounting angle must be finite (rad), got {mount}")));
+                }
+                shape.check().map_err(|(field, msg)| {
+                    // The field sits below the shape's variant: `shape.rho0`.
+                    let field: &'static str = match field {
+                        "radius" => "shape.radius",
+                        "length" => "shape.length",
+                        "rho0" => "shape.rho0",
+                        "n_tilde" => "shape.n_tilde",
+                        "alpha1" => "shape.alpha1",
+                        _ => "shape",
+                    };
+                    (field, msg)
+                })?;
+                Ok(self)
+            }
             other => Ok(other),
         }
     }
@@ -118,20 +202,22 @@ impl JointKind {
     pub fn coordinate_unit(self) -> &'static str {
         match self {
             JointKind::Revolute => "rad",
-            JointKind::Prismatic { .. } => "m",
+            JointKind::Prismatic { .. } | JointKind::Path { .. } => "m",
             JointKind::Fixed => "",
         }
     }
 }
 
 /// A linear spring inside a joint: generalized force `−stiffness·(q − free_angle)` on the child
-/// (a torque for a revolute joint, a force along the axis for a prismatic one).
+/// (a torque for a revolute joint, a force along the axis for a prismatic one, along the path for
+/// a path joint).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Spring {
-    /// Stiffness: N·m/rad for a revolute joint, N/m for a prismatic one.
+    /// Stiffness: N·m/rad for a revolute joint, N/m for a prismatic or path one.
     pub stiffness: f64,
-    /// Coordinate at which the spring is relaxed: rad for a revolute joint, m for a prismatic one.
+    /// Coordinate at which the spring is relaxed: rad for a revolute joint, m for a prismatic or
+    /// path one.
     #[serde(default)]
     pub free_angle: f64,
 }
@@ -158,7 +244,7 @@ pub struct JointSpec {
     pub at: Option<(f64, f64)>,
     /// Internal torsional spring.
     pub spring: Option<Spring>,
-    /// Internal viscous damper, N·m·s/rad (N·s/m for a prismatic joint): generalized force
+    /// Internal viscous damper, N·m·s/rad (N·s/m for a prismatic or path joint): generalized force
     /// `−damper·q̇` on the child, the reverse on the parent.
     pub damper: Option<f64>,
 }

@@ -114,6 +114,20 @@ impl Mechanism {
         path.pop();
         path.into_iter().filter(|&j| self.joints[j].kind.rotates()).filter_map(|j| self.joints[j].coordinate).collect()
     }
+    /// The first path joint whose coordinate in `q` (all n coordinates) is at or beyond its end
+    /// of travel (or not finite), as the engine's error naming it; `None` when every path joint
+    /// is on its path.
+    pub fn path_out_of_travel(&self, q: &[f64]) -> Option<crate::error::EngineError> {
+        // Only path joints have an end: a NaN angle of another joint is the engine's own
+        // non-finite error, not a path's.
+        self.joints.iter().filter(|j| matches!(j.kind, crate::model::joint::JointKind::Path { .. })).find_map(|j| {
+            let s = *q.get(j.coordinate?)?;
+            let travel = j.kind.travel();
+            // A NaN coordinate is off the path too.
+            let on_path = s.abs() < travel;
+            (!on_path).then(|| crate::error::EngineError::OutOfTravel { joint: j.name.clone(), coordinate: s, travel })
+        })
+    }
 
     /// Index of a body by name.
     pub fn body_index(&self, name: &str) -> Option<usize> {

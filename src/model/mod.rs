@@ -11,5 +11,6 @@ pub mod joint;
 pub mod loads;
 pub mod math;
 pub mod mechanism;
+pub mod path;
 pub mod shape;
 pub mod speeds;

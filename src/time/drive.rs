@@ -194,6 +194,10 @@ impl Drive {
     fn assemble(&mut self, t: f64, x: &[f64]) -> std::result::Result<(), EngineError> {
         let n = self.n;
         let (q, u) = x.split_at(n);
+        // A path joint beyond its end of travel is named, not left to surface as a NaN.
+        if let Some(e) = self.kane.mechanism().path_out_of_travel(q) {
+            return Err(e);
+        }
         let (m, f) = self.kane.mass_matrix_and_forcing(t, q, u);
         self.m.copy_from(m);
         self.f.copy_from(f);
