@@ -4,6 +4,9 @@
 //! Loading and evaluation call the same library functions in the same order as the command-line
 //! tool (src/bin/kanedyn.rs), so that the arrays equal the CLI's JSON bit for bit; the Python
 //! tests hold it to that.
+//!
+//! One idea, one file: the `Mechanism` class. It runs past 600 lines because every method's
+//! Python docstring (parameters, returns, raises) is written where the method is.
 
 use crate::arrays::vector;
 use crate::errors::{EngineError, argument_error, guard, to_py};
