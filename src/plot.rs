@@ -89,11 +89,12 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| Error::Io {
-        file: path.to_path_buf(),
-        action: "cannot write plot",
-        source: std::io::Error::other(e.to_string()),
-    })
+    draw().map_err(|e| plot_error(path, e))
+}
+
+/// A drawing error as the I/O error of the plot file it was writing.
+fn plot_error(path: &Path, e: Box<dyn std::error::Error>) -> Error {
+    Error::Io { file: path.to_path_buf(), action: "cannot write plot", source: std::io::Error::other(e.to_string()) }
 }
 
 fn keep(log_y: bool) -> impl Fn(&(f64, f64)) -> bool {
@@ -507,9 +508,5 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| Error::Io {
-        file: path.to_path_buf(),
-        action: "cannot write plot",
-        source: std::io::Error::other(e.to_string()),
-    })
+    draw().map_err(|e| plot_error(path, e))
 }

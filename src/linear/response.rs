@@ -189,10 +189,18 @@ impl OrderResponse {
         weighted(&self.input, |j| self.model.acceleration_response(self.body, j, order))
     }
 
-    /// Complex amplitude of coordinate `k` of the mechanism (rad per N·m, m per N·m for a slide)
-    /// at order n, under the weighted inputs.
-    pub fn coordinate_response(&self, k: usize, order: f64) -> LinResult<C64> {
-        weighted(&self.input, |j| Ok(self.model.state_response(j, order)?[k]))
+    /// Complex amplitudes q̂ of every coordinate of the mechanism (rad per N·m, m per N·m for a
+    /// slide) at order n, under the weighted inputs: one solve per input for all coordinates.
+    pub fn coordinate_responses(&self, order: f64) -> LinResult<DVector<C64>> {
+        let n = self.model.ndof();
+        let mut q = DVector::from_element(n, C64::new(0.0, 0.0));
+        for &(j, w) in &self.input {
+            let x = self.model.state_response(j, order)?;
+            for k in 0..n {
+                q[k] += w * x[k];
+            }
+        }
+        Ok(q)
     }
 
     /// Complex α̂ of the locked mechanism's body per N·m at order n.

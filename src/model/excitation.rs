@@ -9,6 +9,21 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Converts rpm to rad/s.
+/// The cubic ramp-in factor `3x² − 2x³` at `x = t / ramp_s` (0 before t = 0, 1 from `ramp_s`
+/// on, and 1 throughout when `ramp_s ≤ 0`): zero slope at both ends, so the ramp starts no step
+/// transient.
+#[inline]
+pub fn ramp_in(t: f64, ramp_s: f64) -> f64 {
+    if ramp_s <= 0.0 || t >= ramp_s {
+        1.0
+    } else if t <= 0.0 {
+        0.0
+    } else {
+        let x = t / ramp_s;
+        x * x * (3.0 - 2.0 * x)
+    }
+}
+
 pub fn rpm_to_rad_s(rpm: f64) -> f64 {
     rpm * 2.0 * PI / 60.0
 }
@@ -115,14 +130,7 @@ impl Excitation {
     /// ramp starts no step transient).
     #[inline]
     pub fn ramp(&self, t: f64) -> f64 {
-        if self.ramp_s <= 0.0 || t >= self.ramp_s {
-            1.0
-        } else if t <= 0.0 {
-            0.0
-        } else {
-            let x = t / self.ramp_s;
-            x * x * (3.0 - 2.0 * x)
-        }
+        ramp_in(t, self.ramp_s)
     }
 
     /// The excitation phase Φ(t) = Ω ∫₀ᵗ n dτ, rad.

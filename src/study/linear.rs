@@ -9,6 +9,7 @@ use crate::linear::{Damping, LinearError, LinearModel, OrderResponse, ResponseSp
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
+use nalgebra::DVector;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -188,22 +189,23 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
                 spec.name, v.label, orders[i]
             ));
         }
+        // One solve per order for every element's coordinate.
+        let states: Vec<Option<DVector<crate::linear::C64>>> =
+            orders.iter().map(|&n| resp.coordinate_responses(n).ok()).collect();
         let mut elements = Vec::with_capacity(study.elements.len());
         for &j in &study.elements {
             let joint = &m.joints[j];
             let Some(c) = m.coordinate(j) else { continue };
             let k = joint.spring.map_or(0.0, |s| s.stiffness);
             let damper = if spec.modal_damping.is_some() { 0.0 } else { joint.damper };
-            let mut amplitude = Vec::with_capacity(orders.len());
-            let mut torque = Vec::with_capacity(orders.len());
-            for &n in &orders {
-                let (a, t) = match resp.coordinate_response(c, n) {
-                    Ok(q) => (q.norm(), (crate::linear::C64::new(k, n * omega * damper) * q).norm()),
-                    Err(_) => (f64::NAN, f64::NAN),
-                };
-                amplitude.push(a);
-                torque.push(t);
-            }
+            let (amplitude, torque) = orders
+                .iter()
+                .zip(&states)
+                .map(|(&n, q)| match q {
+                    Some(q) => (q[c].norm(), (crate::linear::C64::new(k, n * omega * damper) * q[c]).norm()),
+                    None => (f64::NAN, f64::NAN),
+                })
+                .unzip();
             elements.push(ElementFrf {
                 joint: joint.name.clone(),
                 unit: joint.kind.coordinate_unit(),

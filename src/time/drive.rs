@@ -18,7 +18,7 @@
 
 use crate::error::{EngineError, Result};
 use crate::kane::Kane;
-use crate::model::excitation::Harmonic;
+use crate::model::excitation::{Harmonic, ramp_in};
 use crate::model::mechanism::Mechanism;
 use nalgebra::{DMatrix, DVector};
 
@@ -48,14 +48,7 @@ impl LockedTorque {
         if self.harmonics.is_empty() {
             return mean;
         }
-        let ramp = if self.ramp_s <= 0.0 || t >= self.ramp_s {
-            1.0
-        } else if t <= 0.0 {
-            0.0
-        } else {
-            let x = t / self.ramp_s;
-            x * x * (3.0 - 2.0 * x)
-        };
+        let ramp = ramp_in(t, self.ramp_s);
         let phase = self.order * crank_rad;
         mean + ramp * self.harmonics.iter().map(|h| h.amplitude * (h.multiple * phase + h.phase).sin()).sum::<f64>()
     }
@@ -163,11 +156,6 @@ impl Drive {
         })?;
         self.governor = Some((c, g));
         Ok(self)
-    }
-
-    /// Gives the engine back.
-    pub fn into_kane(self) -> Kane {
-        self.kane
     }
 
     /// The mechanism.
@@ -290,13 +278,18 @@ impl Drive {
             None => Ok(x),
         }
     }
+}
 
-    /// The polar moment of inertia of everything the joint `joint` carries, turning rigidly
-    /// about it at the configuration `q`: `uᵀ M u` for the speeds of `q̇ = e_c`, kg·m².
-    pub fn rigid_inertia(&mut self, joint: usize, q: &[f64]) -> Option<f64> {
-        let c = self.kane.mechanism().coordinate(joint)?;
-        let m = self.kane.mass_matrix(q).clone();
-        let u = self.w.column(c).into_owned();
-        Some((u.transpose() * m * &u)[0])
-    }
+/// The polar moment of inertia of everything joint `joint` carries, turning rigidly about it at
+/// the configuration `q`: `uᵀ M u` for the speeds of `q̇ = e_c` (c the joint's coordinate), kg·m²
+/// (kg for a slide); `None` for a joint without coordinate.
+pub fn rigid_inertia(kane: &mut Kane, joint: usize, q: &[f64]) -> Option<f64> {
+    let mech = kane.mechanism();
+    let c = mech.coordinate(joint)?;
+    let mut qdot = vec![0.0; mech.ndof()];
+    qdot[c] = 1.0;
+    let mut u = vec![0.0; qdot.len()];
+    mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut u);
+    let u = DVector::from_vec(u);
+    Some((u.transpose() * kane.mass_matrix(q) * &u)[0])
 }

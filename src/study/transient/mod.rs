@@ -16,7 +16,7 @@ use super::{JointTorqueSpec, Output, Results, SpeedProfile, Study, TransientSpec
 use crate::error::Result;
 use crate::model::excitation::{Excitation, rpm_to_rad_s};
 use crate::signal::{AngleOptions, OrderMap, order_rpm_map};
-use crate::time::drive::{Drive, Governor, LockedTorque, Prescribed};
+use crate::time::drive::{Drive, Governor, LockedTorque, Prescribed, rigid_inertia};
 use crate::time::probe::{Outcome, Probe, Recorder, simulate_rhs};
 use report::render;
 pub(crate) use report::tables;
@@ -198,8 +198,7 @@ pub(crate) fn compute(
         SpeedProfile::Prescribed { .. } => Some(Prescribed { joint: spin, accel: alpha, until_s: ramp_s }),
         _ => None,
     };
-    let mut drive = Drive::new(kane, spin, Vec::new(), prescribed)?;
-    let inertia = drive.rigid_inertia(spin, &x0[..n]).unwrap_or(f64::NAN);
+    let inertia = rigid_inertia(&mut kane, spin, &x0[..n]).unwrap_or(f64::NAN);
     if prescribed.is_none() {
         // The losses of rigid rotation at the reference speed, plus J·α through the ramp.
         let c = Study::loss_torque(mech, spin, 1.0);
@@ -213,7 +212,7 @@ pub(crate) fn compute(
             ramp_s: 0.0,
         });
     }
-    let mut drive = Drive::new(drive.into_kane(), spin, torques, prescribed)?;
+    let mut drive = Drive::new(kane, spin, torques, prescribed)?;
     if let SpeedProfile::Torque { governor_s: Some(tau), .. } = spec.speed {
         drive = drive.with_governor(Governor {
             joint: spin,

@@ -25,7 +25,7 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
             let u = joint.kind.coordinate_unit();
             let (qu, ru) = if u == "m" { ("m", "m/s") } else { ("rad", "rad/s") };
             t.push(format!("{}_q_{}", joint.name, qu), u, q.clone());
-            t.push(format!("{}_qdot_{}", joint.name, ru.replace('/', "_")), ru_static(ru), qd.clone());
+            t.push(format!("{}_qdot_{}", joint.name, ru.replace('/', "_")), ru, qd.clone());
         }
         if !r.drive_torque.is_empty() {
             t.push("drive_torque_Nm", "N·m", r.drive_torque.clone());
@@ -67,10 +67,6 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
         out.push(c);
     }
     out
-}
-
-fn ru_static(u: &str) -> &'static str {
-    if u == "m/s" { "m/s" } else { "rad/s" }
 }
 
 /// A unit for a CSV header: `rad/s²` → `rad_s2`.
