@@ -133,6 +133,24 @@ pub enum AnalysisResult<'a> {
     DesignStudy(&'a super::design::DesignResult),
     /// A transient or run-up.
     Transient(&'a TransientResult),
+    /// A free oscillation's backbone.
+    FreeOscillation(&'a super::FreeOscillationResult),
+    /// A comparison: per mechanism, its analyses' entries (named `<comparison>_<label>_<analysis>`).
+    Compare {
+        /// Per mechanism, in the file's order.
+        mechanisms: Vec<ComparedEntry<'a>>,
+    },
+}
+
+/// One mechanism of a comparison in the document.
+#[derive(Debug, Clone, Serialize)]
+pub struct ComparedEntry<'a> {
+    /// Its label.
+    pub label: &'a str,
+    /// Its mechanism's name.
+    pub mechanism: &'a str,
+    /// Its analyses, as the document's own entries.
+    pub analyses: Vec<AnalysisEntry<'a>>,
 }
 
 /// What the summary reads off one analysis's results, by kind.
@@ -167,6 +185,16 @@ pub enum AnalysisFindings {
     Transient {
         /// Per cut: signal, order, peak and its speed.
         cuts: Vec<CutFindings>,
+    },
+    /// The backbone read as orders relative to the linear one.
+    FreeOscillation {
+        /// Each amplitude's order over the linear order (NaN where none was measured).
+        order_over_linear: Vec<f64>,
+    },
+    /// The labels of the compared mechanisms (their findings are in their entries).
+    Compare {
+        /// The labels, in the file's order.
+        labels: Vec<String>,
     },
 }
 
@@ -236,17 +264,41 @@ pub fn write(study: &Study, report: &StudyReport, dir: &Path) -> Result<PathBuf>
 pub fn document<'a>(study: &'a Study, report: &'a StudyReport) -> Document<'a> {
     let mech = &study.mechanism;
     let coordinates = mech.joints.iter().filter(|j| j.coordinate.is_some()).map(|j| j.name.as_str()).collect();
+    let analyses = entries(study, report, &report.completed);
+    Document {
+        format: FORMAT,
+        format_version: FORMAT_VERSION,
+        kanedyn_version: env!("CARGO_PKG_VERSION"),
+        study: StudyInfo {
+            name: &study.spec.name,
+            file: study.file.display().to_string(),
+            mechanism: MechanismInfo { name: &mech.name, degrees_of_freedom: mech.ndof(), coordinates },
+            spec: &study.spec,
+        },
+        status: if report.failures.is_empty() { "complete" } else { "partial" },
+        failures: &report.failures,
+        analyses,
+    }
+}
+
+/// The entries of `study`'s analyses, `completed` telling which ran to the end.
+fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: &[bool]) -> Vec<AnalysisEntry<'a>> {
     let mut campbells = report.campbell.iter();
-    let analyses = study
+    study
         .spec
         .analyses
         .iter()
         .enumerate()
         .map(|(index, a)| {
-            let prefix = format!("{} `{}` (", a.kind(), a.name());
-            let failures: Vec<&str> =
-                report.failures.iter().filter(|f| f.starts_with(&prefix)).map(String::as_str).collect();
-            let completed = report.completed.get(index).copied().unwrap_or(false);
+            let prefix = format!("{} `{}` ", a.kind(), a.name());
+            let inner = format!(": {} `{}`", a.kind(), a.name());
+            let failures: Vec<&str> = report
+                .failures
+                .iter()
+                .filter(|f| f.starts_with(&prefix) || f.contains(&inner))
+                .map(String::as_str)
+                .collect();
+            let completed = completed.get(index).copied().unwrap_or(false);
             // The Campbell diagrams carry no name: the k-th completed one is the k-th result.
             let campbell = match a {
                 AnalysisSpec::Campbell(_) if completed => campbells.next(),
@@ -264,26 +316,12 @@ pub fn document<'a>(study: &'a Study, report: &'a StudyReport) -> Document<'a> {
             };
             AnalysisEntry { index, kind: a.kind(), name: a.name(), status, failures, result, findings, tables }
         })
-        .collect();
-    Document {
-        format: FORMAT,
-        format_version: FORMAT_VERSION,
-        kanedyn_version: env!("CARGO_PKG_VERSION"),
-        study: StudyInfo {
-            name: &study.spec.name,
-            file: study.file.display().to_string(),
-            mechanism: MechanismInfo { name: &mech.name, degrees_of_freedom: mech.ndof(), coordinates },
-            spec: &study.spec,
-        },
-        status: if report.failures.is_empty() { "complete" } else { "partial" },
-        failures: &report.failures,
-        analyses,
-    }
+        .collect()
 }
 
 /// The result, findings and tables of a completed analysis (None when its result is missing).
 fn parts<'a>(
-    study: &Study,
+    study: &'a Study,
     report: &'a StudyReport,
     a: &AnalysisSpec,
     campbell: Option<&'a Campbell>,
@@ -338,6 +376,26 @@ fn parts<'a>(
                 .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
                 .collect();
             (AnalysisResult::Transient(r), AnalysisFindings::Transient { cuts }, transient::tables(study, t, r))
+        }
+        AnalysisSpec::FreeOscillation(f) => {
+            let r = report.free.iter().find(|r| r.name == f.name)?;
+            let findings = AnalysisFindings::FreeOscillation { order_over_linear: r.order_ratios() };
+            (AnalysisResult::FreeOscillation(r), findings, vec![super::backbone::table(r)])
+        }
+        AnalysisSpec::Compare(c) => {
+            let r = report.compares.iter().find(|r| r.name == c.name)?;
+            let subs = &study.comparisons.iter().find(|(k, _)| study.spec.analyses[*k].name() == c.name)?.1;
+            let mechanisms = subs
+                .iter()
+                .zip(&r.mechanisms)
+                .map(|((label, sub), m)| ComparedEntry {
+                    label,
+                    mechanism: &sub.mechanism.name,
+                    analyses: entries(sub, report, &m.completed),
+                })
+                .collect();
+            let labels = r.mechanisms.iter().map(|m| m.label.clone()).collect();
+            (AnalysisResult::Compare { mechanisms }, AnalysisFindings::Compare { labels }, Vec::new())
         }
     })
 }

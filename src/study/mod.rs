@@ -6,7 +6,9 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+mod backbone;
 mod campbell;
+pub mod compare;
 pub mod design;
 mod elements;
 pub mod hbm;
@@ -54,6 +56,9 @@ pub struct Study {
     pub locked_body: Option<usize>,
     /// The study file's text, to name the line of an analysis that fails at run time.
     pub source: Source,
+    /// The mechanisms of each `Compare` analysis, by the analysis's index: per mechanism its
+    /// label and the study that runs the comparison's analyses on it (see [`compare`]).
+    pub comparisons: Vec<(usize, compare::Compared)>,
 }
 
 /// How a study is loaded: where its files may come from and the limits its estimated work is
@@ -122,11 +127,18 @@ pub struct StudyReport {
     pub designs: Vec<design::DesignResult>,
     /// Transients and run-ups.
     pub transient: Vec<transient::TransientResult>,
+    /// Free oscillations (backbone curves).
+    pub free: Vec<backbone::FreeOscillationResult>,
+    /// Comparisons: which of their analyses ran to the end on each mechanism (their results are
+    /// in the fields above, under the names `<comparison>_<label>_<analysis>`).
+    pub compares: Vec<compare::CompareResult>,
     /// Per analysis of the study file, in its order: whether it ran to the end (its results are
     /// in the fields above; single runs of it may still have failed) rather than failing whole.
     pub completed: Vec<bool>,
 }
 
+pub use backbone::FreeOscillationResult;
+pub use compare::CompareResult;
 pub use linear::{LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;
@@ -150,10 +162,16 @@ impl Study {
     /// Parses and validates a study from its text; its mechanism is read relative to
     /// `src.file`'s folder.
     pub fn from_source(src: Source, opts: &LoadOptions) -> Result<Self> {
-        let mut spec: StudySpec = src.parse_as("Study")?;
+        let spec: StudySpec = src.parse_as("Study")?;
         if let Err(m) = validate::check_file_name(&spec.name) {
             return Err(src.error("name", format!("{m} (the study name is its output folder)")));
         }
+        Self::from_spec(spec, src, opts)
+    }
+
+    /// A study from its parsed spec (`src` is the study file, for locating errors): reads the
+    /// mechanism, resolves every name and checks every field and the estimated work.
+    pub(crate) fn from_spec(mut spec: StudySpec, src: Source, opts: &LoadOptions) -> Result<Self> {
         let policy = opts.policy_for(&src.file);
         let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
         engine_harmonics(&mut spec, &src, &policy, &base)?;
@@ -225,8 +243,10 @@ impl Study {
             out
         };
         validate::check(&spec, &mechanism, spin, &src)?;
+        let comparisons = compare::load(&spec, &src, opts)?;
         let file = src.file.clone();
-        let study = Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src };
+        let study =
+            Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src, comparisons };
         if let Some((k, driver, message)) = study.plan().exceeds(&opts.limits) {
             return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
         }
@@ -428,33 +448,10 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     );
     let mut sections = String::new();
     for (k, a) in study.spec.analyses.iter().enumerate() {
-        let where_ = study.source.locate(&format!("analyses[{k}]"));
-        let before = report.failures.len();
-        let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            run_analysis(study, a, &dir, &progress, &mut report)
-        }));
-        // Failures of single runs name their analysis and where it is in the study file.
-        for f in &mut report.failures[before..] {
-            *f = format!("{} `{}` ({where_}): {f}", a.kind(), a.name());
-        }
-        report.completed.push(matches!(attempt, Ok(Ok(_))));
-        let failure = match attempt {
-            Ok(Ok(section)) => {
-                sections += &section;
-                continue;
-            }
-            Ok(Err(e)) => e.to_string(),
-            Err(panic) => {
-                let what = panic
-                    .downcast_ref::<&str>()
-                    .map(|s| s.to_string())
-                    .or_else(|| panic.downcast_ref::<String>().cloned())
-                    .unwrap_or_default();
-                format!("internal error (please report): {what}")
-            }
-        };
-        let _ = writeln!(sections, "## {} `{}`\n\nFailed: {failure}\n", a.kind(), a.name());
-        report.failures.push(format!("{} `{}` ({where_}): {failure}", a.kind(), a.name()));
+        let where_ = study.source.locate(&format!("analyses[{k}]")).to_string();
+        let (section, completed) = run_guarded(study, a, &where_, &dir, &progress, &mut report);
+        report.completed.push(completed);
+        sections += &section;
     }
     if report.failures.is_empty() {
         md += "Status: complete.\n\n";
@@ -490,6 +487,40 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     Ok(report)
 }
 
+/// Runs one analysis with its failures named and contained: a failure or panic of the whole
+/// analysis becomes its summary section and an entry of [`StudyReport::failures`]; failures of
+/// single runs are prefixed with the analysis's kind, name and `where_` (its place in the study
+/// file). Returns the summary section and whether the analysis ran to the end.
+pub(crate) fn run_guarded(
+    study: &Study,
+    a: &AnalysisSpec,
+    where_: &str,
+    dir: &Path,
+    progress: &sim::Progress,
+    report: &mut StudyReport,
+) -> (String, bool) {
+    let before = report.failures.len();
+    let attempt =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run_analysis(study, a, dir, progress, report)));
+    for f in &mut report.failures[before..] {
+        *f = format!("{} `{}` ({where_}): {f}", a.kind(), a.name());
+    }
+    let failure = match attempt {
+        Ok(Ok(section)) => return (section, true),
+        Ok(Err(e)) => e.to_string(),
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            format!("internal error (please report): {what}")
+        }
+    };
+    report.failures.push(format!("{} `{}` ({where_}): {failure}", a.kind(), a.name()));
+    (format!("## {} `{}`\n\nFailed: {failure}\n\n", a.kind(), a.name()), false)
+}
+
 /// What one analysis hands back to the study runner: its summary section, the files it wrote,
 /// the runs that failed and its results.
 pub(crate) struct Output {
@@ -508,11 +539,13 @@ pub(crate) enum Results {
     Hbm(Vec<hbm::HbmBranch>),
     Design(design::DesignResult),
     Transient(Box<transient::TransientResult>),
+    Free(backbone::FreeOscillationResult),
+    Compare(compare::CompareResult),
 }
 
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
 /// the summary.
-fn run_analysis(
+pub(crate) fn run_analysis(
     study: &Study,
     a: &AnalysisSpec,
     dir: &Path,
@@ -527,6 +560,8 @@ fn run_analysis(
         AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
         AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
         AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
+        AnalysisSpec::FreeOscillation(f) => backbone::run(study, f, dir)?,
+        AnalysisSpec::Compare(c) => compare::run(study, c, dir, progress, report)?,
     };
     report.files.extend(out.files);
     report.failures.extend(out.failures);
@@ -538,6 +573,8 @@ fn run_analysis(
         Results::Hbm(b) => report.hbm.extend(b),
         Results::Design(d) => report.designs.push(d),
         Results::Transient(t) => report.transient.push(*t),
+        Results::Free(f) => report.free.push(f),
+        Results::Compare(c) => report.compares.push(c),
     }
     Ok(out.markdown)
 }

@@ -289,6 +289,42 @@ impl Study {
                         }
                     }
                     AnalysisSpec::DesignStudy(d) => design_plan(self, d, base),
+                    AnalysisSpec::FreeOscillation(f) => {
+                        let runs = f.amplitudes.len();
+                        // The run waits for the slowest oscillation the analysis accepts (a
+                        // quarter of the linear frequency, assumed below order 10) and samples
+                        // 128 points per linear period.
+                        let rev_s = 60.0 / f.rpm.max(1e-9);
+                        let duration = (f.periods as f64 + 2.0) * 4.0 * rev_s;
+                        let samples = duration * 128.0 * 10.0 / rev_s;
+                        AnalysisPlan {
+                            runs,
+                            samples_per_run: samples,
+                            memory_bytes: 64.0 * runs as f64,
+                            output_bytes: runs as f64 * 4.0 * CSV_CELL_BYTES,
+                            cpu_s: runs as f64 * (time_run_s(self, duration, 10.0 / rev_s) + samples * rhs_s(n)),
+                            driver: "amplitudes",
+                            ..base
+                        }
+                    }
+                    AnalysisSpec::Compare(c) => {
+                        let subs = self.comparisons.iter().find(|(k, _)| *k == index).map(|(_, s)| s.as_slice());
+                        let plans: Vec<AnalysisPlan> =
+                            subs.unwrap_or(&[]).iter().flat_map(|(_, s)| s.plan().analyses).collect();
+                        let sum = |f: &dyn Fn(&AnalysisPlan) -> f64| plans.iter().map(f).sum::<f64>();
+                        AnalysisPlan {
+                            runs: plans.iter().map(|p| p.runs).sum(),
+                            samples_per_run: plans.iter().map(|p| p.samples_per_run).fold(0.0, f64::max),
+                            memory_bytes: sum(&|p| p.memory_bytes),
+                            // The inner plans count their JSON share already (removed here, as
+                            // it is added to every analysis below).
+                            output_bytes: sum(&|p| p.output_bytes) / (1.0 + JSON_PER_CSV_BYTE)
+                                + c.analyses.len() as f64 * 1e5,
+                            cpu_s: sum(&|p| p.cpu_s),
+                            driver: "analyses",
+                            ..base
+                        }
+                    }
                     AnalysisSpec::Transient(t) => {
                         let samples = t.duration_s * fs + 1.0;
                         let e = self.elements.len() as f64;

@@ -117,6 +117,12 @@ pub enum AnalysisSpec {
     /// A transient from a given state: free, or through a run-up or run-down of the spin speed
     /// (driven by a torque or prescribed), with an order–rpm map of the response.
     Transient(TransientSpec),
+    /// The free oscillation of one joint at held spin, undamped, against its release amplitude:
+    /// the absorber's backbone curve (see [`super::backbone`]).
+    FreeOscillation(FreeOscillationSpec),
+    /// The same analyses run on several mechanisms (e.g. absorber paths), their results overlaid
+    /// per analysis in one figure and compared in one table (see [`super::compare`]).
+    Compare(CompareSpec),
 }
 
 impl AnalysisSpec {
@@ -130,6 +136,8 @@ impl AnalysisSpec {
             AnalysisSpec::HarmonicBalance(h) => &h.name,
             AnalysisSpec::DesignStudy(d) => &d.name,
             AnalysisSpec::Transient(t) => &t.name,
+            AnalysisSpec::FreeOscillation(f) => &f.name,
+            AnalysisSpec::Compare(c) => &c.name,
         }
     }
 
@@ -143,6 +151,8 @@ impl AnalysisSpec {
             AnalysisSpec::HarmonicBalance(_) => "HarmonicBalance",
             AnalysisSpec::DesignStudy(_) => "DesignStudy",
             AnalysisSpec::Transient(_) => "Transient",
+            AnalysisSpec::FreeOscillation(_) => "FreeOscillation",
+            AnalysisSpec::Compare(_) => "Compare",
         }
     }
 }
@@ -769,4 +779,52 @@ pub enum Sampling {
         /// Seed of the random stream.
         seed: u64,
     },
+}
+
+/// The free oscillation of one joint at held spin with every damper removed, released from rest
+/// at each amplitude: its order against amplitude (the backbone curve).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FreeOscillationSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// The held spin speed, rpm.
+    pub rpm: f64,
+    /// The joint released (an absorber's pivot or path joint).
+    pub joint: String,
+    /// Release amplitudes in the joint's unit: rad, or m of arc length for a path joint.
+    pub amplitudes: Vec<f64>,
+    /// Full periods measured per amplitude (default 8).
+    #[serde(default = "default_periods")]
+    pub periods: usize,
+}
+
+fn default_periods() -> usize {
+    8
+}
+
+/// One mechanism of a [`CompareSpec`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompareMechanism {
+    /// Legend and file label (letters, digits, `_`, `-`, `.`).
+    pub label: String,
+    /// Mechanism file, relative to the study file. It must have the study's spin joint, response
+    /// body, locked joints and the joints the analyses name.
+    pub mechanism: String,
+}
+
+/// The same analyses run on several mechanisms. Each mechanism's outputs are written as by the
+/// analyses themselves, with file names `<name>_<label>_<analysis>…`; the comparison adds one
+/// figure per analysis, `<name>_<analysis>.svg`, with every mechanism overlaid, and one table.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CompareSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// The mechanisms compared, 1 to 8.
+    pub mechanisms: Vec<CompareMechanism>,
+    /// The analyses run on each: `OrderSweep`, `HarmonicBalance`, `FreeOscillation`,
+    /// `LinearResponse`, `MultiOrder` or `Transient`, written as in the study's `analyses`.
+    pub analyses: Vec<AnalysisSpec>,
 }

@@ -316,6 +316,7 @@ fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study
         body: study.body,
         locked_body,
         source: study.source.clone(),
+        comparisons: Vec::new(),
     };
     Ok((case, analysis))
 }

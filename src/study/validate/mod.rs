@@ -107,7 +107,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
         if !names.insert(name.to_string()) {
             return Err(src.error(&at("name"), format!("duplicate analysis name `{name}`")));
         }
-        if !matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::Transient(_))
+        if !matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::Transient(_) | AnalysisSpec::Compare(_))
             && let Some(why) = steady_spin_obstacle(mech, spin)
         {
             return Err(src.error(&format!("analyses[{k}]"), format!("{} `{name}`: {why}", a.kind())));
@@ -268,6 +268,8 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                 check_hbm(src, spec, k, h)?
             }
             AnalysisSpec::Transient(t) => check_transient(src, spec, mech, spin, k, t)?,
+            AnalysisSpec::FreeOscillation(f) => check_free(src, mech, spin, k, f)?,
+            AnalysisSpec::Compare(c) => check_compare(src, k, c)?,
             AnalysisSpec::Campbell(c) => {
                 if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
                     return Err(src.error(&at("rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
@@ -286,6 +288,75 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
                     order(src, &format!("analyses[{k}].orders[{j}]"), n)?;
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// A free oscillation: a speed, a joint with a coordinate other than the spin joint, and
+/// release amplitudes inside the joint's travel.
+fn check_free(src: &Source, mech: &Mechanism, spin: usize, k: usize, f: &super::FreeOscillationSpec) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    rpm(src, &at("rpm"), f.rpm)?;
+    let j = mech.joint_index(&f.joint).ok_or_else(|| {
+        let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
+        src.error(&at("joint"), format!("unknown joint `{}` (joints: {})", f.joint, names.join(", ")))
+    })?;
+    if j == spin || mech.coordinate(j).is_none() {
+        return Err(src.error(&at("joint"), format!("joint `{}` is the spin joint or has no coordinate", f.joint)));
+    }
+    if f.amplitudes.is_empty() || f.amplitudes.len() > MAX_LIST {
+        return Err(src.error(&at("amplitudes"), format!("need 1 to {MAX_LIST} amplitudes")));
+    }
+    let kind = mech.joints[j].kind;
+    let travel = kind.travel();
+    for (i, &a) in f.amplitudes.iter().enumerate() {
+        if !(a.is_finite() && a != 0.0 && a.abs() < travel) {
+            return Err(src.error(
+                &format!("analyses[{k}].amplitudes[{i}]"),
+                format!(
+                    "amplitude must be finite, non-zero and inside the joint's travel (|a| < {} {}), got {a}",
+                    g(travel),
+                    kind.coordinate_unit()
+                ),
+            ));
+        }
+    }
+    if !(1..=1000).contains(&f.periods) {
+        return Err(src.error(&at("periods"), "need 1 to 1000 periods"));
+    }
+    Ok(())
+}
+
+/// A comparison: 1 to 8 mechanisms with distinct file-name labels, and analyses of the kinds a
+/// comparison runs (each is checked against each mechanism when the mechanisms are read).
+fn check_compare(src: &Source, k: usize, c: &super::CompareSpec) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    let most = super::compare::MAX_MECHANISMS;
+    if c.mechanisms.is_empty() || c.mechanisms.len() > most {
+        return Err(src.error(&at("mechanisms"), format!("need 1 to {most} mechanisms")));
+    }
+    let mut labels = std::collections::HashSet::new();
+    for (v, m) in c.mechanisms.iter().enumerate() {
+        let field = format!("analyses[{k}].mechanisms[{v}].label");
+        check_file_name(&m.label).map_err(|e| src.error(&field, e))?;
+        if !labels.insert(m.label.as_str()) {
+            return Err(src.error(&field, format!("duplicate label `{}`", m.label)));
+        }
+    }
+    if c.analyses.is_empty() || c.analyses.len() > MAX_ANALYSES {
+        return Err(src.error(&at("analyses"), format!("need 1 to {MAX_ANALYSES} analyses")));
+    }
+    for (i, a) in c.analyses.iter().enumerate() {
+        if !super::compare::allowed(a) {
+            return Err(src.error(
+                &format!("analyses[{k}].analyses[{i}]"),
+                format!(
+                    "a comparison runs OrderSweep, HarmonicBalance, FreeOscillation, LinearResponse, MultiOrder or \
+                     Transient analyses, not {}",
+                    a.kind()
+                ),
+            ));
         }
     }
     Ok(())
