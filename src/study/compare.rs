@@ -107,7 +107,13 @@ pub(crate) fn load(spec: &StudySpec, src: &Source, opts: &LoadOptions) -> Result
         let mut studies = Vec::with_capacity(c.mechanisms.len());
         for (v, m) in c.mechanisms.iter().enumerate() {
             let analyses = c.analyses.iter().map(|a| renamed(&c.name, &m.label, a)).collect();
-            let sub = StudySpec { mechanism: m.mechanism.clone(), analyses, ..spec.clone() };
+            let sub = StudySpec {
+                mechanism: m.mechanism.clone(),
+                analyses,
+                lock: m.lock.clone().unwrap_or_else(|| spec.lock.clone()),
+                elements: m.elements.clone().unwrap_or_else(|| spec.elements.clone()),
+                ..spec.clone()
+            };
             let study = Study::from_spec(sub, src.clone(), opts).map_err(|e| relocate(e, src, k, v, &m.label))?;
             studies.push((m.label.clone(), study));
         }

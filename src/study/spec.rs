@@ -809,9 +809,15 @@ fn default_periods() -> usize {
 pub struct CompareMechanism {
     /// Legend and file label (letters, digits, `_`, `-`, `.`).
     pub label: String,
-    /// Mechanism file, relative to the study file. It must have the study's spin joint, response
-    /// body, locked joints and the joints the analyses name.
+    /// Mechanism file, relative to the study file. It must have the study's spin joint and
+    /// response body and the joints the analyses name.
     pub mechanism: String,
+    /// Joints locked for this mechanism's reference twin (default: the study's `lock`).
+    #[serde(default)]
+    pub lock: Option<Vec<String>>,
+    /// Joints reported element by element (default: the study's `elements`).
+    #[serde(default)]
+    pub elements: Option<Vec<String>>,
 }
 
 /// The same analyses run on several mechanisms. Each mechanism's outputs are written as by the
