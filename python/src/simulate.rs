@@ -23,13 +23,16 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// The probe kinds by name, in the order the docs list them.
-const KINDS: [(&str, ProbeKind); 6] = [
+const KINDS: [(&str, ProbeKind); 9] = [
     ("BodyAngle", ProbeKind::BodyAngle),
     ("BodyRate", ProbeKind::BodyRate),
     ("BodyAccel", ProbeKind::BodyAccel),
     ("JointAngle", ProbeKind::JointAngle),
     ("JointRate", ProbeKind::JointRate),
     ("LargestJointAngle", ProbeKind::LargestJointAngle),
+    ("JointForceRadial", ProbeKind::JointForceRadial),
+    ("JointForceTangential", ProbeKind::JointForceTangential),
+    ("JointMoment", ProbeKind::JointMoment),
 ];
 
 /// Name of a probe kind.

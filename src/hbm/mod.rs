@@ -86,12 +86,14 @@ mod assembly;
 mod branch;
 mod continuation;
 mod corrector;
+mod reaction;
 mod sample;
 mod solution;
 mod stability;
 
 pub use branch::{Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 pub use continuation::{ContinuationOptions, continue_in_order};
+pub use reaction::ReactionHarmonics;
 pub use solution::HbmSolution;
 pub use stability::Stability;
 

@@ -67,6 +67,7 @@ pub mod absolute;
 pub mod kinematics;
 pub mod ldlt;
 pub mod rates;
+pub mod reactions;
 pub mod reference;
 mod small;
 

@@ -332,7 +332,8 @@ impl Study {
                         let revs = t.duration_s * a.max(b) / 60.0;
                         let blocks = revs / t.map.hop_revs.max(1e-9) + 1.0;
                         let columns = t.map.max_order * t.map.revs_per_block as f64;
-                        let series_cols = if t.write_time_series { 4.0 + 2.0 * e } else { 0.0 };
+                        let series_cols =
+                            if t.write_time_series { 4.0 + 2.0 * e + 3.0 * t.reactions.len() as f64 } else { 0.0 };
                         let top = t
                             .torques
                             .iter()

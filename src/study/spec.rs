@@ -497,6 +497,10 @@ pub struct TransientSpec {
     /// true).
     #[serde(default = "default_true")]
     pub write_time_series: bool,
+    /// Joints whose reaction is recorded: the force (radial and tangential, N) and moment (N·m)
+    /// the parent exerts on the child, in the time series and the summary (default none).
+    #[serde(default)]
+    pub reactions: Vec<String>,
 }
 
 /// The spin speed of a [`TransientSpec`].

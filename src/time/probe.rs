@@ -12,7 +12,10 @@
 //!   `Ẇ` term); it needs `ẋ` at the sample state, one extra right-hand-side call per sample;
 //! - joint coordinate `q_j` (the pendulum's φ in rad; m for a slide) and its rate `q̇_j`;
 //! - the largest `|q_k|` over every coordinate except one joint's (for a rotor with absorbers,
-//!   the largest absorber excursion when the spin joint is excepted).
+//!   the largest absorber excursion when the spin joint is excepted);
+//! - a joint's reaction, the force (radial and tangential components) and moment its parent
+//!   exerts on its child ([`crate::kane::reactions`], a Newton–Euler pass over `q, q̇, q̈`; it
+//!   needs `ẋ` like an acceleration).
 //!
 //! The rotor response of the paper (Figs. 3–6) is `BodyAccel(rotor)`, i.e. u̇1 in rad/s².
 
@@ -38,6 +41,13 @@ pub enum ProbeKind {
     JointRate,
     /// Largest |q| over the coordinates of every joint except the named one, rad (m for slides).
     LargestJointAngle,
+    /// Radial component of the force the parent exerts on the child through a joint, N (see
+    /// [`crate::kane::reactions::Reaction`]).
+    JointForceRadial,
+    /// Tangential component of that force, N.
+    JointForceTangential,
+    /// Moment about the joint point the parent exerts on the child, N·m.
+    JointMoment,
 }
 
 /// A signal to record, with its body or joint index resolved in a mechanism.
@@ -55,6 +65,12 @@ pub enum Probe {
     JointRate(usize),
     /// Largest |q_k| over every coordinate except joint `j`'s.
     LargestJointAngle(usize),
+    /// Radial reaction force at joint `j`, N.
+    JointForceRadial(usize),
+    /// Tangential reaction force at joint `j`, N.
+    JointForceTangential(usize),
+    /// Reaction moment at joint `j`, N·m.
+    JointMoment(usize),
 }
 
 impl Probe {
@@ -65,12 +81,24 @@ impl Probe {
             mechanism: mech.name.clone(),
             message: format!("probe {kind:?}: unknown {what} `{name}` (known {what}s: {})", known.join(", ")),
         };
-        if matches!(kind, ProbeKind::JointAngle | ProbeKind::JointRate | ProbeKind::LargestJointAngle) {
+        if matches!(
+            kind,
+            ProbeKind::JointAngle
+                | ProbeKind::JointRate
+                | ProbeKind::LargestJointAngle
+                | ProbeKind::JointForceRadial
+                | ProbeKind::JointForceTangential
+                | ProbeKind::JointMoment
+        ) {
             let j = mech
                 .joint_index(name)
                 .ok_or_else(|| unknown("joint", mech.joints.iter().map(|j| j.name.as_str()).collect()))?;
-            if kind == ProbeKind::LargestJointAngle {
-                return Ok(Probe::LargestJointAngle(j));
+            match kind {
+                ProbeKind::LargestJointAngle => return Ok(Probe::LargestJointAngle(j)),
+                ProbeKind::JointForceRadial => return Ok(Probe::JointForceRadial(j)),
+                ProbeKind::JointForceTangential => return Ok(Probe::JointForceTangential(j)),
+                ProbeKind::JointMoment => return Ok(Probe::JointMoment(j)),
+                _ => {}
             }
             if mech.coordinate(j).is_none() {
                 return Err(Error::Model {
@@ -99,6 +127,9 @@ impl Probe {
             Probe::JointAngle(_) => ProbeKind::JointAngle,
             Probe::JointRate(_) => ProbeKind::JointRate,
             Probe::LargestJointAngle(_) => ProbeKind::LargestJointAngle,
+            Probe::JointForceRadial(_) => ProbeKind::JointForceRadial,
+            Probe::JointForceTangential(_) => ProbeKind::JointForceTangential,
+            Probe::JointMoment(_) => ProbeKind::JointMoment,
         }
     }
 
@@ -110,13 +141,24 @@ impl Probe {
             | Probe::BodyAccel(i)
             | Probe::JointAngle(i)
             | Probe::JointRate(i)
-            | Probe::LargestJointAngle(i) => i,
+            | Probe::LargestJointAngle(i)
+            | Probe::JointForceRadial(i)
+            | Probe::JointForceTangential(i)
+            | Probe::JointMoment(i) => i,
         }
+    }
+
+    /// Whether the probe is a joint reaction.
+    pub fn is_reaction(&self) -> bool {
+        matches!(self, Probe::JointForceRadial(_) | Probe::JointForceTangential(_) | Probe::JointMoment(_))
     }
 
     /// Whether recording needs `ẋ` (an extra right-hand-side call per sample).
     pub fn needs_derivative(&self) -> bool {
-        matches!(self, Probe::BodyAccel(_))
+        matches!(
+            self,
+            Probe::BodyAccel(_) | Probe::JointForceRadial(_) | Probe::JointForceTangential(_) | Probe::JointMoment(_)
+        )
     }
 
     /// SI unit of the recorded values in `mech` (a slide's coordinate is in m).
@@ -130,6 +172,8 @@ impl Probe {
             Probe::JointAngle(_) => "rad",
             Probe::JointRate(j) if slides(j) => "m/s",
             Probe::JointRate(_) => "rad/s",
+            Probe::JointForceRadial(_) | Probe::JointForceTangential(_) => "N",
+            Probe::JointMoment(_) => "N·m",
         }
     }
 
@@ -146,6 +190,9 @@ impl Probe {
             Probe::JointAngle(j) => format!("{}.q", joint(j)),
             Probe::JointRate(j) => format!("{}.qdot", joint(j)),
             Probe::LargestJointAngle(j) => format!("max_abs_q_except_{}", joint(j)),
+            Probe::JointForceRadial(j) => format!("{}.force_radial", joint(j)),
+            Probe::JointForceTangential(j) => format!("{}.force_tangential", joint(j)),
+            Probe::JointMoment(j) => format!("{}.moment", joint(j)),
         }
     }
 }
@@ -167,6 +214,8 @@ pub struct Recorder {
     paths: Vec<Vec<usize>>,
     names: Vec<String>,
     units: Vec<&'static str>,
+    /// The mechanism, kept only when a probe is a reaction (its Newton–Euler pass needs it).
+    reactions: Option<Box<Mechanism>>,
     min_gap_s: f64,
     last_t: f64,
     /// Sample times, s.
@@ -207,6 +256,7 @@ impl Recorder {
             paths,
             names: probes.iter().map(|p| p.label(mech)).collect(),
             units: probes.iter().map(|p| p.unit(mech)).collect(),
+            reactions: probes.iter().any(Probe::is_reaction).then(|| Box::new(mech.clone())),
             min_gap_s: 0.0,
             last_t: f64::NEG_INFINITY,
             time: Vec::new(),
@@ -266,6 +316,20 @@ impl Recorder {
                 x[n + k] - parent.map_or(0.0, |p| x[n + p])
             }
             Probe::LargestJointAngle(_) => path.iter().map(|&k| x[k].abs()).fold(0.0, f64::max),
+            Probe::JointForceRadial(j) | Probe::JointForceTangential(j) | Probe::JointMoment(j) => {
+                let (Some(mech), Some(d)) = (&self.reactions, xdot) else { return f64::NAN };
+                let mut qdot = vec![0.0; n];
+                let mut qddot = vec![0.0; n];
+                mech.speeds.qdot(&self.parents, &x[n..2 * n], &mut qdot);
+                // W is constant for both speed choices: q̈ = W⁻¹u̇.
+                mech.speeds.qdot(&self.parents, &d[n..2 * n], &mut qddot);
+                let r = crate::kane::reactions::joint_reactions(mech, &x[..n], &qdot, &qddot)[j];
+                match self.probes[i] {
+                    Probe::JointForceRadial(_) => r.radial,
+                    Probe::JointForceTangential(_) => r.tangential,
+                    _ => r.moment,
+                }
+            }
         }
     }
 

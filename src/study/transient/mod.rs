@@ -92,6 +92,13 @@ pub struct TransientResult {
     /// Per element: (q, q̇) at the samples.
     #[serde(skip)]
     pub element_series: Vec<(Vec<f64>, Vec<f64>)>,
+    /// Per joint of `reactions`: its name and the radial force (N), tangential force (N) and
+    /// moment (N·m) its parent exerts on its child at the samples.
+    #[serde(skip)]
+    pub reaction_series: Vec<(String, [Vec<f64>; 3])>,
+    /// Per joint of `reactions`: the smallest and largest radial force, tangential force and
+    /// moment after the first second (N, N, N·m).
+    pub reaction_ranges: Vec<ReactionRange>,
     /// The prescribed drive's torque at the samples, N·m (empty unless `Prescribed`).
     #[serde(skip)]
     pub drive_torque: Vec<f64>,
@@ -227,8 +234,14 @@ pub(crate) fn compute(
     for &j in &study.elements {
         probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
     }
+    let reaction_joints: Vec<usize> = spec.reactions.iter().filter_map(|r| mech.joint_index(r)).collect();
+    for &j in &reaction_joints {
+        probes.extend([Probe::JointForceRadial(j), Probe::JointForceTangential(j), Probe::JointMoment(j)]);
+    }
     let mut rec = Recorder::new(mech, &probes)?;
-    let opts = super::sim::options(&study.spec.integration);
+    let mut opts = super::sim::options(&study.spec.integration);
+    // Reactions need the accelerations at the samples.
+    opts.sample_derivatives |= rec.needs_derivatives();
     let bar = progress.bar(spec.duration_s, &spec.name);
     let sim = simulate_rhs(|t, x, dx| drive.rhs(t, x, dx), n, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| {
         bar.set_position((t * 1000.0) as u64)
@@ -246,6 +259,25 @@ pub(crate) fn compute(
     let spin_rpm: Vec<f64> = cols.next().unwrap_or_default().iter().map(|w| w * to_rpm).collect();
     let element_series: Vec<(Vec<f64>, Vec<f64>)> =
         study.elements.iter().map(|_| (cols.next().unwrap_or_default(), cols.next().unwrap_or_default())).collect();
+    let reaction_series: Vec<(String, [Vec<f64>; 3])> = reaction_joints
+        .iter()
+        .map(|&j| {
+            let mut next = || cols.next().unwrap_or_default();
+            (mech.joints[j].name.clone(), [next(), next(), next()])
+        })
+        .collect();
+    let skip = time_s.iter().position(|&t| t >= 1.0).unwrap_or(0);
+    let range =
+        |v: &[f64]| v.iter().skip(skip).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    let reaction_ranges = reaction_series
+        .iter()
+        .map(|(name, [r, t, m])| ReactionRange {
+            joint: name.clone(),
+            radial_n: range(r),
+            tangential_n: range(t),
+            moment_nm: range(m),
+        })
+        .collect();
 
     // The drive's torque at the samples, from the state rebuilt out of every joint's (q, q̇)
     // would need them all; the recorded ones are the spin and the elements, so it is evaluated
@@ -320,10 +352,25 @@ pub(crate) fn compute(
         spin_rpm,
         response,
         element_series,
+        reaction_series,
+        reaction_ranges,
         drive_torque,
         map,
     };
     Ok((result, failures))
+}
+
+/// The range of one joint's reaction over a transient (after its first second).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReactionRange {
+    /// The joint.
+    pub joint: String,
+    /// Smallest and largest radial force, N.
+    pub radial_n: (f64, f64),
+    /// Smallest and largest tangential force, N.
+    pub tangential_n: (f64, f64),
+    /// Smallest and largest moment, N·m.
+    pub moment_nm: (f64, f64),
 }
 
 /// The drive's torque at every sample, when the recorded joints (spin and elements) are all the

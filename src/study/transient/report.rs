@@ -30,6 +30,11 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
         if !r.drive_torque.is_empty() {
             t.push("drive_torque_Nm", "N·m", r.drive_torque.clone());
         }
+        for (name, [rad, tan, mom]) in &r.reaction_series {
+            t.push(format!("{name}_force_radial_N"), "N", rad.clone());
+            t.push(format!("{name}_force_tangential_N"), "N", tan.clone());
+            t.push(format!("{name}_moment_Nm"), "N·m", mom.clone());
+        }
         out.push(t);
     }
     if let Some(m) = &r.map {
@@ -227,6 +232,23 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
                 cell(c.peak, 6),
                 c.unit,
                 cell(c.peak_rpm, 1)
+            );
+        }
+        md.push('\n');
+    }
+    if !r.reaction_ranges.is_empty() {
+        md += "Joint reactions (what the parent exerts on the child; radial: outward from the parent's origin), \
+               smallest and largest after the first second:\n\n";
+        md += "| joint | radial force (N) | tangential force (N) | moment (N·m) |\n|---|---|---|---|\n";
+        let pair = |(a, b): (f64, f64)| format!("{} … {}", cell(a, 3), cell(b, 3));
+        for x in &r.reaction_ranges {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} |",
+                x.joint,
+                pair(x.radial_n),
+                pair(x.tangential_n),
+                pair(x.moment_nm)
             );
         }
         md.push('\n');

@@ -84,6 +84,19 @@ pub(super) fn check_transient(
             seen.push(j);
         }
     }
+    if t.reactions.len() > MAX_LIST {
+        return Err(src.error(&at("reactions"), format!("at most {MAX_LIST} joints")));
+    }
+    for (i, name) in t.reactions.iter().enumerate() {
+        let path = at(&format!("reactions[{i}]"));
+        let j = mech.joint_index(name).ok_or_else(|| {
+            let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
+            src.error(&path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
+        })?;
+        if t.reactions[..i].contains(name) {
+            return Err(src.error(&path, format!("joint `{}` is given twice", mech.joints[j].name)));
+        }
+    }
     if t.torques.len() > MAX_LIST {
         return Err(src.error(&at("torques"), format!("at most {MAX_LIST} torques")));
     }
