@@ -57,6 +57,7 @@ impl Hbm {
                     &self.qdd,
                     torque,
                     spin,
+                    self.cyclic,
                     self.opts.fd_step,
                     &mut self.lin,
                 );

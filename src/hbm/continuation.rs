@@ -250,6 +250,14 @@ impl Hbm {
         if !(order.is_finite() && order > 0.0) {
             return bad(format!("excitation order must be positive and finite, got {order}"));
         }
+        if !self.cyclic && parameter == Parameter::Order {
+            return bad(
+                "with gravity or a world-frame force the motion is periodic only at orders whose base divides one \
+                 revolution: continue in speed or torque at a fixed order instead of in order"
+                    .into(),
+            );
+        }
+        self.check_base(order)?;
         let su = Setup { param: parameter, p_ref, base: self.at(order) };
         let (l_from, l_to) = (from / p_ref, to / p_ref);
         let m = self.unknowns();

@@ -203,6 +203,9 @@ pub struct Hbm {
     ev: Evaluator,
     n: usize,
     spin: usize,
+    /// The spin angle is cyclic (no gravity, no world-frame force): its column of ∂R/∂q is zero
+    /// and its shift gives the trivial Floquet multiplier +1.
+    cyclic: bool,
     omega: f64,
     /// Torque scale s of the fixed-parameter solves.
     scale: f64,
@@ -296,9 +299,10 @@ impl Hbm {
         if sj.spring.is_some_and(|s| s.stiffness != 0.0) {
             return bad(format!("spin joint `{}` has a spring: its angle is not cyclic", sj.name));
         }
-        if mech.loads.needs_world_orientation() {
-            return bad("gravity or a world-frame force makes the spin angle non-cyclic".into());
-        }
+        // Gravity or a world-frame force: the spin angle is not cyclic, the forces depend on it
+        // with period 2π, and a periodic solution needs a base period that is a whole number of
+        // revolutions (checked per solve, see `check_base`).
+        let cyclic = !mech.loads.needs_world_orientation();
         if !(omega.is_finite() && omega > 0.0) {
             return bad(format!("mean speed must be positive and finite, got {omega} rad/s"));
         }
@@ -406,6 +410,7 @@ impl Hbm {
             ev,
             n,
             spin,
+            cyclic,
             omega,
             scale: 1.0,
             ratio,
@@ -558,9 +563,34 @@ impl Hbm {
         self.solve_at(&self.at(order), guess)
     }
 
+    /// With a non-cyclic spin angle (gravity, a world-frame force) the forces repeat every
+    /// revolution, so the base period 2π/ω₀ must hold a whole number of revolutions: ω₀/Ω =
+    /// ratio·n must be 1/k. An excitation at order 3 with multiples 1 and 2 has base order 3; the
+    /// multiple 1/3 (amplitude 0 if need be) brings it to 1.
+    fn check_base(&self, order: f64) -> Result<(), HbmError> {
+        if self.cyclic {
+            return Ok(());
+        }
+        let turns = 1.0 / (self.ratio * order);
+        if (turns - turns.round()).abs() > 1e-9 * turns.max(1.0) || turns.round() < 1.0 {
+            return Err(HbmError::Invalid(format!(
+                "with gravity or a world-frame force the base order ({}) must divide 1 (one revolution): \
+                 add the multiple 1/{order} to the excitation's multiples",
+                self.ratio * order
+            )));
+        }
+        Ok(())
+    }
+
+    /// Whether the spin angle is cyclic (no gravity and no world-frame force).
+    pub fn is_cyclic(&self) -> bool {
+        self.cyclic
+    }
+
     /// Newton's method at fixed parameters.
     fn solve_at(&mut self, at: &At, guess: Option<&HbmSolution>) -> Result<HbmSolution, HbmError> {
         let order = at.order;
+        self.check_base(order)?;
         let mut x = self.unknowns_from(guess);
         let mut step = f64::INFINITY;
         for it in 1..=self.opts.max_iter {

@@ -105,8 +105,8 @@ impl Evaluator {
         }
     }
 
-    /// R, A, B, C at one sample by central differences (q and q̇ are restored on return). The
-    /// spin angle is cyclic, so its column of A is zero and not differenced.
+    /// R, A, B, C at one sample by central differences (q and q̇ are restored on return). When
+    /// the spin angle is `cyclic` its column of A is zero and not differenced.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn linearize(
         &mut self,
@@ -116,6 +116,7 @@ impl Evaluator {
         qdd: &[f64],
         torque: f64,
         spin: usize,
+        cyclic: bool,
         h: f64,
         lin: &mut SampleLin,
     ) {
@@ -146,7 +147,7 @@ impl Evaluator {
         let (mut rp, mut rm) = (std::mem::take(&mut self.rp), std::mem::take(&mut self.rm));
         self.residual(t, q, qd, qdd, torque, &mut lin.r, Some(&mut lin.c));
         for k in 0..n {
-            if k == spin {
+            if k == spin && cyclic {
                 for i in 0..n {
                     lin.a[i * n + k] = 0.0;
                 }

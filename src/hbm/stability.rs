@@ -119,7 +119,9 @@ impl Hbm {
         if phi.iter().any(|v| !v.is_finite()) {
             return Err(HbmError::NonFinite { order });
         }
-        let reduced = phi.remove_row(spin).remove_column(spin);
+        // The cyclic spin angle's trivial +1 is not a physical multiplier; with gravity the spin
+        // angle is a state like the others.
+        let reduced = if self.cyclic { phi.remove_row(spin).remove_column(spin) } else { phi };
         let mut multipliers: Vec<Complex<f64>> = reduced.complex_eigenvalues().iter().copied().collect();
         multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
         let max_modulus = multipliers.first().map_or(0.0, |m| m.norm());
