@@ -8,6 +8,7 @@
 use crate::error::{EngineError, Error, Result};
 use crate::io::{ReadPolicy, Source};
 use crate::model::body::{Body, BodySpec};
+use crate::model::coupling::Couplings;
 use crate::model::joint::{Joint, JointSpec};
 use crate::model::loads::{GroundDamper, JointTorque, LoadSpec, Loads, PointForce};
 use crate::model::math::Vec2;
@@ -216,8 +217,13 @@ impl Mechanism {
                     src.error(&format!("{path}.kind.{field}"), format!("joint `{name}`: {msg}"))
                 })?;
             if kind.dof() == 0 {
-                for (field, given) in [("spring", js.spring.is_some()), ("damper", js.damper.is_some_and(|c| c != 0.0))]
-                {
+                for (field, given) in [
+                    ("spring", js.spring.is_some()),
+                    ("damper", js.damper.is_some_and(|c| c != 0.0)),
+                    ("stages", js.stages.is_some()),
+                    ("friction", js.friction.is_some()),
+                    ("stops", js.stops.is_some()),
+                ] {
                     if given {
                         return Err(src.error(
                             &format!("{path}.{field}"),
@@ -239,6 +245,7 @@ impl Mechanism {
                 coordinate,
                 spring: js.spring,
                 damper: js.damper.unwrap_or(0.0),
+                couplings: Couplings { stages: js.stages.clone(), friction: js.friction, stops: js.stops },
             });
         }
         if ncoord == 0 {

@@ -200,6 +200,7 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
         if let Some(s) = j.spring {
             extra += &format!("   spring {} {per}/{unit} (free at {} {unit})", s.stiffness, s.free_angle);
         }
+        extra += &j.couplings.describe(per, unit);
         let q = j.coordinate.map_or_else(|| "    ".to_string(), |c| format!("q[{c}]"));
         println!(
             "  {q} {:<12} {:?} {} -> {} at ({}, {}) m{extra}",

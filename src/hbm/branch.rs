@@ -234,6 +234,7 @@ impl Branch {
         sol.base_frequency = a.solution.base_frequency / (a.solution.order * a.solution.omega) * sol.order * sol.omega;
         sol.top_harmonic_ratio = sol.harmonic_ratio();
         sol.needs_more_harmonics = a.solution.needs_more_harmonics || b.solution.needs_more_harmonics;
+        sol.coupling_tail = a.solution.coupling_tail.max(b.solution.coupling_tail);
         Some(sol)
     }
 }
@@ -311,6 +312,7 @@ mod tests {
             iterations: 0,
             residual: 0.0,
             top_harmonic_ratio: 0.0,
+            coupling_tail: 0.0,
             needs_more_harmonics: false,
             stability: Some(stability),
         };

@@ -80,6 +80,16 @@
 //! spectrum of each coordinate, `H² |c_H| / (Σ_h h⁴ |c_h|²)^½`, maximised over the coordinates;
 //! when it exceeds [`HbmOptions::harmonic_tol`], more harmonics are needed
 //! ([`HbmSolution::needs_more_harmonics`]).
+//!
+//! The joint couplings (staged springs, friction, end stops; [`crate::model::coupling`]) are not
+//! smooth: they go through the AFT like every force, sampled at the N_t instants, but their
+//! spectra decay slowly (as 1/h² past a kink, 1/h for friction close to Coulomb's). Their own
+//! indicator, [`HbmSolution::coupling_tail`], is the share of each coupling force's oscillating
+//! content (its discrete spectrum up to N_t/2 from the same samples) that lies above H, where
+//! the balance drops it: `(Σ_{h>H} |F_h|² / Σ_{h≥1} |F_h|²)^½`. Above
+//! [`HbmOptions::coupling_tol`] the solution needs more harmonics too, and a study's summary says
+//! so. The response converges faster than this share (the dynamics filter the dropped force by
+//! about 1/h²), so the indicator is on the safe side.
 
 mod aft;
 mod assembly;
@@ -98,6 +108,7 @@ pub use solution::HbmSolution;
 pub use stability::Stability;
 
 use crate::kane::Kane;
+use crate::model::coupling::Couplings;
 use crate::model::excitation::{Excitation, Harmonic};
 use nalgebra::{DMatrix, DVector};
 use realfft::num_complex::Complex;
@@ -152,6 +163,9 @@ pub struct HbmOptions {
     pub max_iter: usize,
     /// Largest acceptable share of the top harmonic (see [`HbmSolution::top_harmonic_ratio`]).
     pub harmonic_tol: f64,
+    /// Largest acceptable share of a joint coupling's force in the harmonics above H (see
+    /// [`HbmSolution::coupling_tail`]).
+    pub coupling_tol: f64,
     /// Central-difference step for the per-sample derivatives: rad for angles, and relative
     /// (times max(1, |q̇|)) for rates.
     pub fd_step: f64,
@@ -170,6 +184,7 @@ impl Default for HbmOptions {
             tol: 1e-10,
             max_iter: 30,
             harmonic_tol: 1e-5,
+            coupling_tol: 1e-2,
             fd_step: 1e-6,
             stability_samples: 256,
         }
@@ -245,6 +260,8 @@ pub struct Hbm {
     jac: DMatrix<f64>,
     /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
     gp: DVector<f64>,
+    /// The joint couplings by coordinate, for their harmonic content ([`Hbm::coupling_tail`]).
+    couplings: Vec<(usize, Couplings)>,
 }
 
 impl Hbm {
@@ -298,6 +315,9 @@ impl Hbm {
         };
         if sj.spring.is_some_and(|s| s.stiffness != 0.0) {
             return bad(format!("spin joint `{}` has a spring: its angle is not cyclic", sj.name));
+        }
+        if sj.couplings.stages.is_some() || sj.couplings.stops.is_some() {
+            return bad(format!("spin joint `{}` has a staged spring or end stops: its angle is not cyclic", sj.name));
         }
         // Gravity or a world-frame force: the spin angle is not cyclic, the forces depend on it
         // with period 2π, and a periodic solution needs a base period that is a whole number of
@@ -405,8 +425,14 @@ impl Hbm {
             }
         }
         let nb = 2 * opts.harmonics + 1;
+        let couplings = mech
+            .joints
+            .iter()
+            .filter_map(|j| j.coordinate.filter(|_| !j.couplings.is_empty()).map(|k| (k, j.couplings.clone())))
+            .collect();
         let ev = Evaluator::new(kane, speeds, parents, (0..n * n).map(|i| w[(i / n, i % n)]).collect(), g);
         Ok(Self {
+            couplings,
             ev,
             n,
             spin,
@@ -544,12 +570,47 @@ impl Hbm {
             iterations,
             residual,
             top_harmonic_ratio: 0.0,
+            coupling_tail: 0.0,
             needs_more_harmonics: false,
             stability: None,
         };
         sol.top_harmonic_ratio = sol.harmonic_ratio();
-        sol.needs_more_harmonics = sol.top_harmonic_ratio > self.opts.harmonic_tol;
+        sol.coupling_tail = self.coupling_tail(at);
+        sol.needs_more_harmonics =
+            sol.top_harmonic_ratio > self.opts.harmonic_tol || sol.coupling_tail > self.opts.coupling_tol;
         sol
+    }
+
+    /// The convergence indicator of the couplings' harmonic content at the samples of the last
+    /// assembly (section "Harmonic count" of the module docs): per coupled coordinate, the
+    /// coupling force τ(q(t), q̇(t)) at the N_t samples, its discrete spectrum F_m
+    /// (m ≤ N_t/2), and `(Σ_{m>H} |F_m|² / Σ_{m≥1} |F_m|²)^½`, the share of its oscillating
+    /// content the balance of H harmonics drops; the largest over the couplings (0 without).
+    fn coupling_tail(&mut self, at: &At) -> f64 {
+        let (nt, hh) = (self.aft.nt, self.opts.harmonics);
+        let w0 = self.ratio * at.order * at.omega;
+        let mut spec = vec![Complex::default(); self.aft.half_len()];
+        let mut worst = 0.0f64;
+        for (k, law) in &self.couplings {
+            let k = *k;
+            for j in 0..nt {
+                let t = 2.0 * PI * j as f64 / nt as f64 / w0;
+                let (mut q, mut qd) = (self.qt[k * nt + j], self.qdt[k * nt + j]);
+                if k == self.spin {
+                    q += at.omega * t;
+                    qd += at.omega;
+                }
+                self.series[j] = law.torque(q, qd);
+            }
+            self.aft.spectrum(&self.series, &mut spec);
+            let power = |m: &Complex<f64>| m.norm_sqr();
+            let total: f64 = spec.iter().skip(1).map(power).sum();
+            let tail: f64 = spec.iter().skip(hh + 1).map(power).sum();
+            if total > 0.0 {
+                worst = worst.max((tail / total).sqrt());
+            }
+        }
+        worst
     }
 
     /// Solves for the periodic steady state at excitation order `order` by Newton's method from

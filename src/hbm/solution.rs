@@ -35,7 +35,11 @@ pub struct HbmSolution {
     pub residual: f64,
     /// Largest share of the top harmonic in a coordinate's acceleration spectrum.
     pub top_harmonic_ratio: f64,
-    /// True when `top_harmonic_ratio` exceeds [`HbmOptions::harmonic_tol`](super::HbmOptions::harmonic_tol): raise H.
+    /// Largest share of a joint coupling's force in the harmonics above H (0 without
+    /// couplings; section "Harmonic count" of the module docs of [`crate::hbm`]).
+    pub coupling_tail: f64,
+    /// True when `top_harmonic_ratio` exceeds [`HbmOptions::harmonic_tol`](super::HbmOptions::harmonic_tol)
+    /// or `coupling_tail` exceeds [`HbmOptions::coupling_tol`](super::HbmOptions::coupling_tol): raise H.
     pub needs_more_harmonics: bool,
     /// Floquet stability, when computed.
     pub stability: Option<Stability>,

@@ -225,6 +225,9 @@ impl Kane {
                 k = next;
             }
         }
+        if self.has_couplings() {
+            self.coupling_jacobians(q, u, dr_dq, dr_du, -1.0);
+        }
         true
     }
 }

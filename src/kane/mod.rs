@@ -28,6 +28,7 @@
 //! All work buffers are sized in [`Kane::new`]; evaluating does no heap allocation.
 
 use crate::error::{EngineError, Error, Result};
+use crate::model::coupling::Couplings;
 use crate::model::excitation::Excitation;
 use crate::model::joint::JointKind;
 use crate::model::loads::{JointTorque, PointForce};
@@ -76,6 +77,10 @@ mod small;
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |s, (x, y)| s + x * y)
 }
+
+/// Couplings taken out of a [`Kane`] by [`Kane::suspend_couplings`].
+#[derive(Debug)]
+pub struct CouplingsSuspended(Vec<Coupled>);
 
 /// Which regrouping of Kane's sums evaluates this mechanism (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,6 +159,15 @@ struct BodyState {
     tau: f64,
 }
 
+/// The nonlinear couplings of one coordinate ([`Couplings`]), with the speed whose value is
+/// subtracted to get the joint rate (`q̇_k = u_k − u_p`, absolute angular velocities only).
+#[derive(Debug, Clone)]
+struct Coupled {
+    coord: usize,
+    parent_speed: Option<usize>,
+    law: Couplings,
+}
+
 /// The equation-of-motion evaluator of one mechanism, with its work buffers.
 #[derive(Debug, Clone)]
 pub struct Kane {
@@ -173,6 +187,8 @@ pub struct Kane {
     nodes: Vec<Node>,
     point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
+    /// The coordinates with nonlinear couplings (added by [`Kane::add_couplings`]).
+    couplings: Vec<Coupled>,
     /// Absolute speeds: the constant coefficients `(α, β)` of every ancestor pair (k, j), in the
     /// order the forward pass walks them (j ascending, then k from j's parent up to the root); see
     /// `Kane::evaluate_absolute`.
@@ -286,13 +302,24 @@ impl Kane {
                 }
             }
         }
+        let speed_parent = mech.speed_parents();
+        let couplings = (0..nb)
+            .filter_map(|j| {
+                let jt = &mech.joints[j];
+                let coord = jt.coordinate?;
+                let absolute = mech.speeds == Speeds::AbsoluteAngularVelocities;
+                let parent_speed = if absolute { speed_parent[coord] } else { None };
+                (!jt.couplings.is_empty()).then(|| Coupled { coord, parent_speed, law: jt.couplings.clone() })
+            })
+            .collect();
         let mut k = Kane {
+            couplings,
             mech: mech.clone(),
             pairs,
             small: None,
             n,
             nb,
-            speed_parent: mech.speed_parents(),
+            speed_parent,
             joint_of,
             speeds: mech.speeds,
             form,
@@ -315,8 +342,75 @@ impl Kane {
         let mut zeros = vec![0.0; n];
         k.evaluate(0.0, &zeros, &zeros, false);
         k.factor_solve(&mut zeros)?;
-        k.small = small::Small::new(&k);
+        k.small = k.small_form();
         Ok(k)
+    }
+
+    /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
+    /// the general forms add ([`Kane::add_couplings`]).
+    fn small_form(&self) -> Option<small::Small> {
+        if self.couplings.is_empty() { small::Small::new(self) } else { None }
+    }
+
+    /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
+    pub fn has_couplings(&self) -> bool {
+        !self.couplings.is_empty()
+    }
+
+    /// The couplings' generalized forces added to F (in the speeds), in the one place every form
+    /// goes through: τ(q_k, q̇_k) acts +τ on the child and −τ on the parent, so its generalized
+    /// force is τ for the joint rate q̇_k, and with absolute angular velocities (q̇_k = u_k − u_p)
+    /// +τ in row k and −τ in row p (Bᵀ applied to the joint-rate force, as for a spring).
+    #[inline(never)]
+    fn add_couplings(&mut self, q: &[f64], u: &[f64]) {
+        for c in &self.couplings {
+            let qd = u[c.coord] - c.parent_speed.map_or(0.0, |p| u[p]);
+            let tau = c.law.torque(q[c.coord], qd);
+            self.f[c.coord] += tau;
+            if let Some(p) = c.parent_speed {
+                self.f[p] -= tau;
+            }
+        }
+    }
+
+    /// Adds the couplings' exact local derivatives to the Jacobians of F (row-major n × n, in
+    /// the speeds): `∂F/∂q` gets ∂τ/∂q (the local stiffness, with sign), `∂F/∂u` gets ∂τ/∂q̇
+    /// mapped by `q̇_k = u_k − u_p`. At a stage breakpoint the stiffness of the stage beginning
+    /// there; friction at q̇ = 0 gives the viscous slope −T_f/ε.
+    pub fn add_coupling_jacobians(&self, q: &[f64], u: &[f64], f_q: &mut [f64], f_u: &mut [f64]) {
+        self.coupling_jacobians(q, u, f_q, f_u, 1.0);
+    }
+
+    /// `sign` times the couplings' derivatives of F added to `f_q`, `f_u` (−1: of the residual
+    /// `M u̇ − F`).
+    fn coupling_jacobians(&self, q: &[f64], u: &[f64], f_q: &mut [f64], f_u: &mut [f64], sign: f64) {
+        let n = self.n;
+        for c in &self.couplings {
+            let k = c.coord;
+            let qd = u[k] - c.parent_speed.map_or(0.0, |p| u[p]);
+            let (_, dq, dv) = c.law.torque_and_slopes(q[k], qd);
+            let (dq, dv) = (sign * dq, sign * dv);
+            f_q[k * n + k] += dq;
+            f_u[k * n + k] += dv;
+            if let Some(p) = c.parent_speed {
+                f_q[p * n + k] -= dq;
+                f_u[k * n + p] -= dv;
+                f_u[p * n + k] -= dv;
+                f_u[p * n + p] += dv;
+            }
+        }
+    }
+
+    /// Takes the couplings out of the evaluator (F without them), to be put back with
+    /// [`Kane::restore_couplings`]: for derivatives taken by differences of the smooth part
+    /// while the couplings' own derivatives are added exactly ([`Kane::add_coupling_jacobians`]).
+    pub fn suspend_couplings(&mut self) -> CouplingsSuspended {
+        CouplingsSuspended(std::mem::take(&mut self.couplings))
+    }
+
+    /// Puts back couplings taken out by [`Kane::suspend_couplings`].
+    pub fn restore_couplings(&mut self, s: CouplingsSuspended) {
+        self.couplings = s.0;
     }
 
     /// The mechanism this evaluator was built from.
@@ -342,7 +436,7 @@ impl Kane {
         }
         // The fixed-size path maps each speed to its torque's place in the list.
         if self.small.is_some() {
-            self.small = small::Small::new(self);
+            self.small = self.small_form();
         }
     }
 
@@ -485,6 +579,9 @@ impl Kane {
             Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
             Form::Rates => self.evaluate_rates::<N>(t, q, u, forcing),
             Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
+        }
+        if forcing && !self.couplings.is_empty() {
+            self.add_couplings(q, u);
         }
     }
 

@@ -184,10 +184,11 @@ pub fn mass_matrix_and_forcing(
             }
         }
     }
-    // Each joint's own generalized force τ_k (spring, damper, excitation) enters as τ_k ∂q̇_k/∂u_r.
+    // Each joint's own generalized force τ_k (spring, damper, couplings, excitation) enters as
+    // τ_k ∂q̇_k/∂u_r.
     for (jn, joint) in mech.joints.iter().enumerate() {
         let Some(k) = joint.coordinate else { continue };
-        let mut tau = -joint.damper * qdot[k];
+        let mut tau = -joint.damper * qdot[k] + joint.couplings.torque(q[k], qdot[k]);
         if let Some(sp) = joint.spring {
             tau -= sp.stiffness * (q[k] - sp.free_angle);
         }

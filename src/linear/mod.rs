@@ -39,7 +39,13 @@
 //! differences is exact up to rounding; in q it is built from sines and cosines, analytic, and the
 //! O(h⁶) remainder at h = 0.05 rad is far below rounding (tests: ≤ 1e-12 relative to eq. 13).
 //! `g` (the generalized force of a unit torque in joint k) is exact: `g_r = ∂q̇_k/∂u_r`, row k of
-//! W⁻¹.
+//! W⁻¹. The joint couplings ([`crate::model::coupling`]) are the exception: not smooth on the
+//! scale of these steps, they are left out of the differences and their exact local derivatives
+//! added ([`Kane::add_coupling_jacobians`]): a staged spring contributes the stiffness of the
+//! stage the operating point sits in, an end stop nothing unless engaged, and friction, at the
+//! zero relative rate of a relative equilibrium, the viscous damper T_f/ε. That last one is a
+//! limit of the method: the linear model of a friction joint is a damper whose size depends on
+//! the smoothing ε, not on T_f's Coulomb behaviour, and says nothing about stick-slip.
 //!
 //! The second-order form in the coordinates ([`LinearModel::second_order`]) substitutes
 //! `u* = W q̇*` and projects on the joint rates (premultiplies by Wᵀ): `M_q q̈ + C q̇ + K q = τ`,
@@ -291,8 +297,21 @@ pub fn forcing_jacobians(kane: &mut Kane, q: &[f64], u: &[f64]) -> (DMatrix<f64>
     // a step of 0.05 m).
     let mech = kane.mechanism();
     let h_q: Vec<f64> = (0..q.len()).map(|k| H_ANGLE * mech.joints[mech.joint_of(k)].kind.coordinate_scale()).collect();
-    let f_q = richardson_jacobian(q, &h_q, |x| kane.forcing(0.0, x, u).clone());
-    let f_u = richardson_jacobian(u, &vec![h_u; u.len()], |x| kane.forcing(0.0, q, x).clone());
+    // The joint couplings (staged springs, friction, stops) are not smooth on the scale of these
+    // steps (a stage breakpoint 0.01 rad away, a friction smoothing of 0.01 rad/s): their
+    // derivatives are added exactly instead, so the model sees the local stiffness of the stage
+    // at the operating point and friction as the viscous damper T_f/ε.
+    let suspended = kane.suspend_couplings();
+    let mut f_q = richardson_jacobian(q, &h_q, |x| kane.forcing(0.0, x, u).clone());
+    let mut f_u = richardson_jacobian(u, &vec![h_u; u.len()], |x| kane.forcing(0.0, q, x).clone());
+    kane.restore_couplings(suspended);
+    if kane.has_couplings() {
+        let n = q.len();
+        let (mut dq, mut du) = (vec![0.0; n * n], vec![0.0; n * n]);
+        kane.add_coupling_jacobians(q, u, &mut dq, &mut du);
+        f_q += DMatrix::from_row_slice(n, n, &dq);
+        f_u += DMatrix::from_row_slice(n, n, &du);
+    }
     (f_q, f_u)
 }
 
@@ -358,11 +377,17 @@ fn prepare(mech: &Mechanism, spin: usize) -> Mechanism {
     m
 }
 
-/// The same mechanism without dampers.
+/// The same mechanism without dampers (joint dampers, ground dampers, joint friction and the end
+/// stops' contact damping).
 fn undamped(mech: &Mechanism) -> Mechanism {
     let mut m = mech.clone();
     for j in &mut m.joints {
         j.damper = 0.0;
+        // Friction and the stops' contact damping are dampers too (friction linearises to T_f/ε).
+        j.couplings.friction = None;
+        if let Some(s) = &mut j.couplings.stops {
+            s.damping = 0.0;
+        }
     }
     m.loads.ground_dampers.clear();
     m
@@ -389,6 +414,12 @@ impl LinearModel {
                 joint: spin_joint.into(),
                 stiffness: sp.stiffness,
             });
+        }
+        // A staged spring or end stops on the spin joint hold it to ground as a spring does.
+        let c = &mech.joints[sj].couplings;
+        let held = c.stages.as_ref().map(|st| st.drive[0].stiffness).or(c.stops.map(|st| st.stiffness));
+        if let Some(stiffness) = held {
+            return Err(LinearError::SpinSpring { mechanism: mech.name.clone(), joint: spin_joint.into(), stiffness });
         }
         if mech.loads.needs_world_orientation() {
             return Err(LinearError::WorldOrientation { mechanism: mech.name.clone() });

@@ -2,6 +2,7 @@
 
 use crate::error::Result;
 use crate::io::Source;
+use crate::model::coupling::{Couplings, EndStops, Friction, StageSpring};
 use crate::model::math::{Vec2, rotate_cs};
 use crate::model::path::PathShape;
 use serde::{Deserialize, Serialize};
@@ -247,6 +248,15 @@ pub struct JointSpec {
     /// Internal viscous damper, N·m·s/rad (N·s/m for a prismatic or path joint): generalized force
     /// `−damper·q̇` on the child, the reverse on the parent.
     pub damper: Option<f64>,
+    /// Multi-stage (piecewise-linear) spring, added to `spring` ([`StageSpring`]).
+    #[serde(default)]
+    pub stages: Option<StageSpring>,
+    /// Regularised Coulomb friction ([`Friction`]).
+    #[serde(default)]
+    pub friction: Option<Friction>,
+    /// Compliant end stops ([`EndStops`]).
+    #[serde(default)]
+    pub stops: Option<EndStops>,
 }
 
 impl JointSpec {
@@ -261,6 +271,9 @@ impl JointSpec {
             at: over.at.or(self.at),
             spring: over.spring.or(self.spring),
             damper: over.damper.or(self.damper),
+            stages: over.stages.clone().or_else(|| self.stages.clone()),
+            friction: over.friction.or(self.friction),
+            stops: over.stops.or(self.stops),
         }
     }
 
@@ -290,6 +303,16 @@ impl JointSpec {
                 return Err(src.error(&format!("{path}.spring.free_angle"), "free angle must be finite"));
             }
         }
+        let located = |what: &str, (field, msg): (String, String)| src.error(&format!("{path}.{what}.{field}"), msg);
+        if let Some(s) = &self.stages {
+            s.check().map_err(|e| located("stages", e))?;
+        }
+        if let Some(f) = &self.friction {
+            f.check().map_err(|e| located("friction", e))?;
+        }
+        if let Some(s) = &self.stops {
+            s.check().map_err(|e| located("stops", e))?;
+        }
         Ok(())
     }
 }
@@ -312,4 +335,6 @@ pub struct Joint {
     pub spring: Option<Spring>,
     /// Internal viscous damping, N·m·s/rad (0 when none).
     pub damper: f64,
+    /// Nonlinear couplings: staged spring, friction, end stops (empty when none).
+    pub couplings: Couplings,
 }

@@ -5,6 +5,7 @@
 //! turning them into equations of motion is [`crate::kane`]'s.
 
 pub mod body;
+pub mod coupling;
 pub mod excitation;
 pub mod inertia;
 pub mod joint;

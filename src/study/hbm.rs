@@ -55,6 +55,37 @@ pub struct HbmBranch {
     pub curve_accel: Vec<Vec<f64>>,
     /// Stability along the drawn curve (an interpolated state takes its nearer point's).
     pub curve_stable: Vec<Option<bool>>,
+    /// Per point, the share of a joint coupling's force above the balanced harmonics
+    /// ([`HbmSolution::coupling_tail`]); all zero, and left out of `results.json`, without
+    /// couplings.
+    #[serde(skip_serializing_if = "no_coupling")]
+    pub coupling_tail: Vec<f64>,
+}
+
+fn no_coupling(tail: &[f64]) -> bool {
+    tail.iter().all(|&t| t == 0.0)
+}
+
+/// The summary's warning when a branch's coupling forces have not converged in H: the worst
+/// point's share above H and where it is, or None.
+fn coupling_warning(spec: &HbmSpec, br: &HbmBranch) -> Option<String> {
+    let tol = HbmOptions::default().coupling_tol;
+    let (i, worst) =
+        br.coupling_tail.iter().copied().enumerate().max_by(|a, b| a.1.total_cmp(&b.1)).filter(|&(_, t)| t > tol)?;
+    let count = br.coupling_tail.iter().filter(|&&t| t > tol).count();
+    let ax = axis(spec);
+    Some(format!(
+        "> **Warning** (branch from {}): the joint couplings' harmonic content has not converged at H = {}: at \
+         {count} of {} points more than {:.0} % of a coupling force's oscillating part lies above the balanced \
+         harmonics (worst {:.1} % at {} = {:.4}); raise `harmonics` and compare.\n",
+        br.from,
+        spec.harmonics,
+        br.coupling_tail.len(),
+        100.0 * tol,
+        100.0 * worst,
+        ax.column,
+        br.parameter.get(i).copied().unwrap_or(f64::NAN),
+    ))
 }
 
 /// Parts per branch segment in the drawn curve. The step control follows the whole unknown
@@ -253,6 +284,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                     .map(|x| from_hbm(&study.mechanism, &study.elements, &x.solution, &spec.multiples))
                     .collect(),
                 stable: p.iter().map(|x| x.stable).collect(),
+                coupling_tail: p.iter().map(|x| x.solution.coupling_tail).collect(),
                 max_multiplier: p
                     .iter()
                     .map(|x| x.solution.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus))
@@ -511,6 +543,11 @@ pub(crate) fn render(
         );
     }
     md.push('\n');
+    for br in branches {
+        if let Some(w) = coupling_warning(spec, br) {
+            let _ = writeln!(md, "{w}");
+        }
+    }
     Ok((md, files))
 }
 
