@@ -254,10 +254,31 @@ fn tautochronism_is_reported() {
         let mech = rotor_with(path(shape), 6.0, Some(2.16e-4));
         assert_eq!(absorbers(&mech)[0].tautochronic, want, "{shape:?}");
     }
-    // The paper's revolute pendulum is reported too, with eq. (15).
+    // The paper's revolute pendulum is reported too, with eq. (15): n_t² = m R L / (I + m L²),
+    // R the pivot's distance from the axis, L the pendulum's centre of mass from the pivot.
     let paper = Mechanism::from_file(std::path::Path::new("examples/cpva.ron")).unwrap();
     let md = markdown(&paper);
     assert!(md.contains("## Absorbers") && md.contains("Revolute pendulum"), "{md}");
+    let j = paper.joints.iter().position(|j| j.parent.is_some()).unwrap();
+    let (r, b) = (paper.joints[j].at.norm(), paper.bodies[j].inertia);
+    let (m, l, i) = (b.mass, b.com.norm(), b.i_com);
+    let want = m * r * l / (i + m * l * l);
+    let got = absorbers(&paper)[0].tuning_order_squared;
+    assert!((got - want).abs() <= 1e-14 * want, "revolute pendulum n_t² {got} vs eq. (15) {want}");
+}
+
+/// `kanedyn check` prints the absorbers' table (here for the epicycloid example: n_t = ñ = 3.11,
+/// tautochronic).
+#[test]
+fn check_prints_the_absorbers() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_kanedyn"))
+        .args(["check", "examples/cpva_epicycloid.ron"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("## Absorbers") && text.contains("| `path` | Epicycloid |"), "{text}");
+    assert!(text.contains("| 3.110000 |") && text.contains("| yes |"), "{text}");
 }
 
 /// A travel limit stops the engine and a run with an error naming the joint, the arc length and

@@ -101,7 +101,7 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
     for (j, joint) in mech.joints.iter().enumerate() {
         let carried = carried_inertia(mech, j);
         let (m, i) = (carried.mass, carried.i_com);
-        if !(m > 0.0) {
+        if m.is_nan() || m <= 0.0 {
             continue;
         }
         match joint.kind {
@@ -140,7 +140,7 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
                 let Some(p) = joint.parent else { continue };
                 let rotor = mech.joints[p].parent.is_none() && mech.joints[p].kind == JointKind::Revolute;
                 let (r, l) = (joint.at.norm(), carried.com.norm());
-                if !rotor || !(r > 0.0 && l > 0.0) {
+                if !(rotor && r > 0.0 && l > 0.0) {
                     continue;
                 }
                 let (_, n2, x4, alpha) = PathShape::Circle { radius: r, length: l }.taylor();

@@ -157,10 +157,8 @@ impl JointKind {
                 let (ms, mc) = mount.sin_cos();
                 // Beyond the user's travel limit the joint is off its path, as beyond the path's
                 // end: NaN, which the engine reports as `OutOfTravel` naming the joint.
-                let q = match travel {
-                    Some(t) if !(q.abs() < t) => f64::NAN,
-                    _ => q,
-                };
+                let within = travel.is_none_or(|t| q.abs() < t);
+                let q = if within { q } else { f64::NAN };
                 let p = shape.at(q);
                 let (sin, cos) = p.alpha.sin_cos();
                 JointMotion {

@@ -434,7 +434,7 @@ impl GeneralPath {
 /// coefficient negative), found by a scan on a grid scaled by `hint` (a typical root) and
 /// bisection to the last bit.
 fn first_positive_root(g: &[f64], hint: f64) -> Option<f64> {
-    if !(g[0] > 0.0) || !hint.is_finite() || hint <= 0.0 {
+    if g[0].is_nan() || g[0] <= 0.0 || !hint.is_finite() || hint <= 0.0 {
         return None;
     }
     // Cauchy's bound on the roots' size: the scan's far end.
