@@ -10,7 +10,7 @@ use kanedyn::error::EngineError;
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::linear::{Damping, LinearModel, Spin};
-use kanedyn::model::absorber::{Tautochronism, absorbers, markdown};
+use kanedyn::model::absorber::{Tautochronism, absorbers, markdown, roller_tuning_order_squared};
 use kanedyn::model::body::BodySpec;
 use kanedyn::model::joint::{JointKind, JointSpec};
 use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
@@ -364,4 +364,40 @@ fn catalog_general_part_loads() {
     let want = 6.0 * n * n / (6.0 + 2.16e-4 * a1 * a1);
     assert!((props.tuning_order_squared - want).abs() <= 1e-14 * want);
     println!("{}", markdown(&mech));
+}
+
+/// The rollers' closed-form tuning order (docs/design.md, "Rollers") against the reduced
+/// Lagrangian built here from the rolling kinematics on the actual curve: every roller centre at
+/// c̄(s) = ½(P + r(s)) (P the vertex's centre of curvature, from r''(0)), moving at ½ṡ, turning
+/// at −ṡ/(2r_r) relative to the rotor. At held spin the s-inertia is m + N(m_r/4 + I_r/(4r_r²))
+/// and the potential −½Ω²(m ρ² + N m_r |c̄|²); n_t² = V''(0)/M(0) by central differences of
+/// steps h and 2h, h = 1 % of the travel, Richardson-extrapolated (truncation ~(h/L)⁴/360 ≈ 1e-10,
+/// rounding ~1e-16·V/(h²V'') ≈ 1e-10 relative: the 1e-8 bound has margin).
+#[test]
+fn roller_tuning_order_equals_the_rolling_kinematics() {
+    let (m, count, m_r, r_r) = (6.0, 2.0, 0.08, 0.006);
+    let i_r = 0.5 * m_r * r_r * r_r;
+    for shape in [
+        PathShape::Epicycloid { rho0: 0.185, n_tilde: 3.11, alpha1: 0.0 },
+        PathShape::Bifilar { radius: 0.17, length: 0.0152 },
+        PathShape::general(0.185, 2.0, &[-3000.0], &[]),
+    ] {
+        let vertex = shape.at(0.0);
+        let centre = vertex.position + vertex.curvature / vertex.curvature.norm_squared();
+        let potential = |s: f64| {
+            let p = shape.at(s).position;
+            let c = 0.5 * (centre + p);
+            -0.5 * (m * p.norm_squared() + count * m_r * c.norm_squared())
+        };
+        let h = 1e-2 * shape.travel().min(0.0152);
+        let second = |h: f64| (potential(h) - 2.0 * potential(0.0) + potential(-h)) / (h * h);
+        let stiffness = (4.0 * second(h) - second(2.0 * h)) / 3.0;
+        let inertia = m + count * (0.25 * m_r + 0.25 * i_r / (r_r * r_r));
+        let want = stiffness / inertia;
+        let (_, n2, _, _) = shape.taylor();
+        let got = roller_tuning_order_squared(m, n2, count, m_r, i_r, r_r);
+        println!("{shape:?}: rollers n_t² {got:.9} (without {n2:.9}), kinematics {want:.9}");
+        assert!((got - want).abs() <= 1e-8 * want, "{shape:?}: {got} vs {want}");
+        assert!(got > n2, "uniform-disc rollers raise the order");
+    }
 }

@@ -91,7 +91,20 @@ pub fn carried_inertia(mech: &Mechanism, j: usize) -> PlanarInertia {
 /// `(n_t², κ)` of a body (m, I) on a path with these Taylor coefficients (see the module doc).
 pub fn path_orders(m: f64, i: f64, n2: f64, x4: f64, alpha: [f64; 2]) -> (f64, f64) {
     let inertia = m + i * alpha[0] * alpha[0];
-    (m * n2 / inertia, -0.75 * x4 / n2 - 1.5 * i * alpha[0] * alpha[1] / inertia)
+    // `+ 0.0` turns the −0 of a path without x₄, α₃ into 0 for the reports.
+    (m * n2 / inertia, -0.75 * x4 / n2 - 1.5 * i * alpha[0] * alpha[1] / inertia + 0.0)
+}
+
+/// n_t² of a translating absorber (mass m, path order ñ, `n2` = ñ²) carried by `count` rollers
+/// of mass `m_r` (kg), centroidal inertia `i_r` (kg·m²) and radius `r_r` (m) rolling without slip
+/// between a rotor track and an absorber track, with the rollers' centroid halfway between the
+/// path's vertex and its centre of curvature (docs/design.md, "Rollers"):
+/// `n_t² = ñ² (m + N m_r/2) / (m + N (m_r + I_r/r_r²)/4)`.
+///
+/// NOTE: the engine does not carry rollers yet (design note): this is the closed form for a
+/// designer, not a property of a loaded mechanism.
+pub fn roller_tuning_order_squared(m: f64, n2: f64, count: f64, m_r: f64, i_r: f64, r_r: f64) -> f64 {
+    n2 * (m + 0.5 * count * m_r) / (m + 0.25 * count * (m_r + i_r / (r_r * r_r)))
 }
 
 /// The absorber properties of every path joint, and of every revolute pendulum on a spinning
