@@ -129,6 +129,22 @@ impl JointKind {
         }
     }
 
+    /// The coordinate to evaluate a path at: `q` inside the joint's travel limit, NaN at or beyond
+    /// it (or when `q` is NaN), so that the path's point is NaN there as beyond the path's own
+    /// end, which the engine reports as `OutOfTravel` naming the joint. Every evaluation of a
+    /// path joint's shape (`PathShape::at`) must take its coordinate through this; `q` itself for
+    /// the other kinds.
+    #[inline(always)]
+    pub fn limited(self, q: f64) -> f64 {
+        match self {
+            JointKind::Path { travel: Some(t), .. } => {
+                let within = q.abs() < t;
+                if within { q } else { f64::NAN }
+            }
+            _ => q,
+        }
+    }
+
     /// The joint's transform, motion columns and bias terms at coordinate `q` (ignored without a
     /// coordinate), for a joint at point `at` of the parent frame (m).
     #[inline]
@@ -152,14 +168,10 @@ impl JointKind {
                 JointMotion { origin: at + q * axis, velocity: axis, ..still }
             }
             JointKind::Fixed => still,
-            JointKind::Path { shape, mount, travel } => {
+            JointKind::Path { shape, mount, .. } => {
                 // The path's own frame (vertex on +x) turned by the mounting angle.
                 let (ms, mc) = mount.sin_cos();
-                // Beyond the user's travel limit the joint is off its path, as beyond the path's
-                // end: NaN, which the engine reports as `OutOfTravel` naming the joint.
-                let within = travel.is_none_or(|t| q.abs() < t);
-                let q = if within { q } else { f64::NAN };
-                let p = shape.at(q);
+                let p = shape.at(self.limited(q));
                 let (sin, cos) = p.alpha.sin_cos();
                 JointMotion {
                     cos,
