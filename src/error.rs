@@ -88,17 +88,21 @@ pub enum EngineError {
         index: usize,
     },
     /// A path joint's coordinate left the path (beyond its end of travel, where the path is
-    /// singular, e.g. the epicycloid's cusp).
+    /// singular, e.g. the epicycloid's cusp) or reached the joint's travel limit. The time of
+    /// the failing evaluation is added by the integrator's error around it.
     #[error(
-        "joint `{joint}` left its path: arc length {coordinate:e} m, the path ends at ±{travel:e} m (the absorber's amplitude exceeds its travel)"
+        "joint `{joint}` left its path: arc length {coordinate:e} m, {} ±{travel:e} m (the absorber's amplitude exceeds its travel)",
+        if *limit { "beyond its travel limit (field `travel`) of" } else { "the path ends at" }
     )]
     OutOfTravel {
         /// Name of the path joint.
         joint: String,
-        /// Its coordinate, m.
+        /// Its coordinate (the absorber's amplitude when it stopped), m.
         coordinate: f64,
-        /// Its end of travel, m.
+        /// Its end of travel, m: the travel limit when `limit`, else the path's own end.
         travel: f64,
+        /// True when the joint's travel limit (its `travel` field) was reached before the path's end.
+        limit: bool,
     },
     /// A state vector of the wrong length was passed.
     #[error("{what} has length {got}, the mechanism needs {expected}")]

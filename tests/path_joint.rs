@@ -53,7 +53,7 @@ fn rotor_with_path(shape: PathShape, m: f64, i_b: Option<f64>, speeds: Speeds) -
         bodies: vec![body("rotor", p.rotor_mass, (0.0, 0.0), Some(p.i_a())), body("absorber", m, (0.0, 0.0), i_b)],
         joints: vec![
             joint("spin", JointKind::Revolute, "ground", "rotor", (0.0, 0.0)),
-            joint("path", JointKind::Path { shape, mount: 0.0 }, "rotor", "absorber", (0.0, 0.0)),
+            joint("path", JointKind::Path { shape, mount: 0.0, travel: None }, "rotor", "absorber", (0.0, 0.0)),
         ],
         loads: vec![],
     })
@@ -109,7 +109,7 @@ fn circle_equals_the_revolute_pendulum_in_s_equal_l_phi() {
                 damper: Some(c / (l * l)),
                 ..joint(
                     "pivot",
-                    JointKind::Path { shape: PathShape::Circle { radius: r, length: l }, mount: gamma },
+                    JointKind::Path { shape: PathShape::Circle { radius: r, length: l }, mount: gamma, travel: None },
                     "rotor",
                     "pendulum",
                     (0.0, 0.0),

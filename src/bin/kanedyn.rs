@@ -153,6 +153,7 @@ fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
         study.spec.name
     );
     println!("plan (coarse upper-bound estimates):\n{plan}");
+    print!("{}", kanedyn::model::absorber::markdown(&study.mechanism));
     Ok(())
 }
 
@@ -217,6 +218,7 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
         l.point_forces.len()
     );
     println!("total mass: {} kg", mech.total_mass());
+    print!("{}", kanedyn::model::absorber::markdown(&mech));
     Ok(())
 }
 

@@ -20,8 +20,9 @@ use serde::{Deserialize, Serialize};
 /// `Path(shape: Epicycloid(rho0: 0.185, n_tilde: 3.11), mount: 0.0)`.
 ///
 /// The enum stays `Copy`: a path kind carries only the few numbers of its closed form
-/// ([`PathShape`]), so passing a kind by value into the engine's per-body records costs nothing
-/// new and no caller had to change.
+/// ([`PathShape`]), or for a general path a `&'static` reference to its table built once at load,
+/// so passing a kind by value into the engine's per-body records costs nothing new and no caller
+/// had to change.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub enum JointKind {
     /// Rotation about z through the joint point; one coordinate, the relative angle (rad).
@@ -51,6 +52,11 @@ pub enum JointKind {
         /// Mounting angle: direction of the vertex (s = 0) from `at` in the parent frame, rad.
         #[serde(default)]
         mount: f64,
+        /// The absorber's travel limit, m (> 0, below the path's own end): a state with
+        /// |s| ≥ travel stops the engine with [`crate::error::EngineError::OutOfTravel`] naming the
+        /// joint. `None` (default): the path's own end (the cusp; infinite for a circle).
+        #[serde(default)]
+        travel: Option<f64>,
     },
 }
 
@@ -104,11 +110,11 @@ impl JointKind {
         }
     }
 
-    /// The end of travel of the coordinate: |q| must stay below it (m for a path; infinite for
-    /// the other kinds).
+    /// The end of travel of the coordinate: |q| must stay below it (m for a path: its travel
+    /// limit when given, else the path's own end; infinite for the other kinds).
     pub fn travel(self) -> f64 {
         match self {
-            JointKind::Path { shape, .. } => shape.travel(),
+            JointKind::Path { shape, travel, .. } => travel.map_or(shape.travel(), |t| t.min(shape.travel())),
             _ => f64::INFINITY,
         }
     }
@@ -117,8 +123,26 @@ impl JointKind {
     /// finite-difference steps taken in it.
     pub fn coordinate_scale(self) -> f64 {
         match self {
-            JointKind::Path { shape, .. } => shape.length_scale(),
+            JointKind::Path { shape, travel, .. } => {
+                travel.map_or(shape.length_scale(), |t| shape.length_scale().min(0.2 * t))
+            }
             _ => 1.0,
+        }
+    }
+
+    /// The coordinate to evaluate a path at: `q` inside the joint's travel limit, NaN at or beyond
+    /// it (or when `q` is NaN), so that the path's point is NaN there as beyond the path's own
+    /// end, which the engine reports as `OutOfTravel` naming the joint. Every evaluation of a
+    /// path joint's shape (`PathShape::at`) must take its coordinate through this; `q` itself for
+    /// the other kinds.
+    #[inline(always)]
+    pub fn limited(self, q: f64) -> f64 {
+        match self {
+            JointKind::Path { travel: Some(t), .. } => {
+                let within = q.abs() < t;
+                if within { q } else { f64::NAN }
+            }
+            _ => q,
         }
     }
 
@@ -145,10 +169,10 @@ impl JointKind {
                 JointMotion { origin: at + q * axis, velocity: axis, ..still }
             }
             JointKind::Fixed => still,
-            JointKind::Path { shape, mount } => {
+            JointKind::Path { shape, mount, .. } => {
                 // The path's own frame (vertex on +x) turned by the mounting angle.
                 let (ms, mc) = mount.sin_cos();
-                let p = shape.at(q);
+                let p = shape.at(self.limited(q));
                 let (sin, cos) = p.alpha.sin_cos();
                 JointMotion {
                     cos,
@@ -177,7 +201,7 @@ impl JointKind {
                 }
                 Ok(JointKind::Prismatic { axis: (x / len, y / len) })
             }
-            JointKind::Path { shape, mount } => {
+            JointKind::Path { shape, mount, travel } => {
                 if !mount.is_finite() {
                     return Err(("mount", format!("the mounting angle must be finite (rad), got {mount}")));
                 }
@@ -189,10 +213,31 @@ impl JointKind {
                         "rho0" => "shape.rho0",
                         "n_tilde" => "shape.n_tilde",
                         "alpha1" => "shape.alpha1",
+                        "x" => "shape.x",
+                        "alpha" => "shape.alpha",
                         _ => "shape",
                     };
                     (field, msg)
                 })?;
+                if let Some(t) = travel {
+                    if !(t.is_finite() && t > 0.0) {
+                        return Err(("travel", format!("the travel limit must be finite and positive (m), got {t}")));
+                    }
+                    let end = shape.travel();
+                    if t >= end {
+                        let why = match shape {
+                            PathShape::General(_) => "where |dρ/ds| reaches 1 (the path turns back on itself)",
+                            _ => "at its cusp",
+                        };
+                        return Err((
+                            "travel",
+                            format!(
+                                "the travel limit {t} m reaches beyond the path's end at ±{end:.6e} m, {why}: \
+                                 give a limit below it, or none to use the whole path"
+                            ),
+                        ));
+                    }
+                }
                 Ok(self)
             }
             other => Ok(other),

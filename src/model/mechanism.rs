@@ -123,9 +123,18 @@ impl Mechanism {
         self.joints.iter().filter(|j| matches!(j.kind, crate::model::joint::JointKind::Path { .. })).find_map(|j| {
             let s = *q.get(j.coordinate?)?;
             let travel = j.kind.travel();
+            let limit = match j.kind {
+                crate::model::joint::JointKind::Path { shape, travel: Some(t), .. } => t < shape.travel(),
+                _ => false,
+            };
             // A NaN coordinate is off the path too.
             let on_path = s.abs() < travel;
-            (!on_path).then(|| crate::error::EngineError::OutOfTravel { joint: j.name.clone(), coordinate: s, travel })
+            (!on_path).then(|| crate::error::EngineError::OutOfTravel {
+                joint: j.name.clone(),
+                coordinate: s,
+                travel,
+                limit,
+            })
         })
     }
 

@@ -4,6 +4,7 @@
 //! Nothing here evaluates dynamics; reading files into these types is [`crate::load`]'s work and
 //! turning them into equations of motion is [`crate::kane`]'s.
 
+pub mod absorber;
 pub mod body;
 pub mod coupling;
 pub mod excitation;

@@ -446,7 +446,8 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
             format!("; locked twin with {} locked", study.spec.lock.join(", "))
         }
     );
-    let mut sections = String::new();
+    // The absorbers' properties once, before the analyses (empty without an absorber).
+    let mut sections = crate::model::absorber::markdown(&study.mechanism);
     for (k, a) in study.spec.analyses.iter().enumerate() {
         let where_ = study.source.locate(&format!("analyses[{k}]")).to_string();
         let (section, completed) = run_guarded(study, a, &where_, &dir, &progress, &mut report);
