@@ -69,6 +69,7 @@ pub mod ldlt;
 pub mod rates;
 pub mod reference;
 mod small;
+mod small_rates;
 
 /// `Σ a_k b_k` over the shorter of the two slices.
 #[inline(always)]
