@@ -107,6 +107,7 @@ impl PathShape {
     /// The path at arc length `s` (m). Outside the travel (|s| ≥ s_max, or s not finite) every
     /// field is NaN: the engine reports that as the joint leaving its path (see
     /// `Mechanism::path_out_of_travel`), and nothing downstream can mistake it for a state.
+    #[inline]
     pub fn at(self, s: f64) -> PathPoint {
         match self {
             PathShape::Circle { radius, length } | PathShape::Bifilar { radius, length } => {
