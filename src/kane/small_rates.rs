@@ -7,26 +7,28 @@
 //! The method is `Kane::evaluate_rates`'s, term for term and in the same order (a forward pass of
 //! poses, rates, bias accelerations and motion columns; a backward pass of composite sums about
 //! the joint points giving M_kl and F_k), then `Kane::map_rates_to_speeds` and `Kane::factor_solve`,
-//! so the results are those of the general path to the bit whenever the joint torques are listed
-//! in joint order (as for [`super::small`]). What differs is where the data live and when the
-//! joints are asked for their motion:
+//! so the results are those of the general path to the bit (up to the sign of a zero) whenever
+//! the joint torques are listed in joint order (as for [`super::small`]). What differs is where
+//! the data live, when the joints are asked for their motion, and which exact no-ops are skipped:
 //!
-//! - every joint's `JointMotion` is evaluated first, in one loop, before any other arithmetic
-//!   (the calls into libm and the path's closed form leave nothing live across them), together
-//!   with the excitation torques;
-//! - a path joint's mounting rotation (`cos γ`, `sin γ`) is constant and computed here once,
-//!   instead of once per call inside `JointKind::motion`; the path's own `PathShape::at` is
-//!   called as the joint interface calls it, and the rotation α(s) turned into a cosine and sine
-//!   only when it is not zero (`sin_cos(±0) = (±0, 1)` exactly, so this changes no bit);
+//! - every joint's `JointMotion` is evaluated first, in one loop, then the excitation torques,
+//!   before any other arithmetic: the path's closed form heads the longest dependency chain, and
+//!   nothing is live across the calls into libm;
+//! - a path joint's mounting rotation (`cos γ`, `sin γ`) is constant and computed here once
+//!   (skipped when γ = 0), instead of once per call inside `JointKind::motion`; the path's own
+//!   `PathShape::at` is called as the joint interface calls it, and the rotation α(s) turned
+//!   into a cosine and sine only when it is not zero (`sin_cos(±0) = (±0, 1)` exactly);
+//! - a child of a root in its own frame (the basis) skips the rotations by its parent's exact
+//!   (1, 0) and the parent's exactly zero accelerations;
 //! - the per-body records are local arrays of the literal length N indexed by literal indices
 //!   only, the tree's topology entering as tests of constant data (parents, ancestors, speed
 //!   parents), so the compiler keeps them in registers and unrolls every loop, the mapping and
 //!   the LDLᵀ included.
 //!
 //! NOTE: the form is the general one made fixed-size rather than a new regrouping (a pair form
-//! with s-dependent coefficients): the joint interface stays the only thing the engine knows
-//! about a path (docs/design.md, "How the engine evaluates the sums"), and equality with the
-//! general path is by construction, not by a second derivation.
+//! with s-dependent coefficients): besides the mount rotation above, the joint interface stays
+//! the only thing it knows about a path (docs/design.md, "Fast path for path joints"), and
+//! equality with the general path is by construction, not by a second derivation.
 
 use super::small::{NONE, SMALL, Small, SmallRhs};
 use super::{GROUND_PARENT, Kane, Node, PIVOT_TOL};
