@@ -1,9 +1,13 @@
 //! The cost of one right-hand-side evaluation: the generic Kane engine on examples/cpva.ron
 //! against the hand-written closed form of eq. (7) at the same state and time (both
-//! allocation-free, both evaluating the same excitation torque), and planar chains of N links.
+//! allocation-free, both evaluating the same excitation torque), the same rotor with its absorber
+//! on a path joint (the epicycloid of examples/cpva_epicycloid.ron, and the circle that is the
+//! paper's pendulum in s = Lφ), and planar chains of N links.
 
 #[path = "support/cpva_rhs.rs"]
 mod cpva_rhs;
+#[path = "support/path_cpva_rhs.rs"]
+mod path_cpva_rhs;
 
 use cpva_rhs::{CpvaRhs, T, X};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -56,6 +60,18 @@ fn rhs(c: &mut Criterion) {
             black_box(xdot[2])
         })
     });
+    // The path-joint CPVAs, beside the revolute one (issue 14's speed criterion is their ratio).
+    let xp = path_cpva_rhs::path_state();
+    for (name, mut k) in
+        [("path_cpva", path_cpva_rhs::epicycloid_cpva()), ("path_circle_cpva", path_cpva_rhs::circle_cpva())]
+    {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                k.rhs(black_box(t), black_box(&xp), &mut xdot).unwrap();
+                black_box(xdot[2])
+            })
+        });
+    }
     g.bench_function("closed_form_cpva", |b| {
         // The excitation through `black_box`, as the engine reads its own from memory: inlined
         // here, its loop-invariant part (the rpm → rad/s division) was hoisted out of the loop.

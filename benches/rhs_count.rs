@@ -7,17 +7,21 @@
 //! RHS_MODE=none    valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
 //! RHS_MODE=generic valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
 //! RHS_MODE=closed  valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
+//! RHS_MODE=path    valgrind --tool=callgrind target/release/deps/rhs_count-<hash>
 //! cargo bench --bench rhs_count                 # RHS_MODE=time, the default
 //! ```
 //!
 //! `RHS_MODE` is `generic` (Kane on examples/cpva.ron), `closed` (eq. (7) with the same
-//! excitation), `none` (the loop alone, to subtract: instructions per call = (Ir − Ir_none) /
-//! calls) or `time` (both, timed in alternating chunks of 10⁴ calls, best chunk of each; the
-//! default, run without valgrind). `RHS_CALLS` sets the number of calls (default 10⁶). See
+//! excitation), `path` (Kane on examples/cpva_epicycloid.ron), `path_circle` (Kane on its circle
+//! twin, the paper's pendulum in s = Lφ; both from `support/path_cpva_rhs.rs`), `none` (the loop
+//! alone, to subtract: instructions per call = (Ir − Ir_none) / calls) or `time` (all four, timed
+//! in alternating chunks of 10⁴ calls, best chunk of each; the default, run without valgrind). `RHS_CALLS` sets the number of calls (default 10⁶). See
 //! BENCHMARKS.md.
 
 #[path = "support/cpva_rhs.rs"]
 mod cpva_rhs;
+#[path = "support/path_cpva_rhs.rs"]
+mod path_cpva_rhs;
 
 use cpva_rhs::{CpvaRhs, T, X};
 use std::hint::black_box;
@@ -31,11 +35,20 @@ fn main() {
     let CpvaRhs { mut kane, excitation, closed: cf } = CpvaRhs::new();
     let (x, t) = (X, T);
     let mut xdot = [0.0; 4];
+    let xp = path_cpva_rhs::path_state();
+    let (mut epicycloid, mut circle) = (path_cpva_rhs::epicycloid_cpva(), path_cpva_rhs::circle_cpva());
     let mut acc = 0.0;
     match mode.as_str() {
         "generic" => {
             for _ in 0..calls {
                 kane.rhs(black_box(t), black_box(&x), &mut xdot).unwrap();
+                acc += black_box(xdot[2]);
+            }
+        }
+        "path" | "path_circle" => {
+            let k = if mode == "path" { &mut epicycloid } else { &mut circle };
+            for _ in 0..calls {
+                k.rhs(black_box(t), black_box(&xp), &mut xdot).unwrap();
                 acc += black_box(xdot[2]);
             }
         }
@@ -51,6 +64,7 @@ fn main() {
         "time" => {
             // Alternating chunks, the fastest of each kind: robust against other jobs' load.
             let (mut best_g, mut best_c) = (f64::INFINITY, f64::INFINITY);
+            let (mut best_p, mut best_o) = (f64::INFINITY, f64::INFINITY);
             for _ in 0..calls / 10_000 {
                 let start = std::time::Instant::now();
                 for _ in 0..10_000 {
@@ -65,6 +79,14 @@ fn main() {
                     acc += black_box(xdot[2]);
                 }
                 best_c = best_c.min(start.elapsed().as_secs_f64() / 1e4);
+                for (k, best) in [(&mut epicycloid, &mut best_p), (&mut circle, &mut best_o)] {
+                    let start = std::time::Instant::now();
+                    for _ in 0..10_000 {
+                        k.rhs(black_box(t), black_box(&xp), &mut xdot).unwrap();
+                        acc += black_box(xdot[2]);
+                    }
+                    *best = best.min(start.elapsed().as_secs_f64() / 1e4);
+                }
             }
             println!(
                 "rhs_count: best of {} chunks of 10⁴ calls: generic {:.1} ns, closed form {:.1} ns, ratio {:.2}",
@@ -73,13 +95,20 @@ fn main() {
                 best_c * 1e9,
                 best_g / best_c
             );
+            println!(
+                "rhs_count: path (epicycloid) {:.1} ns, path (circle) {:.1} ns; ratios to generic {:.2} and {:.2}",
+                best_p * 1e9,
+                best_o * 1e9,
+                best_p / best_g,
+                best_o / best_g
+            );
         }
         "none" => {
             for _ in 0..calls {
                 acc += black_box(xdot[2]);
             }
         }
-        other => panic!("unknown RHS_MODE `{other}` (generic, closed, none or time)"),
+        other => panic!("unknown RHS_MODE `{other}` (generic, closed, path, path_circle, none or time)"),
     }
     black_box(acc);
     if mode != "time" {

@@ -5,6 +5,7 @@
 //! numeric differentiation of the kinetic and potential energy, and Kane's sums body by body
 //! (`kane::reference`) for the fast forms.
 
+use kanedyn::error::EngineError;
 use kanedyn::kane::Kane;
 use kanedyn::kane::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
 use kanedyn::kane::reference;
@@ -567,4 +568,106 @@ fn free_undamped_runs_of_path_trees_conserve_energy() {
     }
     println!("free undamped runs of path trees: {runs} ({general} with a general path), worst drift {worst:.1e}");
     assert!(runs >= 20 && general >= 5, "{runs} runs, {general} with a general path");
+}
+
+/// The fixed-size right-hand side of small trees of any joint kind with a coordinate
+/// (`kane::small_rates`: absolute speeds mapped from joint rates, at most six speeds, no fixed
+/// joint, no point forces) against the general mapped form's, which the same mechanism takes
+/// with one point force of zero magnitude (it adds exact zeros): the random trees with path
+/// joints (and the mixed ones, for prismatic joints without paths) recast to absolute speeds,
+/// without their point forces and welded joints, with an order excitation set on one joint,
+/// in the engine's basis and the world frame. The fixed-size form evaluates the same terms in
+/// the same order and solves by the same LDLᵀ; where it skips a rotation by exactly (1, 0) or
+/// the zero acceleration of a basis root, it differs at most in the sign of a zero. So the two
+/// agree to the bit when the joint torques are listed in joint order (with them out of order
+/// the small form sums them by joint: rounding). A path joint taken beyond its end fails alike
+/// in both, naming the joint (`EngineError::OutOfTravel`), and so does a NaN coordinate.
+#[test]
+fn small_tree_rhs_with_path_joints_equals_the_general_path() {
+    let (mut trees, mut with_path, mut identical) = (0, 0, 0);
+    let mut worst: f64 = 0.0;
+    for seed in (MIXED..MIXED + TREES).chain(PATHS..PATHS + TREES) {
+        let mut spec = random_spec(seed);
+        spec.speeds = Speeds::AbsoluteAngularVelocities;
+        spec.loads.retain(|l| !matches!(l, LoadSpec::PointForce { .. }));
+        for j in &mut spec.joints {
+            if j.kind == Some(JointKind::Fixed) {
+                j.kind = Some(JointKind::Revolute);
+            }
+        }
+        if spec.joints.len() > 6 || spec.joints.iter().all(|j| matches!(j.kind, Some(JointKind::Revolute) | None)) {
+            continue;
+        }
+        trees += 1;
+        let small = Mechanism::from_spec(&spec).unwrap();
+        let paths: Vec<usize> =
+            (0..small.joints.len()).filter(|&j| matches!(small.joints[j].kind, JointKind::Path { .. })).collect();
+        with_path += usize::from(!paths.is_empty());
+        spec.loads.push(LoadSpec::PointForce {
+            body: "b0".into(),
+            at: (0.3, -0.2),
+            force: (0.0, 0.0),
+            // In the body frame, so that the general engine keeps the same basis.
+            frame: ForceFrame::Body,
+        });
+        let general = Mechanism::from_spec(&spec).unwrap();
+        let n = small.ndof();
+        let mut rng = StdRng::seed_from_u64(7000 + seed);
+        let excitation = Excitation {
+            mean: 1.5,
+            rpm: 1000.0,
+            order: Order::Fixed(3.0),
+            harmonics: vec![Harmonic { multiple: 1.0, amplitude: 4.0, phase: 0.3 }],
+            ramp_s: 0.0,
+        };
+        let joint = rng.random_range(0..n);
+        for world in [false, true] {
+            let build = |m: &Mechanism| if world { Kane::new_world_frame(m) } else { Kane::new(m) }.unwrap();
+            let (mut ks, mut kg) = (build(&small), build(&general));
+            ks.set_joint_torque(joint, excitation.clone());
+            kg.set_joint_torque(joint, excitation.clone());
+            for _ in 0..3 {
+                let (q, u) = random_state(&small, &mut rng);
+                let t = rng.random_range(0.0..10.0);
+                let x: Vec<f64> = q.iter().chain(&u).copied().collect();
+                let (mut xs, mut xg) = (vec![0.0; 2 * n], vec![0.0; 2 * n]);
+                ks.rhs(t, &x, &mut xs).unwrap();
+                kg.rhs(t, &x, &mut xg).unwrap();
+                let torques: Vec<usize> = ks.joint_torques().iter().map(|t| t.joint).collect();
+                if torques.is_sorted() {
+                    assert_eq!(xs, xg, "tree {seed}");
+                    identical += 1;
+                }
+                assert_eq!(&xs[..n], &xg[..n], "tree {seed}: q̇");
+                let scale = xg[n..].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let err = xs[n..].iter().zip(&xg[n..]).fold(0.0f64, |a, (s, g)| a.max((s - g).abs())) / scale;
+                worst = worst.max(err);
+                assert!(err <= 1e-13, "tree {seed}: u̇ {:?} vs {:?} (rel {err:e})", &xs[n..], &xg[n..]);
+                // Beyond the end of a path (or at a NaN coordinate) both fail with the same error.
+                let mut bad = x.clone();
+                match paths.first() {
+                    Some(&j) => {
+                        let k = small.joints[j].coordinate.unwrap();
+                        let travel = small.joints[j].kind.travel();
+                        bad[k] = if travel.is_finite() { 1.01 * travel } else { f64::NAN };
+                    }
+                    None => bad[n - 1] = f64::NAN,
+                }
+                let (es, eg) = (ks.rhs(t, &bad, &mut xs), kg.rhs(t, &bad, &mut xg));
+                assert_eq!(format!("{es:?}"), format!("{eg:?}"), "tree {seed}");
+                if let Some(&j) = paths.first()
+                    && small.joints[j].kind.travel().is_finite()
+                {
+                    assert!(
+                        matches!(&es, Err(EngineError::OutOfTravel { joint, .. }) if *joint == small.joints[j].name),
+                        "tree {seed}: {es:?}"
+                    );
+                }
+            }
+        }
+    }
+    println!(
+        "small-tree rhs with path joints vs the general path: {trees} trees ({with_path} with path joints), {identical} states identical to the bit, worst relative difference {worst:e}"
+    );
+    assert!(trees >= 20 && with_path >= 15 && identical >= 100);
 }

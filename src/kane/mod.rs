@@ -16,6 +16,10 @@
 //! - [`absolute`]: regrouped by pairs of speeds with precomputed coefficients, for absolute
 //!   angular velocities on a purely revolute tree (the paper's CPVA), with its exact Jacobian.
 //!
+//! For `rhs` on small trees (at most six speeds, no fixed joint, no point forces) the pair form
+//! and the mapped composite-body form also have fixed-size instances (`small`, `small_rates`,
+//! chosen in [`Kane::new`]) with the same results.
+//!
 //! [`ldlt`] factors M and solves for u̇; [`kinematics`] gives world-frame poses, velocities and
 //! energies for outputs and tests.
 //!
@@ -71,6 +75,7 @@ pub mod rates;
 pub mod reactions;
 pub mod reference;
 mod small;
+mod small_rates;
 
 /// `Σ a_k b_k` over the shorter of the two slices.
 #[inline(always)]
@@ -523,8 +528,8 @@ impl Kane {
         let n = self.n;
         let out = if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) };
         // NOTE: a path evaluated beyond its end gives NaN (`PathShape::at`); only on that failure
-        // is the state searched for the joint to name, so a successful call pays nothing. Path
-        // joints never take the fixed-size path (revolute trees only).
+        // is the state searched for the joint to name, so a successful call pays nothing. The
+        // fixed-size composite-body path (`small_rates`) maps its failures the same way.
         out.map_err(|e| match e {
             EngineError::NonFinite { .. } => self.mech.path_out_of_travel(&x[..n]).unwrap_or(e),
             e => e,

@@ -31,8 +31,9 @@ const GROUND: usize = usize::MAX;
 /// Marks a pair (k, j) of which k is not an ancestor of j (`Small::via`).
 const NOT_ANCESTOR: usize = usize::MAX;
 
-/// Marks a speed without applied joint torque (`Small::torque`).
-const NONE: usize = usize::MAX;
+/// Marks a speed without applied joint torque (`Small::torque`), and (in
+/// [`super::small_rates`]) a missing parent or speed parent.
+pub(super) const NONE: usize = usize::MAX;
 
 /// `(cos, sin)` of the sum of two angles given by theirs.
 #[inline(always)]
@@ -74,15 +75,50 @@ pub(super) struct Small {
     first: [Vec2; SMALL],
     /// Gravity, when the evaluation is in the world frame and it is not zero.
     gravity: Option<Vec2>,
+    /// The data of the composite-body instance ([`super::small_rates`]; default for the pair form).
+    pub(super) rates: super::small_rates::Packed,
 }
 
 impl Small {
-    /// Packs the data of `kane` (already built, pair form) when the fixed-size path applies.
+    /// Packs the data of `kane` (already built) when a fixed-size path applies: this module's
+    /// for the pair form, [`super::small_rates`]'s for the mapped composite-body form.
     pub(super) fn new(kane: &Kane) -> Option<Small> {
         let n = kane.n;
-        if kane.form != super::Form::Pairs || n > SMALL || kane.nb != n || !kane.point_forces.is_empty() {
+        if n > SMALL || kane.nb != n || !kane.point_forces.is_empty() {
             return None;
         }
+        match kane.form {
+            super::Form::Pairs => Self::pairs(kane),
+            super::Form::MappedRates => super::small_rates::small(kane),
+            super::Form::Rates => None,
+        }
+    }
+
+    /// The composite-body instance `rhs` with its data: the pair form's fields stay unused.
+    pub(super) fn with_rates(rhs: SmallRhs, rates: super::small_rates::Packed) -> Small {
+        Small {
+            rhs,
+            parent: [GROUND; SMALL],
+            own_frame: [false; SMALL],
+            diag: [0.0; SMALL],
+            diag0_inv: 0.0,
+            pivot_min: 0.0,
+            via: [[NOT_ANCESTOR; SMALL]; SMALL],
+            pair: [[(0.0, 0.0); SMALL]; SMALL],
+            k_spring: [0.0; SMALL],
+            q_free: [0.0; SMALL],
+            c_joint: [0.0; SMALL],
+            c_ground: [0.0; SMALL],
+            torque: [NONE; SMALL],
+            first: [Vec2::zeros(); SMALL],
+            gravity: None,
+            rates,
+        }
+    }
+
+    /// The pair form's data (absolute speeds on a revolute tree).
+    fn pairs(kane: &Kane) -> Option<Small> {
+        let n = kane.n;
         let nodes = &kane.nodes[..n];
         let rhs: SmallRhs = match n {
             1 => Kane::rhs_small::<1>,
@@ -109,6 +145,7 @@ impl Small {
             first: [Vec2::zeros(); SMALL],
             torque: [NONE; SMALL],
             gravity: (kane.world && kane.gravity != Vec2::zeros()).then_some(kane.gravity),
+            rates: Default::default(),
         };
         let mut pair = kane.pairs.iter();
         for (j, nd) in nodes.iter().enumerate() {
@@ -234,27 +271,29 @@ impl Kane {
                 }
             }
         }
-        self.ldlt_small::<N>(&m, &f, s, ud)
+        self.ldlt_small::<N>(&m, &f, s.diag0_inv, s.pivot_min, ud)
     }
 
     /// `M x = F` by LDLᵀ on the local arrays of [`Kane::rhs_small`]: `Kane::factor_solve` with
-    /// every sum in the same order (the same results), unrolled; the first pivot is the constant
-    /// `M_00`.
+    /// every sum in the same order (the same results), unrolled. The first pivot is given as
+    /// `d0_inv = 1 / M_00` (a constant in the pair form), and checked by the caller; pivots at or
+    /// below `pivot_min` stop the solve.
     ///
     /// NOTE: by hand rather than nalgebra's fixed-size Cholesky, for the reasons of
     /// `Kane::factor_solve` (no square roots, a failure names the joint) and to keep the general
     /// path's results; Cramer's rule for n = 2 measured no faster (BENCHMARKS.md).
     #[inline(always)]
-    fn ldlt_small<const N: usize>(
+    pub(super) fn ldlt_small<const N: usize>(
         &self,
         m: &[[f64; N]; N],
         f: &[f64; N],
-        s: &Small,
+        d0_inv: f64,
+        pivot_min: f64,
         x: &mut [f64],
     ) -> Result<(), EngineError> {
         let mut l = [[0.0; N]; N];
         let mut d_inv = [0.0; N];
-        d_inv[0] = s.diag0_inv;
+        d_inv[0] = d0_inv;
         x[0] = f[0];
         for i in 1..N {
             // a_j = L_ij d_j, then L_ij, d_i and y_i, each sum in `factor_solve`'s order.
@@ -273,7 +312,7 @@ impl Kane {
                 d -= a[j] * lij;
                 y -= lij * x[j];
             }
-            if d.is_nan() || d <= s.pivot_min {
+            if d.is_nan() || d <= pivot_min {
                 return Err(self.pivot_error(i, d));
             }
             d_inv[i] = 1.0 / d;

@@ -566,6 +566,7 @@ impl PathShape {
     /// The path at arc length `s` (m). Outside the travel (|s| ≥ s_max, or s not finite) every
     /// field is NaN: the engine reports that as the joint leaving its path (see
     /// `Mechanism::path_out_of_travel`), and nothing downstream can mistake it for a state.
+    #[inline]
     pub fn at(self, s: f64) -> PathPoint {
         match self {
             PathShape::Circle { radius, length } | PathShape::Bifilar { radius, length } => {
@@ -599,25 +600,26 @@ impl PathShape {
                 let k1 = (1.0 + n2).sqrt();
                 let rho = (rho0 * rho0 - n2 * s * s).sqrt();
                 // σ = sin u with s = ρ₀ sin u / (ñ √(1+ñ²)); cos u = √(1 − σ²) > 0 inside the travel.
-                let sigma = n_tilde * k1 * s / rho0;
+                // (ñ s / ρ₀) first: the division runs beside the square root, not after it.
+                let sigma = n_tilde * s / rho0 * k1;
                 let cos_u = ((1.0 - sigma) * (1.0 + sigma)).sqrt();
-                // θ(s) = (√(1+ñ²)/ñ) u − atan(ñ tan u / √(1+ñ²)), written with atan2 so that it
-                // stays continuous up to the cusp (derivation: docs/design.md).
-                let theta = k1 / n_tilde * sigma.asin() - (n_tilde * sigma).atan2(k1 * cos_u);
-                let (st, ct) = theta.sin_cos();
-                let e_rho = Vec2::new(ct, st);
-                let e_theta = perp(e_rho);
-                // ρ' = −ñ²s/ρ, w = ρθ' = √(1 − ρ'²) = ρ₀ cos u / ρ, ρ'' = −(ñ² + ρ'²)/ρ,
-                // w' = −ρ'ρ''/w.
+                // ρ' = −ñ²s/ρ and w = ρθ' = √(1 − ρ'²) = ρ₀ cos u / ρ.
                 let d_rho = -n2 * s / rho;
                 let w = rho0 * cos_u / rho;
-                let dd_rho = -(n2 + d_rho * d_rho) / rho;
-                let dw = -d_rho * dd_rho / w;
+                // θ(s) = A u − β with A = √(1+ñ²)/ñ and β = atan2(ñ sin u, √(1+ñ²) cos u), whose
+                // cosine and sine are w and −ρ' (docs/design.md): so e_ρ is the direction of
+                // A u turned back by β, and the tangent ρ' e_ρ + w e_θ is the direction of
+                // A u + π/2: the tangent turns linearly in u. Its derivative, with
+                // du/ds = ñ√(1+ñ²) / (ρ₀ cos u), is the curvature vector, of length
+                // (1+ñ²) / (ρ₀ cos u), towards −(cos Au, sin Au). One `asin` and one `sin_cos`
+                // (not also an `atan2` and a second `sin_cos` for θ).
+                let (sa, ca) = (k1 / n_tilde * sigma.asin()).sin_cos();
+                let e_rho = Vec2::new(ca * w - sa * d_rho, sa * w + ca * d_rho);
+                let kappa = (1.0 + n2) / (rho0 * cos_u);
                 PathPoint {
                     position: rho * e_rho,
-                    tangent: d_rho * e_rho + w * e_theta,
-                    // d/ds (ρ' e_ρ + w e_θ) with de_ρ/ds = θ' e_θ, de_θ/ds = −θ' e_ρ, θ' = w/ρ.
-                    curvature: (dd_rho - w * w / rho) * e_rho + (d_rho * w / rho + dw) * e_theta,
+                    tangent: Vec2::new(-sa, ca),
+                    curvature: Vec2::new(-kappa * ca, -kappa * sa),
                     alpha: alpha1 * s,
                     dalpha: alpha1,
                     ddalpha: 0.0,
