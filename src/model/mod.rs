@@ -6,6 +6,7 @@
 
 pub mod body;
 pub mod excitation;
+pub mod gears;
 pub mod inertia;
 pub mod joint;
 pub mod loads;
