@@ -347,8 +347,7 @@ fn reduced_equations_are_the_textbook_reduction_on_random_trees() {
         let nf = free.ndof();
         let mut t = DMatrix::zeros(nf, n);
         let mut offset = DVector::zeros(nf);
-        for j in 0..nb {
-            let (root, a, b) = follow[j];
+        for (j, &(root, a, b)) in follow.iter().enumerate() {
             let name = format!("j{root}");
             let (Some(fr), Some(red)) = (free.coordinate_index(&format!("j{j}")), geared.coordinate_index(&name))
             else {
@@ -550,4 +549,34 @@ fn geared_driveline_study_runs() {
     let expected = kanedyn::cpva::CpvaParams::canonical().n_t;
     println!("n_t {nt} vs {expected}");
     assert!((nt - expected).abs() <= 1e-9 * expected);
+}
+
+#[test]
+fn what_is_not_gear_aware_yet_is_refused() {
+    // A response body below the driven joint would report an angle without the gear ratio.
+    let dir = std::env::temp_dir().join(format!("kanedyn_geared_refusals_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The example with its catalog parts written inline (parts must sit below the file).
+    let mech = std::fs::read_to_string("examples/geared_cpva.ron")
+        .unwrap()
+        .replace("part: \"bodies/flywheel_rotor.ron\"", "mass: 110.0, inertia: 3.44")
+        .replace("part: \"bodies/cpva_pendulum.ron\"", "mass: 6.0, com: (0.0152, 0.0), inertia: 2.16e-4")
+        .replace("part: \"joints/cpva_pivot.ron\", ", "");
+    std::fs::write(dir.join("m.ron"), mech).unwrap();
+    let study = |field: &str| {
+        format!(
+            "Study(name: \"s\", mechanism: \"m.ron\", {field}\n analyses: [LinearResponse(name: \"r\", rpm: 1000.0, from: 0.9, to: 1.1, points: 11)])"
+        )
+    };
+    let cases = [
+        ("response_body: \"wheel\",", "s.ron:1:", "response_body", "rigidly geared joint `output`"),
+        ("elements: [\"output\"],", "s.ron:1:", "elements[0]", "rigidly driven"),
+    ];
+    for (field, at, path, what) in cases {
+        std::fs::write(dir.join("s.ron"), study(field)).unwrap();
+        let e = Study::from_file(&dir.join("s.ron")).err().map(|e| e.to_string()).unwrap_or_default();
+        println!("{e}");
+        assert_mentions(&e, &[at, path, what]);
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -208,6 +208,17 @@ impl Mechanism {
         None
     }
 
+    /// The first rigidly driven rotating joint on the path from ground to body `body`, if any: the
+    /// body's angle then involves a gear ratio, which [`Mechanism::rotation_coordinates`] (and the
+    /// probes and study responses built on it) leave out.
+    pub fn driven_joint_above(&self, body: usize) -> Option<usize> {
+        let map = self.follow_map();
+        self.path_to(body).into_iter().find(|&j| {
+            let joint = &self.joints[j];
+            joint.kind.rotates() && joint.coordinate.is_none() && map[j].is_some()
+        })
+    }
+
     /// The unconstrained tree: every joint that has a coordinate kind gets one (in tree order),
     /// no couplings, joint rates as speeds. The engine evaluates it at the expanded state and
     /// reduces (`kane::reduce`); tests compare with the textbook reduction `TᵀMT`, `TᵀF`.
