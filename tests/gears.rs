@@ -580,3 +580,22 @@ fn what_is_not_gear_aware_yet_is_refused() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn the_cli_runs_and_checks_the_geared_example() {
+    let bin = env!("CARGO_BIN_EXE_kanedyn");
+    let out = std::env::temp_dir().join(format!("kanedyn_geared_cli_{}", std::process::id()));
+    let run = std::process::Command::new(bin)
+        .args(["run", "examples/geared_driveline.ron", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(out.join("geared_driveline/summary.md").exists());
+    std::fs::remove_dir_all(&out).ok();
+    let check = std::process::Command::new(bin).args(["check", "examples/geared_cpva.ron"]).output().unwrap();
+    let text = String::from_utf8_lossy(&check.stdout);
+    assert!(check.status.success());
+    assert!(text.contains("degrees of freedom: 3"), "{text}");
+    assert!(text.contains("output follows spin: ratio -0.3125, offset 0 (rigid)"), "{text}");
+}
