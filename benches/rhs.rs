@@ -45,6 +45,7 @@ fn chain(n: usize) -> Mechanism {
         bodies,
         joints,
         loads: vec![],
+        gears: Vec::new(),
     };
     Mechanism::from_spec(&spec).unwrap()
 }

@@ -175,6 +175,7 @@ impl CpvaParams {
             bodies,
             joints,
             loads,
+            gears: Vec::new(),
         }
     }
 

@@ -251,6 +251,9 @@ impl Mechanism {
         if ncoord == 0 {
             return Err(src.error("joints", "every joint is Fixed: the mechanism has no coordinate to move"));
         }
+        // Couplings: a rigidly driven joint loses its coordinate (numbered again over the rest).
+        let index_of = |name: &str| joint_names.get(name).and_then(|&k| new_index[joint_specs[k].3]);
+        let gears = crate::model::gears::resolve(&spec.gears, &mut joints, spec.speeds, &index_of, src)?;
 
         // Loads.
         let (gx, gy) = spec.gravity;
@@ -324,6 +327,7 @@ impl Mechanism {
             bodies,
             joints,
             loads,
+            gears,
         };
         // A tree whose mass matrix is singular or not finite at q = 0 cannot be simulated: say
         // which joint (in the file's numbering: coordinate i belongs to tree joint j = joint_of(i),

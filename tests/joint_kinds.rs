@@ -111,6 +111,7 @@ fn slider_pendulum_equals_lagrange() {
                     },
                 ],
                 loads: vec![LoadSpec::JointTorque { joint: "slide".into(), excitation: Excitation::constant(p) }],
+                gears: Vec::new(),
             };
             let mech = Mechanism::from_spec(&spec).unwrap();
             let mut kane = Kane::new(&mech).unwrap();
@@ -159,6 +160,7 @@ fn bead_on_a_spinning_rod_equals_lagrange() {
                 },
             ],
             loads: vec![LoadSpec::JointTorque { joint: "spin".into(), excitation: Excitation::constant(torque) }],
+            gears: Vec::new(),
         };
         let mech = Mechanism::from_spec(&spec).unwrap();
         let mut kane = Kane::new(&mech).unwrap();
@@ -209,6 +211,7 @@ fn welded_body_equals_merged_inertia() {
                 JointSpec { damper: Some(0.01), ..joint("pivot", JointKind::Revolute, "disc", "pendulum", pivot) },
             ],
             loads: loads.clone(),
+            gears: Vec::new(),
         };
         let merged_spec = MechanismSpec {
             name: "merged".into(),

@@ -41,6 +41,7 @@ fn rotor_with(kind: JointKind, m: f64, i_b: Option<f64>) -> Mechanism {
         bodies: vec![body("rotor", 10.0, Some(0.36)), body("absorber", m, i_b)],
         joints: vec![joint("spin", JointKind::Revolute, "ground", "rotor"), joint("path", kind, "rotor", "absorber")],
         loads: vec![],
+        gears: vec![],
     })
     .unwrap()
 }

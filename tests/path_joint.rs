@@ -56,6 +56,7 @@ fn rotor_with_path(shape: PathShape, m: f64, i_b: Option<f64>, speeds: Speeds) -
             joint("path", JointKind::Path { shape, mount: 0.0, travel: None }, "rotor", "absorber", (0.0, 0.0)),
         ],
         loads: vec![],
+        gears: Vec::new(),
     })
     .unwrap()
 }
@@ -95,6 +96,7 @@ fn circle_equals_the_revolute_pendulum_in_s_equal_l_phi() {
             },
         ],
         loads: loads.clone(),
+        gears: Vec::new(),
     })
     .unwrap();
     let path_spec = |speeds| MechanismSpec {
@@ -117,6 +119,7 @@ fn circle_equals_the_revolute_pendulum_in_s_equal_l_phi() {
             },
         ],
         loads: loads.clone(),
+        gears: Vec::new(),
     };
     let path = Mechanism::from_spec(&path_spec(Speeds::JointRates)).unwrap();
     let path_abs = Mechanism::from_spec(&path_spec(Speeds::AbsoluteAngularVelocities)).unwrap();

@@ -208,6 +208,19 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
             j.name, j.kind, parent, mech.bodies[k].name, j.at.x, j.at.y
         );
     }
+    if mech.is_geared() {
+        println!("couplings: {}", mech.gears.len());
+        for g in &mech.gears {
+            let how = g.mesh.map_or_else(
+                || "rigid".to_string(),
+                |m| format!("compliant mesh {} N·m/rad, {} N·m·s/rad at the driver", m.stiffness, m.damping),
+            );
+            println!(
+                "  {} follows {}: ratio {}, offset {} ({how})",
+                mech.joints[g.joint].name, mech.joints[g.follows].name, g.ratio, g.offset
+            );
+        }
+    }
     let l = &mech.loads;
     println!(
         "loads: gravity ({}, {}) m/s², {} joint torque(s), {} damper(s) to ground, {} point force(s)",

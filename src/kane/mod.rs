@@ -73,6 +73,7 @@ pub mod kinematics;
 pub mod ldlt;
 pub mod rates;
 pub mod reactions;
+mod reduce;
 pub mod reference;
 mod small;
 mod small_rates;
@@ -96,6 +97,8 @@ enum Form {
     Rates,
     /// Absolute angular velocities with other joint kinds: the rates form, mapped to the speeds.
     MappedRates,
+    /// A mechanism with couplings: the unconstrained tree, reduced (`reduce.rs`).
+    Geared,
 }
 
 /// Constant data of one body and its inboard joint, packed so the hot loop touches one record.
@@ -200,6 +203,8 @@ pub struct Kane {
     pairs: Vec<(f64, f64)>,
     /// The data of the fixed-size right-hand side, when it applies ([`small`]).
     small: Option<small::Small>,
+    /// The unconstrained tree of a mechanism with couplings ([`Form::Geared`]).
+    geared: Option<Box<reduce::Geared>>,
     // Work buffers.
     /// The joints of one ancestor walk, for [`Kane::residual_jacobian`] (capacity n).
     walk: Vec<usize>,
@@ -284,6 +289,7 @@ impl Kane {
             Speeds::AbsoluteAngularVelocities if revolute => Form::Pairs,
             Speeds::AbsoluteAngularVelocities => Form::MappedRates,
         };
+        let form = if mech.is_geared() { Form::Geared } else { form };
         let mut pairs = Vec::new();
         if form == Form::Pairs {
             for j in 0..nb {
@@ -322,6 +328,7 @@ impl Kane {
             mech: mech.clone(),
             pairs,
             small: None,
+            geared: None,
             n,
             nb,
             speed_parent,
@@ -344,6 +351,9 @@ impl Kane {
             m_out: DMatrix::zeros(n, n),
             f_out: DVector::zeros(n),
         };
+        if form == Form::Geared {
+            k.geared = Some(Box::new(reduce::Geared::new(mech, world)?));
+        }
         let mut zeros = vec![0.0; n];
         k.evaluate(0.0, &zeros, &zeros, false);
         k.factor_solve(&mut zeros)?;
@@ -432,6 +442,7 @@ impl Kane {
     /// had none). Springs and dampers are not affected. A joint without coordinate (`Fixed`) has
     /// nothing for a torque to drive, so the call is ignored there.
     pub fn set_joint_torque(&mut self, joint: usize, excitation: Excitation) {
+        self.set_geared_torque(joint, &excitation);
         if self.nodes.get(joint).is_none_or(|nd| nd.coord == NO_COORD) {
             return;
         }
@@ -584,6 +595,7 @@ impl Kane {
             Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
             Form::Rates => self.evaluate_rates::<N>(t, q, u, forcing),
             Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
+            Form::Geared => self.evaluate_geared(t, q, u, forcing),
         }
         if forcing && !self.couplings.is_empty() {
             self.add_couplings(q, u);

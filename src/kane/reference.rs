@@ -204,6 +204,9 @@ impl Kane {
     /// Kane's partial velocities of body `j` at `q`, in the world frame, by the textbook route
     /// ([`body_kinematics`]): `(v_{j,r}, ω_{j,r})` for r = 0..n. Allocates; for tests and reports.
     pub fn partial_velocities(&self, q: &[f64], j: usize) -> (Vec<Vec2>, Vec<f64>) {
+        if let Some(geared) = self.geared_partial_velocities(q, j) {
+            return geared;
+        }
         let u = vec![0.0; self.n];
         let k = body_kinematics(&self.mech, q, &u).swap_remove(j);
         (k.partial_velocity, k.partial_omega)

@@ -90,7 +90,8 @@ impl Small {
         match kane.form {
             super::Form::Pairs => Self::pairs(kane),
             super::Form::MappedRates => super::small_rates::small(kane),
-            super::Form::Rates => None,
+            // Joint rates, and geared trees (whose state is reduced), take the general forms.
+            super::Form::Rates | super::Form::Geared => None,
         }
     }
 

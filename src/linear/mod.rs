@@ -390,6 +390,9 @@ fn undamped(mech: &Mechanism) -> Mechanism {
         }
     }
     m.loads.ground_dampers.clear();
+    for mesh in m.gears.iter_mut().filter_map(|g| g.mesh.as_mut()) {
+        mesh.damping = 0.0;
+    }
     m
 }
 
@@ -423,6 +426,9 @@ impl LinearModel {
         }
         if mech.loads.needs_world_orientation() {
             return Err(LinearError::WorldOrientation { mechanism: mech.name.clone() });
+        }
+        if let Some(why) = mech.spin_breaks_cyclic(sj) {
+            return Err(LinearError::Invalid(why));
         }
         if !omega_rad_s.is_finite() {
             return Err(LinearError::Invalid(format!("spin speed must be finite, got {omega_rad_s} rad/s")));
@@ -562,7 +568,11 @@ impl LinearModel {
     pub fn generalized_torque(&self, joint: usize) -> DVector<f64> {
         match self.mech.coordinate(joint) {
             Some(k) => self.w_inv.row(k).transpose(),
-            None => DVector::zeros(self.ndof()),
+            // A rigidly geared joint's unit torque reaches its driving coordinate times the ratio.
+            None => match self.mech.follow_map()[joint] {
+                Some(f) => f.factor * self.w_inv.row(f.coordinate).transpose(),
+                None => DVector::zeros(self.ndof()),
+            },
         }
     }
 
@@ -570,8 +580,8 @@ impl LinearModel {
     /// rates of the rotating joints on its path, [`Mechanism::rotation_coordinates`]).
     pub fn angular_velocity_row(&self, body: usize) -> DVector<f64> {
         let mut c = DVector::zeros(self.ndof());
-        for k in self.mech.rotation_coordinates(body) {
-            c += self.w_inv.row(k).transpose();
+        for (k, factor) in self.mech.rotation_rates(body) {
+            c += factor * self.w_inv.row(k).transpose();
         }
         c
     }

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::model::body::{Body, BodySpec};
+use crate::model::gears::{Gear, GearSpec};
 use crate::model::joint::{Joint, JointSpec};
 use crate::model::loads::{LoadSpec, Loads};
 use crate::model::math::Vec2;
@@ -32,6 +33,9 @@ pub struct MechanismSpec {
     /// External loads.
     #[serde(default)]
     pub loads: Vec<LoadSpec>,
+    /// Gear pairs and fixed-ratio couplings between joints ([`crate::model::gears`]).
+    #[serde(default)]
+    pub gears: Vec<GearSpec>,
 }
 
 /// A validated mechanism (built by [`crate::load`]). Body `i` hangs from joint `i`; parents come
@@ -52,6 +56,9 @@ pub struct Mechanism {
     pub joints: Vec<Joint>,
     /// External loads.
     pub loads: Loads,
+    /// Couplings between joints; a rigidly driven joint has no coordinate of its own
+    /// ([`Mechanism::follow_map`] gives it).
+    pub gears: Vec<Gear>,
 }
 
 impl Mechanism {
@@ -160,6 +167,10 @@ impl Mechanism {
     /// reference of the paper (Fig. 2 and 5). Locking a joint to ground is refused: it would weld
     /// the whole subtree to ground.
     pub fn lock(&self, name: &str, q_lock: f64) -> Result<Mechanism> {
+        // A joint in a rigid gear train locks the whole train (crate::model::gears).
+        if let Some(out) = self.lock_gear_train(name, q_lock)? {
+            return Ok(out);
+        }
         let model = |message: String| Error::Model { mechanism: self.name.clone(), message };
         let c = self.joint_index(name).ok_or_else(|| {
             model(format!(
@@ -218,6 +229,7 @@ impl Mechanism {
         for t in &mut out.loads.joint_torques {
             t.joint = shift(t.joint);
         }
+        crate::model::gears::shift_after_removal(&mut out.gears, c);
         let mut next = 0;
         for joint in &mut out.joints {
             if joint.coordinate.is_some() {

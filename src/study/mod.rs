@@ -200,6 +200,16 @@ impl Study {
             let names: Vec<&str> = mechanism.bodies.iter().map(|b| b.name.as_str()).collect();
             src.error("response_body", format!("unknown body `{}` (bodies: {})", spec.response_body, names.join(", ")))
         })?;
+        if let Some(j) = mechanism.driven_joint_above(body) {
+            return Err(src.error(
+                "response_body",
+                format!(
+                    "body `{}` turns with the rigidly geared joint `{}`: a response body below a driven joint is not \
+                     supported yet (report a body on the driving side)",
+                    spec.response_body, mechanism.joints[j].name
+                ),
+            ));
+        }
         let mut locked = None;
         for (i, j) in spec.lock.iter().enumerate() {
             let m = locked.as_ref().unwrap_or(&mechanism);
@@ -233,7 +243,12 @@ impl Study {
                     .joint_index(name)
                     .ok_or_else(|| src.error(&field, format!("unknown joint `{name}` (joints: {})", joint_names())))?;
                 if mechanism.coordinate(j).is_none() {
-                    return Err(src.error(&field, format!("joint `{name}` is Fixed: it has no motion to report")));
+                    let why = if mechanism.follow_map()[j].is_some() {
+                        "is rigidly driven by a gear: reporting a driven joint is not supported yet"
+                    } else {
+                        "is Fixed: it has no motion to report"
+                    };
+                    return Err(src.error(&field, format!("joint `{name}` {why}")));
                 }
                 if out.contains(&j) {
                     return Err(src.error(&field, format!("joint `{name}` is listed twice")));

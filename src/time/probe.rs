@@ -245,6 +245,15 @@ impl Recorder {
                     let own = mech.coordinate(j);
                     (0..n).filter(|&k| Some(k) != own).collect()
                 }
+                _ if mech.driven_joint_above(p.index()).is_some() => {
+                    return Err(Error::Model {
+                        mechanism: mech.name.clone(),
+                        message: format!(
+                            "probe {p:?}: the body turns with a rigidly geared joint; body probes below a driven \
+                             joint are not supported yet"
+                        ),
+                    });
+                }
                 _ => mech.rotation_coordinates(p.index()),
             });
         }
