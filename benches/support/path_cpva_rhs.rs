@@ -33,8 +33,11 @@ pub fn circle_cpva() -> Kane {
     let mut mech = epicycloid_mechanism();
     let p = CpvaParams::canonical();
     let path = mech.joint_index("path").expect("the path joint of examples/cpva_epicycloid.ron");
-    mech.joints[path].kind =
-        JointKind::Path { shape: PathShape::Circle { radius: p.pivot_radius, length: p.l() }, mount: 0.0 };
+    mech.joints[path].kind = JointKind::Path {
+        shape: PathShape::Circle { radius: p.pivot_radius, length: p.l() },
+        mount: 0.0,
+        travel: None,
+    };
     Kane::new(&mech).expect("engine")
 }
 
