@@ -14,6 +14,10 @@ use differential_equations::traits::State;
 use std::cell::{Cell, RefCell};
 
 /// A type-erased right-hand side `(t, x, ẋ)`.
+/// Consecutive step cuts (by 4) after trial stages beyond a path's travel before the crossing
+/// counts as the motion's own (see the loop in [`run`]).
+const MAX_TRAVEL_RETRIES: usize = 30;
+
 pub(crate) type DynRhs<'a> = dyn FnMut(f64, &[f64], &mut [f64]) -> Result<(), EngineError> + 'a;
 
 /// The crate's DOP853 for state type `Y`: order 8, 12 stages, 16 with the dense-output stages.
@@ -268,6 +272,7 @@ pub(crate) fn run<Y: Slab>(
 
     // The run is complete once t is within rounding of t1.
     let t_done = t1 - 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
+    let (mut travel_retries, mut travel_fault) = (0, None);
     loop {
         let t = solver.t();
         if t >= t_done {
@@ -278,15 +283,36 @@ pub(crate) fn run<Y: Slab>(
             h = t1 - t;
             solver.set_h(h);
         }
-        // Hairer's test: a step below the resolution of t cannot advance the solution.
+        // Hairer's test: a step below the resolution of t cannot advance the solution. Cut down
+        // there by trial stages beyond a path's travel, the motion does leave it.
         if 0.1 * h.abs() <= t.abs() * f64::EPSILON || h == 0.0 {
+            if let Some(fault) = travel_fault.take() {
+                return Err(fail(fault, t, with_evals(stats)));
+            }
             return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: with_evals(stats) });
         }
         let res = solver.step(&sys);
-        if let Some(fault) = sys.fault.borrow_mut().take() {
+        let fault = sys.fault.borrow_mut().take();
+        if let Some(fault) = fault {
             stats.rejected += 1; // the faulty attempt is discarded
+            // A trial stage beyond a path's end (or its travel limit) says the step was too
+            // long, not that the motion leaves the path: an absorber driven into its end stop
+            // turns back within a step that its stages overshoot. The solver rejected the step
+            // (its error estimate is NaN, and t and x are kept), so it is retried 4 times
+            // shorter; only a crossing that survives `MAX_TRAVEL_RETRIES` such cuts (the step
+            // then ~1e-18 of the first) is the motion's own and ends the run at that time.
+            if matches!(fault, Fault::Engine { err: EngineError::OutOfTravel { .. }, .. })
+                && travel_retries < MAX_TRAVEL_RETRIES
+            {
+                travel_retries += 1;
+                travel_fault = Some(fault);
+                solver.set_status(Status::RejectedStep);
+                solver.set_h(0.25 * h);
+                continue;
+            }
             return Err(fail(fault, t, with_evals(stats)));
         }
+        (travel_retries, travel_fault) = (0, None);
         if let Err(e) = res {
             let stats = with_evals(stats);
             use differential_equations::error::Error as E;
