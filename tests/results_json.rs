@@ -56,7 +56,17 @@ fn check_study(study_file: &Path, tag: &str) -> Value {
     assert_eq!(analyses.len(), study.spec.analyses.len());
     let mut table_files = Vec::new();
     let mut cells = 0usize;
+    // A comparison's analyses are entries of their own, inside its result.
+    let mut entries: Vec<&Value> = Vec::new();
     for a in analyses {
+        entries.push(a);
+        if a["kind"] == "Compare" {
+            for m in a["result"]["mechanisms"].as_array().unwrap() {
+                entries.extend(m["analyses"].as_array().unwrap());
+            }
+        }
+    }
+    for a in entries {
         for t in a["tables"].as_array().unwrap() {
             let file = t["file"].as_str().unwrap();
             table_files.push(file.to_string());

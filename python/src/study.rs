@@ -484,7 +484,8 @@ impl StudyResult {
         let data = to_python(py, &value)?.cast_into::<PyDict>()?;
         let (tables, units) = (PyDict::new(py), PyDict::new(py));
         for a in &doc.analyses {
-            for t in &a.tables {
+            // A comparison's tables are those of its mechanisms' analyses.
+            for t in a.all_tables() {
                 let (cols, us) = (PyDict::new(py), PyDict::new(py));
                 for c in &t.columns {
                     cols.set_item(&c.name, PyArray1::from_slice(py, &c.values))?;

@@ -37,7 +37,9 @@ pub struct Reaction {
 }
 
 /// Every joint's reaction at coordinates `q`, rates `qdot` and accelerations `qddot` (joint
-/// rates, `q̇ = W⁻¹u`, `q̈ = W⁻¹u̇`), in joint order.
+/// rates, `q̇ = W⁻¹u`, `q̈ = W⁻¹u̇`), in joint order. A geared mechanism's driven joints have no
+/// coordinate of their own: pass its expanded tree (`Mechanism::expanded`) with the expanded
+/// state, or the driven joints count as welded.
 pub fn joint_reactions(mech: &Mechanism, q: &[f64], qdot: &[f64], qddot: &[f64]) -> Vec<Reaction> {
     let nb = mech.bodies.len();
     let mut angle = vec![0.0; nb];

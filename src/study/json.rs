@@ -109,6 +109,22 @@ pub struct AnalysisEntry<'a> {
     pub tables: Vec<Table>,
 }
 
+impl AnalysisEntry<'_> {
+    /// This entry's tables and, for a comparison, those of every compared mechanism's analyses:
+    /// one per CSV file the analysis wrote.
+    pub fn all_tables(&self) -> Vec<&Table> {
+        let mut out: Vec<&Table> = self.tables.iter().collect();
+        if let Some(AnalysisResult::Compare { mechanisms }) = &self.result {
+            for m in mechanisms {
+                for a in &m.analyses {
+                    out.extend(a.all_tables());
+                }
+            }
+        }
+        out
+    }
+}
+
 /// The results of one analysis, by kind.
 #[derive(Debug, Clone, Serialize)]
 #[serde(untagged)]

@@ -93,6 +93,15 @@ impl Probe {
             let j = mech
                 .joint_index(name)
                 .ok_or_else(|| unknown("joint", mech.joints.iter().map(|j| j.name.as_str()).collect()))?;
+            let reaction =
+                matches!(kind, ProbeKind::JointForceRadial | ProbeKind::JointForceTangential | ProbeKind::JointMoment);
+            if reaction && mech.is_geared() {
+                // The Newton–Euler pass reads joint coordinates; a driven joint has none.
+                return Err(Error::Model {
+                    mechanism: mech.name.clone(),
+                    message: format!("probe {kind:?}: joint reactions of a geared mechanism are not built yet"),
+                });
+            }
             match kind {
                 ProbeKind::LargestJointAngle => return Ok(Probe::LargestJointAngle(j)),
                 ProbeKind::JointForceRadial => return Ok(Probe::JointForceRadial(j)),

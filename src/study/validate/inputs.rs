@@ -87,6 +87,9 @@ pub(super) fn check_transient(
     if t.reactions.len() > MAX_LIST {
         return Err(src.error(&at("reactions"), format!("at most {MAX_LIST} joints")));
     }
+    if !t.reactions.is_empty() && mech.is_geared() {
+        return Err(src.error(&at("reactions"), "joint reactions of a geared mechanism are not built yet"));
+    }
     for (i, name) in t.reactions.iter().enumerate() {
         let path = at(&format!("reactions[{i}]"));
         let j = mech.joint_index(name).ok_or_else(|| {
