@@ -97,6 +97,17 @@ class _LoadsInfo(TypedDict):
     ground_dampers: int
     point_forces: int
 
+class _AbsorberInfo(TypedDict):
+    joint: str
+    kind: str
+    mass: float
+    inertia: float
+    tuning_order: float
+    nonlinear: float
+    travel: float
+    travel_limit: Optional[float]
+    tautochronic: str
+
 class _CheckInfo(TypedDict):
     name: str
     file: Optional[str]
@@ -106,6 +117,7 @@ class _CheckInfo(TypedDict):
     joints: List[_JointInfo]
     loads: _LoadsInfo
     total_mass: float
+    absorbers: List[_AbsorberInfo]
 
 @final
 class Mechanism:

@@ -473,6 +473,12 @@ impl Mechanism {
     ///         and ``point_forces``.
     ///     total_mass : float
     ///         kg.
+    ///     absorbers : list of dict
+    ///         Per absorber joint (a path joint or a revolute pendulum on a spinning body), as
+    ///         the CLI's "Absorbers" table: ``joint``, ``kind``, ``mass`` (kg) and ``inertia``
+    ///         (kg·m²) it carries, ``tuning_order`` n_t, ``nonlinear`` κ (1/m²: n ≈ n_t(1 + κA²)),
+    ///         ``travel`` (m, inf when unlimited), ``travel_limit`` (m or None), ``tautochronic``
+    ///         ("Exact", "LeadingOrder" or "No").
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let mech = &self.mech;
@@ -535,6 +541,22 @@ impl Mechanism {
             loads.set_item("point_forces", l.point_forces.len())?;
             out.set_item("loads", loads)?;
             out.set_item("total_mass", mech.total_mass())?;
+            // The absorber properties `kanedyn check` prints under "## Absorbers".
+            let absorbers = PyList::empty(py);
+            for a in kanedyn::model::absorber::absorbers(mech) {
+                let d = PyDict::new(py);
+                d.set_item("joint", &a.joint)?;
+                d.set_item("kind", a.kind)?;
+                d.set_item("mass", a.mass)?;
+                d.set_item("inertia", a.inertia)?;
+                d.set_item("tuning_order", a.tuning_order())?;
+                d.set_item("nonlinear", a.nonlinear)?;
+                d.set_item("travel", a.travel)?;
+                d.set_item("travel_limit", a.travel_limit)?;
+                d.set_item("tautochronic", format!("{:?}", a.tautochronic))?;
+                absorbers.append(d)?;
+            }
+            out.set_item("absorbers", absorbers)?;
             Ok(out)
         })
     }

@@ -16,6 +16,7 @@ JOINT = re.compile(
 )
 DAMPER = re.compile(r"   damper (\S+) (N·m|N)·s/(rad|m)")
 SPRING = re.compile(r"   spring (\S+) (N·m|N)/(rad|m) \(free at (\S+) (rad|m)\)")
+ABSORBER = re.compile(r"^\| `(\S+)` \| ([^|]+?) \| (\S+) \| (\S+) \| (\S+) \| (\S+) \| ([^|]+?) \| ([^|]+?) \|$")
 LOADS = re.compile(
     r"^loads: gravity \((\S+), (\S+)\) m/s², (\d+) joint torque\(s\), (\d+) damper\(s\) to ground, "
     r"(\d+) point force\(s\)$"
@@ -68,6 +69,12 @@ def parse_check(text):
             }
         elif m := re.match(r"^total mass: (\S+) kg$", line):
             out["total_mass"] = float(m[1])
+        elif m := ABSORBER.match(line):
+            out.setdefault("absorbers", []).append(
+                {"joint": m[1], "kind": m[2], "mass": m[3], "inertia": float(m[4]), "tuning_order": m[5]}
+            )
+        elif line == "## Absorbers" or line == "" or line.startswith("At held spin") or line.startswith("|"):
+            pass  # the absorbers' heading, note and table frame
         elif not re.match(r"^(bodies: \d+|joints \(tree order\): \d+)$", line):
             raise AssertionError(f"unparsed line of `kanedyn check`: {line!r}")
     return out
@@ -114,6 +121,13 @@ def test_check_holds_what_the_cli_prints(cli, name):
     assert [j["coordinate"] for j in got["joints"] if j["coordinate"] is not None] == list(
         range(got["degrees_of_freedom"])
     )
+    # The absorbers (the CLI's table: mass and n_t to 6 decimals, I to 7 significant digits).
+    assert [a["joint"] for a in got["absorbers"]] == [a["joint"] for a in want.get("absorbers", [])]
+    for g, w in zip(got["absorbers"], want.get("absorbers", [])):
+        assert g["kind"] == w["kind"] and f"{g['mass']:.6f}" == w["mass"], (g, w)
+        assert float(f"{g['inertia']:.6e}") == w["inertia"] and f"{g['tuning_order']:.6f}" == w["tuning_order"], (g, w)
+    if name == "cpva":
+        assert got["absorbers"][0]["kind"] == "Revolute pendulum" and abs(got["absorbers"][0]["tuning_order"] - 3.11) < 1e-9
     mech = kanedyn.Mechanism.from_file(EXAMPLES.parent / path)
     assert mech.ndof == want["degrees_of_freedom"]
     assert mech.coordinate_names == [j["name"] for j in want["joints"] if j["coordinate"] is not None]
