@@ -6,13 +6,14 @@
 //! the engine that evaluates it.
 
 use crate::error::{EngineError, Error, Result};
+use crate::io::known_list;
 use crate::io::{ReadPolicy, Source};
 use crate::model::body::{Body, BodySpec};
 use crate::model::coupling::Couplings;
 use crate::model::joint::{Joint, JointSpec};
 use crate::model::loads::{GroundDamper, JointTorque, LoadSpec, Loads, PointForce};
 use crate::model::math::Vec2;
-use crate::model::mechanism::{GROUND, Mechanism, MechanismSpec, known_list};
+use crate::model::mechanism::{GROUND, Mechanism, MechanismSpec};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 

@@ -376,3 +376,8 @@ fn read_capped(file: &Path, open: &Path, max: u64) -> Result<Vec<u8>> {
     }
     Ok(bytes)
 }
+
+/// Names joined by commas, for the "(known: …)" part of an error message.
+pub(crate) fn known_list<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    names.collect::<Vec<_>>().join(", ")
+}

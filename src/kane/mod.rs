@@ -78,6 +78,16 @@ pub mod reference;
 mod small;
 mod small_rates;
 
+/// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).
+const SMALL: usize = 6;
+
+/// In the fixed-size forms: a speed without applied joint torque, a missing parent or speed
+/// parent.
+const NONE: usize = usize::MAX;
+
+/// An instance of a fixed-size right-hand side for one literal n.
+type SmallRhs = fn(&Kane, f64, &[f64], &mut [f64]) -> Result<(), EngineError>;
+
 /// `Σ a_k b_k` over the shorter of the two slices.
 #[inline(always)]
 fn dot(a: &[f64], b: &[f64]) -> f64 {

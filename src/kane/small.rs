@@ -22,8 +22,7 @@ use super::{Kane, PIVOT_TOL};
 use crate::error::EngineError;
 use crate::model::math::{Vec2, cross2, rotate_cs};
 
-/// Largest number of speeds served by the fixed-size path.
-pub(super) const SMALL: usize = 6;
+use super::{NONE, SMALL, SmallRhs};
 
 /// A root's parent: past the end of the speeds, so that a root's parent speed reads as zero.
 const GROUND: usize = usize::MAX;
@@ -31,18 +30,11 @@ const GROUND: usize = usize::MAX;
 /// Marks a pair (k, j) of which k is not an ancestor of j (`Small::via`).
 const NOT_ANCESTOR: usize = usize::MAX;
 
-/// Marks a speed without applied joint torque (`Small::torque`), and (in
-/// [`super::small_rates`]) a missing parent or speed parent.
-pub(super) const NONE: usize = usize::MAX;
-
 /// `(cos, sin)` of the sum of two angles given by theirs.
 #[inline(always)]
 fn compose((ac, as_): (f64, f64), (bc, bs): (f64, f64)) -> (f64, f64) {
     (ac * bc - as_ * bs, as_ * bc + ac * bs)
 }
-
-/// An instance of [`Kane::rhs_small`] for one literal n.
-pub(super) type SmallRhs = fn(&Kane, f64, &[f64], &mut [f64]) -> Result<(), EngineError>;
 
 /// The constant data of the fixed-size path, packed once at construction.
 #[derive(Debug, Clone)]
@@ -89,7 +81,7 @@ impl Small {
         }
         match kane.form {
             super::Form::Pairs => Self::pairs(kane),
-            super::Form::MappedRates => super::small_rates::small(kane),
+            super::Form::MappedRates => super::small_rates::small(kane).map(|(rhs, p)| Self::with_rates(rhs, p)),
             // Joint rates, and geared trees (whose state is reduced), take the general forms.
             super::Form::Rates | super::Form::Geared => None,
         }

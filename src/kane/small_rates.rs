@@ -30,8 +30,7 @@
 //! the only thing it knows about a path (docs/design.md, "Fast path for path joints"), and
 //! equality with the general path is by construction, not by a second derivation.
 
-use super::small::{NONE, SMALL, Small, SmallRhs};
-use super::{GROUND_PARENT, Kane, Node, PIVOT_TOL};
+use super::{GROUND_PARENT, Kane, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
 use crate::error::EngineError;
 use crate::model::joint::{JointKind, JointMotion};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
@@ -65,7 +64,7 @@ pub(super) struct Packed {
 
 /// Packs the data of `kane` (already built, `Form::MappedRates`, at most `SMALL` speeds, one
 /// body per speed, no point forces: checked by the caller) when every joint's torques allow it.
-pub(super) fn small(kane: &Kane) -> Option<Small> {
+pub(super) fn small(kane: &Kane) -> Option<(SmallRhs, Packed)> {
     let n = kane.n;
     let rhs: SmallRhs = match n {
         1 => Kane::rhs_small_rates::<1>,
@@ -112,7 +111,7 @@ pub(super) fn small(kane: &Kane) -> Option<Small> {
         }
         p.torque[jt.joint] = i;
     }
-    Some(Small::with_rates(rhs, p))
+    Some((rhs, p))
 }
 
 /// `JointKind::motion` of body `nd`'s joint at `q`, with a path's mounting rotation given

@@ -175,7 +175,7 @@ impl Mechanism {
         let c = self.joint_index(name).ok_or_else(|| {
             model(format!(
                 "cannot lock unknown joint `{name}` (joints: {})",
-                known_list(self.joints.iter().map(|j| j.name.as_str()))
+                crate::io::known_list(self.joints.iter().map(|j| j.name.as_str()))
             ))
         })?;
         let Some(p) = self.joints[c].parent else {
@@ -251,8 +251,4 @@ impl Mechanism {
         path.reverse();
         path
     }
-}
-
-pub(crate) fn known_list<'a>(names: impl Iterator<Item = &'a str>) -> String {
-    names.collect::<Vec<_>>().join(", ")
 }

@@ -8,6 +8,7 @@ pub mod absorber;
 pub mod body;
 pub mod coupling;
 pub mod excitation;
+pub mod geared;
 pub mod gears;
 pub mod inertia;
 pub mod joint;

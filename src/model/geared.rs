@@ -1,0 +1,223 @@
+//! A geared mechanism's queries (issue 15, item 1; docs/design.md, "Gears"): the map from the
+//! reduced state to every joint's coordinate and rate, the unconstrained tree the engine
+//! evaluates before reducing (`expanded`), its reduction matrix T, and locking a gear train.
+//! Kept apart from [`super::gears`] (the couplings as data) so that the mechanism, which holds
+//! them, and these methods, which read the mechanism, do not import each other.
+
+use crate::error::{Error, Result};
+use crate::model::gears::{Follow, Gear, renumber};
+use crate::model::joint::JointKind;
+use crate::model::mechanism::Mechanism;
+use crate::model::speeds::Speeds;
+
+impl Mechanism {
+    /// True when the mechanism has couplings (rigid or compliant): the engine then evaluates the
+    /// unconstrained tree and reduces it.
+    pub fn is_geared(&self) -> bool {
+        !self.gears.is_empty()
+    }
+
+    /// Per joint, how its coordinate follows from the reduced state; `None` for a joint without
+    /// coordinate (`Fixed`). A rigidly driven joint has `coordinate: None` in
+    /// [`Joint::coordinate`] but a `Follow` here, so its angle and rate stay readable.
+    pub fn follow_map(&self) -> Vec<Option<Follow>> {
+        let mut out: Vec<Option<Follow>> = self
+            .joints
+            .iter()
+            .map(|j| j.coordinate.map(|coordinate| Follow { coordinate, factor: 1.0, offset: 0.0 }))
+            .collect();
+        // A chain a ← b ← c resolves in at most (number of couplings) sweeps; `resolve` refused
+        // or cut every loop, so this terminates.
+        let rigid: Vec<&Gear> = self.gears.iter().filter(|g| g.mesh.is_none()).collect();
+        for _ in 0..=rigid.len() {
+            let mut changed = false;
+            for g in &rigid {
+                if out[g.joint].is_none()
+                    && let Some(f) = out[g.follows]
+                {
+                    out[g.joint] = Some(Follow {
+                        coordinate: f.coordinate,
+                        factor: g.ratio * f.factor,
+                        offset: g.ratio * f.offset + g.offset,
+                    });
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        out
+    }
+
+    /// The coordinate of joint `j` (rad or m) at reduced coordinates `q`, also for a rigidly
+    /// driven joint; `None` for a joint without coordinate.
+    pub fn joint_coordinate(&self, j: usize, q: &[f64]) -> Option<f64> {
+        let f = self.follow_map()[j]?;
+        Some(f.factor * q[f.coordinate] + f.offset)
+    }
+
+    /// The rate of joint `j` (rad/s or m/s) at reduced coordinate rates `qdot`, also for a
+    /// rigidly driven joint; `None` for a joint without coordinate.
+    pub fn joint_rate(&self, j: usize, qdot: &[f64]) -> Option<f64> {
+        let f = self.follow_map()[j]?;
+        Some(f.factor * qdot[f.coordinate])
+    }
+
+    /// The rotating joints on the path from ground to body `body` as (coordinate, factor) pairs:
+    /// the body's absolute angle is `Σ factor · q[coordinate]` plus the offsets. Equals
+    /// [`Mechanism::rotation_coordinates`] with factors 1 when no rigidly geared joint is on the
+    /// path.
+    pub fn rotation_rates(&self, body: usize) -> Vec<(usize, f64)> {
+        let map = self.follow_map();
+        self.path_to(body)
+            .into_iter()
+            .filter(|&j| self.joints[j].kind.rotates())
+            .filter_map(|j| map[j].map(|f| (f.coordinate, f.factor)))
+            .collect()
+    }
+
+    /// Why the spin angle of root joint `spin` is not cyclic through a coupling, if it is not: the
+    /// linear analysis drops that angle, which is right only when shifting it changes no force.
+    /// A joint geared to the spin coordinate keeps it cyclic when it turns about a fixed axis of
+    /// its own (a revolute joint on ground) with no spring and no compliant mesh; any other joint
+    /// moved by the spin angle through a coupling changes the forces with it.
+    pub fn spin_breaks_cyclic(&self, spin: usize) -> Option<String> {
+        let s = self.joints.get(spin)?.coordinate?;
+        let map = self.follow_map();
+        for (j, joint) in self.joints.iter().enumerate() {
+            if j == spin || map[j].is_none_or(|f| f.coordinate != s) {
+                continue;
+            }
+            let meshed = self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == j || g.follows == j));
+            let sprung = joint.spring.is_some_and(|sp| sp.stiffness != 0.0);
+            if joint.parent.is_some() || joint.kind != JointKind::Revolute || sprung || meshed {
+                return Some(format!(
+                    "joint `{}` is geared to the spin joint `{}` and {}, so the spin angle is not cyclic; the \
+                     linear analysis needs it cyclic (put the compliance in a shaft spring after a rigid gear, or \
+                     mount the gears on a carrier driven by the spin joint)",
+                    joint.name,
+                    self.joints[spin].name,
+                    if meshed {
+                        "meshes compliantly"
+                    } else if sprung {
+                        "has a spring"
+                    } else {
+                        "does not turn about a fixed axis of its own"
+                    }
+                ));
+            }
+        }
+        // The spin joint's own mesh turns with its angle too.
+        if self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == spin || g.follows == spin)) {
+            return Some(format!(
+                "the spin joint `{}` meshes compliantly with another joint, so the spin angle is not cyclic; the \
+                 linear analysis needs it cyclic (mount the gears on a carrier driven by the spin joint, or use a \
+                 rigid gear and a shaft spring)",
+                self.joints[spin].name
+            ));
+        }
+        None
+    }
+
+    /// The first rigidly driven rotating joint on the path from ground to body `body`, if any: the
+    /// body's angle then involves a gear ratio, which [`Mechanism::rotation_coordinates`] (and the
+    /// probes and study responses built on it) leave out.
+    pub fn driven_joint_above(&self, body: usize) -> Option<usize> {
+        let map = self.follow_map();
+        self.path_to(body).into_iter().find(|&j| {
+            let joint = &self.joints[j];
+            joint.kind.rotates() && joint.coordinate.is_none() && map[j].is_some()
+        })
+    }
+
+    /// The unconstrained tree: every joint that has a coordinate kind gets one (in tree order),
+    /// no couplings, joint rates as speeds. The engine evaluates it at the expanded state and
+    /// reduces (`kane::reduce`); tests compare with the textbook reduction `TᵀMT`, `TᵀF`.
+    pub fn expanded(&self) -> Mechanism {
+        let mut out = self.clone();
+        out.gears.clear();
+        out.speeds = Speeds::JointRates;
+        let mut next = 0;
+        for j in &mut out.joints {
+            j.coordinate = (j.kind.dof() == 1).then(|| {
+                next += 1;
+                next - 1
+            });
+        }
+        out
+    }
+
+    /// The constant map T from the reduced speeds (n) to the expanded tree's (columns of
+    /// [`Mechanism::expanded`]'s coordinates): `u_full = T u`, row-major `nf × n`.
+    pub fn reduction_matrix(&self) -> nalgebra::DMatrix<f64> {
+        let full = self.expanded();
+        let map = self.follow_map();
+        let mut t = nalgebra::DMatrix::zeros(full.ndof(), self.ndof());
+        for (j, joint) in full.joints.iter().enumerate() {
+            if let (Some(r), Some(f)) = (joint.coordinate, map[j]) {
+                t[(r, f.coordinate)] = f.factor;
+            }
+        }
+        t
+    }
+
+    /// The rigid couplings whose joints are connected to joint `j` (its gear train), and `j`'s
+    /// follow; empty when `j` is not rigidly coupled. For [`Mechanism::lock`].
+    fn gear_train(&self, j: usize) -> Vec<usize> {
+        let mut members = vec![j];
+        let mut grew = true;
+        while grew {
+            grew = false;
+            for g in self.gears.iter().filter(|g| g.mesh.is_none()) {
+                let (a, b) = (members.contains(&g.joint), members.contains(&g.follows));
+                if a != b {
+                    members.push(if a { g.follows } else { g.joint });
+                    grew = true;
+                }
+            }
+        }
+        if members.len() == 1 { Vec::new() } else { members }
+    }
+
+    /// [`Mechanism::lock`] of a joint in a rigid gear train: locking either side locks the whole
+    /// train, each joint at the coordinate the train gives it when `name` is at `q_lock`.
+    /// `Ok(None)` when the joint is not rigidly coupled (the caller locks it alone). A joint with a
+    /// compliant mesh is refused: its spring would act between a weld and a moving joint, which
+    /// the mesh does not model.
+    pub(crate) fn lock_gear_train(&self, name: &str, q_lock: f64) -> Result<Option<Mechanism>> {
+        let Some(c) = self.joint_index(name) else { return Ok(None) };
+        let model = |message: String| Error::Model { mechanism: self.name.clone(), message };
+        if self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == c || g.follows == c)) {
+            return Err(model(format!(
+                "joint `{name}` has a compliant gear mesh; locking it is not supported (remove the mesh or lock \
+                 another joint)"
+            )));
+        }
+        let train = self.gear_train(c);
+        if train.is_empty() {
+            return Ok(None);
+        }
+        let map = self.follow_map();
+        let Some(fc) = map[c] else { return Ok(None) };
+        let names: Vec<String> = train.iter().map(|&j| self.joints[j].name.clone()).collect();
+        // The train's independent coordinate at which `name` sits at q_lock.
+        let root = (q_lock - fc.offset) / fc.factor;
+        let coords: Vec<f64> = train.iter().map(|&j| map[j].map_or(0.0, |f| f.factor * root + f.offset)).collect();
+        // Without the train's couplings its joints are plain joints: lock them one by one.
+        let mut free = self.clone();
+        free.gears.retain(|g| g.mesh.is_some() || !(train.contains(&g.joint) || train.contains(&g.follows)));
+        renumber(&mut free.joints, &free.gears);
+        let mut out = free;
+        for (joint, q) in names.iter().zip(coords) {
+            out = out.lock(joint, q).map_err(|e| match e {
+                Error::Model { message, .. } => {
+                    model(format!("locking `{name}` locks its gear train ({}): {message}", names.join(", ")))
+                }
+                e => e,
+            })?;
+        }
+        out.name = format!("{}_locked", self.name);
+        Ok(Some(out))
+    }
+}
