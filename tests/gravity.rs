@@ -124,3 +124,67 @@ fn harmonic_balance_with_gravity_matches_time_integration() {
         assert!(e.iter().all(|&x| x < 5e-3), "{rpm} rpm: HBM with gravity vs time integration {e:?}");
     }
 }
+
+/// A study's harmonic balance takes gravity when it continues at a fixed order (in speed here):
+/// the paper's four-absorber rotor of `examples/cpva4.ron` in a vertical plane, order 3, 60 N·m,
+/// continued from 300 to 600 rpm. Its branch at both ends equals the library's solve at that
+/// speed (the solve the test above checks against time integration) to the continuation's
+/// Newton tolerance; an order continuation with gravity is refused with a located error.
+#[test]
+fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
+    let dir = std::env::temp_dir().join(format!("kanedyn_gravity_study_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva4.ron")).unwrap();
+    let text = text.replacen(
+        "speeds: AbsoluteAngularVelocities,",
+        "speeds: AbsoluteAngularVelocities,\n    gravity: (0.0, -9.81),",
+        1,
+    );
+    assert!(text.contains("gravity: (0.0, -9.81)"));
+    std::fs::write(dir.join("m.ron"), &text).unwrap();
+    // Its catalog parts, beside it as in examples/.
+    for sub in ["bodies", "joints"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+        for e in std::fs::read_dir(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(sub)).unwrap()
+        {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
+        }
+    }
+    let study_text = |parameter: &str| {
+        format!(
+            r#"Study(name: "g", mechanism: "m.ron", analyses: [
+                HarmonicBalance(name: "hbm", amplitudes: [{TORQUE}], harmonics: 24, {parameter})])"#
+        )
+    };
+    std::fs::write(dir.join("bad.ron"), study_text("rpm: 300.0, order_min: 2.9, order_max: 3.3")).unwrap();
+    let err = kanedyn::study::Study::from_file(&dir.join("bad.ron")).unwrap_err().to_string();
+    assert!(err.contains("bad.ron") && err.contains("gravity"), "{err}");
+    std::fs::write(dir.join("s.ron"), study_text("parameter: Speed(order: 3.0, rpm_min: 300.0, rpm_max: 600.0)"))
+        .unwrap();
+    let study = kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
+    let report =
+        kanedyn::study::run(&study, &kanedyn::study::RunOptions { out: Some(dir.join("out")), progress: false })
+            .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let mech = kanedyn::model::mechanism::Mechanism::from_file(&dir.join("m.ron")).unwrap();
+    let mut worst = 0.0f64;
+    for b in &report.hbm {
+        for (&rpm_at, accel) in b.parameter.iter().zip(&b.accel[0]) {
+            if (rpm_at - 300.0).abs() > 1e-6 && (rpm_at - 600.0).abs() > 1e-6 {
+                continue;
+            }
+            let mut m = mech.clone();
+            m.loads.joint_torques.clear();
+            let kane = Kane::new(&m).unwrap();
+            let opts = HbmOptions { harmonics: 24, ..HbmOptions::default() };
+            let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(rpm_at), &harmonics(), opts).unwrap();
+            let want = hbm.solve(3.0, None).unwrap().order_acceleration(0, 1.0);
+            println!("study branch at {rpm_at} rpm: {accel:.9} rad/s², library solve {want:.9}");
+            worst = worst.max((accel / want - 1.0).abs());
+        }
+    }
+    assert!(worst > 0.0 || report.hbm.iter().any(|b| !b.parameter.is_empty()), "no branch point at the ends");
+    assert!(worst <= 1e-8, "study vs library: {worst:e}");
+}

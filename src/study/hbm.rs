@@ -144,7 +144,17 @@ pub(crate) fn branch_in(
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
     let inputs = study.excited_joints(&study.mechanism, excite);
-    let mut hbm = Hbm::with_inputs(&kane, study.spin, omega, harmonics, &inputs, opts).map_err(hbm_error(study))?;
+    // With gravity (a world-frame force) the forces repeat every revolution: the multiple 1/n
+    // (amplitude 0) puts the base order at a divisor of 1, so `h` counts harmonics of the
+    // rotation (validation allows this only at a fixed order).
+    let mut harmonics = harmonics.to_vec();
+    if study.mechanism.loads.needs_world_orientation()
+        && let Parameter::Speed { order } | Parameter::TorqueScale { order } = parameter
+        && !harmonics.iter().any(|x| (x.multiple * order - 1.0).abs() < 1e-12)
+    {
+        harmonics.push(Harmonic { multiple: 1.0 / order, amplitude: 0.0, phase: 0.0 });
+    }
+    let mut hbm = Hbm::with_inputs(&kane, study.spin, omega, &harmonics, &inputs, opts).map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);

@@ -107,7 +107,12 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
         if !names.insert(name.to_string()) {
             return Err(src.error(&at("name"), format!("duplicate analysis name `{name}`")));
         }
+        // A harmonic balance at a fixed order takes gravity and world-frame forces (its base
+        // period is then whole revolutions); a spring on the spin joint it cannot.
+        let periodic_hbm = matches!(a, AnalysisSpec::HarmonicBalance(h) if h.parameter != HbmParameter::Order)
+            && mech.joints[spin].spring.is_none();
         if !matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::Transient(_) | AnalysisSpec::Compare(_))
+            && !periodic_hbm
             && let Some(why) = steady_spin_obstacle(mech, spin)
         {
             return Err(src.error(&format!("analyses[{k}]"), format!("{} `{name}`: {why}", a.kind())));
