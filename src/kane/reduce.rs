@@ -77,7 +77,16 @@ impl Geared {
                 })
             })
             .collect();
-        let full = Kane::build(&full_mech, world)?;
+        let mut full = Kane::build(&full_mech, world)?;
+        // The reduced evaluator adds the couplings of the independent joints itself (after the
+        // reduction, in its own coordinates, where the linearisation can suspend them); the
+        // unconstrained tree keeps only those of driven joints, which have no reduced coordinate:
+        // otherwise an independent joint's coupling would act twice.
+        let driven: Vec<usize> = (0..mech.joints.len())
+            .filter(|&j| mech.joints[j].coordinate.is_none() && expanded[j] != usize::MAX)
+            .map(|j| expanded[j])
+            .collect();
+        full.couplings.retain(|c| driven.contains(&c.coord));
         let nf = map.len();
         Ok(Geared { full, map, meshes, q: vec![0.0; nf], u: vec![0.0; nf] })
     }
