@@ -152,6 +152,47 @@ impl HbmSolution {
         out
     }
 
+    /// The Fourier coefficients (same layout as one coordinate's, harmonics 0..=H) of a force
+    /// law `f(q_j, q̇_j)` along the periodic motion of coordinate `j`: `f` sampled at 16(H + 1)
+    /// points of one period and projected on the harmonics by the discrete Fourier sums. For a
+    /// smooth law the sums are exact up to aliasing from harmonics above 16(H + 1) − H − 1; a
+    /// kinked one (a stage spring, a stop) converges as its own Fourier series does. Used for the
+    /// nonlinear couplings' torques ([`crate::model::coupling`]), which have no closed form in
+    /// the coefficients.
+    pub fn force_series(&self, j: usize, f: &dyn Fn(f64, f64) -> f64) -> Vec<f64> {
+        let nb = self.nb();
+        let ns = 16 * (self.harmonics + 1);
+        let period = 2.0 * PI / self.base_frequency;
+        let mut out = vec![0.0; nb];
+        for i in 0..ns {
+            let t = period * i as f64 / ns as f64;
+            let (q, qd, _) = self.periodic_part(j, t);
+            let v = f(q, qd);
+            out[0] += v / ns as f64;
+            for h in 1..=self.harmonics {
+                let (s, c) = (h as f64 * self.base_frequency * t).sin_cos();
+                out[2 * h - 1] += 2.0 * v * c / ns as f64;
+                out[2 * h] += 2.0 * v * s / ns as f64;
+            }
+        }
+        out
+    }
+
+    /// Like [`HbmSolution::element_torques`] for any torque series laid out as one
+    /// coordinate's (e.g. [`HbmSolution::force_series`]): the amplitude at each order
+    /// `multiples·n` and the peak of the oscillating part.
+    pub fn series_torques(&self, series: &[f64], multiples: &[f64]) -> (Vec<f64>, f64) {
+        let amps = multiples
+            .iter()
+            .map(|&m| {
+                self.harmonic_of(m)
+                    .filter(|&h| h <= self.harmonics)
+                    .map_or(0.0, |h| series[2 * h - 1].hypot(series[2 * h]))
+            })
+            .collect();
+        (amps, self.series_peak(series))
+    }
+
     /// The vibratory torque of an element (see [`HbmSolution::element_torque_series`]): the
     /// amplitude at the order `multiple·n` (0 when that order is not a harmonic of ω₀) and the
     /// true peak of its oscillating part over a period, N·m (N for a slide).
@@ -299,6 +340,42 @@ mod tests {
             }
         }
     }
+    /// The sampled force series reproduces the closed forms it stands in for: a linear law
+    /// `k q + c q̇` gives [`HbmSolution::element_torque_series`] (coefficient by coefficient, to
+    /// rounding: the discrete sums of a band-limited product are exact), and Coulomb friction
+    /// `T_f tanh(q̇/ε)` on a pure sine `q = A sin ω₀t` has the fundamental `4T_f/π` of a square
+    /// wave, to within the smoothing's share: at ε/(Aω₀) = 1e-4 the tanh differs from sign(q̇)
+    /// only over a phase width ~ε/(Aω₀), which changes the fundamental by O((ε/Aω₀)²) ≈ 1e-8, and
+    /// the 16(H + 1) samples see the jump at its exact place (it falls between samples), so the
+    /// sampled sums carry the square wave's own aliasing, below 1e-3 at H = 10 (checked here
+    /// against 1e-3).
+    #[test]
+    fn force_series_matches_closed_forms() {
+        let mut hbm = test_problem(500.0, 0, crate::model::speeds::Speeds::AbsoluteAngularVelocities);
+        let sol = hbm.solve(3.05, None).unwrap();
+        let (k, c) = (1.5e3, 0.8);
+        for j in 0..sol.ndof() {
+            let closed = sol.element_torque_series(j, k, c);
+            let sampled = sol.force_series(j, &|q, qd| k * q + c * qd);
+            let scale = closed.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (a, b) in closed.iter().zip(&sampled) {
+                assert!((a - b).abs() <= 1e-12 * scale, "{a} vs {b}");
+            }
+        }
+        // A pure sine on coordinate 0 of an otherwise zero solution.
+        let mut pure = sol.clone();
+        pure.coefficients.iter_mut().for_each(|v| *v = 0.0);
+        let amp = 0.02;
+        pure.coefficients[2] = amp; // b_1: A sin ω₀t
+        let (tf, eps) = (20.0, 1e-4 * amp * pure.base_frequency);
+        let series = pure.force_series(0, &|_, qd| tf * (qd / eps).tanh());
+        let fundamental = series[1].hypot(series[2]);
+        let expect = 4.0 * tf / PI;
+        let e = (fundamental - expect).abs() / expect;
+        println!("friction fundamental {fundamental:.9} vs 4T_f/π {expect:.9}: {e:.1e}");
+        assert!(e <= 1e-3, "{fundamental} vs {expect}");
+    }
+
     /// An element's transmitted torque: its amplitude at each order equals `|k + i hω₀ c|·|q̂_h|`
     /// (the complex stiffness times the coordinate's amplitude) to rounding, and its peak equals
     /// a dense synthesis of `k (p(t) − a_0) + c ṗ(t)` from `periodic_part` to 1e-9 (the dense

@@ -47,6 +47,17 @@ fn stiffness_damping(mech: &Mechanism, j: usize) -> (f64, f64) {
     (joint.spring.map_or(0.0, |s| s.stiffness), joint.damper)
 }
 
+/// The torque an element transmits at (q, q̇), N·m (N for a slide): its linear spring and
+/// damper, `k q + c q̇`, and its nonlinear couplings (stages, friction, stops), whose
+/// generalized force on the child is the reverse of what they transmit; None when the joint has
+/// none of these.
+fn element_torque(mech: &Mechanism, j: usize) -> Option<impl Fn(f64, f64) -> f64 + '_> {
+    let (stiff, damp) = stiffness_damping(mech, j);
+    let couplings = &mech.joints[j].couplings;
+    (stiff != 0.0 || damp != 0.0 || !couplings.is_empty())
+        .then_some(move |q: f64, qd: f64| stiff * q + damp * qd - couplings.torque(q, qd))
+}
+
 /// Per-element results of a harmonic-balance solution at the orders `multiples`·n.
 pub(crate) fn from_hbm(
     mech: &Mechanism,
@@ -63,10 +74,20 @@ pub(crate) fn from_hbm(
                 .iter()
                 .map(|&m| sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| sol.amplitude(k, h)))
                 .collect();
-            let torque = (stiff != 0.0 || damp != 0.0).then(|| {
-                let (amplitude, peak) = sol.element_torques(k, stiff, damp, multiples);
-                ElementTorque { amplitude, peak }
-            });
+            let couplings = &mech.joints[j].couplings;
+            let torque = if !couplings.is_empty() {
+                // The couplings have no closed form in the coefficients: sampled along the motion.
+                let mut series = sol.element_torque_series(k, stiff, damp);
+                let nonlinear = sol.force_series(k, &|q, qd| -couplings.torque(q, qd));
+                series.iter_mut().zip(&nonlinear).for_each(|(a, b)| *a += b);
+                let (amplitude, peak) = sol.series_torques(&series, multiples);
+                Some(ElementTorque { amplitude, peak })
+            } else {
+                (stiff != 0.0 || damp != 0.0).then(|| {
+                    let (amplitude, peak) = sol.element_torques(k, stiff, damp, multiples);
+                    ElementTorque { amplitude, peak }
+                })
+            };
             Some(ElementResponse {
                 joint: mech.joints[j].name.clone(),
                 unit: mech.joints[j].kind.coordinate_unit(),
@@ -95,7 +116,6 @@ pub(crate) fn from_window(
 ) -> Result<Vec<ElementResponse>> {
     let mut out = Vec::with_capacity(elements.len());
     for (&j, &(q, qd)) in elements.iter().zip(&cols.signals) {
-        let (stiff, damp) = stiffness_damping(mech, j);
         // The last two windows, as in the steady-state test; the amplitude of the later one.
         let span = q.len().min(2 * window);
         let (q2, qd2) = (&q[q.len() - span..], &qd[qd.len() - span..]);
@@ -111,8 +131,8 @@ pub(crate) fn from_window(
             let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
             refined_peak(last, slope.map(|d| &d[from..]), 1.0 / fs, mean)
         };
-        let torque = if stiff != 0.0 || damp != 0.0 {
-            let t: Vec<f64> = q2.iter().zip(qd2).map(|(q, qd)| stiff * q + damp * qd).collect();
+        let torque = if let Some(f) = element_torque(mech, j) {
+            let t: Vec<f64> = q2.iter().zip(qd2).map(|(&q, &qd)| f(q, qd)).collect();
             Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t, None) })
         } else {
             None
@@ -161,14 +181,13 @@ pub(crate) fn traces(
 ) -> Result<Vec<ElementTraces>> {
     let mut out = Vec::with_capacity(elements.len());
     for (&j, &(q, qd)) in elements.iter().zip(&cols.signals) {
-        let (stiff, damp) = stiffness_damping(mech, j);
         // The largest |value| after the ramp-in, between the samples too (see `refined_peak`).
         let peak = |v: &[f64], slope: Option<&[f64]>| {
             let from = skip.min(v.len());
             refined_peak(&v[from..], slope.map(|d| &d[from..]), 1.0 / fs, 0.0)
         };
-        let (torque, torque_peak) = if stiff != 0.0 || damp != 0.0 {
-            let t: Vec<f64> = q.iter().zip(qd).map(|(q, qd)| stiff * q + damp * qd).collect();
+        let (torque, torque_peak) = if let Some(f) = element_torque(mech, j) {
+            let t: Vec<f64> = q.iter().zip(qd).map(|(&q, &qd)| f(q, qd)).collect();
             (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t, None))
         } else {
             (None, 0.0)
@@ -188,17 +207,18 @@ pub(crate) fn traces(
 /// A column of one element over the table's rows, from a read-out of one [`ElementResponse`].
 pub(crate) type ElementColumn<'a> = dyn Fn(&dyn Fn(&ElementResponse) -> f64) -> Vec<f64> + 'a;
 
-/// Appends one element's columns to `table`: per multiple `<joint>_<m>x_<unit>`, then
-/// `<joint>_peak_<unit>`, and with `torque` the same for `<joint>_torque_…_Nm` (`_N` for a
-/// slide). `value` reads one number of an [`ElementResponse`] for every row.
+/// Appends one element's columns to `table`: per multiple `<prefix><joint>_<m>x_<unit>`, then
+/// `<prefix><joint>_peak_<unit>`, and with `torque` the same for `<prefix><joint>_torque_…_Nm`
+/// (`_N` for a slide); `prefix` tells sources apart (`""`, `hbm_`, `hbm_locked_`). `value` reads one number of an [`ElementResponse`] for every row.
 pub(crate) fn push_element_columns(
     table: &mut Table,
     joint: &crate::model::joint::Joint,
     multiples: &[f64],
     torque: bool,
+    prefix: &str,
     value: &ElementColumn<'_>,
 ) {
-    let (name, unit) = (&joint.name, joint.kind.coordinate_unit());
+    let (name, unit) = (format!("{prefix}{}", joint.name), joint.kind.coordinate_unit());
     let (force, force_unit) = if joint.kind.rotates() { ("Nm", "N·m") } else { ("N", "N") };
     for (k, m) in multiples.iter().enumerate() {
         table.push(format!("{name}_{}x_{unit}", fmt_num(*m)), unit, value(&|x| x.amplitude[k]));

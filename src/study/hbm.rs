@@ -356,6 +356,7 @@ pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) 
                         joint,
                         &spec.multiples,
                         first.torque.is_some(),
+                        "",
                         &el,
                     );
                 }
