@@ -338,7 +338,11 @@ impl Study {
                     ..*h
                 })
                 .collect();
-            let mean = if j == spin { base.mean } else { 0.0 };
+            // The mean stays the mechanism's own on every joint but the spin joint, as in the
+            // linear operating point and the harmonic balance (a preload such as an engine's
+            // mean torque on a joint chain must not vanish with the oscillating part).
+            let own = mech_mean(kane, j);
+            let mean = if j == spin { base.mean } else { own };
             kane.set_joint_torque(j, crate::model::excitation::Excitation { mean, harmonics, ..base.clone() });
         }
     }
@@ -350,6 +354,11 @@ impl Study {
             _ => Kane::new(&self.mechanism),
         }
     }
+}
+
+/// The mean of the torque the mechanism file applies at joint `j` (0 when none).
+fn mech_mean(kane: &Kane, j: usize) -> f64 {
+    kane.joint_torques().iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean)
 }
 
 /// Fills the harmonics of every multi-order analysis that names an `engine` from the engine's

@@ -56,6 +56,15 @@ pub struct SpeedResult {
     /// the full torques (s = 1) that state no longer exists. None when it reaches s = 1 (or
     /// harmonic balance was not asked for).
     pub hbm_lower_fold: Option<f64>,
+    /// The harmonic-balance state a slow run-up of the torques reaches: the low-amplitude
+    /// branch continued in torque scale from s = 0.01 to the full torques (None when it folds
+    /// first, see `hbm_lower_fold`, or harmonic balance was not asked for).
+    pub hbm_ramp: Option<HbmState>,
+    /// The locked twin's state by the same continuation (None without a locked twin, or when
+    /// its branch folds before the full torques: see `hbm_locked_fold`).
+    pub hbm_locked: Option<HbmState>,
+    /// Where the locked twin's low-amplitude branch folds below s = 1, as `hbm_lower_fold`.
+    pub hbm_locked_fold: Option<f64>,
 }
 
 /// One periodic steady state by harmonic balance.
@@ -76,6 +85,10 @@ impl SpeedResult {
     /// relative difference of their tracked amplitudes.
     pub fn hbm_match(&self) -> Option<(&HbmState, f64)> {
         let r = self.response.as_ref()?;
+        // A run without finite amplitudes matches nothing (a NaN would read as agreement).
+        if r.amplitudes.iter().any(|a| !a.is_finite()) {
+            return None;
+        }
         self.hbm
             .iter()
             .filter(|h| h.stable == Some(true))
@@ -115,6 +128,20 @@ impl SpeedResult {
     fn linear_amplitude(&self, k: usize, locked: bool) -> f64 {
         let v = if locked { &self.linear_locked } else { &self.linear };
         v.as_ref().map_or(f64::NAN, |v| v[k])
+    }
+
+    /// Harmonic-balance amplitude of multiple k on the torque ramp's branch, of the mechanism or
+    /// of its locked twin (NaN when there is none).
+    pub fn hbm_amplitude(&self, k: usize, locked: bool) -> f64 {
+        let s = if locked { &self.hbm_locked } else { &self.hbm_ramp };
+        s.as_ref().map_or(f64::NAN, |s| s.amplitudes[k])
+    }
+
+    /// The torque ramp's harmonic-balance amplitude of multiple k over the locked twin's, NaN
+    /// when undefined.
+    pub fn hbm_ratio(&self, k: usize) -> f64 {
+        let scale = self.hbm_locked.as_ref().map_or(0.0, |l| l.amplitudes.iter().copied().fold(0.0, f64::max));
+        super::ratio(self.hbm_amplitude(k, false), self.hbm_amplitude(k, true), scale)
     }
 }
 
@@ -185,16 +212,31 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             linear_locked: linear_locked.get(i).cloned(),
             hbm: Vec::new(),
             hbm_lower_fold: None,
+            hbm_ramp: None,
+            hbm_locked: None,
+            hbm_locked_fold: None,
         })
         .collect();
     let mut speeds = speeds;
     if spec.hbm {
-        let states: Vec<Result<(Vec<HbmState>, Option<f64>)>> =
+        let states: Vec<Result<(Vec<HbmState>, Ramp)>> =
             spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
         for (s, st) in speeds.iter_mut().zip(states) {
             match st {
-                Ok(st) => (s.hbm, s.hbm_lower_fold) = st,
+                Ok((states, ramp)) => {
+                    s.hbm = states;
+                    (s.hbm_ramp, s.hbm_lower_fold) = ramp;
+                }
                 Err(e) => failures.push(format!("{} harmonic balance at {} rpm: {e}", spec.name, s.rpm)),
+            }
+        }
+        if study.locked.is_some() {
+            let locked: Vec<Result<Ramp>> = spec.speeds.par_iter().map(|p| ramp(study, spec, p, true)).collect();
+            for (s, r) in speeds.iter_mut().zip(locked) {
+                match r {
+                    Ok(r) => (s.hbm_locked, s.hbm_locked_fold) = r,
+                    Err(e) => failures.push(format!("{} harmonic balance at {} rpm locked: {e}", spec.name, s.rpm)),
+                }
             }
         }
     }
@@ -264,7 +306,41 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
             };
             let joint = &study.mechanism.joints[j];
             let torque = joint.spring.is_some() || joint.damper != 0.0;
-            push_element_columns(&mut table, joint, &spec.multiples, torque, &el);
+            push_element_columns(&mut table, joint, &spec.multiples, torque, "", &el);
+        }
+    }
+    if spec.hbm {
+        for (k, m) in spec.multiples.iter().enumerate() {
+            let tag = fmt_mult(*m);
+            let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
+            table.push(format!("hbm_{tag}x_rad_s2"), "rad/s²", col(&|s| s.hbm_amplitude(k, false)));
+            if has_locked {
+                table.push(format!("hbm_locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.hbm_amplitude(k, true)));
+                table.push(format!("hbm_ratio_{tag}x"), "1", col(&|s| s.hbm_ratio(k)));
+            }
+        }
+        // The elements on the torque ramp's state, of the mechanism and of the locked twin (by
+        // joint name: the twin lacks the locked joints).
+        for (prefix, locked) in [("hbm_", false), ("hbm_locked_", true)] {
+            if locked && !has_locked {
+                continue;
+            }
+            for &j in &study.elements {
+                let joint = &study.mechanism.joints[j];
+                let pick = |s: &SpeedResult| -> Option<ElementResponse> {
+                    let st = if locked { s.hbm_locked.as_ref() } else { s.hbm_ramp.as_ref() }?;
+                    st.elements.iter().find(|e| e.joint == joint.name).cloned()
+                };
+                let present = result.speeds.iter().any(|s| pick(s).is_some());
+                if !present {
+                    continue;
+                }
+                let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                    result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |e| f(&e))).collect::<Vec<f64>>()
+                };
+                let torque = result.speeds.iter().filter_map(pick).any(|e| e.torque.is_some());
+                push_element_columns(&mut table, joint, &spec.multiples, torque, prefix, &el);
+            }
         }
     }
     table
@@ -303,10 +379,8 @@ pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
 /// All periodic steady states at the operating order: the response is continued in order from
 /// `order + 0.4` down to `order − 0.4` and back up (a branch crosses the operating order once per
 /// sheet of an S-shaped response, and each direction reaches the sheets connected to its start),
-/// and each crossing is solved exactly at the order.
-/// The harmonic-balance states at one speed, and where the low-amplitude branch ends in torque
-/// scale if below 1 (see [`SpeedResult::hbm_lower_fold`]).
-fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Option<f64>)> {
+/// and each crossing is solved exactly at the order; with the torque ramp's state ([`ramp`]).
+fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Ramp)> {
     let omega = rpm_to_rad_s(p.rpm);
     let path = study.mechanism.rotation_coordinates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
@@ -325,11 +399,49 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
         }
     }
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
-    // Both torques scaled together from nearly nothing (the linear response) up to the table's.
-    let param = crate::hbm::Parameter::TorqueScale { order: spec.order };
-    let (_, up, _) = super::hbm::branch_in(study, omega, &p.harmonics, &spec.excite, 10, param, 0.01, 1.0, None)?;
-    let fold = up.folds.first().filter(|f| f.kind == crate::hbm::FoldKind::Maximum).map(|f| f.parameter);
-    Ok((out, fold))
+    Ok((out, ramp(study, spec, p, false)?))
+}
+
+/// The torque ramp's state and, when its branch folds first, the torque scale of the fold.
+type Ramp = (Option<HbmState>, Option<f64>);
+
+/// The state a slow run-up of the torques settles in, by harmonic balance on the mechanism or
+/// its locked twin: every harmonic scaled together by s, continued from s = 0.01 (where the
+/// response is the linear one) up to the table's torques, s = 1, at the operating order. A fold
+/// of maximum kind before s = 1 means that state stops existing on the way (the run jumps): the
+/// fold's s is returned instead of a state. The locked twin reports the study's elements that
+/// it keeps.
+fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: bool) -> Result<Ramp> {
+    use crate::hbm::{ContinuationOptions, FoldKind, Hbm, HbmOptions, Parameter};
+    let omega = rpm_to_rad_s(p.rpm);
+    let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
+    let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
+    let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
+    let kane = study.kane(locked)?;
+    let inputs = study.excited_joints(mech, &spec.excite);
+    let opts = HbmOptions { harmonics: 10, ..HbmOptions::default() };
+    let err = super::hbm::hbm_error(study);
+    let mut hbm = Hbm::with_inputs(&kane, spin, omega, &p.harmonics, &inputs, opts).map_err(&err)?;
+    let param = Parameter::TorqueScale { order: spec.order };
+    let up = hbm.continue_in(param, 0.01, 1.0, None, &ContinuationOptions::default()).map_err(&err)?;
+    let fold = up.folds.first().filter(|f| f.kind == FoldKind::Maximum).map(|f| f.parameter);
+    if fold.is_some() {
+        return Ok((None, fold));
+    }
+    let Some(guess) = up.guesses_at(1.0).into_iter().next().cloned() else { return Ok((None, None)) };
+    hbm.set_torque_scale(1.0).map_err(&err)?;
+    let sol = hbm.solve(spec.order, Some(&guess)).map_err(&err)?;
+    let stable = hbm.stability(&sol).ok().map(|s| s.stable);
+    let path = mech.rotation_coordinates(body);
+    let amplitudes = spec.multiples.iter().map(|&m| super::hbm::body_accel(&sol, &path, m)).collect();
+    let elements: Vec<usize> = if locked {
+        let names = study.elements.iter().map(|&j| &study.mechanism.joints[j].name);
+        names.filter_map(|n| mech.joint_index(n)).collect()
+    } else {
+        study.elements.clone()
+    };
+    let elements = from_hbm(mech, &elements, &sol, &spec.multiples);
+    Ok((Some(HbmState { amplitudes, stable, max_relative_angle: sol.max_peak_amplitude(), elements }), None))
 }
 
 /// Amplitudes indexed `[speed][multiple]`, rad/s².
@@ -376,8 +488,15 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
     let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
     let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
+    // Start at the linear analysis's operating point when it has one: every coordinate at its
+    // relative equilibrium under the mechanism's mean torques (a wound-up spring needs no
+    // transient to get there), and the mean spin torque that holds the speed against every
+    // loss and constant torque of the mechanism, which the dampers' estimate alone misses.
+    let op = crate::linear::LinearModel::new(mech, &study.spec.spin_joint, omega, None).ok().map(|m| m.op);
     let excitation = Excitation {
-        mean: spec.mean_torque.unwrap_or_else(|| Study::loss_torque(mech, spin, omega)),
+        mean: spec.mean_torque.unwrap_or_else(|| {
+            op.as_ref().map_or_else(|| Study::loss_torque(mech, spin, omega), |op| op.mean_spin_torque)
+        }),
         rpm: point.rpm,
         order: Order::Fixed(spec.order),
         harmonics: point.harmonics.clone(),
@@ -391,7 +510,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
     // The elements are the mechanism's joints; the locked twin reports none.
     let elements: &[usize] = if locked { &[] } else { &study.elements };
     let mut rec = sim::recorder(mech, spin, body, false, elements)?;
-    let x0 = Study::initial_state(mech, spin, omega);
+    let x0 = op.as_ref().map_or_else(|| Study::initial_state(mech, spin, omega), |op| [&op.q[..], &op.u[..]].concat());
     let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
     let order = spec.order;
     let mut measure = |tail: &[f64]| -> Result<WindowPair> {

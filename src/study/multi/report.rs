@@ -34,14 +34,23 @@ pub(super) fn render(
                 add(format!("{}, locked", order_name(*m)), ys(&|s| s.locked_amplitude(k)), LineStyle::Dotted);
             }
         }
+        // Without time runs the torque ramp's harmonic-balance state is the nonlinear line.
+        let hbm_lines = spec.hbm && !spec.time_domain;
+        if hbm_lines {
+            add(
+                format!("{} ({}n), HBM", order_name(*m), fmt_mult(*m)),
+                ys(&|s| s.hbm_amplitude(k, false)),
+                LineStyle::Solid,
+            );
+            if has_locked {
+                add(format!("{}, HBM locked", order_name(*m)), ys(&|s| s.hbm_amplitude(k, true)), LineStyle::Dotted);
+            }
+        }
         if spec.linear {
             add(format!("{}, linear", order_name(*m)), ys(&|s| s.linear_amplitude(k, false)), LineStyle::Dashed);
             if !spec.time_domain && has_locked {
-                add(
-                    format!("{}, linear locked", order_name(*m)),
-                    ys(&|s| s.linear_amplitude(k, true)),
-                    LineStyle::Dotted,
-                );
+                let style = if hbm_lines { LineStyle::Points } else { LineStyle::Dotted };
+                add(format!("{}, linear locked", order_name(*m)), ys(&|s| s.linear_amplitude(k, true)), style);
             }
         }
     }
@@ -57,11 +66,18 @@ pub(super) fn render(
     };
     let mut panels = vec![panel];
     // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
-    // from the first harmonic-balance state where there are none.
+    // from the torque ramp's harmonic-balance state (else the lowest state) where there are none.
+    fn elements_of(s: &SpeedResult) -> Option<&Vec<crate::study::elements::ElementResponse>> {
+        s.response
+            .as_ref()
+            .map(|r| &r.elements)
+            .or_else(|| s.hbm_ramp.as_ref().map(|h| &h.elements))
+            .or_else(|| s.hbm.first().map(|h| &h.elements))
+    }
     let names: Vec<String> = result
         .speeds
         .iter()
-        .find_map(|s| s.response.as_ref().map(|r| &r.elements).or_else(|| s.hbm.first().map(|h| &h.elements)))
+        .find_map(elements_of)
         .map(|els| els.iter().map(|e| e.joint.clone()).collect())
         .unwrap_or_default();
     let mut element_series = Vec::new();
@@ -71,7 +87,7 @@ pub(super) fn render(
                 .speeds
                 .iter()
                 .map(|s| {
-                    let els = s.response.as_ref().map(|r| &r.elements).or_else(|| s.hbm.first().map(|h| &h.elements));
+                    let els = elements_of(s);
                     els.and_then(|els| els.get(e)).and_then(|el| el.amplitude.get(k).copied()).unwrap_or(f64::NAN)
                 })
                 .collect();
@@ -193,6 +209,58 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
              at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
              and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
         );
+        md += &ramp_table(spec, r);
+    }
+    md
+}
+
+/// The torque ramp's harmonic-balance states with and without the absorber (the locked twin),
+/// and their elements.
+fn ramp_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let locked = r.speeds.iter().any(|s| s.hbm_locked.is_some() || s.hbm_locked_fold.is_some());
+    let _ = writeln!(
+        md,
+        "The state a slow run-up of the torques reaches (the low-amplitude branch at s = 1){}:\n",
+        if locked { ", with the absorbers free and locked" } else { "" }
+    );
+    let mut head = "| rpm |".to_string();
+    let mut rule = "|---|".to_string();
+    for m in &spec.multiples {
+        let tag = fmt_mult(*m);
+        head += &format!(" {tag}n HBM (rad/s²) |");
+        rule += "---|";
+        if locked {
+            head += &format!(" {tag}n HBM locked | {tag}n ratio |");
+            rule += "---|---|";
+        }
+    }
+    let _ = writeln!(md, "{head}\n{rule}");
+    let fold = |f: Option<f64>| f.map_or("–".to_string(), |f| format!("fold at s = {f:.4}"));
+    for s in &r.speeds {
+        let mut row = format!("| {} |", s.rpm);
+        for k in 0..spec.multiples.len() {
+            let a = if s.hbm_ramp.is_some() { cell(s.hbm_amplitude(k, false), 4) } else { fold(s.hbm_lower_fold) };
+            let _ = write!(row, " {a} |");
+            if locked {
+                let l =
+                    if s.hbm_locked.is_some() { cell(s.hbm_amplitude(k, true), 4) } else { fold(s.hbm_locked_fold) };
+                let _ = write!(row, " {l} | {} |", cell(s.hbm_ratio(k), 3));
+            }
+        }
+        let _ = writeln!(md, "{row}");
+    }
+    md.push('\n');
+    for (what, locked) in [("absorbers free", false), ("absorbers locked", true)] {
+        let rows = r.speeds.iter().flat_map(move |s| {
+            let st = if locked { s.hbm_locked.as_ref() } else { s.hbm_ramp.as_ref() };
+            st.into_iter().flat_map(move |h| h.elements.iter().map(move |e| (s.rpm, e)))
+        });
+        let t = element_table(rows, &spec.multiples);
+        if !t.is_empty() {
+            let _ = writeln!(md, "Elements on that state, {what}:\n");
+            md += &t;
+        }
     }
     md
 }
