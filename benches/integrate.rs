@@ -60,7 +60,8 @@ fn sweep(c: &mut Criterion) {
 
 /// End to end through the study runner: reading the files, integrating, order tracking, writing
 /// CSV/SVG/Markdown. `paper_study` is the whole of `examples/cpva_paper.ron` on the global rayon
-/// pool (as many threads as cores: 2 here).
+/// pool (as many threads as cores: 2 here); `truck_driveline` the whole of
+/// `examples/truck_study.ron` likewise.
 fn study(c: &mut Criterion) {
     use kanedyn::study::{RunOptions, Study, run};
     let out = std::env::temp_dir().join("kanedyn_bench_out");
@@ -76,6 +77,14 @@ fn study(c: &mut Criterion) {
     g.bench_function("paper_study", |b| {
         b.iter(|| {
             let s = Study::from_file(std::path::Path::new("examples/cpva_paper.ron")).unwrap();
+            black_box(run(&s, &opts).unwrap().files.len())
+        })
+    });
+    // Issue 15's driveline example, whole: Campbell, and at 13 speeds the linear, harmonic-balance
+    // (every branch, the torque ramp, the locked twin) and time-domain multi-order response.
+    g.bench_function("truck_driveline", |b| {
+        b.iter(|| {
+            let s = Study::from_file(std::path::Path::new("examples/truck_study.ron")).unwrap();
             black_box(run(&s, &opts).unwrap().files.len())
         })
     });
