@@ -57,21 +57,26 @@ pub(crate) fn from_hbm(
     elements
         .iter()
         .filter_map(|&j| {
-            let k = mech.coordinate(j)?;
+            // A rigidly driven joint moves as factor · its followed coordinate (plus a constant
+            // offset, which no amplitude or peak about the mean sees).
+            let f = mech.follow_map()[j]?;
+            let (k, a) = (f.coordinate, f.factor);
             let (stiff, damp) = stiffness_damping(mech, j);
             let amplitude = multiples
                 .iter()
-                .map(|&m| sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| sol.amplitude(k, h)))
+                .map(|&m| {
+                    sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| a.abs() * sol.amplitude(k, h))
+                })
                 .collect();
             let torque = (stiff != 0.0 || damp != 0.0).then(|| {
-                let (amplitude, peak) = sol.element_torques(k, stiff, damp, multiples);
+                let (amplitude, peak) = sol.element_torques(k, a * stiff, a * damp, multiples);
                 ElementTorque { amplitude, peak }
             });
             Some(ElementResponse {
                 joint: mech.joints[j].name.clone(),
                 unit: mech.joints[j].kind.coordinate_unit(),
                 amplitude,
-                peak: sol.peak_amplitude(k),
+                peak: a.abs() * sol.peak_amplitude(k),
                 torque,
             })
         })

@@ -308,7 +308,7 @@ pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
 /// scale if below 1 (see [`SpeedResult::hbm_lower_fold`]).
 fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Option<f64>)> {
     let omega = rpm_to_rad_s(p.rpm);
-    let path = study.mechanism.rotation_coordinates(study.body);
+    let path = study.mechanism.rotation_rates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
     let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
     for (from, to) in [(hi, lo), (lo, hi)] {
