@@ -197,15 +197,16 @@ fn power_balances_across_the_mesh_in_a_time_run() {
     let opts = IntegrateOptions { sample_rate_hz: Some(2000.0), ..IntegrateOptions::default() };
     let out = simulate(&mut kane, &x0, 0.0, 0.5, &opts, &mut rec, &mut |_| {});
     assert!(out.error.is_none(), "{:?}", out.error);
-    let c = &rec.columns;
     let mut worst = 0.0f64;
     for s in 0..rec.time.len() {
-        let (tau, w_out, w_in) = (c[0][s], c[1][s], c[2][s]);
+        // One sample across the columns.
+        let v: Vec<f64> = rec.columns.iter().map(|col| col[s]).collect();
+        let (tau, w_out, w_in) = (v[0], v[1], v[2]);
         // The driven joint's rate is the gear's r times the driver's, the wheel's body rate too.
         assert_eq!(w_out, r * w_in);
-        assert_eq!(c[3][s], w_out);
+        assert_eq!(v[3], w_out);
         let p_mesh = tau * w_out;
-        let terms = [jw * c[3][s] * c[4][s], jv * c[5][s] * c[6][s], kd * c[7][s] * c[8][s], cd * c[8][s] * c[8][s]];
+        let terms = [jw * v[3] * v[4], jv * v[5] * v[6], kd * v[7] * v[8], cd * v[8] * v[8]];
         let scale = terms.iter().map(|t| t.abs()).fold(p_mesh.abs(), f64::max);
         worst = worst.max((p_mesh - terms.iter().sum::<f64>()).abs() / scale);
         // Reflected on the driving shaft: −r τ θ̇_in = −τ θ̇_out.
@@ -248,14 +249,15 @@ fn driven_joint_probes_follow_the_gear() {
     let mut rec = Recorder::new(&mech, &probes).unwrap();
     let opts = IntegrateOptions { sample_rate_hz: Some(500.0), ..IntegrateOptions::default() };
     simulate(&mut kane, &[0.1, 20.0], 0.0, 0.2, &opts, &mut rec, &mut |_| {});
-    let c = &rec.columns;
     assert!(rec.time.len() > 90);
     for s in 0..rec.time.len() {
-        assert_eq!(c[0][s], r * c[5][s] + o);
-        assert_eq!(c[2][s], c[0][s]);
-        assert_eq!(c[1][s], r * c[6][s]);
-        assert_eq!(c[3][s], c[1][s]);
-        assert_eq!(c[4][s], r * c[7][s]);
+        // One sample across the columns.
+        let v: Vec<f64> = rec.columns.iter().map(|col| col[s]).collect();
+        assert_eq!(v[0], r * v[5] + o);
+        assert_eq!(v[2], v[0]);
+        assert_eq!(v[1], r * v[6]);
+        assert_eq!(v[3], v[1]);
+        assert_eq!(v[4], r * v[7]);
     }
     // A joint no gear drives has no mesh torque: a located refusal names the driven joints.
     let e = Probe::resolve(&mech, ProbeKind::GearMeshTorque, "input").unwrap_err().to_string();

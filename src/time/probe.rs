@@ -57,9 +57,10 @@ pub enum ProbeKind {
     JointForceTangential,
     /// Moment about the joint point the parent exerts on the child, N·m.
     JointMoment,
-    /// Torque the gear mesh driving the named joint exerts on it (N·m; N on a prismatic joint;
-    /// + on the child, − on the parent): a rigid coupling's constraint torque, a compliant mesh's
-    /// spring and damper torque. The driving joint receives `−ratio` times it.
+    /// Torque the gear mesh driving the named joint exerts on it, as a joint torque (positive on
+    /// the child, negative on the parent; N·m, N on a prismatic joint): a rigid coupling's
+    /// constraint torque, a compliant mesh's spring and damper torque. The driving joint receives
+    /// `−ratio` times it.
     GearMeshTorque,
 }
 
