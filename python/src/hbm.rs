@@ -141,7 +141,7 @@ fn hbm_branch(
         let branch =
             py.detach(|| hbm.continue_in(Parameter::Order, order_from, order_to, None, &copts)).map_err(hbm_err)?;
         let wall_s = start.elapsed().as_secs_f64();
-        let path = mech.rotation_coordinates(body_index);
+        let path = mech.rotation_rates(body_index);
         let p = &branch.points;
         let accel: Vec<f64> = multiples
             .iter()

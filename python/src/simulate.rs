@@ -23,7 +23,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 }
 
 /// The probe kinds by name, in the order the docs list them.
-const KINDS: [(&str, ProbeKind); 9] = [
+const KINDS: [(&str, ProbeKind); 10] = [
     ("BodyAngle", ProbeKind::BodyAngle),
     ("BodyRate", ProbeKind::BodyRate),
     ("BodyAccel", ProbeKind::BodyAccel),
@@ -33,6 +33,7 @@ const KINDS: [(&str, ProbeKind); 9] = [
     ("JointForceRadial", ProbeKind::JointForceRadial),
     ("JointForceTangential", ProbeKind::JointForceTangential),
     ("JointMoment", ProbeKind::JointMoment),
+    ("GearMeshTorque", ProbeKind::GearMeshTorque),
 ];
 
 /// Name of a probe kind.

@@ -170,7 +170,7 @@ def test_bad_arguments_raise_argument_errors():
         (dict(x0=[0, 0, 1]), "x0 must be [q; u] (4 values) or a pair (q0, u0) of 2 values each (coordinates: spin, pivot)"),
         (dict(x0=[0, float("nan"), 1, 1]), "x0: q[1] is not finite"),
         (dict(probes=[("BodyAccel", "rotr")]), "probes[0]: mechanism `cpva`: probe BodyAccel: unknown body `rotr` (known bodys: rotor, pendulum)"),
-        (dict(probes=[("Accel", "rotor")]), "probes[0]: unknown probe kind `Accel` (kinds: BodyAngle, BodyRate, BodyAccel, JointAngle, JointRate, LargestJointAngle, JointForceRadial, JointForceTangential, JointMoment)"),
+        (dict(probes=[("Accel", "rotor")]), "probes[0]: unknown probe kind `Accel` (kinds: BodyAngle, BodyRate, BodyAccel, JointAngle, JointRate, LargestJointAngle, JointForceRadial, JointForceTangential, JointMoment, GearMeshTorque)"),
         (dict(probes=["rotor"]), "probes[0] must be a pair (kind, name)"),
         (dict(t1=0.0), "t1 must be after t0, got t0 = 0 s, t1 = 0 s"),
         (dict(rtol=-1.0), "rtol must be a finite, positive number, got -1"),

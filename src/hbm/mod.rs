@@ -103,7 +103,7 @@ mod stability;
 
 pub use branch::{Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 pub use continuation::{ContinuationOptions, continue_in_order};
-pub use reaction::ReactionHarmonics;
+pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::Stability;
 
@@ -326,8 +326,11 @@ impl Hbm {
         if !(omega.is_finite() && omega > 0.0) {
             return bad(format!("mean speed must be positive and finite, got {omega} rad/s"));
         }
+        // A rigidly driven joint is excited through its gear: its torque reaches the coordinate it
+        // follows times the factor (Tᵀ, docs/design.md "Gears").
+        let follow = mech.follow_map();
         for &(j, scale, phase) in inputs {
-            if mech.joints.get(j).and_then(|_| mech.coordinate(j)).is_none() {
+            if follow.get(j).copied().flatten().is_none() {
                 return bad(format!("excitation input: joint #{j} has no coordinate (Fixed or out of range)"));
             }
             if !(scale.is_finite() && phase.is_finite()) {
@@ -337,7 +340,9 @@ impl Hbm {
                 ));
             }
         }
-        for jt in kane.joint_torques() {
+        // A geared engine's unconstrained tree holds every joint torque, the driven joints' too.
+        let torques = kane.unconstrained().map_or(kane.joint_torques(), |u| u.joint_torques()).to_vec();
+        for jt in &torques {
             let replaced = jt.joint == spin_joint || inputs.iter().any(|i| i.0 == jt.joint);
             if !replaced && jt.excitation.harmonics.iter().any(|h| h.amplitude != 0.0) {
                 return bad(format!(
@@ -388,7 +393,7 @@ impl Hbm {
         let t_scale = harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>().max(1.0);
         let mut kane = kane.clone();
         for &(j, _, _) in inputs {
-            let mean = kane.joint_torques().iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean);
+            let mean = torques.iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean);
             kane.set_joint_torque(j, Excitation::constant(mean));
         }
         kane.set_joint_torque(spin_joint, Excitation::constant(0.0));
@@ -408,13 +413,13 @@ impl Hbm {
         // g_j[r] = ∂q̇_j/∂u_r (a torque τ at joint j does τ q̇_j of power).
         let mut exc = vec![0.0; n * nt];
         for &(joint, scale, phase) in inputs {
-            let c = mech.coordinate(joint).unwrap_or(spin);
+            let (c, factor) = follow[joint].map_or((spin, 1.0), |f| (f.coordinate, f.factor));
             let mut gj = vec![0.0; n];
             for (r, g) in gj.iter_mut().enumerate() {
                 e.iter_mut().for_each(|x| *x = 0.0);
                 e[r] = 1.0;
                 speeds.qdot(&parents, &e, &mut qd);
-                *g = qd[c];
+                *g = factor * qd[c];
             }
             for j in 0..nt {
                 let tau = 2.0 * PI * j as f64 / nt as f64;

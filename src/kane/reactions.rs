@@ -16,6 +16,18 @@
 //! and dampers inside S_j cancel in pairs; those of joint j itself are part of what the parent
 //! exerts, so a revolute joint's moment is its spring, damper and applied torque (its
 //! constraint carries no moment), a path or slide joint's moment includes the track's.
+//!
+//! Geared mechanisms (docs/design.md, "Gears"): the pass runs on the unconstrained tree at the
+//! expanded state `q_full = T q + o`, `q̇_full = T q̇`, `q̈_full = T q̈` (T constant). A rigid
+//! coupling `q̇_d = r q̇_f` acts on that tree as the generalized constraint force `Gᵀλ` of its
+//! Jacobian row `G = e_d − r e_f`: a joint torque λ at the driven joint d and `−r λ` at the
+//! driving joint f (no net power: `λ q̇_d − r λ q̇_f = 0`). So a driven revolute joint's moment is
+//! its own torques plus λ, and the driving one's includes `−r λ`. λ itself, the mesh torque, is
+//! [`crate::kane::Kane::gear_torques`]: the residual `R = M_full q̈_full − F_full` of the unconstrained tree
+//! equals `Gᵀλ`, so `λ_d = R_d + Σ_e r_e λ_e` over the couplings e that follow d (solved from
+//! the ends of each gear chain back). The tooth force itself is not resolved into the bearing
+//! forces: the model has no pitch radii, only the ratio, so a gear shaft's radial and
+//! tangential reactions carry its inertia and loads but not the mesh force.
 
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rot2};
@@ -37,10 +49,23 @@ pub struct Reaction {
 }
 
 /// Every joint's reaction at coordinates `q`, rates `qdot` and accelerations `qddot` (joint
-/// rates, `q̇ = W⁻¹u`, `q̈ = W⁻¹u̇`), in joint order. A geared mechanism's driven joints have no
-/// coordinate of their own: pass its expanded tree (`Mechanism::expanded`) with the expanded
-/// state, or the driven joints count as welded.
+/// rates, `q̇ = W⁻¹u`, `q̈ = W⁻¹u̇`), in joint order. On a geared mechanism these are its
+/// reduced coordinates: the pass runs on the unconstrained tree at the expanded state
+/// ([`Mechanism::expand_state`]), so a driven joint's moment holds the torque its mesh exerts
+/// on it and a driving joint's the reflection (see the module doc).
 pub fn joint_reactions(mech: &Mechanism, q: &[f64], qdot: &[f64], qddot: &[f64]) -> Vec<Reaction> {
+    if mech.is_geared() {
+        let [q, qd, qdd] = mech.expand_state(q, qdot, qddot);
+        return tree_reactions(&mech.expanded(), &q, &qd, &qdd);
+    }
+    tree_reactions(mech, q, qdot, qddot)
+}
+
+/// [`joint_reactions`] of a tree without couplings (for a geared mechanism: its
+/// [`Mechanism::expanded`] tree at the expanded state, which callers evaluating many samples
+/// keep instead of expanding per call).
+pub fn tree_reactions(mech: &Mechanism, q: &[f64], qdot: &[f64], qddot: &[f64]) -> Vec<Reaction> {
+    debug_assert!(!mech.is_geared(), "internal: tree_reactions takes the expanded tree of a geared mechanism");
     let nb = mech.bodies.len();
     let mut angle = vec![0.0; nb];
     let mut omega = vec![0.0; nb];

@@ -35,6 +35,15 @@ struct MeshLoad {
     damping: f64,
 }
 
+/// One coupling as [`Kane::gear_torques`] reads it.
+#[derive(Debug, Clone, Copy)]
+enum Link {
+    /// A rigid coupling: expanded coordinates of the driven and the driving joint, the ratio.
+    Rigid { joint: usize, follows: usize, ratio: f64 },
+    /// A compliant mesh: its index in `Geared::meshes`.
+    Mesh(usize),
+}
+
 /// The unconstrained tree of a geared mechanism and the constant map to its reduced state.
 #[derive(Debug, Clone)]
 pub(super) struct Geared {
@@ -43,6 +52,9 @@ pub(super) struct Geared {
     /// Per expanded coordinate: (reduced coordinate, factor, offset), `q_f = factor q_r + offset`.
     map: Vec<(usize, f64, f64)>,
     meshes: Vec<MeshLoad>,
+    /// Per coupling of the mechanism (its `gears` order): a rigid one's expanded driven and
+    /// driving coordinates and ratio, or a compliant one's index in `meshes`.
+    links: Vec<Link>,
     /// The expanded state of one evaluation.
     q: Vec<f64>,
     u: Vec<f64>,
@@ -62,6 +74,18 @@ impl Geared {
                 expanded[j] = k;
             }
         }
+        let mut n_mesh = 0;
+        let links = mech
+            .gears
+            .iter()
+            .map(|g| match g.mesh {
+                None => Link::Rigid { joint: expanded[g.joint], follows: expanded[g.follows], ratio: g.ratio },
+                Some(_) => {
+                    n_mesh += 1;
+                    Link::Mesh(n_mesh - 1)
+                }
+            })
+            .collect();
         let meshes = mech
             .gears
             .iter()
@@ -78,17 +102,20 @@ impl Geared {
             })
             .collect();
         let mut full = Kane::build(&full_mech, world)?;
-        // The reduced evaluator adds the couplings of the independent joints itself (after the
-        // reduction, in its own coordinates, where the linearisation can suspend them); the
-        // unconstrained tree keeps only those of driven joints, which have no reduced coordinate:
-        // otherwise an independent joint's coupling would act twice.
-        let driven: Vec<usize> = (0..mech.joints.len())
-            .filter(|&j| mech.joints[j].coordinate.is_none() && expanded[j] != usize::MAX)
-            .map(|j| expanded[j])
+        // NOTE: an independent joint's nonlinear couplings (stages, friction, stops) are the
+        // outer engine's, which adds them on the reduced coordinates (with their exact
+        // Jacobians); the inner tree keeps only the driven joints'. Keeping both counted them
+        // twice (issue 15 regression, tests/gear_reactions.rs).
+        let independent: Vec<usize> = full_mech
+            .joints
+            .iter()
+            .zip(&mech.joints)
+            .filter(|(_, outer)| outer.coordinate.is_some())
+            .filter_map(|(inner, _)| inner.coordinate)
             .collect();
-        full.couplings.retain(|c| driven.contains(&c.coord));
+        full.couplings.retain(|c| !independent.contains(&c.coord));
         let nf = map.len();
-        Ok(Geared { full, map, meshes, q: vec![0.0; nf], u: vec![0.0; nf] })
+        Ok(Geared { full, map, meshes, links, q: vec![0.0; nf], u: vec![0.0; nf] })
     }
 }
 
@@ -147,6 +174,74 @@ impl Kane {
                 self.state[j].qdot = u[k];
             }
         }
+    }
+
+    /// The torque (N·m; N on a prismatic joint) each coupling's mesh exerts on its driven joint
+    /// (`gears[i].joint`, as a joint torque: + on the child, − on the parent) at time `t`, reduced
+    /// coordinates `q`, speeds `u` and their rates `udot`, in the mechanism's `gears` order; the
+    /// driving joint receives `−ratio` times it (the same power with the opposite sign). Empty
+    /// without couplings.
+    ///
+    /// A rigid coupling's torque is its constraint force λ: the unconstrained tree's residual
+    /// `R = M_full T u̇ − F_full` at the expanded state is `Gᵀλ` (module doc of
+    /// [`crate::kane::reactions`]), so `λ_d = R_d + Σ_e r_e λ_e` over the couplings e driven by
+    /// d. A compliant mesh's is its spring and damper, `(k e + c ė) / ratio` with the deflection
+    /// `e` at the driving joint. `udot` must be the engine's own accelerations at this state (from
+    /// [`Kane::rhs`]) for λ to be the constraint's; the joint torques are this engine's, so a
+    /// torque applied at a driven joint must be set here as in the run.
+    pub fn gear_torques(&mut self, t: f64, q: &[f64], u: &[f64], udot: &[f64]) -> Vec<f64> {
+        if self.geared.is_none() {
+            return Vec::new();
+        }
+        self.evaluate(t, q, u, true);
+        let Some(g) = self.geared.as_deref() else { return Vec::new() };
+        let nf = g.map.len();
+        let (mf, ff) = (&g.full.m[..nf * nf], &g.full.f[..nf]);
+        let udot_full: Vec<f64> = g.map.iter().map(|&(k, a, _)| a * udot[k]).collect();
+        let residual = |f: usize| -> f64 {
+            let row = &mf[f * nf..(f + 1) * nf];
+            row.iter().zip(&udot_full).map(|(m, a)| m * a).sum::<f64>() - ff[f]
+        };
+        let mut out = vec![f64::NAN; g.links.len()];
+        // Chains resolve from their ends back: a coupling is ready once every rigid coupling it
+        // drives is; `resolve` refused loops, so each sweep settles at least one.
+        for _ in 0..=g.links.len() {
+            let mut pending = false;
+            for (i, link) in g.links.iter().enumerate() {
+                if !out[i].is_nan() {
+                    continue;
+                }
+                match *link {
+                    Link::Mesh(m) => {
+                        let mesh = &g.meshes[m];
+                        let e = g.q[mesh.follows] - (g.q[mesh.joint] - mesh.offset) / mesh.ratio;
+                        let edot = g.u[mesh.follows] - g.u[mesh.joint] / mesh.ratio;
+                        out[i] = (mesh.stiffness * e + mesh.damping * edot) / mesh.ratio;
+                    }
+                    Link::Rigid { joint, .. } => {
+                        let mut sum = residual(joint);
+                        let mut ready = true;
+                        for (e, other) in g.links.iter().enumerate() {
+                            if let Link::Rigid { follows, ratio, .. } = *other
+                                && follows == joint
+                            {
+                                ready &= !out[e].is_nan();
+                                sum += ratio * out[e];
+                            }
+                        }
+                        if ready {
+                            out[i] = sum;
+                        } else {
+                            pending = true;
+                        }
+                    }
+                }
+            }
+            if !pending {
+                break;
+            }
+        }
+        out
     }
 
     /// The unconstrained tree's evaluator of a geared mechanism (`None` without couplings), for

@@ -121,8 +121,8 @@ impl Mechanism {
     }
 
     /// The first rigidly driven rotating joint on the path from ground to body `body`, if any: the
-    /// body's angle then involves a gear ratio, which [`Mechanism::rotation_coordinates`] (and the
-    /// probes and study responses built on it) leave out.
+    /// body's angle then involves a gear ratio, which [`Mechanism::rotation_coordinates`] leaves
+    /// out and [`Mechanism::rotation_rates`] (what probes and study responses use) holds.
     pub fn driven_joint_above(&self, body: usize) -> Option<usize> {
         let map = self.follow_map();
         self.path_to(body).into_iter().find(|&j| {
@@ -146,6 +146,91 @@ impl Mechanism {
             });
         }
         out
+    }
+
+    /// Per coordinate of [`Mechanism::expanded`] (in its order), the reduced coordinate it
+    /// follows, the factor and the offset: `q_full = factor · q[coordinate] + offset`. An
+    /// independent joint's entry is (its coordinate, 1, 0). The same map as
+    /// [`Mechanism::reduction_matrix`], kept sparse.
+    pub fn expansion(&self) -> Vec<(usize, f64, f64)> {
+        self.follow_map()
+            .into_iter()
+            .zip(&self.joints)
+            .filter(|(_, j)| j.kind.dof() == 1)
+            .filter_map(|(f, _)| f.map(|f| (f.coordinate, f.factor, f.offset)))
+            .collect()
+    }
+
+    /// The expanded tree's state from the reduced one: coordinates `q_full = T q + offsets`
+    /// (rad or m), rates `q̇_full = T q̇` and accelerations `q̈_full = T q̈` (T constant, so no
+    /// `Ṫ q̇` term), in [`Mechanism::expanded`]'s numbering. Without couplings the copies of the
+    /// inputs.
+    pub fn expand_state(&self, q: &[f64], qdot: &[f64], qddot: &[f64]) -> [Vec<f64>; 3] {
+        let map = self.expansion();
+        let q_full = map.iter().map(|&(k, a, o)| a * q[k] + o).collect();
+        let qd_full = map.iter().map(|&(k, a, _)| a * qdot[k]).collect();
+        let qdd_full = map.iter().map(|&(k, a, _)| a * qddot[k]).collect();
+        [q_full, qd_full, qdd_full]
+    }
+
+    /// The coupling that drives joint `j` (rigid or compliant: `gears[i].joint == j`), if exactly
+    /// one does; `Err` with the couplings' indices when several compliant meshes drive it.
+    pub fn gear_driving(&self, j: usize) -> std::result::Result<Option<usize>, Vec<usize>> {
+        let found: Vec<usize> = (0..self.gears.len()).filter(|&i| self.gears[i].joint == j).collect();
+        match found.len() {
+            0 => Ok(None),
+            1 => Ok(Some(found[0])),
+            _ => Err(found),
+        }
+    }
+
+    /// The offset of body `body`'s absolute angle from `Σ factor · q[coordinate]` over
+    /// [`Mechanism::rotation_rates`]: the sum of the rigid couplings' offsets (rad) of the
+    /// rotating joints on its path.
+    pub fn rotation_offset(&self, body: usize) -> f64 {
+        let map = self.follow_map();
+        self.path_to(body)
+            .into_iter()
+            .filter(|&j| self.joints[j].kind.rotates())
+            .filter_map(|j| map[j].map(|f| f.offset))
+            .sum()
+    }
+
+    /// Each joint's rate (relative to its parent) per unit rate of the spin joint `spin` in the
+    /// steady rigid rotation of the driveline: the spin joint at 1, every joint geared to it at
+    /// its factor (the product of the ratios down its chain, rigid couplings and compliant meshes
+    /// alike: a compliant mesh's steady deflection rate is zero), every other joint at rest
+    /// relative to its parent. Without couplings: 1 at the spin joint, 0 elsewhere.
+    pub fn steady_rates(&self, spin: usize) -> Vec<f64> {
+        let map = self.follow_map();
+        let Some(s) = self.joints.get(spin).and_then(|j| j.coordinate) else { return vec![0.0; self.joints.len()] };
+        let mut w: Vec<f64> = map.iter().map(|f| f.filter(|f| f.coordinate == s).map_or(0.0, |f| f.factor)).collect();
+        // A compliant mesh joins two independent coordinates: the one not yet turning takes the
+        // other's rate through the ratio, and its rigid followers with it. Each sweep reaches one
+        // more mesh of a chain; meshes cannot reach more coordinates than there are.
+        for _ in 0..=self.gears.len() {
+            let mut changed = false;
+            for g in self.gears.iter().filter(|g| g.mesh.is_some()) {
+                let (target_joint, rate) = match (w[g.joint] != 0.0, w[g.follows] != 0.0) {
+                    (false, true) => (g.joint, g.ratio * w[g.follows]),
+                    (true, false) => (g.follows, w[g.joint] / g.ratio),
+                    _ => continue,
+                };
+                let Some(ft) = map[target_joint] else { continue };
+                for (j, f) in map.iter().enumerate() {
+                    if let Some(f) = f
+                        && f.coordinate == ft.coordinate
+                    {
+                        w[j] = f.factor / ft.factor * rate;
+                    }
+                }
+                changed = true;
+            }
+            if !changed {
+                break;
+            }
+        }
+        w
     }
 
     /// The constant map T from the reduced speeds (n) to the expanded tree's (columns of

@@ -68,23 +68,29 @@ pub(crate) fn from_hbm(
     elements
         .iter()
         .filter_map(|&j| {
-            let k = mech.coordinate(j)?;
+            // A rigidly driven joint moves as factor · its followed coordinate (plus a constant
+            // offset, which no amplitude or peak about the mean sees).
+            let f = mech.follow_map()[j]?;
+            let (k, a) = (f.coordinate, f.factor);
             let (stiff, damp) = stiffness_damping(mech, j);
             let amplitude = multiples
                 .iter()
-                .map(|&m| sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| sol.amplitude(k, h)))
+                .map(|&m| {
+                    sol.harmonic_of(m).filter(|&h| h <= sol.harmonics).map_or(0.0, |h| a.abs() * sol.amplitude(k, h))
+                })
                 .collect();
             let couplings = &mech.joints[j].couplings;
             let torque = if !couplings.is_empty() {
-                // The couplings have no closed form in the coefficients: sampled along the motion.
-                let mut series = sol.element_torque_series(k, stiff, damp);
-                let nonlinear = sol.force_series(k, &|q, qd| -couplings.torque(q, qd));
-                series.iter_mut().zip(&nonlinear).for_each(|(a, b)| *a += b);
+                // The couplings have no closed form in the coefficients: sampled along the motion
+                // (a driven joint's own coordinate is factor · q + offset).
+                let mut series = sol.element_torque_series(k, a * stiff, a * damp);
+                let nonlinear = sol.force_series(k, &|q, qd| -couplings.torque(a * q + f.offset, a * qd));
+                series.iter_mut().zip(&nonlinear).for_each(|(s, b)| *s += b);
                 let (amplitude, peak) = sol.series_torques(&series, multiples);
                 Some(ElementTorque { amplitude, peak })
             } else {
                 (stiff != 0.0 || damp != 0.0).then(|| {
-                    let (amplitude, peak) = sol.element_torques(k, stiff, damp, multiples);
+                    let (amplitude, peak) = sol.element_torques(k, a * stiff, a * damp, multiples);
                     ElementTorque { amplitude, peak }
                 })
             };
@@ -92,7 +98,7 @@ pub(crate) fn from_hbm(
                 joint: mech.joints[j].name.clone(),
                 unit: mech.joints[j].kind.coordinate_unit(),
                 amplitude,
-                peak: sol.peak_amplitude(k),
+                peak: a.abs() * sol.peak_amplitude(k),
                 torque,
             })
         })

@@ -99,14 +99,14 @@ pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
     move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
 }
 
-/// Acceleration amplitude of the response body (Σ of its path's coordinates `path`, see
-/// [`crate::model::mechanism::Mechanism::rotation_coordinates`]) at order m·n, rad/s²; 0 when
-/// the solution has no harmonic at that multiple.
-pub fn body_accel(sol: &HbmSolution, path: &[usize], multiple: f64) -> f64 {
+/// Acceleration amplitude of the response body (Σ factor · its path's coordinates, `path` as
+/// [`crate::model::mechanism::Mechanism::rotation_rates`] gives it: factor 1 except through a
+/// gear) at order m·n, rad/s²; 0 when the solution has no harmonic at that multiple.
+pub fn body_accel(sol: &HbmSolution, path: &[(usize, f64)], multiple: f64) -> f64 {
     let Some(h) = sol.harmonic_of(multiple) else { return 0.0 };
-    let (a, b) = path.iter().fold((0.0, 0.0), |(a, b), &k| {
+    let (a, b) = path.iter().fold((0.0, 0.0), |(a, b), &(k, factor)| {
         let (ak, bk) = sol.coefficient(k, h);
-        (a + ak, b + bk)
+        (a + factor * ak, b + factor * bk)
     });
     let w = h as f64 * sol.base_frequency;
     w * w * a.hypot(b)
@@ -217,7 +217,7 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
 /// and bifurcations, and the drawn curve; a failed continuation is listed, never lost with the
 /// others.
 pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<String>) {
-    let path = study.mechanism.rotation_coordinates(study.body);
+    let path = study.mechanism.rotation_rates(study.body);
     let ax = axis(spec);
     // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
     let parameter = spec.parameter.continued();

@@ -200,16 +200,6 @@ impl Study {
             let names: Vec<&str> = mechanism.bodies.iter().map(|b| b.name.as_str()).collect();
             src.error("response_body", format!("unknown body `{}` (bodies: {})", spec.response_body, names.join(", ")))
         })?;
-        if let Some(j) = mechanism.driven_joint_above(body) {
-            return Err(src.error(
-                "response_body",
-                format!(
-                    "body `{}` turns with the rigidly geared joint `{}`: a response body below a driven joint is not \
-                     supported yet (report a body on the driving side)",
-                    spec.response_body, mechanism.joints[j].name
-                ),
-            ));
-        }
         let mut locked = None;
         for (i, j) in spec.lock.iter().enumerate() {
             let m = locked.as_ref().unwrap_or(&mechanism);
@@ -242,13 +232,10 @@ impl Study {
                 let j = mechanism
                     .joint_index(name)
                     .ok_or_else(|| src.error(&field, format!("unknown joint `{name}` (joints: {})", joint_names())))?;
-                if mechanism.coordinate(j).is_none() {
-                    let why = if mechanism.follow_map()[j].is_some() {
-                        "is rigidly driven by a gear: reporting a driven joint is not supported yet"
-                    } else {
-                        "is Fixed: it has no motion to report"
-                    };
-                    return Err(src.error(&field, format!("joint `{name}` {why}")));
+                // A rigidly driven joint is reported through its gear (factor · the followed
+                // coordinate); a Fixed one has nothing to report.
+                if mechanism.follow_map()[j].is_none() {
+                    return Err(src.error(&field, format!("joint `{name}` is Fixed: it has no motion to report")));
                 }
                 if out.contains(&j) {
                     return Err(src.error(&field, format!("joint `{name}` is listed twice")));
@@ -269,23 +256,35 @@ impl Study {
     }
 
     /// Mean torque that holds the spin joint's subtree in rigid rotation at `omega` (rad/s): the
-    /// viscous losses of the spinning bodies to ground and of the spin joint itself, `Σ c·Ω`.
-    /// In rigid rotation about a fixed axis the inertia forces point at the axis and have no
-    /// moment about it, and the joint dampers inside the subtree see no relative rate, so these are
-    /// all the losses (for the CPVA, `T_m = c_r·Ω`).
+    /// viscous losses at the steady rates of [`Mechanism::steady_rates`], by power. A damper whose
+    /// rate is `w Ω` (a joint's relative rate, or a ground damper's body rate `Σ w` over the
+    /// rotating joints on its path) dissipates `c w² Ω²`, which the spin joint supplies as the
+    /// torque `c w² Ω`: on a plain rotor the spinning bodies' ground dampers and the spin joint's
+    /// own damper (`Σ c·Ω`; for the CPVA `T_m = c_r·Ω`), and through a gear of factor r a driven
+    /// shaft's dampers reflected as `r² c Ω`. In rigid rotation about fixed axes the inertia
+    /// forces have no moment about the axes, and joint dampers inside a rigidly turning subtree
+    /// see no relative rate. Nonlinear couplings (friction, stops) are not counted.
     pub fn loss_torque(mech: &Mechanism, spin: usize, omega: f64) -> f64 {
-        let in_subtree = |b: usize| mech.path_to(b).contains(&spin);
-        let ground: f64 = mech.loads.ground_dampers.iter().filter(|g| in_subtree(g.body)).map(|g| g.c).sum();
-        (ground + mech.joints[spin].damper) * omega
+        let w = mech.steady_rates(spin);
+        let joints: f64 = mech.joints.iter().zip(&w).map(|(j, w)| j.damper * w * w).sum();
+        let body_rate = |b: usize| -> f64 {
+            mech.path_to(b).into_iter().filter(|&j| mech.joints[j].kind.rotates()).map(|j| w[j]).sum()
+        };
+        let ground: f64 = mech.loads.ground_dampers.iter().map(|g| g.c * body_rate(g.body).powi(2)).sum();
+        (joints + ground) * omega
     }
 
     /// The initial state of a sweep or steady run (docs/design.md): q = 0, the spin joint turning at
-    /// `omega` and every other joint at rest relative to its parent.
+    /// `omega`, every joint geared to it at its steady rate ([`Mechanism::steady_rates`]: a shaft
+    /// behind a compliant mesh turns with the train) and every other joint at rest relative to its
+    /// parent.
     pub fn initial_state(mech: &Mechanism, spin: usize, omega: f64) -> Vec<f64> {
         let n = mech.ndof();
         let mut qdot = vec![0.0; n];
-        if let Some(k) = mech.coordinate(spin) {
-            qdot[k] = omega;
+        for (joint, w) in mech.joints.iter().zip(mech.steady_rates(spin)) {
+            if let Some(k) = joint.coordinate {
+                qdot[k] = w * omega;
+            }
         }
         let mut u = vec![0.0; n];
         mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut u);

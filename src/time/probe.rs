@@ -15,7 +15,16 @@
 //!   the largest absorber excursion when the spin joint is excepted);
 //! - a joint's reaction, the force (radial and tangential components) and moment its parent
 //!   exerts on its child ([`crate::kane::reactions`], a Newton–Euler pass over `q, q̇, q̈`; it
-//!   needs `ẋ` like an acceleration).
+//!   needs `ẋ` like an acceleration);
+//! - the torque a gear mesh exerts on its driven joint ([`Kane::gear_torques`]: a rigid
+//!   coupling's constraint torque λ, a compliant mesh's spring and damper torque; it needs `ẋ`
+//!   and the joint torques acting at driven joints, which [`simulate`] hands over).
+//!
+//! On a geared mechanism (docs/design.md, "Gears") a rigidly driven joint has no state entry:
+//! its coordinate, rate and acceleration are `factor · (the followed coordinate's)` plus its
+//! offset ([`Mechanism::follow_map`]), and a body's angle is `Σ factor · q_k` plus the offsets
+//! over the rotating joints on its path ([`Mechanism::rotation_rates`]); reactions run on the
+//! unconstrained tree at the expanded state.
 //!
 //! The rotor response of the paper (Figs. 3–6) is `BodyAccel(rotor)`, i.e. u̇1 in rad/s².
 
@@ -48,6 +57,11 @@ pub enum ProbeKind {
     JointForceTangential,
     /// Moment about the joint point the parent exerts on the child, N·m.
     JointMoment,
+    /// Torque the gear mesh driving the named joint exerts on it, as a joint torque (positive on
+    /// the child, negative on the parent; N·m, N on a prismatic joint): a rigid coupling's
+    /// constraint torque, a compliant mesh's spring and damper torque. The driving joint receives
+    /// `−ratio` times it.
+    GearMeshTorque,
 }
 
 /// A signal to record, with its body or joint index resolved in a mechanism.
@@ -71,6 +85,8 @@ pub enum Probe {
     JointForceTangential(usize),
     /// Reaction moment at joint `j`, N·m.
     JointMoment(usize),
+    /// Torque of the gear mesh on its driven joint `j`, N·m (N for a slide).
+    GearMeshTorque(usize),
 }
 
 impl Probe {
@@ -89,27 +105,45 @@ impl Probe {
                 | ProbeKind::JointForceRadial
                 | ProbeKind::JointForceTangential
                 | ProbeKind::JointMoment
+                | ProbeKind::GearMeshTorque
         ) {
             let j = mech
                 .joint_index(name)
                 .ok_or_else(|| unknown("joint", mech.joints.iter().map(|j| j.name.as_str()).collect()))?;
-            let reaction =
-                matches!(kind, ProbeKind::JointForceRadial | ProbeKind::JointForceTangential | ProbeKind::JointMoment);
-            if reaction && mech.is_geared() {
-                // The Newton–Euler pass reads joint coordinates; a driven joint has none.
-                return Err(Error::Model {
-                    mechanism: mech.name.clone(),
-                    message: format!("probe {kind:?}: joint reactions of a geared mechanism are not built yet"),
-                });
-            }
             match kind {
+                ProbeKind::GearMeshTorque => {
+                    return match mech.gear_driving(j) {
+                        Ok(Some(_)) => Ok(Probe::GearMeshTorque(j)),
+                        Ok(None) => {
+                            let driven: Vec<&str> =
+                                mech.gears.iter().map(|g| mech.joints[g.joint].name.as_str()).collect();
+                            Err(Error::Model {
+                                mechanism: mech.name.clone(),
+                                message: format!(
+                                    "probe {kind:?}: no gear drives joint `{name}` (name the driven joint of a \
+                                     coupling, its `joint`; driven joints: {})",
+                                    if driven.is_empty() { "none".to_string() } else { driven.join(", ") }
+                                ),
+                            })
+                        }
+                        Err(several) => Err(Error::Model {
+                            mechanism: mech.name.clone(),
+                            message: format!(
+                                "probe {kind:?}: joint `{name}` is driven by {} compliant meshes (gears {:?}): the \
+                                 probe names one mesh by its driven joint",
+                                several.len(),
+                                several
+                            ),
+                        }),
+                    };
+                }
                 ProbeKind::LargestJointAngle => return Ok(Probe::LargestJointAngle(j)),
                 ProbeKind::JointForceRadial => return Ok(Probe::JointForceRadial(j)),
                 ProbeKind::JointForceTangential => return Ok(Probe::JointForceTangential(j)),
                 ProbeKind::JointMoment => return Ok(Probe::JointMoment(j)),
                 _ => {}
             }
-            if mech.coordinate(j).is_none() {
+            if mech.follow_map()[j].is_none() {
                 return Err(Error::Model {
                     mechanism: mech.name.clone(),
                     message: format!("probe {kind:?}: joint `{name}` is Fixed and has no coordinate"),
@@ -139,6 +173,7 @@ impl Probe {
             Probe::JointForceRadial(_) => ProbeKind::JointForceRadial,
             Probe::JointForceTangential(_) => ProbeKind::JointForceTangential,
             Probe::JointMoment(_) => ProbeKind::JointMoment,
+            Probe::GearMeshTorque(_) => ProbeKind::GearMeshTorque,
         }
     }
 
@@ -153,7 +188,8 @@ impl Probe {
             | Probe::LargestJointAngle(i)
             | Probe::JointForceRadial(i)
             | Probe::JointForceTangential(i)
-            | Probe::JointMoment(i) => i,
+            | Probe::JointMoment(i)
+            | Probe::GearMeshTorque(i) => i,
         }
     }
 
@@ -166,7 +202,11 @@ impl Probe {
     pub fn needs_derivative(&self) -> bool {
         matches!(
             self,
-            Probe::BodyAccel(_) | Probe::JointForceRadial(_) | Probe::JointForceTangential(_) | Probe::JointMoment(_)
+            Probe::BodyAccel(_)
+                | Probe::JointForceRadial(_)
+                | Probe::JointForceTangential(_)
+                | Probe::JointMoment(_)
+                | Probe::GearMeshTorque(_)
         )
     }
 
@@ -183,11 +223,14 @@ impl Probe {
             Probe::JointRate(_) => "rad/s",
             Probe::JointForceRadial(_) | Probe::JointForceTangential(_) => "N",
             Probe::JointMoment(_) => "N·m",
+            Probe::GearMeshTorque(j) if slides(j) => "N",
+            Probe::GearMeshTorque(_) => "N·m",
         }
     }
 
     /// Column name `<body>.angle`, `<body>.rate`, `<body>.accel`, `<joint>.q`, `<joint>.qdot` or
-    /// `max_abs_q_except_<joint>` (names not checked: use on the mechanism the probe was
+    /// `max_abs_q_except_<joint>`, `<joint>.force_radial`, `.force_tangential`, `.moment` or
+    /// `.mesh_torque` (names not checked: use on the mechanism the probe was
     /// resolved in).
     pub fn label(&self, mech: &Mechanism) -> String {
         let body = |b: usize| mech.bodies.get(b).map_or("?", |b| b.name.as_str()).to_string();
@@ -202,6 +245,7 @@ impl Probe {
             Probe::JointForceRadial(j) => format!("{}.force_radial", joint(j)),
             Probe::JointForceTangential(j) => format!("{}.force_tangential", joint(j)),
             Probe::JointMoment(j) => format!("{}.moment", joint(j)),
+            Probe::GearMeshTorque(j) => format!("{}.mesh_torque", joint(j)),
         }
     }
 }
@@ -217,14 +261,24 @@ pub struct Recorder {
     absolute: bool,
     parents: Vec<Option<usize>>,
     probes: Vec<Probe>,
-    /// Per probe: the coordinates whose sum is its body's rotation
-    /// ([`Mechanism::rotation_coordinates`]), its joint's one coordinate for a joint probe, or
-    /// the coordinates compared by [`Probe::LargestJointAngle`].
-    paths: Vec<Vec<usize>>,
+    /// Per probe: the (coordinate, factor) pairs whose weighted sum is its body's rotation
+    /// ([`Mechanism::rotation_rates`]), its joint's one coordinate and factor for a joint probe
+    /// (a rigidly driven joint's followed coordinate and gear factor), or the coordinates
+    /// compared by [`Probe::LargestJointAngle`] (factor 1).
+    paths: Vec<Vec<(usize, f64)>>,
+    /// Per probe: the constant added to an angle (a driven joint's or its body's gear offsets).
+    offsets: Vec<f64>,
     names: Vec<String>,
     units: Vec<&'static str>,
-    /// The mechanism, kept only when a probe is a reaction (its Newton–Euler pass needs it).
+    /// The tree the reaction probes' Newton–Euler pass runs on (the unconstrained tree of a
+    /// geared mechanism), kept only when a probe is a reaction.
     reactions: Option<Box<Mechanism>>,
+    /// A geared mechanism's map to the expanded state ([`Mechanism::expansion`]).
+    expansion: Vec<(usize, f64, f64)>,
+    /// The engine whose constraint residual gives the mesh torques (only with a
+    /// [`Probe::GearMeshTorque`]), and per probe the coupling it reads.
+    mesh: Option<Box<Kane>>,
+    mesh_gear: Vec<usize>,
     min_gap_s: f64,
     last_t: f64,
     /// Sample times, s.
@@ -237,8 +291,11 @@ impl Recorder {
     /// A recorder for `probes` on `mech`; refuses indices outside the mechanism.
     pub fn new(mech: &Mechanism, probes: &[Probe]) -> Result<Self> {
         let (n, nb) = (mech.ndof(), mech.bodies.len());
+        let follow = mech.follow_map();
         let mut paths = Vec::with_capacity(probes.len());
-        for p in probes {
+        let mut offsets = Vec::with_capacity(probes.len());
+        let mut mesh_gear = vec![usize::MAX; probes.len()];
+        for (i, p) in probes.iter().enumerate() {
             let out_of_range = |what: &str| Error::Model {
                 mechanism: mech.name.clone(),
                 message: format!("probe {p:?}: {what} ({nb} bodies and joints)"),
@@ -246,40 +303,77 @@ impl Recorder {
             if p.index() >= nb {
                 return Err(out_of_range("index out of range"));
             }
+            let mut offset = 0.0;
             paths.push(match *p {
                 Probe::JointAngle(j) | Probe::JointRate(j) => {
-                    vec![mech.coordinate(j).ok_or_else(|| out_of_range("joint has no coordinate"))?]
+                    let f = follow[j].ok_or_else(|| out_of_range("joint has no coordinate"))?;
+                    offset = f.offset;
+                    vec![(f.coordinate, f.factor)]
                 }
                 Probe::LargestJointAngle(j) => {
                     let own = mech.coordinate(j);
-                    (0..n).filter(|&k| Some(k) != own).collect()
+                    (0..n).filter(|&k| Some(k) != own).map(|k| (k, 1.0)).collect()
                 }
-                _ if mech.driven_joint_above(p.index()).is_some() => {
-                    return Err(Error::Model {
-                        mechanism: mech.name.clone(),
-                        message: format!(
-                            "probe {p:?}: the body turns with a rigidly geared joint; body probes below a driven \
-                             joint are not supported yet"
-                        ),
-                    });
+                Probe::GearMeshTorque(j) => {
+                    mesh_gear[i] = match mech.gear_driving(j) {
+                        Ok(Some(g)) => g,
+                        _ => return Err(out_of_range("no single gear drives this joint")),
+                    };
+                    Vec::new()
                 }
-                _ => mech.rotation_coordinates(p.index()),
+                Probe::JointForceRadial(_) | Probe::JointForceTangential(_) | Probe::JointMoment(_) => Vec::new(),
+                Probe::BodyAngle(b) | Probe::BodyRate(b) | Probe::BodyAccel(b) => {
+                    offset = mech.rotation_offset(b);
+                    mech.rotation_rates(b)
+                }
             });
+            offsets.push(offset);
         }
+        let geared = mech.is_geared();
+        let reactions = probes
+            .iter()
+            .any(Probe::is_reaction)
+            .then(|| Box::new(if geared { mech.expanded() } else { mech.clone() }));
+        let mesh = match probes.iter().any(|p| matches!(p, Probe::GearMeshTorque(_))) {
+            true => Some(Box::new(Kane::new(mech)?)),
+            false => None,
+        };
         Ok(Self {
             n,
             absolute: mech.speeds == Speeds::AbsoluteAngularVelocities,
             parents: mech.speed_parents(),
             probes: probes.to_vec(),
             paths,
+            offsets,
             names: probes.iter().map(|p| p.label(mech)).collect(),
             units: probes.iter().map(|p| p.unit(mech)).collect(),
-            reactions: probes.iter().any(Probe::is_reaction).then(|| Box::new(mech.clone())),
+            reactions,
+            expansion: if geared { mech.expansion() } else { Vec::new() },
+            mesh,
+            mesh_gear,
             min_gap_s: 0.0,
             last_t: f64::NEG_INFINITY,
             time: Vec::new(),
             columns: vec![Vec::new(); probes.len()],
         })
+    }
+
+    /// Takes the joint torques of `kane` (an engine of the recorder's mechanism, as the run
+    /// evaluates it) for the mesh-torque probes: a torque applied at a driven joint enters the
+    /// constraint's balance there. [`simulate`] calls it with the engine it integrates; a run
+    /// through another right-hand side (a [`crate::time::drive::Drive`]) calls it with the
+    /// engine's torques as that run applies them. No effect without a mesh-torque probe.
+    pub fn use_torques_of(&mut self, kane: &Kane) {
+        let Some(mesh) = self.mesh.as_deref_mut() else { return };
+        let full = |k: &Kane| k.unconstrained().map(|u| u.joint_torques().to_vec()).unwrap_or_default();
+        // A geared engine forwards every joint torque to its unconstrained tree: that list is
+        // the whole set (the reduced one lacks the driven joints').
+        for t in full(mesh) {
+            mesh.set_joint_torque(t.joint, crate::model::excitation::Excitation::constant(0.0));
+        }
+        for t in full(kane) {
+            mesh.set_joint_torque(t.joint, t.excitation);
+        }
     }
 
     /// The probes, in column order.
@@ -313,40 +407,75 @@ impl Recorder {
         self.columns.iter_mut().for_each(|c| c.reserve(samples));
     }
 
-    /// The value of probe `i` at state `x` (and `xdot`; accelerations are NaN without it).
-    pub fn value(&self, i: usize, x: &[f64], xdot: Option<&[f64]>) -> f64 {
+    /// The value of probe `i` at time `t` and state `x` (and `xdot`; accelerations, reactions
+    /// and mesh torques are NaN without it).
+    pub fn value(&mut self, i: usize, t: f64, x: &[f64], xdot: Option<&[f64]>) -> f64 {
         let n = self.n;
         let path = &self.paths[i];
         // Absolute rate (or acceleration) of the probe's body from speeds (or their rates) `v`.
-        // With absolute angular velocities the last rotating joint's speed is the body's own.
+        // With absolute angular velocities the last rotating joint's speed is the body's own
+        // (no couplings then: every factor is 1).
         let absolute = |v: &[f64]| {
-            if self.absolute { path.last().map_or(0.0, |&k| v[k]) } else { path.iter().map(|&k| v[k]).sum() }
+            if self.absolute {
+                path.last().map_or(0.0, |&(k, _)| v[k])
+            } else {
+                path.iter().map(|&(k, a)| a * v[k]).sum()
+            }
         };
         match self.probes[i] {
-            Probe::BodyAngle(_) => path.iter().map(|&k| x[k]).sum(),
+            Probe::BodyAngle(_) => path.iter().map(|&(k, a)| a * x[k]).sum::<f64>() + self.offsets[i],
             Probe::BodyRate(_) => absolute(&x[n..2 * n]),
             Probe::BodyAccel(_) => xdot.map_or(f64::NAN, |d| absolute(&d[n..2 * n])),
-            Probe::JointAngle(_) => x[path[0]],
+            Probe::JointAngle(_) => path[0].1 * x[path[0].0] + self.offsets[i],
             Probe::JointRate(_) => {
-                // q̇_k = (W⁻¹u)_k, row k of Speeds::qdot.
-                let k = path[0];
+                // q̇_k = (W⁻¹u)_k, row k of Speeds::qdot; a driven joint's is factor · q̇_k.
+                let (k, a) = path[0];
                 let parent = if self.absolute { self.parents[k] } else { None };
-                x[n + k] - parent.map_or(0.0, |p| x[n + p])
+                a * (x[n + k] - parent.map_or(0.0, |p| x[n + p]))
             }
-            Probe::LargestJointAngle(_) => path.iter().map(|&k| x[k].abs()).fold(0.0, f64::max),
+            Probe::LargestJointAngle(_) => path.iter().map(|&(k, _)| x[k].abs()).fold(0.0, f64::max),
             Probe::JointForceRadial(j) | Probe::JointForceTangential(j) | Probe::JointMoment(j) => {
                 let (Some(mech), Some(d)) = (&self.reactions, xdot) else { return f64::NAN };
                 let mut qdot = vec![0.0; n];
                 let mut qddot = vec![0.0; n];
-                mech.speeds.qdot(&self.parents, &x[n..2 * n], &mut qdot);
                 // W is constant for both speed choices: q̈ = W⁻¹u̇.
-                mech.speeds.qdot(&self.parents, &d[n..2 * n], &mut qddot);
-                let r = crate::kane::reactions::joint_reactions(mech, &x[..n], &qdot, &qddot)[j];
+                if self.absolute {
+                    crate::model::speeds::Speeds::AbsoluteAngularVelocities.qdot(
+                        &self.parents,
+                        &x[n..2 * n],
+                        &mut qdot,
+                    );
+                    crate::model::speeds::Speeds::AbsoluteAngularVelocities.qdot(
+                        &self.parents,
+                        &d[n..2 * n],
+                        &mut qddot,
+                    );
+                } else {
+                    qdot.copy_from_slice(&x[n..2 * n]);
+                    qddot.copy_from_slice(&d[n..2 * n]);
+                }
+                let r = if self.expansion.is_empty() {
+                    crate::kane::reactions::tree_reactions(mech, &x[..n], &qdot, &qddot)[j]
+                } else {
+                    // Couplings need joint rates, so q̇ = u and q̈ = u̇ here.
+                    let e = &self.expansion;
+                    let qf: Vec<f64> = e.iter().map(|&(k, a, o)| a * x[k] + o).collect();
+                    let qdf: Vec<f64> = e.iter().map(|&(k, a, _)| a * qdot[k]).collect();
+                    let qddf: Vec<f64> = e.iter().map(|&(k, a, _)| a * qddot[k]).collect();
+                    crate::kane::reactions::tree_reactions(mech, &qf, &qdf, &qddf)[j]
+                };
                 match self.probes[i] {
                     Probe::JointForceRadial(_) => r.radial,
                     Probe::JointForceTangential(_) => r.tangential,
                     _ => r.moment,
                 }
+            }
+            Probe::GearMeshTorque(_) => {
+                let (Some(kane), Some(d)) = (self.mesh.as_deref_mut(), xdot) else { return f64::NAN };
+                kane.gear_torques(t, &x[..n], &x[n..2 * n], &d[n..2 * n])
+                    .get(self.mesh_gear[i])
+                    .copied()
+                    .unwrap_or(f64::NAN)
             }
         }
     }
@@ -359,7 +488,7 @@ impl Recorder {
         self.last_t = t;
         self.time.push(t);
         for i in 0..self.probes.len() {
-            let v = self.value(i, x, xdot);
+            let v = self.value(i, t, x, xdot);
             self.columns[i].push(v);
         }
     }
@@ -441,6 +570,7 @@ pub fn simulate(
     progress: &mut dyn FnMut(f64),
 ) -> Outcome {
     let n = kane.ndof();
+    rec.use_torques_of(kane);
     simulate_rhs(|t, x, dx| kane.rhs(t, x, dx), n, x0, t0, t1, opts, rec, progress)
 }
 

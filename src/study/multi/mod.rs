@@ -382,7 +382,7 @@ pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
 /// and each crossing is solved exactly at the order; with the torque ramp's state ([`ramp`]).
 fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Ramp)> {
     let omega = rpm_to_rad_s(p.rpm);
-    let path = study.mechanism.rotation_coordinates(study.body);
+    let path = study.mechanism.rotation_rates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
     let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
     for (from, to) in [(hi, lo), (lo, hi)] {
@@ -432,7 +432,7 @@ fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: boo
     hbm.set_torque_scale(1.0).map_err(&err)?;
     let sol = hbm.solve(spec.order, Some(&guess)).map_err(&err)?;
     let stable = hbm.stability(&sol).ok().map(|s| s.stable);
-    let path = mech.rotation_coordinates(body);
+    let path = mech.rotation_rates(body);
     let amplitudes = spec.multiples.iter().map(|&m| super::hbm::body_accel(&sol, &path, m)).collect();
     let elements: Vec<usize> = if locked {
         let names = study.elements.iter().map(|&j| &study.mechanism.joints[j].name);

@@ -96,6 +96,10 @@ pub struct TransientResult {
     /// moment (N·m) its parent exerts on its child at the samples.
     #[serde(skip)]
     pub reaction_series: Vec<(String, [Vec<f64>; 3])>,
+    /// Per joint of `reactions` that a gear drives: its name and the torque its mesh exerts on
+    /// it at the samples, N·m (N on a slide).
+    #[serde(skip)]
+    pub mesh_series: Vec<(String, Vec<f64>)>,
     /// Per joint of `reactions`: the smallest and largest radial force, tangential force and
     /// moment after the first second (N, N, N·m).
     pub reaction_ranges: Vec<ReactionRange>,
@@ -192,8 +196,9 @@ pub(crate) fn compute(
     let mech = &study.mechanism;
     let spin = study.spin;
     let mut kane = study.kane(false)?;
-    // The analysis's torques replace the mechanism's own.
-    for jt in kane.joint_torques().to_vec() {
+    // The analysis's torques replace the mechanism's own (a geared engine's unconstrained tree
+    // lists the driven joints' too).
+    for jt in kane.unconstrained().map_or(kane.joint_torques(), |u| u.joint_torques()).to_vec() {
         kane.set_joint_torque(jt.joint, Excitation::constant(0.0));
     }
     let x0 = initial_state(study, spec);
@@ -219,6 +224,22 @@ pub(crate) fn compute(
             ramp_s: 0.0,
         });
     }
+    let mut probes = vec![Probe::BodyAccel(study.body), Probe::JointAngle(spin), Probe::JointRate(spin)];
+    for &j in &study.elements {
+        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
+    }
+    let reaction_joints: Vec<usize> = spec.reactions.iter().filter_map(|r| mech.joint_index(r)).collect();
+    // A driven joint's reaction comes with the torque of the mesh that drives it.
+    let meshed = |j: usize| matches!(mech.gear_driving(j), Ok(Some(_)));
+    for &j in &reaction_joints {
+        probes.extend([Probe::JointForceRadial(j), Probe::JointForceTangential(j), Probe::JointMoment(j)]);
+        if meshed(j) {
+            probes.push(Probe::GearMeshTorque(j));
+        }
+    }
+    let mut rec = Recorder::new(mech, &probes)?;
+    // A mesh torque balances the torques at driven joints as this run applies them.
+    rec.use_torques_of(&kane);
     let mut drive = Drive::new(kane, spin, torques, prescribed)?;
     if let SpeedProfile::Torque { governor_s: Some(tau), .. } = spec.speed {
         drive = drive.with_governor(Governor {
@@ -230,15 +251,6 @@ pub(crate) fn compute(
         })?;
     }
 
-    let mut probes = vec![Probe::BodyAccel(study.body), Probe::JointAngle(spin), Probe::JointRate(spin)];
-    for &j in &study.elements {
-        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
-    }
-    let reaction_joints: Vec<usize> = spec.reactions.iter().filter_map(|r| mech.joint_index(r)).collect();
-    for &j in &reaction_joints {
-        probes.extend([Probe::JointForceRadial(j), Probe::JointForceTangential(j), Probe::JointMoment(j)]);
-    }
-    let mut rec = Recorder::new(mech, &probes)?;
     let mut opts = super::sim::options(&study.spec.integration);
     // Reactions need the accelerations at the samples.
     opts.sample_derivatives |= rec.needs_derivatives();
@@ -259,11 +271,16 @@ pub(crate) fn compute(
     let spin_rpm: Vec<f64> = cols.next().unwrap_or_default().iter().map(|w| w * to_rpm).collect();
     let element_series: Vec<(Vec<f64>, Vec<f64>)> =
         study.elements.iter().map(|_| (cols.next().unwrap_or_default(), cols.next().unwrap_or_default())).collect();
+    let mut mesh_series = Vec::new();
     let reaction_series: Vec<(String, [Vec<f64>; 3])> = reaction_joints
         .iter()
         .map(|&j| {
             let mut next = || cols.next().unwrap_or_default();
-            (mech.joints[j].name.clone(), [next(), next(), next()])
+            let forces = [next(), next(), next()];
+            if meshed(j) {
+                mesh_series.push((mech.joints[j].name.clone(), next()));
+            }
+            (mech.joints[j].name.clone(), forces)
         })
         .collect();
     let skip = time_s.iter().position(|&t| t >= 1.0).unwrap_or(0);
@@ -276,6 +293,7 @@ pub(crate) fn compute(
             radial_n: range(r),
             tangential_n: range(t),
             moment_nm: range(m),
+            mesh_torque_nm: mesh_series.iter().find(|(n, _)| n == name).map(|(_, v)| range(v)),
         })
         .collect();
 
@@ -353,6 +371,7 @@ pub(crate) fn compute(
         response,
         element_series,
         reaction_series,
+        mesh_series,
         reaction_ranges,
         drive_torque,
         map,
@@ -371,6 +390,10 @@ pub struct ReactionRange {
     pub tangential_n: (f64, f64),
     /// Smallest and largest moment, N·m.
     pub moment_nm: (f64, f64),
+    /// Smallest and largest torque of the gear mesh driving the joint, N·m (N on a slide);
+    /// absent when no gear drives it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh_torque_nm: Option<(f64, f64)>,
 }
 
 /// The drive's torque at every sample, when the recorded joints (spin and elements) are all the
@@ -385,7 +408,8 @@ fn reaction(
 ) -> Vec<f64> {
     let mech = &study.mechanism;
     let n = mech.ndof();
-    if study.elements.len() + 1 != n {
+    // A rigidly driven element has no coordinate of its own: it cannot complete the state.
+    if study.elements.len() + 1 != n || study.elements.iter().any(|&j| mech.coordinate(j).is_none()) {
         return Vec::new();
     }
     let parents = mech.speed_parents();

@@ -34,6 +34,9 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
             t.push(format!("{name}_force_radial_N"), "N", rad.clone());
             t.push(format!("{name}_force_tangential_N"), "N", tan.clone());
             t.push(format!("{name}_moment_Nm"), "N·m", mom.clone());
+            if let Some((_, mesh)) = r.mesh_series.iter().find(|(n, _)| n == name) {
+                t.push(format!("{name}_mesh_torque_Nm"), "N·m", mesh.clone());
+            }
         }
         out.push(t);
     }
@@ -239,17 +242,21 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
     if !r.reaction_ranges.is_empty() {
         md += "Joint reactions (what the parent exerts on the child; radial: outward from the parent's origin), \
                smallest and largest after the first second:\n\n";
-        md += "| joint | radial force (N) | tangential force (N) | moment (N·m) |\n|---|---|---|---|\n";
+        // The mesh column appears only when a listed joint is driven by a gear.
+        let mesh = r.reaction_ranges.iter().any(|x| x.mesh_torque_nm.is_some());
+        md += if mesh {
+            "| joint | radial force (N) | tangential force (N) | moment (N·m) | gear mesh torque (N·m) |\n|---|---|---|---|---|\n"
+        } else {
+            "| joint | radial force (N) | tangential force (N) | moment (N·m) |\n|---|---|---|---|\n"
+        };
         let pair = |(a, b): (f64, f64)| format!("{} … {}", cell(a, 3), cell(b, 3));
         for x in &r.reaction_ranges {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} |",
-                x.joint,
-                pair(x.radial_n),
-                pair(x.tangential_n),
-                pair(x.moment_nm)
-            );
+            let _ =
+                write!(md, "| {} | {} | {} | {} |", x.joint, pair(x.radial_n), pair(x.tangential_n), pair(x.moment_nm));
+            if mesh {
+                let _ = write!(md, " {} |", x.mesh_torque_nm.map_or_else(|| "—".to_string(), pair));
+            }
+            md.push('\n');
         }
         md.push('\n');
     }

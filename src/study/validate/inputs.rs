@@ -60,7 +60,13 @@ pub(super) fn check_transient(
             src.error(path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
         })?;
         if mech.coordinate(j).is_none() {
-            return Err(src.error(path, format!("joint `{name}` is Fixed: it has no coordinate")));
+            let why = if mech.follow_map()[j].is_some() {
+                "is rigidly driven by a gear: its state follows the joint it is geared to (set that one; a \
+                 transient's crank-locked torques act on joints with a coordinate)"
+            } else {
+                "is Fixed: it has no coordinate"
+            };
+            return Err(src.error(path, format!("joint `{name}` {why}")));
         }
         Ok(j)
     };
@@ -86,9 +92,6 @@ pub(super) fn check_transient(
     }
     if t.reactions.len() > MAX_LIST {
         return Err(src.error(&at("reactions"), format!("at most {MAX_LIST} joints")));
-    }
-    if !t.reactions.is_empty() && mech.is_geared() {
-        return Err(src.error(&at("reactions"), "joint reactions of a geared mechanism are not built yet"));
     }
     for (i, name) in t.reactions.iter().enumerate() {
         let path = at(&format!("reactions[{i}]"));
@@ -202,7 +205,8 @@ pub(super) fn check_excite(
                 src.error(&format!("{p}.joint"), format!("unknown joint `{}` (joints: {})", e.joint, names.join(", ")))
             );
         };
-        if mech.coordinate(j).is_none() {
+        // A rigidly driven joint has no coordinate but its torque drives its gear train (Tᵀ).
+        if mech.follow_map()[j].is_none() {
             return Err(src
                 .error(&format!("{p}.joint"), format!("joint `{}` is Fixed: a torque there drives nothing", e.joint)));
         }
