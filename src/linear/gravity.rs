@@ -22,9 +22,9 @@
 //! product of two small quantities (the gravity ratio `g/(r Ω²)` and the deflection), second
 //! order, and is left out: the linear gravity response is exact to first order in gravity and in
 //! the torque together. Its size is measured against harmonic balance with gravity in
-//! `tests/gravity_linear.rs` (the difference falls with the square of g). The parametric term
-//! would also shift eigen-orders at second order; the modes and Campbell diagram are those of
-//! the steady rotation.
+//! `tests/gravity_linear.rs` (the difference falls about as g², as a second-order term should).
+//! The parametric term would also shift eigen-orders at second order; the modes and Campbell
+//! diagram are those of the steady rotation.
 //!
 //! # Spin free or held
 //! With the spin free the response solves the full 2n state, as the torque response does; with
