@@ -337,7 +337,8 @@ fn nonsense_values_are_refused_at_load() {
 }
 
 /// Used to: a MultiOrder run on a mechanism with gravity wrote NaN everywhere and exited 0. Now
-/// every analysis about a steady spin is refused on such a mechanism, saying why.
+/// the parts of an analysis about a steady spin that cannot take gravity are refused, saying why
+/// (a MultiOrder's steady time runs: its linear part takes gravity, tests/gravity_linear.rs).
 #[test]
 fn steady_spin_analyses_under_gravity_are_refused() {
     let s = Scratch::new("gravity");
@@ -358,7 +359,7 @@ fn steady_spin_analyses_under_gravity_are_refused() {
         r#"MultiOrder(name: "m", order: 3.0, speeds: [(rpm: 1000.0, harmonics: [(multiple: 1.0, amplitude: 100.0)])])"#;
     let e = load_error(&s, &study_with(m).replace("cpva.ron", "cpva_g.ron"));
     assert!(e.contains("gravity"), "{e}");
-    assert_located(&e, "analyses[0]");
+    assert_located(&e, "analyses[0].time_domain");
     // The time-domain sweep takes gravity.
     let p = s.study("sweep_g.ron", &study_with(SWEEP).replace("cpva.ron", "cpva_g.ron"));
     assert!(Study::from_file(&p).is_ok());

@@ -57,7 +57,9 @@ pub fn linear_error(py: Python<'_>, mech: &Mech, e: &LinearError) -> PyErr {
 /// Parameters
 /// ----------
 /// mechanism : Mechanism
-///     Without gravity or world-frame forces (the spin angle must be cyclic).
+///     Gravity and world-frame forces may act only on bodies that turn with the spin joint: the
+///     model is linearised without them and they force it at order 1 (the library's
+///     ``LinearModel::gravity_force``; not exposed here).
 /// spin_joint : str
 ///     A revolute joint to ground without a spring.
 /// rpm : float

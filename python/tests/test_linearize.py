@@ -100,8 +100,16 @@ def test_linear_errors(cpva):
         lin.order_response("spin", "rotor", [3.0], lock=["spin"])
     with pytest.raises(kanedyn.ArgumentError, match="unknown body `rotr`"):
         lin.order_response("spin", "rotr", [3.0])
-    gravity = kanedyn.Mechanism.from_file(EXAMPLES / "triple_pendulum.ron")
-    root = gravity.coordinate_names[0]
+    # Gravity on bodies that turn with the spin joint forces the rotation at order 1 (accepted);
+    # the weight of a body that does not turn with it (a pendulum hung from the ground) is refused.
+    spun = kanedyn.Mechanism.from_file(EXAMPLES / "triple_pendulum.ron")
+    kanedyn.linearize(spun, spun.coordinate_names[0], 100.0)
+    hung = kanedyn.Mechanism.from_str(
+        'Mechanism(name: "hung", gravity: (0.0, -9.81), bodies: [Body(name: "rotor", mass: 1.0, inertia: 0.1), '
+        'Body(name: "bob", mass: 1.0, com: (0.0, -0.1), inertia: 0.001)], joints: [Joint(name: "spin", '
+        'kind: Revolute, parent: "ground", child: "rotor"), Joint(name: "hang", kind: Revolute, parent: "ground", '
+        'child: "bob", at: (1.0, 0.0))])'
+    )
     with pytest.raises(kanedyn.ModelError, match="gravity or a world-frame force") as e:
-        kanedyn.linearize(gravity, root, 100.0)
-    assert e.value.mechanism == gravity.name
+        kanedyn.linearize(hung, "spin", 100.0)
+    assert e.value.mechanism == hung.name

@@ -5,18 +5,20 @@
 //!
 //! This module holds the operating point, the Jacobians and [`LinearModel`] with its first- and
 //! second-order forms; the analyses are in submodules, all re-exported here: `modes` (eigen-orders
-//! and shapes), `response` (the order-domain response, eq. 22), `campbell` and `multi_order`
-//! (eq. 24).
+//! and shapes), `response` (the order-domain response, eq. 22), `gravity` (the order-1 response to
+//! gravity at the nominal rotation), `campbell` and `multi_order` (eq. 24).
 //!
 //! # The operating point
 //! One root joint, the *spin joint* s, turns at the constant rate Ω (rad/s); every other joint j
 //! sits at a relative equilibrium `q_j = q⁰_j`, `q̇_j = 0`, so `u⁰ = W q̇⁰` with `q̇⁰ = Ω e_s`
 //! (with absolute angular velocities as speeds every body of the spinning subtree has u⁰ = Ω, as
 //! in the paper's eqs. 9 and 11). The spin angle must be *cyclic*: F may not depend on it. That
-//! holds when no load needs the world orientation (no gravity, no world-frame force) and the spin
-//! joint has no spring; otherwise the steady spin is not an equilibrium of the equations (with
-//! gravity the motion is periodic and the linear system time-periodic), and [`LinearModel::new`]
-//! refuses with [`LinearError::WorldOrientation`] or [`LinearError::SpinSpring`].
+//! holds when the spin joint has no spring ([`LinearError::SpinSpring`] otherwise) and no load
+//! needs the world orientation. Gravity and world-frame forces do: with them the steady spin is
+//! not an equilibrium, the motion is periodic in the rotor angle. They are taken out of the
+//! linearisation and put back as what they are at first order, a forcing of order 1 exactly
+//! ([`LinearModel::gravity_force`], the `gravity` submodule: the gravity-forced response through
+//! eq. 22, the parametric gravity × deflection term neglected as second order).
 //!
 //! Steady spin against losses needs a mean torque T_m on the spin joint (for the CPVA `c_r Ω`).
 //! Newton's method solves `F(q⁰, u⁰) + T_m g_s = 0` (all n rows, i.e. `u̇ = 0`) for the n − 1
@@ -66,6 +68,7 @@
 
 mod campbell;
 mod damping;
+mod gravity;
 mod modes;
 mod multi_order;
 mod response;
@@ -73,7 +76,7 @@ mod response;
 pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell};
 pub use damping::ModalDamping;
 pub use modes::{Modal, Mode, ModeKind};
-pub use multi_order::{HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
+pub use multi_order::{GravityLine, HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
 pub use response::{Extremes, FrfPoint, Input, OrderResponse, ResponseSpec};
 
 use crate::error::Error;
@@ -141,13 +144,17 @@ pub enum LinearError {
         /// Its stiffness, N·m/rad.
         stiffness: f64,
     },
-    /// Gravity or a world-frame force: the spin angle is not cyclic.
+    /// Gravity or a world-frame force whose generalized force at the nominal rotation is not a
+    /// pure order-1 harmonic of the spin angle (it loads a body that does not turn with the spin
+    /// joint, or turns at another rate): the linear analysis has no steady state to expand about.
     #[error(
-        "mechanism `{mechanism}`: gravity or a world-frame force makes the steady spin periodic, not an equilibrium; linear analysis about a spin needs a cyclic spin angle (turn gravity off or use body-frame forces)"
+        "mechanism `{mechanism}`: gravity or a world-frame force is not a pure order-1 forcing of the steady rotation ({detail}); the linear analysis takes gravity only on bodies that turn with the spin joint (use a time-domain analysis, or a harmonic balance continued in speed or torque)"
     )]
     WorldOrientation {
         /// Mechanism name.
         mechanism: String,
+        /// What was found.
+        detail: String,
     },
     /// Newton's method found no relative equilibrium.
     #[error(
@@ -282,6 +289,12 @@ pub struct LinearModel {
     pub f_u_undamped: DMatrix<f64>,
     /// W⁻¹ (q̇ = W⁻¹u).
     pub w_inv: DMatrix<f64>,
+    /// Complex amplitude `F̂_g` of the generalized force of gravity and world-frame forces at the
+    /// nominal rotation (n entries, rows of u; N·m, N for a slide): `F_g(t) = Re(F̂_g e^{iΩt})`,
+    /// order 1 exactly (see `gravity`'s module docs); zero without such loads. It is not part
+    /// of the linearisation (the operating point and Jacobians are those without gravity).
+    pub gravity_force: DVector<C64>,
+    gravity_loaded: bool,
     partials: Vec<(Vec<Vec2>, Vec<f64>)>,
 }
 
@@ -367,10 +380,13 @@ fn body_of(mech: &Mechanism, name: &str) -> LinResult<usize> {
 }
 
 /// The mechanism at its operating point's loads: applied torques frozen at their means, the spin
-/// joint's torque removed (T_m is solved for).
+/// joint's torque removed (T_m is solved for), gravity and world-frame forces removed (they force
+/// the linear model at order 1 instead, [`LinearModel::gravity_force`]).
 fn prepare(mech: &Mechanism, spin: usize) -> Mechanism {
     let mut m = mech.clone();
     m.loads.joint_torques.retain(|t| t.joint != spin);
+    m.loads.gravity = Vec2::zeros();
+    m.loads.point_forces.retain(|p| p.frame != crate::model::loads::ForceFrame::World);
     for t in &mut m.loads.joint_torques {
         t.excitation = Excitation::constant(t.excitation.mean);
     }
@@ -423,9 +439,6 @@ impl LinearModel {
         let held = c.stages.as_ref().map(|st| st.drive[0].stiffness).or(c.stops.map(|st| st.stiffness));
         if let Some(stiffness) = held {
             return Err(LinearError::SpinSpring { mechanism: mech.name.clone(), joint: spin_joint.into(), stiffness });
-        }
-        if mech.loads.needs_world_orientation() {
-            return Err(LinearError::WorldOrientation { mechanism: mech.name.clone() });
         }
         if let Some(why) = mech.spin_breaks_cyclic(sj) {
             return Err(LinearError::Invalid(why));
@@ -514,6 +527,17 @@ impl LinearModel {
             .loads
             .joint_torques
             .push(crate::model::loads::JointTorque { joint: sj, excitation: Excitation::constant(t_m) });
+        // Gravity forces the rotation at order 1 (its mean is zero, so the equilibrium above,
+        // found without it, is the one to expand about).
+        let gravity_loaded = mech.loads.needs_world_orientation();
+        let gravity_force = if gravity_loaded {
+            let mut loaded = model_mech.clone();
+            loaded.loads.gravity = mech.loads.gravity;
+            loaded.loads.point_forces.clone_from(&mech.loads.point_forces);
+            gravity::order_one_force(&loaded, &model_mech, &q, &u, s)?
+        } else {
+            DVector::from_element(n, C64::new(0.0, 0.0))
+        };
         Ok(LinearModel {
             mech: model_mech,
             op: OperatingPoint {
@@ -531,12 +555,15 @@ impl LinearModel {
             f_u,
             f_u_undamped,
             w_inv,
+            gravity_force,
+            gravity_loaded,
             partials,
         })
     }
 
     /// The mechanism as linearised: applied torques frozen at their means, the spin joint driven
-    /// by the mean torque T_m.
+    /// by the mean torque T_m, without gravity and world-frame forces (they are
+    /// [`LinearModel::gravity_force`]).
     pub fn mechanism(&self) -> &Mechanism {
         &self.mech
     }

@@ -2,15 +2,22 @@
 //! ([`multi_order_response`]): each harmonic `T_k sin(k·nΩt + α_k)` passes through the
 //! order-domain frequency response (eq. 22) at its own order k·n, the harmonics are superposed
 //! and the peak over a revolution sampled, with the locked comparison (Fig. 5 in the linear
-//! approximation).
+//! approximation). With gravity, its order-1 response (the `gravity` submodule) is one more line
+//! of the superposition: the peak is then taken over the common period of all the lines in the
+//! rotor angle (one revolution for integer orders, d revolutions for orders in steps of 1/d).
 
-use super::{LinResult, OrderResponse, ResponseSpec};
+use super::{C64, LinResult, OrderResponse, ResponseSpec};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Samples per revolution of the base-order phase for the peak of a multi-order response.
 const PEAK_SAMPLES: usize = 4096;
+/// Largest denominator d tried for a common period of the lines with gravity (orders in steps
+/// of 1/d: half orders of a four-stroke engine have d = 2).
+const MAX_PERIOD_REVOLUTIONS: usize = 24;
+/// Most samples of one peak search with gravity (beyond it, no peak is given).
+const MAX_PEAK_SAMPLES: usize = 1 << 22;
 
 /// The torque harmonics at one speed of a multi-order load case (the paper's Table 1 row).
 #[derive(Debug, Clone, PartialEq)]
@@ -57,6 +64,64 @@ pub struct SpeedResponse {
     pub peak: Option<f64>,
     /// The same for the locked mechanism.
     pub locked_peak: Option<f64>,
+    /// The order-1 response to gravity (and world-frame forces), when the mechanism has it
+    /// (see the `gravity` submodule); included in `peak` and `locked_peak`.
+    pub gravity: Option<GravityLine>,
+}
+
+/// The steady order-1 line of a body's angular acceleration forced by gravity at the nominal
+/// rotation, in the convention of [`HarmonicResponse`]: `amplitude·sin(Ωt + phase)`, the spin
+/// angle 0 at t = 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GravityLine {
+    /// Amplitude of the body's angular acceleration, rad/s².
+    pub amplitude: f64,
+    /// Its phase, rad.
+    pub phase: f64,
+    /// Amplitude for the locked mechanism, rad/s².
+    pub locked_amplitude: f64,
+    /// Phase for the locked mechanism, rad.
+    pub locked_phase: f64,
+}
+
+impl SpeedResponse {
+    /// The amplitude of the body's acceleration at excitation order `order` (rad/s²), and the
+    /// locked mechanism's: every line at that order (harmonics and gravity's order 1) added as
+    /// phasors; 0 when none is there.
+    pub fn line(&self, order: f64) -> (f64, f64) {
+        let same = |o: f64| (o - order).abs() <= 1e-12 * order.abs().max(1.0);
+        let (mut a, mut l) = (C64::new(0.0, 0.0), C64::new(0.0, 0.0));
+        for h in self.harmonics.iter().filter(|h| same(h.order)) {
+            a += C64::from_polar(h.amplitude, h.phase);
+            l += C64::from_polar(h.locked_amplitude, h.locked_phase);
+        }
+        if let Some(g) = self.gravity.filter(|_| same(1.0)) {
+            a += C64::from_polar(g.amplitude, g.phase);
+            l += C64::from_polar(g.locked_amplitude, g.locked_phase);
+        }
+        (a.norm(), l.norm())
+    }
+}
+
+/// Peak of `Σ a sin(o ψ + p)` over the lines `(o, a, p)` (orders in the rotor angle ψ), sampled
+/// over their common period: `d` revolutions, d the smallest of 1..=24 that makes every `o·d` an
+/// integer, with 4096 samples per period of the highest line. None when there is no such d.
+fn peak_in_rotor_angle(lines: &[(f64, f64, f64)]) -> Option<f64> {
+    let d = (1..=MAX_PERIOD_REVOLUTIONS)
+        .find(|&d| lines.iter().all(|&(o, _, _)| (o * d as f64 - (o * d as f64).round()).abs() <= 1e-9))?;
+    let top = lines.iter().fold(1.0f64, |a, &(o, _, _)| a.max((o * d as f64).abs()));
+    let samples = PEAK_SAMPLES * top.round() as usize;
+    if samples > MAX_PEAK_SAMPLES {
+        return None;
+    }
+    let span = 2.0 * PI * d as f64;
+    let mut peak = 0.0f64;
+    for i in 0..samples {
+        let psi = span * i as f64 / samples as f64;
+        let v: f64 = lines.iter().map(|&(o, a, p)| a * (o * psi + p).sin()).sum();
+        peak = peak.max(v.abs());
+    }
+    Some(peak)
 }
 
 fn superposed_peak(h: &[(f64, f64, f64)]) -> Option<f64> {
@@ -77,8 +142,8 @@ fn superposed_peak(h: &[(f64, f64, f64)]) -> Option<f64> {
 /// The linear steady-state response per order of `spec.body`'s angular acceleration to the
 /// multi-order torque of each speed case (eq. 24 at base order `base_order`), superposing the
 /// harmonics each through the frequency response at its own order, with the locked comparison
-/// (Fig. 5 in the linear approximation). Each speed is linearised from the previous one's
-/// equilibrium.
+/// (Fig. 5 in the linear approximation), and with gravity its order-1 line
+/// ([`SpeedResponse::gravity`]). Each speed is linearised from the previous one's equilibrium.
 pub fn multi_order_response(
     mech: &Mechanism,
     spec: &ResponseSpec,
@@ -108,10 +173,47 @@ pub fn multi_order_response(
                 locked_phase: h.phase + l.arg() + if h.amplitude < 0.0 { PI } else { 0.0 },
             });
         }
-        let peak = superposed_peak(&harmonics.iter().map(|h| (h.multiple, h.amplitude, h.phase)).collect::<Vec<_>>());
-        let locked_peak = superposed_peak(
-            &harmonics.iter().map(|h| (h.multiple, h.locked_amplitude, h.locked_phase)).collect::<Vec<_>>(),
-        );
+        // Gravity's order-1 line: Re(α̂ e^{iΩt}) = |α̂| sin(Ωt + arg α̂ + π/2).
+        let gravity = if resp.model.has_gravity() {
+            let (a, l) = (resp.gravity_response()?, resp.gravity_locked_response()?);
+            Some(GravityLine {
+                amplitude: a.norm(),
+                phase: a.arg() + FRAC_PI_2,
+                locked_amplitude: l.norm(),
+                locked_phase: l.arg() + FRAC_PI_2,
+            })
+        } else {
+            None
+        };
+        let (peak, locked_peak) = match gravity {
+            None => (
+                superposed_peak(&harmonics.iter().map(|h| (h.multiple, h.amplitude, h.phase)).collect::<Vec<_>>()),
+                superposed_peak(
+                    &harmonics.iter().map(|h| (h.multiple, h.locked_amplitude, h.locked_phase)).collect::<Vec<_>>(),
+                ),
+            ),
+            Some(g) => {
+                let lines = |locked: bool| {
+                    let mut v: Vec<(f64, f64, f64)> = harmonics
+                        .iter()
+                        .map(|h| {
+                            if locked {
+                                (h.order, h.locked_amplitude, h.locked_phase)
+                            } else {
+                                (h.order, h.amplitude, h.phase)
+                            }
+                        })
+                        .collect();
+                    v.push(if locked {
+                        (1.0, g.locked_amplitude, g.locked_phase)
+                    } else {
+                        (1.0, g.amplitude, g.phase)
+                    });
+                    v
+                };
+                (peak_in_rotor_angle(&lines(false)), peak_in_rotor_angle(&lines(true)))
+            }
+        };
         out.push(SpeedResponse {
             rpm: case.rpm,
             omega,
@@ -119,6 +221,7 @@ pub fn multi_order_response(
             harmonics,
             peak,
             locked_peak,
+            gravity,
         });
     }
     Ok(out)

@@ -5,7 +5,7 @@
 //! Fig. 2 ([`OrderResponse`]), with its high-order asymptote, first amplification order and
 //! extremes over an order range.
 
-use super::{C64, LinResult, LinearError, LinearModel, body_of, joint_of};
+use super::{C64, LinResult, LinearError, LinearModel, Spin, body_of, joint_of};
 use crate::model::mechanism::Mechanism;
 use nalgebra::{DMatrix, DVector};
 
@@ -29,23 +29,38 @@ impl LinearModel {
     /// N·m; m and m/s for slides) for a unit torque `e^{iΩnt}` in joint `joint`, spin free
     /// (eq. 22).
     pub fn state_response(&self, joint: usize, order: f64) -> LinResult<DVector<C64>> {
+        let g = self.generalized_torque(joint).map(|v| C64::new(v, 0.0));
+        self.forced_state(Spin::Free, order, &g)
+    }
+
+    /// Eq. (22) for a generalized force `force·e^{iΩnt}` in the rows of the speeds (n entries):
+    /// the steady `x̂ = [q̂; û]` (2n). With the spin held, the spin angle and speed are removed
+    /// (their entries are 0, the spin speed's row is the reaction).
+    pub(super) fn forced_state(&self, spin: Spin, order: f64, force: &DVector<C64>) -> LinResult<DVector<C64>> {
         let n = self.ndof();
         let w = self.op.omega * order;
         let iw = C64::new(0.0, w);
-        let mut k = DMatrix::from_element(2 * n, 2 * n, C64::new(0.0, 0.0));
-        for i in 0..n {
-            k[(i, i)] = iw;
-            for j in 0..n {
-                k[(i, n + j)] = C64::new(-self.w_inv[(i, j)], 0.0);
-                k[(n + i, j)] = C64::new(-self.f_q[(i, j)], 0.0);
-                k[(n + i, n + j)] = iw * self.mass[(i, j)] - self.f_u[(i, j)];
+        let s = self.op.spin_coordinate;
+        let kept: Vec<usize> = (0..n).filter(|&j| spin == Spin::Free || j != s).collect();
+        let m = kept.len();
+        let mut k = DMatrix::from_element(2 * m, 2 * m, C64::new(0.0, 0.0));
+        for (a, &i) in kept.iter().enumerate() {
+            k[(a, a)] = iw;
+            for (b, &j) in kept.iter().enumerate() {
+                k[(a, m + b)] = C64::new(-self.w_inv[(i, j)], 0.0);
+                k[(m + a, b)] = C64::new(-self.f_q[(i, j)], 0.0);
+                k[(m + a, m + b)] = iw * self.mass[(i, j)] - self.f_u[(i, j)];
             }
         }
-        let g = self.generalized_torque(joint);
-        let rhs = DVector::from_fn(2 * n, |i, _| C64::new(if i >= n { g[i - n] } else { 0.0 }, 0.0));
-        let x = k.lu().solve(&rhs).ok_or(LinearError::Singular { order })?;
-        if x.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
+        let rhs = DVector::from_fn(2 * m, |a, _| if a >= m { force[kept[a - m]] } else { C64::new(0.0, 0.0) });
+        let xr = k.lu().solve(&rhs).ok_or(LinearError::Singular { order })?;
+        if xr.iter().any(|v| !v.re.is_finite() || !v.im.is_finite()) {
             return Err(LinearError::Singular { order });
+        }
+        let mut x = DVector::from_element(2 * n, C64::new(0.0, 0.0));
+        for (a, &i) in kept.iter().enumerate() {
+            x[i] = xr[a];
+            x[n + i] = xr[m + a];
         }
         Ok(x)
     }
@@ -201,6 +216,26 @@ impl OrderResponse {
             }
         }
         Ok(q)
+    }
+
+    /// Complex α̂ of the body at order 1 under gravity (rad/s², absolute, not per N·m), spin
+    /// free, `α(t) = Re(α̂ e^{iΩt})`: the gravity-forced response (see `gravity`'s module docs);
+    /// zero without gravity.
+    pub fn gravity_response(&self) -> LinResult<C64> {
+        self.model.gravity_acceleration(self.body)
+    }
+
+    /// The same for the locked mechanism's body (its own weight distribution, e.g. the
+    /// unbalance of one locked absorber), rad/s².
+    pub fn gravity_locked_response(&self) -> LinResult<C64> {
+        self.locked.gravity_acceleration(self.body_locked)
+    }
+
+    /// Complex amplitudes q̂ of every coordinate at order 1 under gravity (rad, m for a slide),
+    /// spin free.
+    pub fn gravity_coordinates(&self) -> LinResult<DVector<C64>> {
+        let n = self.model.ndof();
+        Ok(self.model.gravity_state_response(Spin::Free)?.rows(0, n).into_owned())
     }
 
     /// Complex α̂ of the locked mechanism's body per N·m at order n.

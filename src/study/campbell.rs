@@ -42,7 +42,20 @@ pub(crate) fn campbell_tables(spec: &CampbellSpec, c: &Campbell) -> Vec<Table> {
 /// ([`render_campbell`]).
 pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Result<Output> {
     let (c, failures) = compute_campbell(study, spec)?;
-    let (markdown, files) = render_campbell(spec, &c, dir)?;
+    let (mut markdown, files) = render_campbell(spec, &c, dir)?;
+    let g = study.mechanism.loads.gravity;
+    if study.mechanism.loads.needs_world_orientation() {
+        // After the heading: what gravity does to these modes.
+        let note = format!(
+            "The mechanism has gravity ({}, {}) m/s² (or a world-frame force): at the nominal rotation it is an \
+             order-1 forcing, not a change of the linear system, so these modes about the steady rotation are \
+             those without it; its parametric effect (gravity × deflection) is second order and neglected. Its \
+             forced response is in LinearResponse and MultiOrder.\n\n",
+            g.x, g.y
+        );
+        let at = markdown.find("\n\n").map_or(markdown.len(), |i| i + 2);
+        markdown.insert_str(at, &note);
+    }
     Ok(Output { markdown, files, failures, results: Results::Campbell(c) })
 }
 

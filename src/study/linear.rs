@@ -42,6 +42,21 @@ pub struct ResponseVariant {
     pub asymptote: f64,
     /// Each reported element's response per unit torque at each order.
     pub elements: Vec<ElementFrf>,
+    /// With gravity: its order-1 response (not per unit torque), see [`GravityResponse`].
+    pub gravity: Option<GravityResponse>,
+}
+
+/// The steady order-1 response that gravity forces at the nominal rotation, spin free, in the
+/// linear model (`linear::gravity`: exact to first order; the gravity × deflection terms are
+/// neglected).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GravityResponse {
+    /// |α̂| of the watched body at order 1, rad/s².
+    pub accel: f64,
+    /// The locked twin's |α̂| at order 1, rad/s².
+    pub locked: f64,
+    /// Each reported element's |q̂| at order 1 (rad; m for a slide), as `elements`.
+    pub elements: Vec<f64>,
 }
 
 /// One element's linear response per unit excitation torque over the orders of a variant.
@@ -183,6 +198,22 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             _ => None,
         };
         let asymptote = resp.asymptote().map_err(lin(&m))?;
+        // Gravity's order-1 line (with modal damping, through the modally damped model).
+        let gravity = if resp.model.has_gravity() {
+            let q = resp.gravity_coordinates().map_err(lin(&m))?;
+            Some(GravityResponse {
+                accel: resp.gravity_response().map_err(lin(&m))?.norm(),
+                locked: resp.gravity_locked_response().map_err(lin(&m))?.norm(),
+                elements: study.elements.iter().filter_map(|&j| m.coordinate(j)).map(|c| q[c].norm()).collect(),
+            })
+        } else {
+            None
+        };
+        if let Some(g) = &gravity
+            && !(g.accel.is_finite() && g.locked.is_finite() && g.elements.iter().all(|v| v.is_finite()))
+        {
+            failures.push(format!("{} variant `{}`: the gravity response is not finite", spec.name, v.label));
+        }
         if let Some(i) = pts.iter().position(|p| !(p.response.is_finite() && p.locked.is_finite())) {
             failures.push(format!(
                 "{} variant `{}`: the response is not finite at order {} (left empty in the CSV)",
@@ -224,6 +255,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             crossing,
             asymptote,
             elements,
+            gravity,
         });
     }
     let result = LinearResult { name: spec.name.clone(), n_t, free_orders, modes, variants: results };
@@ -395,6 +427,7 @@ pub(crate) fn render_response(
         let _ = writeln!(md, "- modal damping: {} (in place of the mechanism's dampers)", z.describe());
     }
     let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
+    md += &gravity_table(study, spec, results);
     if !normalised {
         let _ = writeln!(
             md,
@@ -442,6 +475,44 @@ pub(crate) fn render_response(
     md.push('\n');
     md += &element_table(results);
     Ok((md, files))
+}
+
+/// With gravity: its order-1 response per variant (the watched body, its locked twin and each
+/// element), and what it is.
+fn gravity_table(study: &Study, spec: &LinearResponseSpec, results: &[ResponseVariant]) -> String {
+    let mut md = String::new();
+    if results.iter().all(|r| r.gravity.is_none()) {
+        return md;
+    }
+    let g = study.mechanism.loads.gravity;
+    let _ = writeln!(
+        md,
+        "Gravity ({}, {}) m/s² forces the rotation at order 1 (exactly, at the nominal rotation); its steady \
+         response at {} rpm through the same linear transfer (spin free; the gravity × deflection terms, second \
+         order, are neglected; the per-N·m responses above do not change):\n",
+        g.x, g.y, spec.rpm
+    );
+    let body = &study.spec.response_body;
+    let names: Vec<String> = results
+        .iter()
+        .find_map(|r| {
+            r.gravity.as_ref().map(|_| r.elements.iter().map(|e| format!(" `{}` order 1 |", e.joint)).collect())
+        })
+        .unwrap_or_default();
+    let _ = writeln!(
+        md,
+        "| variant | `{body}` order 1 (rad/s²) | locked twin (rad/s²) |{}\n|---|---|---|{}",
+        names.concat(),
+        "---|".repeat(names.len())
+    );
+    for r in results {
+        let Some(gr) = &r.gravity else { continue };
+        let els: Vec<String> =
+            gr.elements.iter().zip(&r.elements).map(|(a, e)| format!(" {} {} |", sci(*a), e.unit)).collect();
+        let _ = writeln!(md, "| {} | {} | {} |{}", r.label, sci(gr.accel), sci(gr.locked), els.concat());
+    }
+    md.push('\n');
+    md
 }
 
 /// A number in exponent form with six digits, or `undefined`.

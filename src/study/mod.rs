@@ -139,7 +139,7 @@ pub struct StudyReport {
 
 pub use backbone::FreeOscillationResult;
 pub use compare::CompareResult;
-pub use linear::{LinearResult, ResponseVariant};
+pub use linear::{GravityResponse, LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;
 

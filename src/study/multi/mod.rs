@@ -49,6 +49,12 @@ pub struct SpeedResult {
     pub linear: Option<Vec<f64>>,
     /// The locked twin's linear amplitudes, rad/s².
     pub linear_locked: Option<Vec<f64>>,
+    /// With gravity: the linear order-1 amplitude of the watched body's acceleration that
+    /// gravity forces at the nominal rotation (`linear::gravity`), rad/s²; None without gravity
+    /// or without the linear part.
+    pub linear_gravity: Option<f64>,
+    /// The locked twin's, rad/s².
+    pub linear_gravity_locked: Option<f64>,
     /// Every periodic steady state found by harmonic balance at this speed.
     pub hbm: Vec<HbmState>,
     /// The torque scale s < 1 (every harmonic's amplitude times s) at which the low-amplitude
@@ -191,13 +197,13 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             )),
         }
     }
-    let (linear, linear_locked) = if spec.linear {
+    let (linear, linear_locked, gravity) = if spec.linear {
         linear_amplitudes(study, spec).unwrap_or_else(|e| {
             failures.push(format!("{} linear response: {e}", spec.name));
-            (Vec::new(), Vec::new())
+            (Vec::new(), Vec::new(), Vec::new())
         })
     } else {
-        (Vec::new(), Vec::new())
+        (Vec::new(), Vec::new(), Vec::new())
     };
     let speeds: Vec<SpeedResult> = spec
         .speeds
@@ -210,6 +216,8 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             locked,
             linear: linear.get(i).cloned(),
             linear_locked: linear_locked.get(i).cloned(),
+            linear_gravity: gravity.get(i).copied().flatten().map(|g| g.0),
+            linear_gravity_locked: gravity.get(i).copied().flatten().map(|g| g.1),
             hbm: Vec::new(),
             hbm_lower_fold: None,
             hbm_ramp: None,
@@ -255,7 +263,8 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
                 ));
             }
         }
-        let lin = s.linear.iter().chain(&s.linear_locked).flatten();
+        let lin =
+            s.linear.iter().chain(&s.linear_locked).flatten().chain(&s.linear_gravity).chain(&s.linear_gravity_locked);
         if lin.clone().any(|a| !a.is_finite()) {
             failures.push(format!("{} at {} rpm: the linear amplitudes are not finite (left empty)", spec.name, s.rpm));
         }
@@ -285,6 +294,16 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
             if has_locked {
                 table.push(format!("linear_locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.linear_amplitude(k, true)));
             }
+        }
+    }
+    // Gravity's order-1 line (order 1 of the rotation, whatever the base order).
+    if spec.linear && study.mechanism.loads.needs_world_orientation() {
+        let col = |f: &dyn Fn(&SpeedResult) -> Option<f64>| {
+            result.speeds.iter().map(|s| f(s).unwrap_or(f64::NAN)).collect::<Vec<f64>>()
+        };
+        table.push("linear_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity));
+        if has_locked {
+            table.push("linear_locked_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity_locked));
         }
     }
     if spec.time_domain {
@@ -446,10 +465,13 @@ fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: boo
 
 /// Amplitudes indexed `[speed][multiple]`, rad/s².
 type PerSpeed = Vec<Vec<f64>>;
+/// Per speed, gravity's order-1 amplitude of the mechanism and of its locked twin, rad/s².
+type GravityPerSpeed = Vec<Option<(f64, f64)>>;
 
 /// Linear amplitudes per speed and tracked multiple, of the mechanism and of its locked twin:
-/// each harmonic through the order-domain response of eq. (22).
-fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, PerSpeed)> {
+/// each harmonic through the order-domain response of eq. (22); a multiple at order 1 also
+/// holds gravity's line, added as a phasor. With gravity, its order-1 line per speed.
+fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, PerSpeed, GravityPerSpeed)> {
     let rspec = crate::linear::ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
         inputs: study.inputs(&spec.excite),
@@ -469,15 +491,13 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
         spec.multiples
             .iter()
             .map(|m| {
-                r.harmonics
-                    .iter()
-                    .filter(|h| (h.multiple - m).abs() < 1e-12)
-                    .map(|h| if locked { h.locked_amplitude } else { h.amplitude })
-                    .sum()
+                let (a, l) = r.line(m * spec.order);
+                if locked { l } else { a }
             })
             .collect()
     };
-    Ok((res.iter().map(|r| pick(r, false)).collect(), res.iter().map(|r| pick(r, true)).collect()))
+    let gravity = res.iter().map(|r| r.gravity.map(|g| (g.amplitude, g.locked_amplitude))).collect();
+    Ok((res.iter().map(|r| pick(r, false)).collect(), res.iter().map(|r| pick(r, true)).collect(), gravity))
 }
 
 /// Integrates in windows of `window_s` until the amplitudes of the last two windows agree to

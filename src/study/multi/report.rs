@@ -124,6 +124,16 @@ pub(super) fn fmt_mult(m: f64) -> String {
 fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## Multi-order response `{}`: n = {}, steady states\n", spec.name, spec.order);
+    let gravity = r.speeds.iter().any(|s| s.linear_gravity.is_some());
+    if gravity {
+        let _ = writeln!(
+            md,
+            "The mechanism has gravity: only the linear part runs. Gravity forces the rotation at order 1 \
+             (exactly, at the nominal rotation); its response through the same linear transfer is the column \
+             \"order 1 gravity linear\" (CSV `linear_gravity_order1_rad_s2`) and is added as a phasor to a \
+             tracked multiple at order 1. The gravity × deflection terms, second order, are neglected.\n"
+        );
+    }
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -136,6 +146,10 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
             let _ = write!(head, " {tag}n linear | {tag}n linear ratio |");
             rule += "---|---|";
         }
+    }
+    if gravity {
+        head += " order 1 gravity linear (rad/s²) | order 1 gravity linear locked |";
+        rule += "---|---|";
     }
     if spec.time_domain {
         head +=
@@ -154,6 +168,10 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
                 let a = s.linear_amplitude(k, false);
                 let _ = write!(row, " {} | {} |", cell(a, 4), cell(s.linear_ratio(k), 3));
             }
+        }
+        if gravity {
+            let g = |v: Option<f64>| v.map_or("undefined".into(), |v| format!("{v:.4e}"));
+            let _ = write!(row, " {} | {} |", g(s.linear_gravity), g(s.linear_gravity_locked));
         }
         if let Some(resp) = &s.response {
             let _ = write!(

@@ -19,13 +19,16 @@ use inputs::{check_excite, check_transient};
 pub use limits::*;
 
 /// Why analyses about a steady spin (linear response, Campbell, multi-order, harmonic balance)
-/// cannot be run on this mechanism, if they cannot: they need the spin angle to be cyclic.
+/// cannot be run on this mechanism, if they cannot: they need the spin angle to be cyclic. (The
+/// linear ones take gravity and world-frame forces as an order-1 forcing all the same; `check`
+/// says which.)
 pub fn steady_spin_obstacle(mech: &Mechanism, spin: usize) -> Option<String> {
     let g = mech.loads.gravity;
     if g.x != 0.0 || g.y != 0.0 {
         return Some(format!(
             "mechanism `{}` has gravity ({}, {}) m/s²: the spinning state is then periodic at order 1, \
-             not steady, which this analysis needs (sweeps in the time domain do take gravity); \
+             not steady, which this analysis needs (OrderSweep, Transient, a HarmonicBalance continued in \
+             Speed or Torque, LinearResponse, Campbell and MultiOrder's linear part take gravity); \
              set gravity to (0.0, 0.0)",
             mech.name, g.x, g.y
         ));
@@ -108,14 +111,48 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
             return Err(src.error(&at("name"), format!("duplicate analysis name `{name}`")));
         }
         // A harmonic balance at a fixed order takes gravity and world-frame forces (its base
-        // period is then whole revolutions); a spring on the spin joint it cannot.
+        // period is then whole revolutions); a spring on the spin joint it cannot. The linear
+        // analyses take them as an order-1 forcing of the steady rotation (`linear::gravity`):
+        // LinearResponse, Campbell (modes unchanged at that order) and MultiOrder's linear part.
         let periodic_hbm = matches!(a, AnalysisSpec::HarmonicBalance(h) if h.parameter != HbmParameter::Order)
             && mech.joints[spin].spring.is_none();
+        let linear =
+            matches!(a, AnalysisSpec::LinearResponse(_) | AnalysisSpec::Campbell(_) | AnalysisSpec::MultiOrder(_));
         if !matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::Transient(_) | AnalysisSpec::Compare(_))
             && !periodic_hbm
             && let Some(why) = steady_spin_obstacle(mech, spin)
         {
-            return Err(src.error(&format!("analyses[{k}]"), format!("{} `{name}`: {why}", a.kind())));
+            let spring = mech.joints[spin].spring.is_some();
+            if !linear || spring {
+                return Err(src.error(&format!("analyses[{k}]"), format!("{} `{name}`: {why}", a.kind())));
+            }
+            if let AnalysisSpec::MultiOrder(m) = a {
+                // Only the linear part: the steady time runs and the order-continued harmonic
+                // balance assume a steady spin.
+                let g = mech.loads.gravity;
+                let what = if g.x != 0.0 || g.y != 0.0 {
+                    format!("gravity ({}, {}) m/s²", g.x, g.y)
+                } else {
+                    "a world-frame point force".to_string()
+                };
+                for (on, field, part) in [
+                    (m.time_domain, "time_domain", "steady time runs"),
+                    (m.hbm, "hbm", "harmonic balance continued in order"),
+                ] {
+                    if on {
+                        return Err(src.error(
+                            &at(field),
+                            format!(
+                                "MultiOrder `{name}`: mechanism `{}` has {what}, which makes the spinning state \
+                                 periodic at order 1; the {part} of this analysis need a steady spin. Only its \
+                                 linear part takes gravity (and reports the order-1 response it forces): set \
+                                 `{field}: false`, or use a HarmonicBalance continued in Speed or Torque",
+                                mech.name
+                            ),
+                        ));
+                    }
+                }
+            }
         }
         match a {
             AnalysisSpec::OrderSweep(s) => {
