@@ -441,13 +441,14 @@ impl Kane {
         let packed = &self.small.as_ref().expect("the fixed-size path is chosen with its data").rates;
         let c = packed.pair.as_ref().expect("the pair form is chosen with its constants");
         let (theta, s, w, sd) = (x[0], x[1], x[2], x[3]);
-        let p = c.path.at(if s.abs() < c.limit { s } else { f64::NAN });
+        // The excitation's `sin` first: its chain (phase, `sin`, F, solve) is the longest here.
         let mut exc = [0.0; 2];
         for (j, exc) in exc.iter_mut().enumerate() {
             if packed.torque[j] != NONE {
                 *exc = self.torques[packed.torque[j]].excitation.torque(t);
             }
         }
+        let p = c.path.at(if s.abs() < c.limit { s } else { f64::NAN });
         let (m, i) = (c.mass, c.i_com);
         let (da, dda) = (p.dalpha, p.ddalpha);
         let spin = w + da * sd;

@@ -602,7 +602,7 @@ pub enum PolarPath {
 impl PolarPath {
     /// The rotation-invariant quantities at arc length `s` (m); NaN in every field at |s| ≥ the
     /// travel (or a NaN s), as [`PathShape::at`].
-    #[inline]
+    #[inline(always)]
     pub fn at(self, s: f64) -> PolarPoint {
         match self {
             PolarPath::Circle { inv_length, sum_sq, two_rl, radius, length, ratio, dalpha } => {
