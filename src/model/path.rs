@@ -191,6 +191,12 @@ fn poly3(c: &[f64], z: f64) -> (f64, f64, f64) {
     (v, d1, d2)
 }
 
+/// `d/dz Σ c_k z^k`.
+#[inline]
+fn poly_d(c: &[f64], z: f64) -> f64 {
+    c.iter().enumerate().skip(1).rev().fold(0.0, |v, (k, &a)| v * z + k as f64 * a)
+}
+
 /// `Σ c_k z^k`.
 #[inline]
 fn poly(c: &[f64], z: f64) -> f64 {
@@ -424,6 +430,31 @@ impl GeneralPath {
         }
     }
 
+    /// The rotation-invariant quantities at s ([`PolarPoint`]; NaN beyond the end): no θ table.
+    #[inline]
+    fn polar(&self, s: f64) -> PolarPoint {
+        let on_path = s.abs() < self.s_end;
+        if !on_path {
+            return PolarPoint::nan();
+        }
+        // ρ² = P(z), ρρ' = s P'(z), ρw = √g with g = (z_end − z) h(z) = P − zP'², and
+        // d√g/ds = s g'(z)/√g with g' = (z_end − z) h' − h.
+        let z = s * s;
+        let (pz, dpz) = (poly(&self.p, z), poly_d(&self.p, z));
+        let (hz, dhz, _) = poly3(&self.h, z);
+        let gap = self.z_end - z;
+        let root = (gap * hz).sqrt();
+        let (_, dalpha, ddalpha) = self.rotation(s);
+        PolarPoint {
+            rho_sq: pz,
+            r_dot_t: s * dpz,
+            r_cross_t: root,
+            r_cross_k: s * (gap * dhz - hz) / root,
+            dalpha,
+            ddalpha,
+        }
+    }
+
     /// The Taylor coefficients of ρ² (by powers of s², from s⁰) and of α (by odd powers).
     pub fn coefficients(&self) -> (&[f64], &[f64]) {
         (&self.p, &self.alpha)
@@ -492,6 +523,121 @@ impl PathPoint {
     fn nan() -> PathPoint {
         let nan = Vec2::repeat(f64::NAN);
         PathPoint { position: nan, tangent: nan, curvature: nan, alpha: f64::NAN, dalpha: f64::NAN, ddalpha: f64::NAN }
+    }
+}
+
+/// The rotation-invariant quantities of a path at one arc length s: what the dynamics of a body
+/// whose centre of mass follows the path about the rotor axis need when the rotor's own frame is
+/// the basis (docs/design.md, "Fast path for path joints"). With r the point, t = r' the unit
+/// tangent and κ = r'' the curvature vector, all about the path's centre:
+/// `|r|² = ρ²`, `r·t = ρρ' = ½ dρ²/ds`, `r × t = ρ w` (w = ρθ'), `r × κ = d(r × t)/ds`.
+/// None of them depends on the polar angle θ(s), so none needs it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolarPoint {
+    /// `|r|² = ρ²`, m².
+    pub rho_sq: f64,
+    /// `r·t = ρ ρ'`, m.
+    pub r_dot_t: f64,
+    /// `r × t = ρ w = ρ² θ'`, m.
+    pub r_cross_t: f64,
+    /// `r × κ = d(r × t)/ds`, dimensionless.
+    pub r_cross_k: f64,
+    /// dα/ds, rad/m.
+    pub dalpha: f64,
+    /// d²α/ds², rad/m².
+    pub ddalpha: f64,
+}
+
+impl PolarPoint {
+    /// Every field NaN: a point off the path.
+    fn nan() -> PolarPoint {
+        let nan = f64::NAN;
+        PolarPoint { rho_sq: nan, r_dot_t: nan, r_cross_t: nan, r_cross_k: nan, dalpha: nan, ddalpha: nan }
+    }
+}
+
+/// A path prepared for [`PolarPath::at`]: its constants (travel, squares, the scale of the
+/// epicycloid's parameter) computed once per joint, so that an evaluation's dependency chain
+/// holds no division or square root of constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PolarPath {
+    /// `Circle` (`turns`: α = s/L) or `Bifilar` (α = 0).
+    Circle {
+        /// 1/L, 1/m.
+        inv_length: f64,
+        /// R² + L², m².
+        sum_sq: f64,
+        /// 2RL, m².
+        two_rl: f64,
+        /// R, m.
+        radius: f64,
+        /// L, m.
+        length: f64,
+        /// R/L.
+        ratio: f64,
+        /// α' (1/L for `Circle`, 0 for `Bifilar`), rad/m.
+        dalpha: f64,
+    },
+    /// `Epicycloid`.
+    Epicycloid {
+        /// The end of travel s_max, m.
+        travel: f64,
+        /// ρ₀², m².
+        rho0_sq: f64,
+        /// ñ².
+        n2: f64,
+        /// ρ₀, m.
+        rho0: f64,
+        /// `c = ñ√(1+ñ²)/ρ₀` of σ = sin u = c s, 1/m.
+        c_sigma: f64,
+        /// −ρ₀ c, dimensionless.
+        minus_rho0_c: f64,
+        /// α₁, rad/m.
+        alpha1: f64,
+    },
+    /// `General`: its polynomials are already stored.
+    General(&'static GeneralPath),
+}
+
+impl PolarPath {
+    /// The rotation-invariant quantities at arc length `s` (m); NaN in every field at |s| ≥ the
+    /// travel (or a NaN s), as [`PathShape::at`].
+    #[inline(always)]
+    pub fn at(self, s: f64) -> PolarPoint {
+        match self {
+            PolarPath::Circle { inv_length, sum_sq, two_rl, radius, length, ratio, dalpha } => {
+                // r = (R, 0) + L(cos φ, sin φ), t = (−sin φ, cos φ), κ = −(cos φ, sin φ)/L.
+                let (sn, cs) = (s * inv_length).sin_cos();
+                PolarPoint {
+                    rho_sq: sum_sq + two_rl * cs,
+                    r_dot_t: -radius * sn,
+                    r_cross_t: length + radius * cs,
+                    r_cross_k: -ratio * sn,
+                    dalpha,
+                    ddalpha: 0.0,
+                }
+            }
+            PolarPath::Epicycloid { travel, rho0_sq, n2, rho0, c_sigma, minus_rho0_c, alpha1 } => {
+                // Written so that a NaN s also counts as off the path.
+                let on_path = s.abs() < travel;
+                if !on_path {
+                    return PolarPoint::nan();
+                }
+                // ρ² = ρ₀² − ñ²s² and ρρ' = −ñ²s exactly; with σ = sin u = c s, ρw = ρ₀ cos u
+                // (cos u > 0 inside the travel), whose derivative is −ρ₀ c σ / cos u.
+                let sigma = c_sigma * s;
+                let cos_u = ((1.0 - sigma) * (1.0 + sigma)).sqrt();
+                PolarPoint {
+                    rho_sq: rho0_sq - n2 * (s * s),
+                    r_dot_t: -n2 * s,
+                    r_cross_t: rho0 * cos_u,
+                    r_cross_k: minus_rho0_c * sigma / cos_u,
+                    dalpha: alpha1,
+                    ddalpha: 0.0,
+                }
+            }
+            PolarPath::General(g) => g.polar(s),
+        }
     }
 }
 
@@ -629,6 +775,39 @@ impl PathShape {
         }
     }
 
+    /// The path prepared for [`PolarPath::at`], its constants computed once.
+    pub fn polar_path(self) -> PolarPath {
+        match self {
+            PathShape::Circle { radius, length } | PathShape::Bifilar { radius, length } => PolarPath::Circle {
+                inv_length: 1.0 / length,
+                sum_sq: radius * radius + length * length,
+                two_rl: 2.0 * radius * length,
+                radius,
+                length,
+                ratio: radius / length,
+                dalpha: if matches!(self, PathShape::Circle { .. }) { 1.0 / length } else { 0.0 },
+            },
+            PathShape::Epicycloid { rho0, n_tilde, alpha1 } => {
+                let c_sigma = n_tilde * (1.0 + n_tilde * n_tilde).sqrt() / rho0;
+                PolarPath::Epicycloid {
+                    travel: self.travel(),
+                    rho0_sq: rho0 * rho0,
+                    n2: n_tilde * n_tilde,
+                    rho0,
+                    c_sigma,
+                    minus_rho0_c: -rho0 * c_sigma,
+                    alpha1,
+                }
+            }
+            PathShape::General(g) => PolarPath::General(g),
+        }
+    }
+
+    /// The rotation-invariant quantities at arc length `s` (m) ([`PolarPoint`]): `self.polar_path().at(s)`.
+    pub fn polar(self, s: f64) -> PolarPoint {
+        self.polar_path().at(s)
+    }
+
     /// Checks the parameters: the field that is wrong and why.
     pub fn check(self) -> Result<(), (&'static str, String)> {
         let positive = |field: &'static str, v: f64, what: &str| {
@@ -690,6 +869,50 @@ mod tests {
                     k_fd
                 );
             }
+        }
+    }
+
+    /// The rotation-invariant quantities of [`PolarPath::at`] equal the products of
+    /// [`PathShape::at`]'s vectors (|r|², r·t, r × t, r × κ) and its rotation law, for every kind
+    /// and mount-free path, to 1e-13 of the size of the products' terms (|r|², |r|, |r||κ|: both
+    /// sides are a few roundings of these), and are NaN off the path as `at` is.
+    #[test]
+    fn polar_quantities_are_the_products_of_the_vectors() {
+        let shapes = [
+            PathShape::Circle { radius: 0.17, length: 0.015 },
+            PathShape::Bifilar { radius: 0.1, length: 0.03 },
+            PathShape::Epicycloid { rho0: 0.185, n_tilde: 3.11, alpha1: 0.0 },
+            PathShape::Epicycloid { rho0: 0.5, n_tilde: 0.7, alpha1: 2.0 },
+            PathShape::general(0.3, 1.7, &[4.0], &[0.8, -3.0]),
+        ];
+        for shape in shapes {
+            let reach = if shape.travel().is_finite() { shape.travel() } else { 3.0 * shape.length_scale() };
+            for f in [-0.99, -0.6, -0.1, 0.0, 0.25, 0.7, 0.95, 0.999] {
+                let s = f * reach;
+                let (p, q) = (shape.at(s), shape.polar(s));
+                let (r, t, k) = (p.position, p.tangent, p.curvature);
+                let cross = |a: Vec2, b: Vec2| a.x * b.y - a.y * b.x;
+                let pairs = [
+                    (q.rho_sq, r.norm_squared(), r.norm_squared()),
+                    (q.r_dot_t, r.dot(&t), r.norm()),
+                    (q.r_cross_t, cross(r, t), r.norm()),
+                    (q.r_cross_k, cross(r, k), r.norm() * k.norm()),
+                ];
+                for (i, (polar, vectors, size)) in pairs.into_iter().enumerate() {
+                    assert!(
+                        (polar - vectors).abs() <= 1e-13 * size,
+                        "{shape:?} at {s}: quantity {i}: {polar} vs {vectors}"
+                    );
+                }
+                assert_eq!((q.dalpha, q.ddalpha), (p.dalpha, p.ddalpha), "{shape:?} at {s}");
+            }
+            if shape.travel().is_finite() {
+                assert!(
+                    shape.polar(shape.travel()).rho_sq.is_nan()
+                        && shape.polar(-1.5 * shape.travel()).r_cross_k.is_nan()
+                );
+            }
+            assert!(shape.polar(f64::NAN).r_cross_t.is_nan());
         }
     }
 
