@@ -137,6 +137,14 @@ struct Node {
     diag_abs: f64,
     /// The matching first moment in the body frame, `m c + Σ_children M_c at_c`, kg·m.
     first_abs: Vec2,
+    /// A path joint's rollers (docs/design.md, "Rollers"): `Some((P, dψ/ds))` makes this node
+    /// the rollers' body, a "satellite" hanging from the path joint's parent and moved by the
+    /// path's coordinate ([`JointKind::roller_motion`]); `None` for every body of the mechanism.
+    satellite: Option<(Vec2, f64)>,
+    /// True for a path joint whose rollers' node wrote its row of M and F first (the satellite
+    /// is placed after every body, so the backward pass reaches it first): this node adds to
+    /// those entries instead of setting them.
+    adds: bool,
 }
 
 /// Per-evaluation state of one body: its pose and rates (in the subtree's basis), the composite
@@ -192,7 +200,8 @@ pub struct Kane {
     mech: Mechanism,
     /// Number of coordinates (= speeds).
     n: usize,
-    /// Number of bodies (n plus the fixed joints).
+    /// Number of nodes: the bodies (n plus the fixed joints), then one per path joint with
+    /// rollers (their satellite bodies, `Node::satellite`).
     nb: usize,
     /// Per coordinate: the speed subtracted in `q̇ = W⁻¹u` ([`Mechanism::speed_parents`]).
     speed_parent: Vec<Option<usize>>,
@@ -264,6 +273,13 @@ impl Kane {
         let mut point_forces = mech.loads.point_forces.clone();
         point_forces.sort_by_key(|p| p.body);
         let mut subtree_mass: Vec<f64> = mech.bodies.iter().map(|b| b.inertia.mass).collect();
+        // The rollers belong to the subtree of their path joint's parent (not of the absorber).
+        let rollers = mech.roller_sets();
+        for set in &rollers {
+            if let Some(p) = set.parent {
+                subtree_mass[p] += set.rollers.total_mass();
+            }
+        }
         for j in (0..nb).rev() {
             if let Some(p) = parent[j] {
                 subtree_mass[p] += subtree_mass[j];
@@ -291,6 +307,39 @@ impl Kane {
                 j_own: b.inertia.i_com + b.inertia.mass * b.inertia.com.norm_squared(),
                 diag_abs: 0.0,
                 first_abs: b.inertia.mass * b.inertia.com,
+                satellite: None,
+                adds: false,
+            });
+        }
+        // Each path joint's rollers: one more node after the bodies (its parent, the path's
+        // parent, comes before it, so the passes' order holds), and their spread as a constant
+        // inertia of that parent.
+        for set in &rollers {
+            let r = set.rollers;
+            nodes[set.joint].adds = true;
+            if let Some(p) = set.parent {
+                nodes[p].i_com += r.spread_inertia();
+                nodes[p].j_own += r.spread_inertia();
+            }
+            nodes.push(Node {
+                parent: set.parent.unwrap_or(GROUND_PARENT),
+                coord: set.coordinate,
+                kind: set.kind,
+                mass: r.total_mass(),
+                i_com: r.total_inertia(),
+                com_local: Vec2::zeros(),
+                at: set.at,
+                k_spring: 0.0,
+                q_free: 0.0,
+                c_joint: 0.0,
+                c_ground: 0.0,
+                forces: (0, 0),
+                subtree_mass: r.total_mass(),
+                j_own: r.total_inertia(),
+                diag_abs: 0.0,
+                first_abs: Vec2::zeros(),
+                satellite: Some((set.centre, r.turn_rate())),
+                adds: false,
             });
         }
         let revolute = mech.joints.iter().all(|j| j.kind == JointKind::Revolute);
@@ -333,6 +382,7 @@ impl Kane {
                 (!jt.couplings.is_empty()).then(|| Coupled { coord, parent_speed, law: jt.couplings.clone() })
             })
             .collect();
+        let nodes_len = nodes.len();
         let mut k = Kane {
             couplings,
             mech: mech.clone(),
@@ -340,7 +390,7 @@ impl Kane {
             small: None,
             geared: None,
             n,
-            nb,
+            nb: nodes_len,
             speed_parent,
             joint_of,
             speeds: mech.speeds,
@@ -350,7 +400,7 @@ impl Kane {
             nodes,
             point_forces,
             torques: mech.loads.joint_torques.clone(),
-            state: vec![BodyState::default(); nb],
+            state: vec![BodyState::default(); nodes_len],
             qdot: vec![0.0; n],
             walk: Vec::with_capacity(nb),
             m: vec![0.0; n * n],
@@ -374,7 +424,9 @@ impl Kane {
     /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
     /// the general forms add ([`Kane::add_couplings`]).
     fn small_form(&self) -> Option<small::Small> {
-        if self.couplings.is_empty() { small::Small::new(self) } else { None }
+        // Rollers' nodes (satellites) take the general forms too.
+        let rollers = self.nodes.iter().any(|nd| nd.satellite.is_some());
+        if self.couplings.is_empty() && !rollers { small::Small::new(self) } else { None }
     }
 
     /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).

@@ -14,6 +14,12 @@
 //!
 //! Everything about a joint comes from [`JointKind::motion`]: its transform, its columns and its
 //! velocity-product terms; a new joint kind needs no change here.
+//!
+//! A path joint's rollers (docs/design.md, "Rollers") are one more node after the bodies, hanging
+//! from the path's parent and moved by the path's coordinate k through
+//! [`JointKind::roller_motion`]. Kane's sums have no term between two bodies, so the rollers'
+//! node contributes to the same entries as the path joint (row k against k and its ancestors,
+//! and F_k): it is reached first in the backward pass and sets them, the path node adds.
 
 use super::{GROUND_PARENT, Kane, NO_COORD};
 use crate::model::joint::{JointKind, JointMotion};
@@ -41,7 +47,11 @@ impl Kane {
             let qj = if has_coord { q[nd.coord] } else { 0.0 };
             // A revolute root outside the world frame is the basis itself: its (cyclic) angle is
             // never turned into a sine and cosine.
-            let mo = if root && !world && nd.kind == JointKind::Revolute {
+            let mo = if let Some((centre, turn_rate)) = nd.satellite {
+                // A path joint's rollers: moved by the path's coordinate relative to the path's
+                // parent, a joint of their own for these sums (docs/design.md, "Rollers").
+                nd.kind.roller_motion(nd.at, qj, centre, turn_rate)
+            } else if root && !world && nd.kind == JointKind::Revolute {
                 JointMotion {
                     cos: 1.0,
                     sin: 0.0,
@@ -119,16 +129,20 @@ impl Kane {
                 let k = nd.coord;
                 let mass = nd.subtree_mass;
                 let revolute = nd.kind == JointKind::Revolute;
+                // A path joint with rollers adds its terms to those its rollers' node wrote
+                // (the same entries: the rollers hang from the path's parent); 0 otherwise.
+                let (f0, m0) = if nd.adds { (f[k], m[k * n + k]) } else { (0.0, 0.0) };
                 if forcing {
-                    f[k] = if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau;
+                    f[k] = f0 + (if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau);
                 }
-                m[k * n + k] = if revolute {
-                    b.inertia
-                } else {
-                    mass * b.col_v.norm_squared()
-                        + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
-                        + b.col_w * b.col_w * b.inertia
-                };
+                m[k * n + k] = m0
+                    + if revolute {
+                        b.inertia
+                    } else {
+                        mass * b.col_v.norm_squared()
+                            + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
+                            + b.col_w * b.col_w * b.inertia
+                    };
                 let mut l = nd.parent;
                 while l != GROUND_PARENT {
                     let a = &st[l];
@@ -143,6 +157,7 @@ impl Kane {
                                 + b.col_w * perp(b.first).dot(&a.col_v)
                                 + b.col_w * a.col_w * (b.inertia + b.first.dot(&d))
                         };
+                        let v = if nd.adds { m[k * n + lc] + v } else { v };
                         m[k * n + lc] = v;
                         m[lc * n + k] = v;
                     }
