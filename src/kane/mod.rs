@@ -137,14 +137,26 @@ struct Node {
     diag_abs: f64,
     /// The matching first moment in the body frame, `m c + Σ_children M_c at_c`, kg·m.
     first_abs: Vec2,
-    /// A path joint's rollers (docs/design.md, "Rollers"): `Some((P, dψ/ds))` makes this node
-    /// the rollers' body, a "satellite" hanging from the path joint's parent and moved by the
-    /// path's coordinate ([`JointKind::roller_motion`]); `None` for every body of the mechanism.
-    satellite: Option<(Vec2, f64)>,
-    /// True for a path joint whose rollers' node wrote its row of M and F first (the satellite
-    /// is placed after every body, so the backward pass reaches it first): this node adds to
-    /// those entries instead of setting them.
-    adds: bool,
+}
+
+/// A path joint's rollers as the engine carries them (docs/design.md, "Rollers"): one rigid
+/// body hanging from the path's parent and moved by the path's coordinate
+/// ([`JointKind::roller_motion`]); its terms are added by `Kane::add_rollers` (`rates.rs`).
+#[derive(Debug, Clone, Copy)]
+struct Satellite {
+    /// The path's parent body (`GROUND_PARENT` for ground).
+    parent: usize,
+    /// The path's coordinate.
+    coord: usize,
+    /// The path joint's kind and point.
+    kind: JointKind,
+    at: Vec2,
+    /// The vertex's centre of curvature P (path frame), m, and dψ/ds = −1/(2 r_r), rad/m.
+    centre: Vec2,
+    turn_rate: f64,
+    /// N m_r, kg, and N I_r, kg·m².
+    mass: f64,
+    i_com: f64,
 }
 
 /// Per-evaluation state of one body: its pose and rates (in the subtree's basis), the composite
@@ -200,8 +212,7 @@ pub struct Kane {
     mech: Mechanism,
     /// Number of coordinates (= speeds).
     n: usize,
-    /// Number of nodes: the bodies (n plus the fixed joints), then one per path joint with
-    /// rollers (their satellite bodies, `Node::satellite`).
+    /// Number of bodies (n plus the fixed joints).
     nb: usize,
     /// Per coordinate: the speed subtracted in `q̇ = W⁻¹u` ([`Mechanism::speed_parents`]).
     speed_parent: Vec<Option<usize>>,
@@ -212,6 +223,8 @@ pub struct Kane {
     world: bool,
     gravity: Vec2,
     nodes: Vec<Node>,
+    /// The rollers of path joints (empty for most mechanisms).
+    rollers: Vec<Satellite>,
     point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
     /// The coordinates with nonlinear couplings (added by [`Kane::add_couplings`]).
@@ -307,39 +320,25 @@ impl Kane {
                 j_own: b.inertia.i_com + b.inertia.mass * b.inertia.com.norm_squared(),
                 diag_abs: 0.0,
                 first_abs: b.inertia.mass * b.inertia.com,
-                satellite: None,
-                adds: false,
             });
         }
-        // Each path joint's rollers: one more node after the bodies (its parent, the path's
-        // parent, comes before it, so the passes' order holds), and their spread as a constant
-        // inertia of that parent.
+        // Each path joint's rollers, and their spread as a constant inertia of the path's parent.
+        let mut satellites = Vec::with_capacity(rollers.len());
         for set in &rollers {
             let r = set.rollers;
-            nodes[set.joint].adds = true;
             if let Some(p) = set.parent {
                 nodes[p].i_com += r.spread_inertia();
                 nodes[p].j_own += r.spread_inertia();
             }
-            nodes.push(Node {
+            satellites.push(Satellite {
                 parent: set.parent.unwrap_or(GROUND_PARENT),
                 coord: set.coordinate,
                 kind: set.kind,
+                at: set.at,
+                centre: set.centre,
+                turn_rate: r.turn_rate(),
                 mass: r.total_mass(),
                 i_com: r.total_inertia(),
-                com_local: Vec2::zeros(),
-                at: set.at,
-                k_spring: 0.0,
-                q_free: 0.0,
-                c_joint: 0.0,
-                c_ground: 0.0,
-                forces: (0, 0),
-                subtree_mass: r.total_mass(),
-                j_own: r.total_inertia(),
-                diag_abs: 0.0,
-                first_abs: Vec2::zeros(),
-                satellite: Some((set.centre, r.turn_rate())),
-                adds: false,
             });
         }
         let revolute = mech.joints.iter().all(|j| j.kind == JointKind::Revolute);
@@ -382,7 +381,6 @@ impl Kane {
                 (!jt.couplings.is_empty()).then(|| Coupled { coord, parent_speed, law: jt.couplings.clone() })
             })
             .collect();
-        let nodes_len = nodes.len();
         let mut k = Kane {
             couplings,
             mech: mech.clone(),
@@ -390,7 +388,7 @@ impl Kane {
             small: None,
             geared: None,
             n,
-            nb: nodes_len,
+            nb,
             speed_parent,
             joint_of,
             speeds: mech.speeds,
@@ -398,9 +396,10 @@ impl Kane {
             world,
             gravity: mech.loads.gravity,
             nodes,
+            rollers: satellites,
             point_forces,
             torques: mech.loads.joint_torques.clone(),
-            state: vec![BodyState::default(); nodes_len],
+            state: vec![BodyState::default(); nb],
             qdot: vec![0.0; n],
             walk: Vec::with_capacity(nb),
             m: vec![0.0; n * n],
@@ -424,9 +423,8 @@ impl Kane {
     /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
     /// the general forms add ([`Kane::add_couplings`]).
     fn small_form(&self) -> Option<small::Small> {
-        // Rollers' nodes (satellites) take the general forms too.
-        let rollers = self.nodes.iter().any(|nd| nd.satellite.is_some());
-        if self.couplings.is_empty() && !rollers { small::Small::new(self) } else { None }
+        // Rollers take the general forms too (`Kane::add_rollers`).
+        if self.couplings.is_empty() && self.rollers.is_empty() { small::Small::new(self) } else { None }
     }
 
     /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
@@ -655,7 +653,12 @@ impl Kane {
         // speed choice inside them; BENCHMARKS.md).
         match self.form {
             Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
-            Form::Rates => self.evaluate_rates::<N>(t, q, u, forcing),
+            Form::Rates => {
+                self.evaluate_rates::<N>(t, q, u, forcing);
+                if !self.rollers.is_empty() {
+                    self.add_rollers(q, u, forcing);
+                }
+            }
             Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
             Form::Geared => self.evaluate_geared(t, q, u, forcing),
         }
@@ -675,6 +678,9 @@ impl Kane {
             self.speeds.qdot(&self.speed_parent, &u[..self.n], &mut rates);
         }
         self.evaluate_rates::<0>(t, q, &rates, forcing);
+        if !self.rollers.is_empty() {
+            self.add_rollers(q, &rates, forcing);
+        }
         self.qdot = rates;
         self.map_rates_to_speeds(forcing);
     }

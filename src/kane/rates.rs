@@ -15,11 +15,13 @@
 //! Everything about a joint comes from [`JointKind::motion`]: its transform, its columns and its
 //! velocity-product terms; a new joint kind needs no change here.
 //!
-//! A path joint's rollers (docs/design.md, "Rollers") are one more node after the bodies, hanging
-//! from the path's parent and moved by the path's coordinate k through
-//! [`JointKind::roller_motion`]. Kane's sums have no term between two bodies, so the rollers'
-//! node contributes to the same entries as the path joint (row k against k and its ancestors,
-//! and F_k): it is reached first in the backward pass and sets them, the path node adds.
+//! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
+//! path's parent and moved by the path's coordinate through [`JointKind::roller_motion`]. Kane's
+//! sums have no term between two bodies, so their terms are simply added after the composite
+//! pass ([`Kane::add_rollers`]), body by body as the textbook writes them: for every pair of
+//! columns acting on them (their own, the path's coordinate, and each ancestor's),
+//! `M_ab += m v_a·v_b + I ω_a ω_b` and `F_a += (f − m a⁰)·v_a + (T − I α⁰) ω_a`. The bodies' passes
+//! stay the code they were.
 
 use super::{GROUND_PARENT, Kane, NO_COORD};
 use crate::model::joint::{JointKind, JointMotion};
@@ -47,11 +49,7 @@ impl Kane {
             let qj = if has_coord { q[nd.coord] } else { 0.0 };
             // A revolute root outside the world frame is the basis itself: its (cyclic) angle is
             // never turned into a sine and cosine.
-            let mo = if let Some((centre, turn_rate)) = nd.satellite {
-                // A path joint's rollers: moved by the path's coordinate relative to the path's
-                // parent, a joint of their own for these sums (docs/design.md, "Rollers").
-                nd.kind.roller_motion(nd.at, qj, centre, turn_rate)
-            } else if root && !world && nd.kind == JointKind::Revolute {
+            let mo = if root && !world && nd.kind == JointKind::Revolute {
                 JointMotion {
                     cos: 1.0,
                     sin: 0.0,
@@ -129,20 +127,16 @@ impl Kane {
                 let k = nd.coord;
                 let mass = nd.subtree_mass;
                 let revolute = nd.kind == JointKind::Revolute;
-                // A path joint with rollers adds its terms to those its rollers' node wrote
-                // (the same entries: the rollers hang from the path's parent); 0 otherwise.
-                let (f0, m0) = if nd.adds { (f[k], m[k * n + k]) } else { (0.0, 0.0) };
                 if forcing {
-                    f[k] = f0 + (if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau);
+                    f[k] = if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau;
                 }
-                m[k * n + k] = m0
-                    + if revolute {
-                        b.inertia
-                    } else {
-                        mass * b.col_v.norm_squared()
-                            + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
-                            + b.col_w * b.col_w * b.inertia
-                    };
+                m[k * n + k] = if revolute {
+                    b.inertia
+                } else {
+                    mass * b.col_v.norm_squared()
+                        + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
+                        + b.col_w * b.col_w * b.inertia
+                };
                 let mut l = nd.parent;
                 while l != GROUND_PARENT {
                     let a = &st[l];
@@ -157,7 +151,6 @@ impl Kane {
                                 + b.col_w * perp(b.first).dot(&a.col_v)
                                 + b.col_w * a.col_w * (b.inertia + b.first.dot(&d))
                         };
-                        let v = if nd.adds { m[k * n + lc] + v } else { v };
                         m[k * n + lc] = v;
                         m[lc * n + k] = v;
                     }
@@ -173,6 +166,80 @@ impl Kane {
                 let mass = nd.subtree_mass;
                 bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
                 bp.first += b.first + mass * d;
+            }
+        }
+    }
+}
+
+impl Kane {
+    /// Adds the rollers' terms to M and F in joint rates, after [`Kane::evaluate_rates`] has
+    /// left every body's pose, rates, columns and bias accelerations in its record (see the
+    /// module doc). The rollers' centroid r and the columns acting on it: their own
+    /// (`ω = dψ/ds`, `v = ½ t` turned into the basis) for the path's coordinate, and for each
+    /// ancestor joint A above the path's parent `ω_A` and `v_A + ω_A ẑ × (r − o_A)`.
+    ///
+    /// NOTE: out of line and after the composite pass, so that a tree without rollers runs the
+    /// bodies' loops alone, compiled as they were.
+    #[inline(never)]
+    pub(super) fn add_rollers(&mut self, q: &[f64], u: &[f64], forcing: bool) {
+        let n = self.n;
+        let g = self.gravity;
+        let Kane { rollers, nodes, state, m, f, walk, .. } = self;
+        let (m, f) = (&mut m[..n * n], &mut f[..n]);
+        for sat in rollers.iter() {
+            let k = sat.coord;
+            let mo = sat.kind.roller_motion(sat.at, q[k], sat.centre, sat.turn_rate);
+            let (pc, ps, w_p, alpha_p, acc_p, o_p) = if sat.parent == GROUND_PARENT {
+                (1.0, 0.0, 0.0, 0.0, Vec2::zeros(), Vec2::zeros())
+            } else {
+                let p = &state[sat.parent];
+                (p.c, p.s, p.omega, p.alpha, p.acc_o, p.origin)
+            };
+            let d = rotate_cs(pc, ps, mo.origin);
+            let r = o_p + d;
+            let (col_w, col_v) = (mo.omega, rotate_cs(pc, ps, mo.velocity));
+            // Applied minus inertial at u̇ = 0 (gravity, the transport, Coriolis and bias terms
+            // as for a body's joint point; the centre of mass is the node's origin).
+            let (force, moment) = if forcing {
+                let qd = u[k];
+                let alpha = alpha_p + mo.bias_alpha * qd * qd;
+                let acc = acc_p + alpha_p * perp(d) - w_p * w_p * d
+                    + 2.0 * w_p * perp(col_v * qd)
+                    + rotate_cs(pc, ps, mo.bias_acc) * (qd * qd);
+                (sat.mass * (g - acc), -sat.i_com * alpha)
+            } else {
+                (Vec2::zeros(), 0.0)
+            };
+            // The ancestors with a coordinate, nearest first.
+            walk.clear();
+            let mut l = sat.parent;
+            while l != GROUND_PARENT {
+                if nodes[l].coord != NO_COORD {
+                    walk.push(l);
+                }
+                l = nodes[l].parent;
+            }
+            let column = |i: usize| -> (usize, f64, Vec2) {
+                if i == 0 {
+                    (k, col_w, col_v)
+                } else {
+                    let a = &state[walk[i - 1]];
+                    (nodes[walk[i - 1]].coord, a.col_w, a.col_v + a.col_w * perp(r - a.origin))
+                }
+            };
+            for i in 0..=walk.len() {
+                let (ka, wa, va) = column(i);
+                if forcing {
+                    f[ka] += force.dot(&va) + moment * wa;
+                }
+                for jj in i..=walk.len() {
+                    let (kb, wb, vb) = column(jj);
+                    let v = sat.mass * va.dot(&vb) + sat.i_com * wa * wb;
+                    m[ka * n + kb] += v;
+                    if kb != ka {
+                        m[kb * n + ka] += v;
+                    }
+                }
             }
         }
     }
