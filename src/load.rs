@@ -217,6 +217,13 @@ impl Mechanism {
                 js.kind.unwrap_or_default().normalised().map_err(|(field, msg)| {
                     src.error(&format!("{path}.kind.{field}"), format!("joint `{name}`: {msg}"))
                 })?;
+            if let Some(rollers) = js.rollers {
+                let on = match kind {
+                    crate::model::joint::JointKind::Path { shape, .. } => rollers.check_on(shape),
+                    other => Err(("rollers", format!("rollers carry a path absorber, but this joint is {other:?}"))),
+                };
+                on.map_err(|(field, msg)| src.error(&format!("{path}.{field}"), format!("joint `{name}`: {msg}")))?;
+            }
             if kind.dof() == 0 {
                 for (field, given) in [
                     ("spring", js.spring.is_some()),
@@ -247,6 +254,7 @@ impl Mechanism {
                 spring: js.spring,
                 damper: js.damper.unwrap_or(0.0),
                 couplings: Couplings { stages: js.stages.clone(), friction: js.friction, stops: js.stops },
+                rollers: js.rollers,
             });
         }
         if ncoord == 0 {

@@ -478,7 +478,10 @@ impl Mechanism {
     ///         the CLI's "Absorbers" table: ``joint``, ``kind``, ``mass`` (kg) and ``inertia``
     ///         (kg·m²) it carries, ``tuning_order`` n_t, ``nonlinear`` κ (1/m²: n ≈ n_t(1 + κA²)),
     ///         ``travel`` (m, inf when unlimited), ``travel_limit`` (m or None), ``tautochronic``
-    ///         ("Exact", "LeadingOrder" or "No").
+    ///         ("Exact", "LeadingOrder" or "No"), ``rollers`` (None, or the rollers carrying a
+    ///         translating path absorber: ``count``, ``mass`` kg and ``inertia`` kg·m² each,
+    ///         ``radius`` m, ``spread`` m; ``tuning_order``, ``nonlinear`` and ``tautochronic``
+    ///         then include them) and ``tuning_order_without_rollers``.
     fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         guard(|| {
             let mech = &self.mech;
@@ -554,6 +557,21 @@ impl Mechanism {
                 d.set_item("travel", a.travel)?;
                 d.set_item("travel_limit", a.travel_limit)?;
                 d.set_item("tautochronic", format!("{:?}", a.tautochronic))?;
+                // A translating absorber on rollers: n_t and κ above include them.
+                let rollers = match a.rollers {
+                    Some(r) => {
+                        let rd = PyDict::new(py);
+                        rd.set_item("count", r.count)?;
+                        rd.set_item("mass", r.mass)?;
+                        rd.set_item("inertia", r.inertia)?;
+                        rd.set_item("radius", r.radius)?;
+                        rd.set_item("spread", r.spread)?;
+                        Some(rd)
+                    }
+                    None => None,
+                };
+                d.set_item("rollers", rollers)?;
+                d.set_item("tuning_order_without_rollers", a.plain_tuning_order_squared.sqrt())?;
                 absorbers.append(d)?;
             }
             out.set_item("absorbers", absorbers)?;

@@ -139,6 +139,26 @@ struct Node {
     first_abs: Vec2,
 }
 
+/// A path joint's rollers as the engine carries them (docs/design.md, "Rollers"): one rigid
+/// body hanging from the path's parent and moved by the path's coordinate
+/// ([`JointKind::roller_motion`]); its terms are added by `Kane::add_rollers` (`rates.rs`).
+#[derive(Debug, Clone, Copy)]
+struct Satellite {
+    /// The path's parent body (`GROUND_PARENT` for ground).
+    parent: usize,
+    /// The path's coordinate.
+    coord: usize,
+    /// The path joint's kind and point.
+    kind: JointKind,
+    at: Vec2,
+    /// The vertex's centre of curvature P (path frame), m, and dψ/ds = −1/(2 r_r), rad/m.
+    centre: Vec2,
+    turn_rate: f64,
+    /// N m_r, kg, and N I_r, kg·m².
+    mass: f64,
+    i_com: f64,
+}
+
 /// Per-evaluation state of one body: its pose and rates (in the subtree's basis), the composite
 /// sums of its subtree about its joint point o, and its joint's rate and torque.
 ///
@@ -203,6 +223,8 @@ pub struct Kane {
     world: bool,
     gravity: Vec2,
     nodes: Vec<Node>,
+    /// The rollers of path joints (empty for most mechanisms).
+    rollers: Vec<Satellite>,
     point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
     /// The coordinates with nonlinear couplings (added by [`Kane::add_couplings`]).
@@ -264,6 +286,13 @@ impl Kane {
         let mut point_forces = mech.loads.point_forces.clone();
         point_forces.sort_by_key(|p| p.body);
         let mut subtree_mass: Vec<f64> = mech.bodies.iter().map(|b| b.inertia.mass).collect();
+        // The rollers belong to the subtree of their path joint's parent (not of the absorber).
+        let rollers = mech.roller_sets();
+        for set in &rollers {
+            if let Some(p) = set.parent {
+                subtree_mass[p] += set.rollers.total_mass();
+            }
+        }
         for j in (0..nb).rev() {
             if let Some(p) = parent[j] {
                 subtree_mass[p] += subtree_mass[j];
@@ -291,6 +320,25 @@ impl Kane {
                 j_own: b.inertia.i_com + b.inertia.mass * b.inertia.com.norm_squared(),
                 diag_abs: 0.0,
                 first_abs: b.inertia.mass * b.inertia.com,
+            });
+        }
+        // Each path joint's rollers, and their spread as a constant inertia of the path's parent.
+        let mut satellites = Vec::with_capacity(rollers.len());
+        for set in &rollers {
+            let r = set.rollers;
+            if let Some(p) = set.parent {
+                nodes[p].i_com += r.spread_inertia();
+                nodes[p].j_own += r.spread_inertia();
+            }
+            satellites.push(Satellite {
+                parent: set.parent.unwrap_or(GROUND_PARENT),
+                coord: set.coordinate,
+                kind: set.kind,
+                at: set.at,
+                centre: set.centre,
+                turn_rate: r.turn_rate(),
+                mass: r.total_mass(),
+                i_com: r.total_inertia(),
             });
         }
         let revolute = mech.joints.iter().all(|j| j.kind == JointKind::Revolute);
@@ -348,6 +396,7 @@ impl Kane {
             world,
             gravity: mech.loads.gravity,
             nodes,
+            rollers: satellites,
             point_forces,
             torques: mech.loads.joint_torques.clone(),
             state: vec![BodyState::default(); nb],
@@ -374,7 +423,8 @@ impl Kane {
     /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
     /// the general forms add ([`Kane::add_couplings`]).
     fn small_form(&self) -> Option<small::Small> {
-        if self.couplings.is_empty() { small::Small::new(self) } else { None }
+        // Rollers take the general forms too (`Kane::add_rollers`).
+        if self.couplings.is_empty() && self.rollers.is_empty() { small::Small::new(self) } else { None }
     }
 
     /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
@@ -603,7 +653,12 @@ impl Kane {
         // speed choice inside them; BENCHMARKS.md).
         match self.form {
             Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
-            Form::Rates => self.evaluate_rates::<N>(t, q, u, forcing),
+            Form::Rates => {
+                self.evaluate_rates::<N>(t, q, u, forcing);
+                if !self.rollers.is_empty() {
+                    self.add_rollers(q, u, forcing);
+                }
+            }
             Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
             Form::Geared => self.evaluate_geared(t, q, u, forcing),
         }
@@ -623,6 +678,9 @@ impl Kane {
             self.speeds.qdot(&self.speed_parent, &u[..self.n], &mut rates);
         }
         self.evaluate_rates::<0>(t, q, &rates, forcing);
+        if !self.rollers.is_empty() {
+            self.add_rollers(q, &rates, forcing);
+        }
         self.qdot = rates;
         self.map_rates_to_speeds(forcing);
     }

@@ -14,6 +14,14 @@
 //!
 //! Everything about a joint comes from [`JointKind::motion`]: its transform, its columns and its
 //! velocity-product terms; a new joint kind needs no change here.
+//!
+//! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
+//! path's parent and moved by the path's coordinate through [`JointKind::roller_motion`]. Kane's
+//! sums have no term between two bodies, so their terms are simply added after the composite
+//! pass ([`Kane::add_rollers`]), body by body as the textbook writes them: for every pair of
+//! columns acting on them (their own, the path's coordinate, and each ancestor's),
+//! `M_ab += m v_a·v_b + I ω_a ω_b` and `F_a += (f − m a⁰)·v_a + (T − I α⁰) ω_a`. The bodies' passes
+//! stay the code they were.
 
 use super::{GROUND_PARENT, Kane, NO_COORD};
 use crate::model::joint::{JointKind, JointMotion};
@@ -158,6 +166,80 @@ impl Kane {
                 let mass = nd.subtree_mass;
                 bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
                 bp.first += b.first + mass * d;
+            }
+        }
+    }
+}
+
+impl Kane {
+    /// Adds the rollers' terms to M and F in joint rates, after [`Kane::evaluate_rates`] has
+    /// left every body's pose, rates, columns and bias accelerations in its record (see the
+    /// module doc). The rollers' centroid r and the columns acting on it: their own
+    /// (`ω = dψ/ds`, `v = ½ t` turned into the basis) for the path's coordinate, and for each
+    /// ancestor joint A above the path's parent `ω_A` and `v_A + ω_A ẑ × (r − o_A)`.
+    ///
+    /// NOTE: out of line and after the composite pass, so that a tree without rollers runs the
+    /// bodies' loops alone, compiled as they were.
+    #[inline(never)]
+    pub(super) fn add_rollers(&mut self, q: &[f64], u: &[f64], forcing: bool) {
+        let n = self.n;
+        let g = self.gravity;
+        let Kane { rollers, nodes, state, m, f, walk, .. } = self;
+        let (m, f) = (&mut m[..n * n], &mut f[..n]);
+        for sat in rollers.iter() {
+            let k = sat.coord;
+            let mo = sat.kind.roller_motion(sat.at, q[k], sat.centre, sat.turn_rate);
+            let (pc, ps, w_p, alpha_p, acc_p, o_p) = if sat.parent == GROUND_PARENT {
+                (1.0, 0.0, 0.0, 0.0, Vec2::zeros(), Vec2::zeros())
+            } else {
+                let p = &state[sat.parent];
+                (p.c, p.s, p.omega, p.alpha, p.acc_o, p.origin)
+            };
+            let d = rotate_cs(pc, ps, mo.origin);
+            let r = o_p + d;
+            let (col_w, col_v) = (mo.omega, rotate_cs(pc, ps, mo.velocity));
+            // Applied minus inertial at u̇ = 0 (gravity, the transport, Coriolis and bias terms
+            // as for a body's joint point; the centre of mass is the node's origin).
+            let (force, moment) = if forcing {
+                let qd = u[k];
+                let alpha = alpha_p + mo.bias_alpha * qd * qd;
+                let acc = acc_p + alpha_p * perp(d) - w_p * w_p * d
+                    + 2.0 * w_p * perp(col_v * qd)
+                    + rotate_cs(pc, ps, mo.bias_acc) * (qd * qd);
+                (sat.mass * (g - acc), -sat.i_com * alpha)
+            } else {
+                (Vec2::zeros(), 0.0)
+            };
+            // The ancestors with a coordinate, nearest first.
+            walk.clear();
+            let mut l = sat.parent;
+            while l != GROUND_PARENT {
+                if nodes[l].coord != NO_COORD {
+                    walk.push(l);
+                }
+                l = nodes[l].parent;
+            }
+            let column = |i: usize| -> (usize, f64, Vec2) {
+                if i == 0 {
+                    (k, col_w, col_v)
+                } else {
+                    let a = &state[walk[i - 1]];
+                    (nodes[walk[i - 1]].coord, a.col_w, a.col_v + a.col_w * perp(r - a.origin))
+                }
+            };
+            for i in 0..=walk.len() {
+                let (ka, wa, va) = column(i);
+                if forcing {
+                    f[ka] += force.dot(&va) + moment * wa;
+                }
+                for jj in i..=walk.len() {
+                    let (kb, wb, vb) = column(jj);
+                    let v = sat.mass * va.dot(&vb) + sat.i_com * wa * wb;
+                    m[ka * n + kb] += v;
+                    if kb != ka {
+                        m[kb * n + ka] += v;
+                    }
+                }
             }
         }
     }

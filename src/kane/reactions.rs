@@ -126,6 +126,27 @@ pub fn tree_reactions(mech: &Mechanism, q: &[f64], qdot: &[f64], qddot: &[f64]) 
         force[k] = ma - f_ext;
         moment0[k] = b.i_com * alpha[k] + cross2(com[k], ma) - m_ext;
     }
+    // A path joint's rollers belong to the subtree of the path's parent (they roll on its track),
+    // not to the absorber's: their Newton–Euler terms and their spread's I α join that parent, so
+    // the path joint's reaction is what the rollers pass to the absorber.
+    for set in mech.roller_sets() {
+        let Some(p) = set.parent else { continue };
+        let (s, sd, sdd) = (q[set.coordinate], qdot[set.coordinate], qddot[set.coordinate]);
+        let mo = set.motion(s);
+        let rp = rot2(angle[p]);
+        let d = rp * mo.origin;
+        let v_rel = rp * mo.velocity * sd;
+        let acc = acc_origin[p] + alpha[p] * perp(d) - omega[p] * omega[p] * d
+            + 2.0 * omega[p] * perp(v_rel)
+            + rp * (mo.velocity * sdd + mo.bias_acc * sd * sd);
+        let r = set.rollers;
+        let c = origin[p] + d;
+        let ma = r.total_mass() * acc;
+        let weight = r.total_mass() * g;
+        force[p] += ma - weight;
+        moment0[p] += r.total_inertia() * (alpha[p] + mo.omega * sdd) + r.spread_inertia() * alpha[p] + cross2(c, ma)
+            - cross2(c, weight);
+    }
     // Subtree sums, children before parents (a parent's index is below its child's).
     for j in (0..nb).rev() {
         if let Some(p) = mech.joints[j].parent {

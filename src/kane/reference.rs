@@ -57,11 +57,26 @@ pub fn speeds_to_rates(mech: &Mechanism) -> DMatrix<f64> {
 pub fn body_kinematics(mech: &Mechanism, q: &[f64], u: &[f64]) -> Vec<BodyKinematics> {
     let b = speeds_to_rates(mech);
     let qdot = &b * DVector::from_column_slice(&u[..mech.ndof()]);
-    kinematics(mech, &b, &qdot, q)
+    kinematics(mech, &b, &qdot, q).0
 }
 
-/// [`body_kinematics`] with B and the joint rates `q̇ = B u` already formed.
-fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]) -> Vec<BodyKinematics> {
+/// The kinematics of each path joint's rollers ([`Mechanism::roller_sets`], in that order) as one
+/// body of mass N m_r and centroidal inertia N I_r at their centroid, turning with ψ relative to
+/// the path's parent (the angle and origin are the centroid's): the same steps as for a body.
+pub fn roller_kinematics(mech: &Mechanism, q: &[f64], u: &[f64]) -> Vec<BodyKinematics> {
+    let b = speeds_to_rates(mech);
+    let qdot = &b * DVector::from_column_slice(&u[..mech.ndof()]);
+    kinematics(mech, &b, &qdot, q).1
+}
+
+/// [`body_kinematics`] and [`roller_kinematics`] with B and the joint rates `q̇ = B u` already
+/// formed.
+fn kinematics(
+    mech: &Mechanism,
+    b: &DMatrix<f64>,
+    qdot: &DVector<f64>,
+    q: &[f64],
+) -> (Vec<BodyKinematics>, Vec<BodyKinematics>) {
     let n = mech.ndof();
     // Per body, by joint rate k: ∂ω/∂q̇_k and ∂v_o/∂q̇_k of its joint point o.
     struct Frame {
@@ -76,9 +91,18 @@ fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]
     }
     let mut frames: Vec<Frame> = Vec::with_capacity(mech.bodies.len());
     let mut out = Vec::with_capacity(mech.bodies.len());
-    for (j, joint) in mech.joints.iter().enumerate() {
-        let (qj, qdj) = joint.coordinate.map_or((0.0, 0.0), |k| (q[k], qdot[k]));
-        let mo = joint.kind.motion(joint.at, qj);
+    // The bodies, then the rollers (each a body moved by its path's coordinate, hanging from the
+    // path's parent: docs/design.md, "Rollers"), whose frames are pushed after the bodies'.
+    let sets = mech.roller_sets();
+    let entries = mech.joints.iter().enumerate().map(|(j, joint)| {
+        let coord = joint.coordinate;
+        let qj = coord.map_or(0.0, |k| q[k]);
+        (joint.parent, coord, joint.kind.motion(joint.at, qj), mech.bodies[j].inertia.com)
+    });
+    let rollers =
+        sets.iter().map(|set| (set.parent, Some(set.coordinate), set.motion(q[set.coordinate]), Vec2::zeros()));
+    for (parent, coordinate, mo, com) in entries.chain(rollers) {
+        let qdj = coordinate.map_or(0.0, |k| qdot[k]);
         let ground = Frame {
             angle: 0.0,
             origin: Vec2::zeros(),
@@ -89,7 +113,7 @@ fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]
             dw: vec![0.0; n],
             dv: vec![Vec2::zeros(); n],
         };
-        let p = match joint.parent {
+        let p = match parent {
             Some(p) => &frames[p],
             None => &ground,
         };
@@ -103,7 +127,7 @@ fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]
         let (col_w, col_v) = (mo.omega, to_world(mo.velocity));
         let mut dw = p.dw.clone();
         let mut dv: Vec<Vec2> = p.dv.iter().zip(&p.dw).map(|(v, &w)| v + w * perp(d)).collect();
-        if let Some(k) = joint.coordinate {
+        if let Some(k) = coordinate {
             dw[k] += col_w;
             dv[k] += col_v;
         }
@@ -118,8 +142,7 @@ fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]
             + to_world(mo.bias_acc) * (qdj * qdj);
         let frame = Frame { angle, origin, omega, v_origin, alpha0, a0_origin, dw, dv };
         // The centre of mass.
-        let inertia = &mech.bodies[j].inertia;
-        let arm = rotate_cs(angle.cos(), angle.sin(), inertia.com);
+        let arm = rotate_cs(angle.cos(), angle.sin(), com);
         let dv_com: Vec<Vec2> = frame.dv.iter().zip(&frame.dw).map(|(v, &w)| v + w * perp(arm)).collect();
         // From joint rates to speeds: v_{j,r} = Σ_k ∂v/∂q̇_k B_kr.
         let partial_velocity: Vec<Vec2> =
@@ -138,7 +161,8 @@ fn kinematics(mech: &Mechanism, b: &DMatrix<f64>, qdot: &DVector<f64>, q: &[f64]
         });
         frames.push(frame);
     }
-    out
+    let rollers = out.split_off(mech.bodies.len());
+    (out, rollers)
 }
 
 /// M and F of `M u̇ = F` at time `t` (s), coordinates `q` and speeds `u`, by Kane's sums body by
@@ -154,12 +178,22 @@ pub fn mass_matrix_and_forcing(
     let n = mech.ndof();
     let b = speeds_to_rates(mech);
     let qdot = &b * DVector::from_column_slice(&u[..n]);
-    let kin = kinematics(mech, &b, &qdot, q);
+    let (kin, roller_kin) = kinematics(mech, &b, &qdot, q);
+    let sets = mech.roller_sets();
     let mut m = DMatrix::zeros(n, n);
     let mut f = DVector::zeros(n);
     let g = mech.loads.gravity;
-    for (j, k) in kin.iter().enumerate() {
-        let (mass, i_com) = (mech.bodies[j].inertia.mass, mech.bodies[j].inertia.i_com);
+    // Each body with its mass and centroidal inertia (the rollers' spread turns with their path's
+    // parent: a constant inertia of that body), then the rollers' bodies.
+    let nb = kin.len();
+    let bodies = kin.iter().enumerate().map(|(j, k)| {
+        let spread: f64 = sets.iter().filter(|r| r.parent == Some(j)).map(|r| r.rollers.spread_inertia()).sum();
+        (Some(j), k, mech.bodies[j].inertia.mass, mech.bodies[j].inertia.i_com + spread)
+    });
+    let rollers =
+        roller_kin.iter().zip(&sets).map(|(k, r)| (None, k, r.rollers.total_mass(), r.rollers.total_inertia()));
+    for (body, k, mass, i_com) in bodies.chain(rollers) {
+        let j = body.unwrap_or(nb);
         // Applied: gravity at the centre of mass, dampers to ground as a torque.
         let mut force = mass * g;
         let mut torque = -mech.loads.ground_dampers.iter().filter(|d| d.body == j).map(|d| d.c).sum::<f64>() * k.omega;

@@ -10,6 +10,14 @@
 //! `κ = −(3/4) x₄/ñ² − (3/2) I α₁ α₃ / (m + I α₁²)` (single-harmonic balance, exact to O(A²)).
 //! A circle gives κ = −1/(16 L²), the compound pendulum's n/n_t = 1 − φ₀²/16.
 //!
+//! A translating absorber on rollers (docs/design.md, "Rollers") keeps a constant s-inertia
+//! `M₀ = m + N(m_r + I_r/r_r²)/4` and gains the rollers' centrifugal potential
+//! `−½ Ω² N m_r |c̄(s)|²`, `c̄ = ½(P + r(s))`; with the path's x coordinate
+//! `r_x = ρ₀ − (κ_v/2)s² + c₄s⁴ + …` (κ_v = (1+ñ²)/ρ₀ the vertex curvature,
+//! `c₄ = x₄/(2ρ₀) + (1+ñ²)²/(24ρ₀³)`) and `P_x = ρ₀ − 1/κ_v`, the potential `½K₀s² + ¼K₂s⁴` has
+//! `K₀ = ñ²(m + N m_r/2)` and `K₂ = −2m x₄ − (N m_r/2)(2P_x c₄ + x₄)`, so
+//! `n_t² = K₀/M₀` and `κ = (3/8) K₂/K₀`.
+//!
 //! A revolute joint whose parent is a spinning root body (a rotor hung from ground by a revolute
 //! joint) and whose child's centre of mass is off the pivot is the paper's compound pendulum: a
 //! circle path with R the pivot's distance from the rotor axis and L the centre of mass's from
@@ -19,7 +27,7 @@ use crate::model::inertia::PlanarInertia;
 use crate::model::joint::JointKind;
 use crate::model::math::{Vec2, rotate_cs};
 use crate::model::mechanism::Mechanism;
-use crate::model::path::PathShape;
+use crate::model::path::{PathShape, Rollers};
 
 /// Whether an absorber's free oscillation at held spin keeps its period at every amplitude.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,6 +65,11 @@ pub struct Absorber {
     pub travel_limit: Option<f64>,
     /// Whether the period is independent of the amplitude at held spin.
     pub tautochronic: Tautochronism,
+    /// The rollers that carry the absorber, when it has them: `tuning_order_squared`,
+    /// `nonlinear` and `tautochronic` include them.
+    pub rollers: Option<Rollers>,
+    /// n_t² of the same absorber without its rollers (equal to `tuning_order_squared` without).
+    pub plain_tuning_order_squared: f64,
 }
 
 impl Absorber {
@@ -101,10 +114,24 @@ pub fn path_orders(m: f64, i: f64, n2: f64, x4: f64, alpha: [f64; 2]) -> (f64, f
 /// path's vertex and its centre of curvature (docs/design.md, "Rollers"):
 /// `n_t² = ñ² (m + N m_r/2) / (m + N (m_r + I_r/r_r²)/4)`.
 ///
-/// NOTE: the engine does not carry rollers yet (design note): this is the closed form for a
-/// designer, not a property of a loaded mechanism.
+/// The same number as [`roller_orders`]'s first, for a designer without a mechanism; a loaded
+/// mechanism's path joint with `rollers` reports it in [`absorbers`].
 pub fn roller_tuning_order_squared(m: f64, n2: f64, count: f64, m_r: f64, i_r: f64, r_r: f64) -> f64 {
     n2 * (m + 0.5 * count * m_r) / (m + 0.25 * count * (m_r + i_r / (r_r * r_r)))
+}
+
+/// `(n_t², κ)` of a translating absorber of mass `m` (kg) carried by `rollers` on a path with
+/// these Taylor coefficients (`rho0_2` = ρ₀², `n2` = ñ², `x4`; see the module doc).
+pub fn roller_orders(m: f64, rho0_2: f64, n2: f64, x4: f64, rollers: &Rollers) -> (f64, f64) {
+    let (count, m_r) = (f64::from(rollers.count), rollers.mass);
+    let nt2 = roller_tuning_order_squared(m, n2, count, m_r, rollers.inertia, rollers.radius);
+    let rho0 = rho0_2.sqrt();
+    let p_x = rho0 - rho0 / (1.0 + n2);
+    let c4 = x4 / (2.0 * rho0) + (1.0 + n2) * (1.0 + n2) / (24.0 * rho0 * rho0_2);
+    let k0 = n2 * (m + 0.5 * count * m_r);
+    let k2 = -2.0 * m * x4 - 0.5 * count * m_r * (2.0 * p_x * c4 + x4);
+    // `+ 0.0`: a −0 reads as 0 in the reports.
+    (nt2, 0.375 * k2 / k0 + 0.0)
 }
 
 /// The absorber properties of every path joint, and of every revolute pendulum on a spinning
@@ -119,8 +146,15 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
         }
         match joint.kind {
             JointKind::Path { shape, travel, .. } => {
-                let (_, n2, x4, alpha) = shape.taylor();
-                let (nt2, kappa) = path_orders(m, i, n2, x4, alpha);
+                let (rho0_2, n2, x4, alpha) = shape.taylor();
+                let (plain, plain_kappa) = path_orders(m, i, n2, x4, alpha);
+                // Rollers are accepted only on a translating absorber (α = 0, checked at load).
+                let (nt2, kappa) = match joint.rollers {
+                    Some(r) => roller_orders(m, rho0_2, n2, x4, &r),
+                    None => (plain, plain_kappa),
+                };
+                // Massive rollers add |c̄(s)|², never exactly quadratic, to the potential.
+                let heavy_rollers = joint.rollers.is_some_and(|r| r.total_mass() > 0.0);
                 let kind = match shape {
                     PathShape::Circle { .. } => "Circle",
                     PathShape::Bifilar { .. } => "Bifilar",
@@ -128,7 +162,7 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
                     PathShape::General(_) => "General",
                 };
                 // Constant (m + I α'²) and exactly quadratic ρ²: the reduced equation is linear.
-                let tautochronic = if shape.is_epicycloid() || (i == 0.0 && is_quadratic(shape)) {
+                let tautochronic = if !heavy_rollers && (shape.is_epicycloid() || (i == 0.0 && is_quadratic(shape))) {
                     Tautochronism::Exact
                 } else if kappa == 0.0 {
                     Tautochronism::LeadingOrder
@@ -146,6 +180,8 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
                     travel: shape.travel(),
                     travel_limit: travel,
                     tautochronic,
+                    rollers: joint.rollers,
+                    plain_tuning_order_squared: plain,
                 });
             }
             JointKind::Revolute => {
@@ -169,6 +205,8 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
                     travel: f64::INFINITY,
                     travel_limit: None,
                     tautochronic: Tautochronism::No,
+                    rollers: None,
+                    plain_tuning_order_squared: nt2,
                 });
             }
             _ => {}
@@ -211,14 +249,33 @@ pub fn markdown(mech: &Mechanism) -> String {
             Tautochronism::LeadingOrder => "to leading order",
             Tautochronism::No => "no",
         };
+        let kind = match a.rollers {
+            Some(r) => format!("{} on {} roller{}", a.kind, r.count, if r.count == 1 { "" } else { "s" }),
+            None => a.kind.to_string(),
+        };
         md += &format!(
             "| `{}` | {} | {:.6} | {:.6e} | {:.6} | {:.6e} | {travel} | {tauto} |\n",
             a.joint,
-            a.kind,
+            kind,
             a.mass,
             a.inertia,
             a.tuning_order(),
             a.nonlinear
+        );
+    }
+    for a in list.iter().filter(|a| a.rollers.is_some()) {
+        let Some(r) = a.rollers else { continue };
+        md += &format!(
+            "\nRollers included for `{}`: {} × (m_r {:.6e} kg, I_r {:.6e} kg·m², r_r {:.6e} m) rolling without slip \
+             (docs/design.md, \"Rollers\"): n_t = {:.6} with them, {:.6} without \
+             (n_t² = ñ² (m + N m_r/2) / (m + N (m_r + I_r/r_r²)/4)); κ includes their centrifugal potential.\n",
+            a.joint,
+            r.count,
+            r.mass,
+            r.inertia,
+            r.radius,
+            a.tuning_order(),
+            a.plain_tuning_order_squared.sqrt()
         );
     }
     if list.iter().any(|a| a.com_offset > 1e-9) {

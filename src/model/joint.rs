@@ -4,7 +4,7 @@ use crate::error::Result;
 use crate::io::Source;
 use crate::model::coupling::{Couplings, EndStops, Friction, StageSpring};
 use crate::model::math::{Vec2, rotate_cs};
-use crate::model::path::PathShape;
+use crate::model::path::{PathShape, Rollers};
 use serde::{Deserialize, Serialize};
 
 /// The joint vocabulary: how a child body's frame may move relative to its parent's.
@@ -187,6 +187,41 @@ impl JointKind {
         }
     }
 
+    /// The motion of a path joint's rollers ([`Rollers`]) relative to the parent at the path's
+    /// coordinate `q`, as a joint's (docs/design.md, "Rollers"): the rollers' centroid
+    /// `at + R(γ) ½(P + r(s))` (`centre` = P, the vertex's centre of curvature in the path's
+    /// frame), turned by ψ = `turn_rate` · s; columns ω = `turn_rate` (= −1/(2 r_r)) and
+    /// v = ½ R(γ) t(s); bias 0 and ½ R(γ) r''(s) per ṡ². Beyond the travel every field is NaN,
+    /// as the path's own. For a kind other than `Path` the rollers stand still at `at`.
+    #[inline]
+    pub fn roller_motion(self, at: Vec2, q: f64, centre: Vec2, turn_rate: f64) -> JointMotion {
+        let mut out = JointMotion {
+            cos: 1.0,
+            sin: 0.0,
+            origin: at,
+            omega: 0.0,
+            velocity: Vec2::zeros(),
+            bias_alpha: 0.0,
+            bias_acc: Vec2::zeros(),
+        };
+        if let JointKind::Path { shape, mount, .. } = self {
+            let (ms, mc) = mount.sin_cos();
+            let s = self.limited(q);
+            let p = shape.at(s);
+            let (sin, cos) = (turn_rate * s).sin_cos();
+            out = JointMotion {
+                cos,
+                sin,
+                origin: at + rotate_cs(mc, ms, 0.5 * (centre + p.position)),
+                omega: turn_rate,
+                velocity: rotate_cs(mc, ms, 0.5 * p.tangent),
+                bias_alpha: 0.0,
+                bias_acc: rotate_cs(mc, ms, 0.5 * p.curvature),
+            };
+        }
+        out
+    }
+
     /// The kind with its parameters checked and normalised (a prismatic axis to unit length), or
     /// the field below the kind and what is wrong.
     pub fn normalised(self) -> std::result::Result<JointKind, (&'static str, String)> {
@@ -302,6 +337,10 @@ pub struct JointSpec {
     /// Compliant end stops ([`EndStops`]).
     #[serde(default)]
     pub stops: Option<EndStops>,
+    /// The rollers that carry a translating path absorber ([`Rollers`]; path joints with α = 0
+    /// only).
+    #[serde(default)]
+    pub rollers: Option<Rollers>,
 }
 
 impl JointSpec {
@@ -319,6 +358,7 @@ impl JointSpec {
             stages: over.stages.clone().or_else(|| self.stages.clone()),
             friction: over.friction.or(self.friction),
             stops: over.stops.or(self.stops),
+            rollers: over.rollers.or(self.rollers),
         }
     }
 
@@ -358,6 +398,9 @@ impl JointSpec {
         if let Some(s) = &self.stops {
             s.check().map_err(|e| located("stops", e))?;
         }
+        if let Some(r) = &self.rollers {
+            r.check().map_err(|(field, msg)| located("rollers", (field.to_string(), msg)))?;
+        }
         Ok(())
     }
 }
@@ -382,4 +425,6 @@ pub struct Joint {
     pub damper: f64,
     /// Nonlinear couplings: staged spring, friction, end stops (empty when none).
     pub couplings: Couplings,
+    /// The rollers carrying a path joint's translating absorber (`None` for most joints).
+    pub rollers: Option<Rollers>,
 }

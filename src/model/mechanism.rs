@@ -4,9 +4,10 @@
 use crate::error::{Error, Result};
 use crate::model::body::{Body, BodySpec};
 use crate::model::gears::{Gear, GearSpec};
-use crate::model::joint::{Joint, JointSpec};
+use crate::model::joint::{Joint, JointKind, JointMotion, JointSpec};
 use crate::model::loads::{LoadSpec, Loads};
 use crate::model::math::Vec2;
+use crate::model::path::Rollers;
 use crate::model::speeds::Speeds;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -61,7 +62,59 @@ pub struct Mechanism {
     pub gears: Vec<Gear>,
 }
 
+/// One path joint's rollers as the engine carries them (docs/design.md, "Rollers"): a rigid body
+/// of mass N m_r and centroidal inertia N I_r hanging from the path joint's parent, moved by the
+/// path's coordinate through [`JointKind::roller_motion`], plus the rollers' spread
+/// `N m_r spread²`, a constant inertia of that parent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RollerSet {
+    /// The path joint (its index).
+    pub joint: usize,
+    /// The path joint's parent body, `None` for ground.
+    pub parent: Option<usize>,
+    /// The path's coordinate (index in q).
+    pub coordinate: usize,
+    /// The path joint's kind and point (`at`, parent frame, m).
+    pub kind: JointKind,
+    /// See `kind`.
+    pub at: Vec2,
+    /// The rollers.
+    pub rollers: Rollers,
+    /// The vertex's centre of curvature P in the path's own frame, m ([`Rollers::vertex_centre`]).
+    pub centre: Vec2,
+}
+
+impl RollerSet {
+    /// The rollers' motion relative to the parent at the path's arc length `s` (m): centroid,
+    /// rotation ψ, columns and bias terms ([`JointKind::roller_motion`]).
+    #[inline]
+    pub fn motion(&self, s: f64) -> JointMotion {
+        self.kind.roller_motion(self.at, s, self.centre, self.rollers.turn_rate())
+    }
+}
+
 impl Mechanism {
+    /// The rollers of every path joint that has them, in tree order (empty for most mechanisms).
+    pub fn roller_sets(&self) -> Vec<RollerSet> {
+        self.joints
+            .iter()
+            .enumerate()
+            .filter_map(|(j, joint)| {
+                let rollers = joint.rollers?;
+                let JointKind::Path { shape, .. } = joint.kind else { return None };
+                Some(RollerSet {
+                    joint: j,
+                    parent: joint.parent,
+                    coordinate: joint.coordinate?,
+                    kind: joint.kind,
+                    at: joint.at,
+                    rollers,
+                    centre: Rollers::vertex_centre(shape),
+                })
+            })
+            .collect()
+    }
+
     /// Number of degrees of freedom (= coordinates = speeds): one per joint that has a coordinate.
     pub fn ndof(&self) -> usize {
         self.joints.iter().filter(|j| j.coordinate.is_some()).count()
@@ -155,9 +208,10 @@ impl Mechanism {
         self.joints.iter().position(|j| j.name == name)
     }
 
-    /// Total mass, kg.
+    /// Total mass, kg, with the rollers of path joints.
     pub fn total_mass(&self) -> f64 {
-        self.bodies.iter().map(|b| b.inertia.mass).sum()
+        let rollers: f64 = self.joints.iter().filter_map(|j| j.rollers).map(|r| r.total_mass()).sum();
+        self.bodies.iter().map(|b| b.inertia.mass).sum::<f64>() + rollers
     }
 
     /// The mechanism with joint `name` locked at angle `q_lock` (rad): its child body is merged
@@ -192,6 +246,15 @@ impl Mechanism {
         let child = &self.bodies[c].inertia;
         let moved = crate::model::inertia::PlanarInertia::new(child.mass, to_parent(child.com), child.i_com);
         out.bodies[p].inertia = out.bodies[p].inertia + moved;
+        // A path joint's rollers are welded with it: their mass at their centroid, their own
+        // inertias and their spread about it join the parent too.
+        if let Some(set) = self.roller_sets().into_iter().find(|r| r.joint == c) {
+            let r = set.rollers;
+            let at = set.motion(q_lock).origin;
+            let welded =
+                crate::model::inertia::PlanarInertia::new(r.total_mass(), at, r.total_inertia() + r.spread_inertia());
+            out.bodies[p].inertia = out.bodies[p].inertia + welded;
+        }
         for (j, joint) in out.joints.iter_mut().enumerate() {
             if joint.parent == Some(c) {
                 joint.parent = Some(p);
