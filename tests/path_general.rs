@@ -402,3 +402,49 @@ fn roller_tuning_order_equals_the_rolling_kinematics() {
         assert!(got > n2, "uniform-disc rollers raise the order");
     }
 }
+
+/// A body probe below a path joint whose carried body turns (circle, epicycloid with α₁ ≠ 0,
+/// general with a rotation law) is refused, naming the joint: the probes add revolute angles
+/// only and would leave α(s) out of the body's angle. A translating absorber (bifilar, α = 0)
+/// and the rotor above any path are accepted.
+#[test]
+fn body_probes_below_a_turning_path_are_refused() {
+    use kanedyn::time::probe::{Probe, Recorder};
+    let turning = [
+        PathShape::Circle { radius: 0.1, length: 0.02 },
+        PathShape::Epicycloid { rho0: 0.1, n_tilde: 3.0, alpha1: 5.0 },
+        PathShape::general(0.1, 3.0, &[], &[5.0]),
+    ];
+    for shape in turning {
+        let mech = rotor_with(path(shape), 1.0, Some(1e-4));
+        for p in [Probe::BodyAngle(1), Probe::BodyRate(1), Probe::BodyAccel(1)] {
+            let err = Recorder::new(&mech, &[p]).err().unwrap_or_else(|| panic!("{shape:?}: {p:?} accepted"));
+            assert!(err.to_string().contains("path joint `path`"), "{err}");
+        }
+        assert!(Recorder::new(&mech, &[Probe::BodyAccel(0)]).is_ok(), "{shape:?}: the rotor's probe");
+    }
+    for shape in [
+        PathShape::Bifilar { radius: 0.1, length: 0.02 },
+        PathShape::Epicycloid { rho0: 0.1, n_tilde: 3.0, alpha1: 0.0 },
+    ] {
+        let mech = rotor_with(path(shape), 1.0, Some(1e-4));
+        assert!(Recorder::new(&mech, &[Probe::BodyAccel(1)]).is_ok(), "{shape:?}: a translating absorber");
+    }
+}
+
+/// The same refusal at the study level: a study whose response body rides a circular path is a
+/// located error at `response_body`, naming the path joint.
+#[test]
+fn a_response_body_on_a_turning_path_is_a_located_study_error() {
+    let dir = std::env::temp_dir().join(format!("kanedyn-turning-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy("examples/paths/circle.ron", dir.join("circle.ron")).unwrap();
+    let study = "Study(\n    name: \"turning\",\n    mechanism: \"circle.ron\",\n    spin_joint: \"spin\",\n    \
+                 response_body: \"absorber\",\n    analyses: [],\n)\n";
+    std::fs::write(dir.join("study.ron"), study).unwrap();
+    let Err(err) = kanedyn::study::Study::from_file(&dir.join("study.ron")) else { panic!("accepted") };
+    let err = err.to_string();
+    assert!(err.contains("study.ron:5:") && err.contains("response_body") && err.contains("`path`"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

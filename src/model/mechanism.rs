@@ -155,6 +155,17 @@ impl Mechanism {
         out
     }
 
+    /// The path joint nearest body `body` on its way from ground (its own joint included) whose
+    /// carried body turns with its coordinate, if any: the body's absolute angle then has the
+    /// path's rotation law α(s) in it, which [`Mechanism::rotation_coordinates`] and the body
+    /// probes built on it do not sum (they add revolute angles only), so callers refuse it.
+    pub fn turning_path_above(&self, body: usize) -> Option<usize> {
+        self.path_to(body).into_iter().rev().find(|&j| match self.joints[j].kind {
+            JointKind::Path { shape, .. } => shape.turns(),
+            _ => false,
+        })
+    }
+
     /// The coordinates of the rotating joints on the path from ground to body `body`, root first:
     /// the body's absolute angle is their sum (every joint kind keeps the child parallel to the
     /// parent at zero coordinate), and so are its angular velocity and acceleration from q̇ and q̈.

@@ -699,6 +699,16 @@ impl PathShape {
         }
     }
 
+    /// Whether the carried body turns relative to the parent as it moves (α not identically 0).
+    pub fn turns(self) -> bool {
+        match self {
+            PathShape::Circle { .. } => true,
+            PathShape::Bifilar { .. } => false,
+            PathShape::Epicycloid { alpha1, .. } => alpha1 != 0.0,
+            PathShape::General(g) => g.alpha.iter().any(|a| *a != 0.0),
+        }
+    }
+
     /// The body's rotation α(s) relative to the parent, rad (exact, not wrapped).
     pub fn alpha(self, s: f64) -> f64 {
         match self {

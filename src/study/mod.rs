@@ -200,6 +200,16 @@ impl Study {
             let names: Vec<&str> = mechanism.bodies.iter().map(|b| b.name.as_str()).collect();
             src.error("response_body", format!("unknown body `{}` (bodies: {})", spec.response_body, names.join(", ")))
         })?;
+        if let Some(j) = mechanism.turning_path_above(body) {
+            return Err(src.error(
+                "response_body",
+                format!(
+                    "body `{}` turns with the path joint `{}` (its rotation law), whose turn the \
+                     rotor response does not include yet: choose a body above it",
+                    spec.response_body, mechanism.joints[j].name
+                ),
+            ));
+        }
         let mut locked = None;
         for (i, j) in spec.lock.iter().enumerate() {
             let m = locked.as_ref().unwrap_or(&mechanism);

@@ -323,6 +323,16 @@ impl Recorder {
                 }
                 Probe::JointForceRadial(_) | Probe::JointForceTangential(_) | Probe::JointMoment(_) => Vec::new(),
                 Probe::BodyAngle(b) | Probe::BodyRate(b) | Probe::BodyAccel(b) => {
+                    if let Some(j) = mech.turning_path_above(b) {
+                        let name = &mech.joints[j].name;
+                        return Err(Error::Model {
+                            mechanism: mech.name.clone(),
+                            message: format!(
+                                "probe {p:?}: the body turns with the path joint `{name}`, whose rotation law \
+                                 body probes do not include yet"
+                            ),
+                        });
+                    }
                     offset = mech.rotation_offset(b);
                     mech.rotation_rates(b)
                 }
