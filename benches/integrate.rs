@@ -66,11 +66,14 @@ fn study(c: &mut Criterion) {
     use kanedyn::study::{RunOptions, Study, run};
     let out = std::env::temp_dir().join("kanedyn_bench_out");
     let opts = RunOptions { out: Some(out.clone()), progress: false };
+    // The bench studies name the examples' mechanism: that folder is allowed, as `--allow-read`.
+    let examples =
+        kanedyn::study::LoadOptions { allow_read: vec!["examples".into()], ..kanedyn::study::LoadOptions::default() };
     let mut g = c.benchmark_group("study");
     g.sample_size(10);
     g.bench_function("sweep_240s_end_to_end", |b| {
         b.iter(|| {
-            let s = Study::from_file(std::path::Path::new("benches/studies/sweep40_up.ron")).unwrap();
+            let s = Study::from_file_with(std::path::Path::new("benches/studies/sweep40_up.ron"), &examples).unwrap();
             black_box(run(&s, &opts).unwrap().sweeps.len())
         })
     });
