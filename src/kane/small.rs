@@ -81,17 +81,27 @@ impl Small {
         }
         match kane.form {
             super::Form::Pairs => Self::pairs(kane),
-            super::Form::MappedRates => super::small_rates::small(kane, false).map(|(rhs, p)| Self::with_rates(rhs, p)),
+            super::Form::MappedRates => {
+                super::small_rates::small(kane, false, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
+            }
             // With joint rates only a rotor carrying one path absorber, whose joint rates are its
             // absolute speeds (W = I), has a fixed-size form: the pair form of `small_rates`.
-            super::Form::Rates => super::small_rates::small(kane, true).map(|(rhs, p)| Self::with_rates(rhs, p)),
+            super::Form::Rates => {
+                super::small_rates::small(kane, true, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
+            }
             // Geared trees (whose state is reduced) take the general form.
             super::Form::Geared => None,
         }
     }
 
+    /// Gives `kane` the composite-body instance `rhs` with its data (the pair form's selection
+    /// compares against it on a copy of the engine).
+    fn install(kane: &mut Kane, rhs: SmallRhs, rates: super::small_rates::Packed) {
+        kane.small = Some(Self::with_rates(rhs, rates));
+    }
+
     /// The composite-body instance `rhs` with its data: the pair form's fields stay unused.
-    pub(super) fn with_rates(rhs: SmallRhs, rates: super::small_rates::Packed) -> Small {
+    fn with_rates(rhs: SmallRhs, rates: super::small_rates::Packed) -> Small {
         Small {
             rhs,
             parent: [GROUND; SMALL],

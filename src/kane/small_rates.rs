@@ -45,6 +45,10 @@ use crate::model::joint::{JointKind, JointMotion};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 use crate::model::path::PolarPath;
 
+/// Sets an engine's fixed-size instance to the composite-body one given with its data; passed
+/// in by `small.rs`, which owns that instance's type (so this module does not import it back).
+pub(super) type Install = dyn Fn(&mut Kane, SmallRhs, Packed);
+
 /// The constant data of the fixed-size composite-body path, packed once at construction.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Packed {
@@ -102,7 +106,7 @@ struct PathPair {
 /// `Form::Rates`; at most `SMALL` speeds, one body per speed, no point forces: checked by the
 /// caller) when every joint's torques allow it. With `pair_only`, only the pair form of a rotor
 /// carrying one path absorber is offered (its speeds are the joint rates: W = I).
-pub(super) fn small(kane: &Kane, pair_only: bool) -> Option<(SmallRhs, Packed)> {
+pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
     let n = kane.n;
     let rhs: SmallRhs = match n {
         1 => Kane::rhs_small_rates::<1>,
@@ -153,7 +157,7 @@ pub(super) fn small(kane: &Kane, pair_only: bool) -> Option<(SmallRhs, Packed)> 
         // Selected only when it reproduces the general form at probe states: a term the
         // general engine gains (and this form does not know) keeps the general form.
         let with_pair = Packed { pair: Some(pair), ..p.clone() };
-        if pair_agrees(kane, &with_pair, rhs) {
+        if pair_agrees(kane, &with_pair, rhs, install) {
             return Some((Kane::rhs_path_pair, with_pair));
         }
     }
@@ -193,12 +197,12 @@ fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
 /// 1e-10 of the absorber's largest acceleration term (ω²ρ + 2|ωṡ| + ṡ²|κ|, or u̇ itself), far
 /// above both forms' rounding (the general form's F₁ sums terms of that size, so a state whose
 /// u̇ is nearly zero carries its rounding) and far below any physical term either could lack.
-fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs) -> bool {
+fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs, install: &Install) -> bool {
     let Some(pair) = &packed.pair else { return false };
     let JointKind::Path { shape, .. } = kane.nodes[1].kind else { return false };
     let reach = shape.length_scale().min(0.5 * shape.travel()).min(0.5 * pair.limit);
     let mut probe = kane.clone();
-    probe.small = Some(super::small::Small::with_rates(rates, packed.clone()));
+    install(&mut probe, rates, packed.clone());
     [(0.0, 0.37), (0.6, -0.9), (-0.95, 0.5)].iter().all(|&(f, g)| {
         let x = [0.3, f * reach, 20.0 + 40.0 * f, 20.0 * g * reach];
         let (mut general, mut fast) = ([0.0; 4], [0.0; 4]);
