@@ -72,7 +72,10 @@
 //! normalised time n enters only through `d/dt = ω₀ d/dτ`. Likewise for the mean speed
 //! (`∂R/∂Ω = B (q̇_per/Ω + e_s) + 2 C q̈/Ω`: Ω also sets the mean spin rate, while the spin angle
 //! Ωt = τ/(ratio·n) is cyclic) and the torque scale s (`∂R/∂s = −g T_osc(τ)`, the torque enters
-//! linearly); the unit test checks all three against differences of the residual.
+//! linearly); the unit test checks all three against differences of the residual. A forcing that
+//! follows the speed, `T_osc = T_0(τ) + Ω² T_2(τ)` (an engine: gas torque and reciprocating
+//! inertia, [`Hbm::with_speed_forcing`]), adds `−2Ω s g T_2(τ)` to ∂R/∂Ω; a second unit test
+//! checks that one.
 //!
 //! # Harmonic count
 //!

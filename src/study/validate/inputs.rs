@@ -141,7 +141,11 @@ pub(super) fn check_transient(
             e.excite
                 .iter()
                 .enumerate()
-                .map(|(i, x)| Ok((at(&format!("engine.excite[{i}].joint")), joint(&at("engine.excite"), &x.joint)?)))
+                .map(|(i, x)| {
+                    let path = at(&format!("engine.excite[{i}].joint"));
+                    let j = joint(&path, &x.joint)?;
+                    Ok((path, j))
+                })
                 .collect::<Result<_>>()?
         };
         for (path, j) in excited {
