@@ -284,6 +284,98 @@ impl Engine {
     }
 }
 
+impl Engine {
+    /// The oscillating part of the torque as a series whose coefficients follow the speed: the
+    /// orders that are whole multiples of `base_order` (itself a positive multiple of ½) up to
+    /// `max_order`, each with its gas coefficients and its inertia coefficients per Ω² kept
+    /// apart, so that one series serves every speed of a run-up or a continuation. `None` when
+    /// `base_order` is not a positive multiple of ½ or `max_order` is below it.
+    pub fn oscillating_series(&self, base_order: f64, max_order: f64) -> Option<OscillatingSeries> {
+        let step = 2.0 * base_order;
+        if !(base_order.is_finite() && base_order > 0.0 && step.fract() == 0.0) {
+            return None;
+        }
+        if !(max_order.is_finite() && max_order >= base_order) {
+            return None;
+        }
+        let step = step as usize;
+        let top = ((2.0 * max_order).floor() as usize).min(self.gas.1.len());
+        let multiples: Vec<usize> = (1..=top).filter(|j| j % step == 0).collect();
+        Some(OscillatingSeries {
+            gas: multiples.iter().map(|&j| self.gas.1[j - 1]).collect(),
+            inertia: multiples.iter().map(|&j| self.inertia.1[j - 1]).collect(),
+            half_orders: multiples,
+        })
+    }
+}
+
+/// The oscillating engine torque at any speed from a fixed set of orders:
+/// `T̃(θ, Ω) = Σ_j (a_j + Ω² c_j) cos(jθ/2) + (b_j + Ω² d_j) sin(jθ/2)`, with (a_j, b_j) the gas
+/// torque's coefficients (N·m) and (c_j, d_j) the reciprocating-inertia torque's per Ω²
+/// (N·m·s²/rad²): the gas torque does not depend on the speed, the inertia torque
+/// `−m Ω² x'x''` scales with Ω² (see the module docs). Made by [`Engine::oscillating_series`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct OscillatingSeries {
+    /// The multiples j of order ½ kept (order j/2): s, 2s, 3s, … for a step s.
+    half_orders: Vec<usize>,
+    /// Gas coefficients (a_j, b_j) of cos(jθ/2) and sin(jθ/2), N·m.
+    gas: Vec<(f64, f64)>,
+    /// Inertia coefficients (c_j, d_j) per Ω², N·m·s²/rad².
+    inertia: Vec<(f64, f64)>,
+}
+
+impl OscillatingSeries {
+    /// The oscillating torque at crank angle `theta` (rad from cylinder 1's firing TDC) and
+    /// speed `omega` (rad/s), every harmonic led by `phase` (rad), N·m: `A sin(x + α)` becomes
+    /// `A sin(x + α + phase)`, the form of an `excite` share.
+    pub fn torque(&self, theta: f64, omega: f64, phase: f64) -> f64 {
+        let Some(&step) = self.half_orders.first() else { return 0.0 };
+        let w2 = omega * omega;
+        // The kept multiples are step, 2·step, …: the angles jθ/2 + phase advance by step·θ/2,
+        // so one rotation per term replaces a sine and cosine each (the rounding this adds grows
+        // with the term count, ~1e-14 for a hundred terms). a cos x + b sin x = A sin(x + α), so
+        // leading x by the phase leads A sin(·) alike.
+        let x = 0.5 * step as f64 * theta;
+        let (ds, dc) = x.sin_cos();
+        let (mut s, mut co) = (x + phase).sin_cos();
+        let mut sum = 0.0;
+        for (&(a, b), &(c, d)) in self.gas.iter().zip(&self.inertia) {
+            sum += (a + w2 * c) * co + (b + w2 * d) * s;
+            (s, co) = (s * dc + co * ds, co * dc - s * ds);
+        }
+        sum
+    }
+
+    /// The series at speed `omega` (rad/s) as harmonics of `base_order`: multiple
+    /// `(j/2)/base_order`, amplitude N·m, phase rad (the form of [`Harmonic`]).
+    pub fn harmonics(&self, omega: f64, base_order: f64) -> Vec<Harmonic> {
+        let w2 = omega * omega;
+        self.parts(base_order, |(a, b), (c, d)| (a + w2 * c, b + w2 * d))
+    }
+
+    /// The gas part (N·m) and the inertia part per Ω² (N·m·s²/rad²) as harmonics of
+    /// `base_order`, for a solver whose forcing is `gas + Ω² inertia`.
+    pub fn split_harmonics(&self, base_order: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
+        (self.parts(base_order, |g, _| g), self.parts(base_order, |_, i| i))
+    }
+
+    fn parts(&self, base_order: f64, pick: impl Fn((f64, f64), (f64, f64)) -> (f64, f64)) -> Vec<Harmonic> {
+        self.half_orders
+            .iter()
+            .zip(self.gas.iter().zip(&self.inertia))
+            .map(|(&j, (&g, &i))| {
+                let (a, b) = pick(g, i);
+                Harmonic { multiple: 0.5 * j as f64 / base_order, amplitude: a.hypot(b), phase: a.atan2(b) }
+            })
+            .collect()
+    }
+
+    /// The orders kept, cycles per crank revolution.
+    pub fn orders(&self) -> Vec<f64> {
+        self.half_orders.iter().map(|&j| 0.5 * j as f64).collect()
+    }
+}
+
 /// The mean and the (cos, sin) coefficients of harmonics j = 1..N/2 − 1 in φ = θ/2 of a torque
 /// over the 720° cycle, by a real FFT of [`CYCLE_SAMPLES`] samples:
 /// `x_i = a₀ + Σ_j (a_j cos jφ_i + b_j sin jφ_i)` gives `X_j = (N/2)(a_j − i b_j)`.

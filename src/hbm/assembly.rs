@@ -64,8 +64,10 @@ impl Hbm {
             } else {
                 self.ev.residual(t, &self.q, &self.qd, &self.qdd, torque, &mut self.lin.r, None);
             }
+            let w2 = omega * omega;
             for i in 0..n {
-                self.rt[i * nt + j] = self.lin.r[i] - scale * self.exc[i * nt + j];
+                let forcing = self.exc[i * nt + j] + self.exc2.get(i * nt + j).map_or(0.0, |e| w2 * e);
+                self.rt[i * nt + j] = self.lin.r[i] - scale * forcing;
             }
             let Some(param) = jacobian else { continue };
             let lin = &self.lin;
@@ -78,15 +80,22 @@ impl Hbm {
             // ∝ ω₀², ω₀ ∝ nΩ; Ω also sets the mean spin rate; the spin angle Ωt = τ/(ratio·n) is
             // cyclic (its column of A is zero); s multiplies the oscillating torque only.
             for i in 0..n {
+                let per_w2 = self.exc2.get(i * nt + j).copied().unwrap_or(0.0);
                 let dr = match param {
-                    Parameter::TorqueScale { .. } => -self.exc[i * nt + j],
+                    Parameter::TorqueScale { .. } => -(self.exc[i * nt + j] + w2 * per_w2),
                     Parameter::Order | Parameter::Speed { .. } => {
                         let mut s = 0.0;
                         for k in 0..n {
                             let qd_per = if k == spin { self.qd[k] - omega } else { self.qd[k] };
                             s += lin.b[i * n + k] * qd_per + 2.0 * lin.c[i * n + k] * self.qdd[k];
                         }
-                        if param == Parameter::Order { s / order } else { s / omega + lin.b[i * n + spin] }
+                        // A speed-following forcing (an engine's inertia torque, ∝ Ω²) adds
+                        // −s·2Ω·exc2 to ∂R/∂Ω.
+                        if param == Parameter::Order {
+                            s / order
+                        } else {
+                            s / omega + lin.b[i * n + spin] - scale * 2.0 * omega * per_w2
+                        }
                     }
                 };
                 self.dpt[i * nt + j] = dr;
@@ -190,6 +199,7 @@ impl Hbm {
 mod tests {
     use super::super::test_problem;
     use super::*;
+    use crate::model::excitation::Harmonic;
 
     /// The assembled Jacobian and ∂R̂/∂n against central differences of the whole residual, for
     /// the default even N_t = 44 and an odd one (45) and the minimum 2H + 1 = 21, where the
@@ -206,8 +216,26 @@ mod tests {
         }
     }
 
+    /// The same with a forcing that follows the speed (an engine's inertia torque ∝ Ω²), whose
+    /// derivative enters ∂R̂/∂Ω and ∂R̂/∂s.
+    #[test]
+    fn jacobian_matches_with_a_speed_following_forcing() {
+        let mech = crate::cpva::CpvaParams::canonical().mechanism(None).unwrap();
+        let kane = crate::kane::Kane::new(&mech).unwrap();
+        let gas = [Harmonic { multiple: 1.0, amplitude: 30.0, phase: 0.3 }];
+        // 40 N·m of order 2n at 1000 rpm: 40 / (104.7 rad/s)².
+        let per_w2 = [Harmonic { multiple: 2.0, amplitude: 40.0 / 104.72f64.powi(2), phase: -0.5 }];
+        let omega = crate::model::excitation::rpm_to_rad_s(1000.0);
+        let hbm = super::Hbm::with_speed_forcing(&kane, 0, omega, &gas, &per_w2, &[(0, 1.0, 0.0)], Default::default())
+            .unwrap();
+        jacobian_check_of(hbm, 0);
+    }
+
     fn jacobian_check(time_samples: usize, speeds: crate::model::speeds::Speeds) {
-        let mut hbm = test_problem(40.0, time_samples, speeds);
+        jacobian_check_of(test_problem(40.0, time_samples, speeds), time_samples);
+    }
+
+    fn jacobian_check_of(mut hbm: super::Hbm, time_samples: usize) {
         let sol = hbm.solve(3.05, None).unwrap();
         let mut x = hbm.unknowns_from(Some(&sol));
         // Move off the solution so that the residual is not zero.

@@ -72,7 +72,10 @@
 //! normalised time n enters only through `d/dt = ω₀ d/dτ`. Likewise for the mean speed
 //! (`∂R/∂Ω = B (q̇_per/Ω + e_s) + 2 C q̈/Ω`: Ω also sets the mean spin rate, while the spin angle
 //! Ωt = τ/(ratio·n) is cyclic) and the torque scale s (`∂R/∂s = −g T_osc(τ)`, the torque enters
-//! linearly); the unit test checks all three against differences of the residual.
+//! linearly); the unit test checks all three against differences of the residual. A forcing that
+//! follows the speed, `T_osc = T_0(τ) + Ω² T_2(τ)` (an engine: gas torque and reciprocating
+//! inertia, [`Hbm::with_speed_forcing`]), adds `−2Ω s g T_2(τ)` to ∂R/∂Ω; a second unit test
+//! checks that one.
 //!
 //! # Harmonic count
 //!
@@ -233,6 +236,9 @@ pub struct Hbm {
     /// The generalized force of the oscillating excitation torques at the N_t samples, per
     /// equation (`exc[r·N_t + j]`), N·m.
     exc: Vec<f64>,
+    /// The same for the forcing per Ω² (N·m·s²/rad²; empty without one): the generalized force
+    /// is `exc + Ω² exc2` ([`Hbm::with_speed_forcing`]).
+    exc2: Vec<f64>,
     // Work buffers: p, ṗ, p̈ per coordinate, R and ∂R/∂n per equation, each N_t samples.
     qt: Vec<f64>,
     qdt: Vec<f64>,
@@ -293,6 +299,24 @@ impl Hbm {
         spin_joint: usize,
         omega: f64,
         harmonics: &[Harmonic],
+        inputs: &[(usize, f64, f64)],
+        options: HbmOptions,
+    ) -> Result<Self, HbmError> {
+        Self::with_speed_forcing(kane, spin_joint, omega, harmonics, &[], inputs, options)
+    }
+
+    /// [`Hbm::with_inputs`] with a forcing that follows the mean speed, as an engine's does:
+    /// `Σ T_k sin(m_k n Ω t + α_k) + Ω² Σ T'_k sin(m'_k n Ω t + α'_k)`, the terms T'_k of
+    /// `per_omega2` in N·m·s²/rad² (an engine's reciprocating-inertia torque per Ω², its gas
+    /// torque in `harmonics`, see [`crate::engine::OscillatingSeries::split_harmonics`]). A
+    /// continuation in [`Parameter::Speed`] then carries the forcing along, and its ∂R̂/∂Ω holds
+    /// the forcing's derivative `2Ω Σ T'_k sin(…)`.
+    pub fn with_speed_forcing(
+        kane: &Kane,
+        spin_joint: usize,
+        omega: f64,
+        harmonics: &[Harmonic],
+        per_omega2: &[Harmonic],
         inputs: &[(usize, f64, f64)],
         options: HbmOptions,
     ) -> Result<Self, HbmError> {
@@ -368,7 +392,9 @@ impl Hbm {
         // Base frequency: the multiples as fractions k_i/d with a common denominator d ≤ 12.
         let mut ratio = 1.0;
         let mut terms = Vec::new();
-        if !harmonics.is_empty() {
+        let all: Vec<Harmonic> = harmonics.iter().chain(per_omega2).copied().collect();
+        if !all.is_empty() {
+            let harmonics = &all;
             for h in harmonics {
                 if !(h.multiple.is_finite() && h.multiple > 0.0 && h.amplitude.is_finite() && h.phase.is_finite()) {
                     return bad(format!("excitation term {h:?}: multiple must be positive, all numbers finite"));
@@ -390,7 +416,11 @@ impl Hbm {
                 .map(|(h, &k)| Term { index: (k / g) as f64, amplitude: h.amplitude, phase: h.phase })
                 .collect();
         }
-        let t_scale = harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>().max(1.0);
+        // The terms of `per_omega2` follow those of `harmonics` in `terms`.
+        let terms2 = terms.split_off(terms.len().min(harmonics.len()));
+        let t_scale = (harmonics.iter().map(|h| h.amplitude.abs()).sum::<f64>()
+            + omega * omega * per_omega2.iter().map(|h| h.amplitude.abs()).sum::<f64>())
+        .max(1.0);
         let mut kane = kane.clone();
         for &(j, _, _) in inputs {
             let mean = torques.iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean);
@@ -412,6 +442,7 @@ impl Hbm {
         // The oscillating torque's generalized force at every sample: Σ_inputs g_j · T_j(τ), with
         // g_j[r] = ∂q̇_j/∂u_r (a torque τ at joint j does τ q̇_j of power).
         let mut exc = vec![0.0; n * nt];
+        let mut exc2 = vec![0.0; if terms2.is_empty() { 0 } else { n * nt }];
         for &(joint, scale, phase) in inputs {
             let (c, factor) = follow[joint].map_or((spin, 1.0), |f| (f.coordinate, f.factor));
             let mut gj = vec![0.0; n];
@@ -424,8 +455,12 @@ impl Hbm {
             for j in 0..nt {
                 let tau = 2.0 * PI * j as f64 / nt as f64;
                 let t: f64 = terms.iter().map(|t| t.amplitude * (t.index * tau + t.phase + phase).sin()).sum();
+                let t2: f64 = terms2.iter().map(|t| t.amplitude * (t.index * tau + t.phase + phase).sin()).sum();
                 for (r, g) in gj.iter().enumerate() {
                     exc[r * nt + j] += scale * g * t;
+                    if !exc2.is_empty() {
+                        exc2[r * nt + j] += scale * g * t2;
+                    }
                 }
             }
         }
@@ -450,6 +485,7 @@ impl Hbm {
             nb,
             aft: aft::Aft::new(nt, opts.harmonics),
             exc,
+            exc2,
             qt: vec![0.0; n * nt],
             qdt: vec![0.0; n * nt],
             qddt: vec![0.0; n * nt],

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 pub struct HbmBranch {
     /// The analysis name.
     pub analysis: String,
-    /// Torque amplitude T_n, N·m (NaN on a torque branch).
+    /// Torque amplitude T_n, N·m (NaN on a torque branch and with an engine).
     pub amplitude: f64,
     /// Orders of the branch points, in continuation order.
     pub order: Vec<f64>,
@@ -123,17 +123,18 @@ pub(crate) fn branch(
     from: f64,
     to: f64,
 ) -> Result<(Hbm, Branch, f64)> {
-    branch_in(study, omega, harmonics, excite, h, Parameter::Order, from, to, None)
+    branch_in(study, omega, (harmonics, &[]), excite, h, Parameter::Order, from, to, None)
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
-/// torque scale) for the excitation `harmonics` at mean speed `omega` (rad/s), with the largest
-/// step `max_step` (None: the default).
+/// torque scale) for the excitation `forcing` at mean speed `omega` (rad/s), with the largest
+/// step `max_step` (None: the default). The forcing is `(harmonics, per Ω²)`: the terms in N·m
+/// and those that scale with the speed squared (an engine's inertia torque; empty otherwise).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn branch_in(
     study: &Study,
     omega: f64,
-    harmonics: &[Harmonic],
+    forcing: (&[Harmonic], &[Harmonic]),
     excite: &[super::ExciteAt],
     h: usize,
     parameter: Parameter,
@@ -147,6 +148,7 @@ pub(crate) fn branch_in(
     // With gravity (a world-frame force) the forces repeat every revolution: the multiple 1/n
     // (amplitude 0) puts the base order at a divisor of 1, so `h` counts harmonics of the
     // rotation (validation allows this only at a fixed order).
+    let (harmonics, per_omega2) = forcing;
     let mut harmonics = harmonics.to_vec();
     if study.mechanism.loads.needs_world_orientation()
         && let Parameter::Speed { order } | Parameter::TorqueScale { order } = parameter
@@ -154,7 +156,8 @@ pub(crate) fn branch_in(
     {
         harmonics.push(Harmonic { multiple: 1.0 / order, amplitude: 0.0, phase: 0.0 });
     }
-    let mut hbm = Hbm::with_inputs(&kane, study.spin, omega, &harmonics, &inputs, opts).map_err(hbm_error(study))?;
+    let mut hbm = Hbm::with_speed_forcing(&kane, study.spin, omega, &harmonics, per_omega2, &inputs, opts)
+        .map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);
@@ -197,12 +200,22 @@ fn axis(spec: &HbmSpec) -> Axis {
 }
 
 /// The amplitudes continued: one case per amplitude (order and speed), or one with T_n = 1 N·m
-/// scaled (torque, NaN here).
+/// scaled (torque, NaN here), or one with the engine's amplitudes (NaN here too).
 fn cases(spec: &HbmSpec) -> Vec<f64> {
     match spec.parameter {
         HbmParameter::Torque { .. } => vec![f64::NAN],
+        _ if spec.engine.is_some() => vec![f64::NAN],
         _ => spec.amplitudes.clone(),
     }
+}
+
+/// The forcing of one case: `T_n sin(nΩt)`, or the engine's orders as harmonics of n split into
+/// the gas part (N·m) and the inertia part per Ω² (N·m·s²/rad²), which follow the speed.
+fn forcing(spec: &HbmSpec, amp: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
+    if let (Some(series), HbmParameter::Speed { order, .. }) = (&spec.engine_series, spec.parameter) {
+        return series.split_harmonics(order);
+    }
+    (vec![Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }], Vec::new())
 }
 
 /// Runs the branches ([`compute`]) and writes their outputs over the sweeps already run
@@ -228,7 +241,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
     let mut branches = Vec::new();
     let mut failures = Vec::new();
     for amp in cases(spec) {
-        let harmonics = [Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }];
+        let (harmonics, per_omega2) = forcing(spec, amp);
         // From above, the continuation follows the branch that comes down from high values; from
         // below, the one that comes up from low values. Where the response is S-shaped and a fold
         // lies outside the range, each reaches sheets the other cannot.
@@ -237,7 +250,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
             let solved = branch_in(
                 study,
                 omega,
-                &harmonics,
+                (&harmonics, &per_omega2),
                 &spec.excite,
                 spec.harmonics,
                 parameter,
@@ -451,7 +464,10 @@ pub(crate) fn render(
             markers.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-3);
             let title = match spec.parameter {
                 HbmParameter::Order => format!("Harmonic balance, T_n = {amp} N·m, {} rpm", spec.rpm),
-                HbmParameter::Speed { order, .. } => format!("Harmonic balance, T_n = {amp} N·m, n = {order}"),
+                HbmParameter::Speed { order, .. } => match &spec.engine {
+                    Some(e) => format!("Harmonic balance, engine {e}, n = {order}"),
+                    None => format!("Harmonic balance, T_n = {amp} N·m, n = {order}"),
+                },
                 HbmParameter::Torque { order, .. } => format!("Harmonic balance, n = {order}, {} rpm", spec.rpm),
             };
             Panel {
@@ -533,7 +549,11 @@ pub(crate) fn render(
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
-            if br.amplitude.is_nan() { "continued".to_string() } else { br.amplitude.to_string() },
+            match (&spec.engine, br.amplitude.is_nan()) {
+                (Some(_), _) => "engine".to_string(),
+                (None, true) => "continued".to_string(),
+                (None, false) => br.amplitude.to_string(),
+            },
             br.from,
             f.points,
             f.stable,

@@ -370,69 +370,149 @@ fn mech_mean(kane: &Kane, j: usize) -> f64 {
     kane.joint_torques().iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean)
 }
 
-/// Fills the harmonics of every multi-order analysis that names an `engine` from the engine's
-/// torque at each speed (the orders that are whole multiples of the analysis's base order, up to
-/// `engine_multiples`); errors are located in the study file or in the engine file.
+/// Highest order of a transient's engine series: engine orders that matter for torsional
+/// vibration stay below ~50, and each kept order costs a term in every right-hand side.
+pub const MAX_ENGINE_ORDER: f64 = 64.0;
+
+/// Resolves every analysis that names an engine, when the study is loaded: a multi-order
+/// analysis gets each speed's harmonics (the orders that are whole multiples of its base order,
+/// up to `engine_multiples`), a harmonic balance continued in speed and a transient the engine's
+/// [`crate::engine::OscillatingSeries`], whose amplitudes follow the speed as they run. Errors are
+/// located in the study file or in the engine file.
 fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, base: &Path) -> Result<()> {
+    use crate::engine::Engine;
     // Too many analyses is `validate`'s error; no engine work is spent on such a file.
     if spec.analyses.len() > validate::MAX_ANALYSES {
         return Ok(());
     }
     // Each engine file is read and prepared once, however many analyses name it.
-    let mut engines: std::collections::HashMap<PathBuf, crate::engine::Engine> = std::collections::HashMap::new();
+    let mut engines: std::collections::HashMap<PathBuf, Engine> = std::collections::HashMap::new();
+    let mut load = |field: &str, file: &str| -> Result<Engine> {
+        let path = policy.resolve(base, file).map_err(|e| src.error(field, e))?;
+        if let Some(e) = engines.get(&path) {
+            return Ok(e.clone());
+        }
+        let esrc = Source::read_with(&path, policy).map_err(|e| match e {
+            Error::Io { .. } => src.error(field, format!("cannot read engine file: {e}")),
+            other => other,
+        })?;
+        let engine = Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
+        engines.insert(path, engine.clone());
+        Ok(engine)
+    };
+    let half_multiple = |v: f64| v.is_finite() && v > 0.0 && v <= validate::MAX_ORDER && (2.0 * v).fract() == 0.0;
     for (k, a) in spec.analyses.iter_mut().enumerate() {
-        let AnalysisSpec::MultiOrder(m) = a else { continue };
-        let Some(file) = &m.engine else { continue };
         let at = |f: &str| format!("analyses[{k}].{f}");
-        let path = policy.resolve(base, file).map_err(|e| src.error(&at("engine"), e))?;
-        if !engines.contains_key(&path) {
-            let esrc = Source::read_with(&path, policy).map_err(|e| match e {
-                Error::Io { .. } => src.error(&at("engine"), format!("cannot read engine file: {e}")),
-                other => other,
-            })?;
-            let engine =
-                crate::engine::Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
-            engines.insert(path.clone(), engine);
-        }
-        let engine = &engines[&path];
-        if !(1..=validate::MAX_LIST).contains(&m.engine_multiples) {
-            return Err(src.error(&at("engine_multiples"), format!("need 1 to {} multiples", validate::MAX_LIST)));
-        }
-        if !(m.order.is_finite() && m.order > 0.0 && (2.0 * m.order).fract() == 0.0) {
-            return Err(src.error(
-                &at("order"),
-                format!("with an engine the base order must be a multiple of ½ (its orders are), got {}", m.order),
-            ));
-        }
-        if m.speeds.len() > validate::MAX_LIST {
-            return Err(src.error(&at("speeds"), format!("{} speeds; at most {}", m.speeds.len(), validate::MAX_LIST)));
-        }
-        for (i, p) in m.speeds.iter_mut().enumerate() {
-            if !p.harmonics.is_empty() {
-                return Err(src.error(
-                    &at(&format!("speeds[{i}].harmonics")),
-                    "give either the harmonics or the analysis's engine, not both",
-                ));
+        match a {
+            AnalysisSpec::MultiOrder(m) => {
+                let Some(file) = &m.engine else { continue };
+                let engine = load(&at("engine"), file)?;
+                if !(1..=validate::MAX_LIST).contains(&m.engine_multiples) {
+                    return Err(
+                        src.error(&at("engine_multiples"), format!("need 1 to {} multiples", validate::MAX_LIST))
+                    );
+                }
+                if !half_multiple(m.order) {
+                    return Err(src.error(
+                        &at("order"),
+                        format!(
+                            "with an engine the base order must be a multiple of ½ (its orders are), got {}",
+                            m.order
+                        ),
+                    ));
+                }
+                if m.speeds.len() > validate::MAX_LIST {
+                    return Err(
+                        src.error(&at("speeds"), format!("{} speeds; at most {}", m.speeds.len(), validate::MAX_LIST))
+                    );
+                }
+                for (i, p) in m.speeds.iter_mut().enumerate() {
+                    if !p.harmonics.is_empty() {
+                        return Err(src.error(
+                            &at(&format!("speeds[{i}].harmonics")),
+                            "give either the harmonics or the analysis's engine, not both",
+                        ));
+                    }
+                    if !(p.rpm.is_finite() && p.rpm > 0.0 && p.rpm <= validate::MAX_RPM) {
+                        return Err(src.error(&at(&format!("speeds[{i}].rpm")), "speed must be within 0 < rpm ≤ 1e6"));
+                    }
+                    let top = m.order * m.engine_multiples as f64;
+                    let series = engine.orders(crate::model::excitation::rpm_to_rad_s(p.rpm), top);
+                    p.harmonics = series
+                        .harmonics
+                        .iter()
+                        .filter_map(|h| {
+                            let multiple = 0.5 * h.multiple / m.order;
+                            ((multiple - multiple.round()).abs() < 1e-9 && multiple >= 1.0).then(|| {
+                                crate::model::excitation::Harmonic {
+                                    multiple: multiple.round(),
+                                    amplitude: h.amplitude,
+                                    phase: h.phase,
+                                }
+                            })
+                        })
+                        .collect();
+                }
             }
-            if !(p.rpm.is_finite() && p.rpm > 0.0 && p.rpm <= validate::MAX_RPM) {
-                return Err(src.error(&at(&format!("speeds[{i}].rpm")), "speed must be within 0 < rpm ≤ 1e6"));
+            AnalysisSpec::HarmonicBalance(h) => {
+                let Some(file) = &h.engine else { continue };
+                let HbmParameter::Speed { order, .. } = h.parameter else {
+                    return Err(src.error(
+                        &at("engine"),
+                        "an engine's amplitudes follow the speed: only a harmonic balance continued in                          `parameter: Speed(…)` takes one",
+                    ));
+                };
+                if !h.amplitudes.is_empty() {
+                    return Err(src.error(&at("amplitudes"), "give either the amplitudes or the engine, not both"));
+                }
+                if !half_multiple(order) {
+                    return Err(src.error(
+                        &at("parameter"),
+                        format!("with an engine the order must be a multiple of ½ (its orders are), got {order}"),
+                    ));
+                }
+                // The balance keeps `harmonics` multiples of the order: more from the engine
+                // would be dropped, so they are refused rather than lost.
+                if !(1..=h.harmonics.clamp(1, 64)).contains(&h.engine_multiples) {
+                    return Err(src.error(
+                        &at("engine_multiples"),
+                        format!("need 1 to harmonics = {} multiples", h.harmonics.clamp(1, 64)),
+                    ));
+                }
+                let engine = load(&at("engine"), file)?;
+                h.engine_series = engine.oscillating_series(order, order * h.engine_multiples as f64);
             }
-            let top = m.order * m.engine_multiples as f64;
-            let series = engine.orders(crate::model::excitation::rpm_to_rad_s(p.rpm), top);
-            p.harmonics = series
-                .harmonics
-                .iter()
-                .filter_map(|h| {
-                    let multiple = 0.5 * h.multiple / m.order;
-                    ((multiple - multiple.round()).abs() < 1e-9 && multiple >= 1.0).then(|| {
-                        crate::model::excitation::Harmonic {
-                            multiple: multiple.round(),
-                            amplitude: h.amplitude,
-                            phase: h.phase,
-                        }
-                    })
-                })
-                .collect();
+            AnalysisSpec::Transient(t) => {
+                let Some(e) = &mut t.engine else { continue };
+                if !half_multiple(e.order) {
+                    return Err(src.error(
+                        &at("engine.order"),
+                        format!("the base order must be a multiple of ½ (the engine's orders are), got {}", e.order),
+                    ));
+                }
+                if !(e.max_order.is_finite() && e.max_order >= e.order && e.max_order <= MAX_ENGINE_ORDER) {
+                    return Err(src.error(
+                        &at("engine.max_order"),
+                        format!("must lie within order ({}) ≤ max_order ≤ {MAX_ENGINE_ORDER}", e.order),
+                    ));
+                }
+                if !(e.ramp_s.is_finite() && (0.0..=validate::MAX_TRANSIENT_S).contains(&e.ramp_s)) {
+                    return Err(src.error(&at("engine.ramp_s"), "the ramp must be finite and non-negative (s)"));
+                }
+                let engine = load(&at("engine.file"), &e.file)?;
+                e.series = engine.oscillating_series(e.order, e.max_order);
+            }
+            AnalysisSpec::DesignStudy(d) => {
+                if let AnalysisSpec::HarmonicBalance(h) = d.analysis.as_ref()
+                    && h.engine.is_some()
+                {
+                    return Err(src.error(
+                        &at("analysis.engine"),
+                        "a design study's harmonic balance takes typed amplitudes, not an engine",
+                    ));
+                }
+            }
+            _ => {}
         }
     }
     Ok(())

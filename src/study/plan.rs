@@ -273,8 +273,11 @@ impl Study {
                         }
                     }
                     AnalysisSpec::HarmonicBalance(h) => {
-                        let cases =
-                            if matches!(h.parameter, HbmParameter::Torque { .. }) { 1 } else { h.amplitudes.len() };
+                        let cases = if matches!(h.parameter, HbmParameter::Torque { .. }) || h.engine.is_some() {
+                            1
+                        } else {
+                            h.amplitudes.len()
+                        };
                         let runs = 2 * cases;
                         let points = crate::hbm::ContinuationOptions::default().max_points as f64;
                         let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);

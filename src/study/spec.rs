@@ -200,6 +200,19 @@ pub struct HbmSpec {
     /// the spin joint alone). The mean torque stays on the spin joint.
     #[serde(default)]
     pub excite: Vec<ExciteAt>,
+    /// An engine file (RON `Engine(...)`, relative to the study file) whose torque replaces
+    /// `amplitudes` in a `Speed` continuation: its orders that are the multiples
+    /// 1..=`engine_multiples` of the parameter's `order`, with amplitudes and phases that follow
+    /// the speed along the branch (the gas part fixed, the reciprocating-inertia part ∝ Ω²).
+    /// The engine's mean torque is not applied (the solved mean torque holds the speed).
+    #[serde(default)]
+    pub engine: Option<String>,
+    /// Highest multiple of the order taken from the engine (default 4).
+    #[serde(default = "default_engine_multiples")]
+    pub engine_multiples: usize,
+    /// The engine's series, filled when the study is loaded (not part of the file).
+    #[serde(skip)]
+    pub engine_series: Option<crate::engine::OscillatingSeries>,
 }
 
 /// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
@@ -501,6 +514,48 @@ pub struct TransientSpec {
     /// the parent exerts on the child, in the time series and the summary (default none).
     #[serde(default)]
     pub reactions: Vec<String>,
+    /// An engine whose oscillating torque from cylinder pressure acts through the run, at the
+    /// spin joint's angle (the crank angle) and its speed at each instant (default none).
+    #[serde(default)]
+    pub engine: Option<EngineExcitation>,
+}
+
+/// An engine's oscillating torque in a time run: at every instant the order series of
+/// [`crate::engine::Engine`] at the crank angle θ (the spin joint's angle, from cylinder 1's
+/// firing TDC) and the crank speed Ω (the spin joint's rate),
+/// `T̃(θ, Ω) = Σ_j A_j(Ω) sin(jθ/2 + α_j(Ω))` over the orders j/2 that are multiples of `order` up
+/// to `max_order`, with the gas part fixed and the reciprocating-inertia part ∝ Ω². The
+/// engine's mean torque is not applied: the speed profile's drive holds the speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EngineExcitation {
+    /// The engine file (RON `Engine(...)`), relative to the study file.
+    pub file: String,
+    /// Base order: the engine's orders that are its whole multiples are kept (default ½: every
+    /// order the engine has). Must be a multiple of ½.
+    #[serde(default = "default_half")]
+    pub order: f64,
+    /// Highest order kept, cycles per crank revolution (default 12).
+    #[serde(default = "default_engine_max_order")]
+    pub max_order: f64,
+    /// Ramp-in of the torque, s (default 0: none).
+    #[serde(default)]
+    pub ramp_s: f64,
+    /// The joints the torque acts at, each with its share and phase lead (default: the spin
+    /// joint alone).
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
+    /// The engine's series, filled when the study is loaded (not part of the file).
+    #[serde(skip)]
+    pub series: Option<crate::engine::OscillatingSeries>,
+}
+
+fn default_half() -> f64 {
+    0.5
+}
+
+fn default_engine_max_order() -> f64 {
+    12.0
 }
 
 /// The spin speed of a [`TransientSpec`].

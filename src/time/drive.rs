@@ -15,7 +15,11 @@
 //! `A q̈ = G` with `A = WᵀMW` and `G = WᵀF`; row s is replaced by the prescribed `q̈_s` and the
 //! remaining rows give `A_rr q̈_r = G_r − A_rs q̈_s` (the partitioned form of a rheonomic
 //! constraint on one coordinate). The torque the drive exerts is `(A q̈ − G)_s`.
+//!
+//! An engine torque ([`EngineTorque`]) is crank-locked too, but its amplitudes and phases follow
+//! the crank's rate q̇_c at each instant (the inertia part of the engine series scales with q̇_c²).
 
+use crate::engine::OscillatingSeries;
 use crate::error::{EngineError, Result};
 use crate::kane::Kane;
 use crate::model::excitation::{Harmonic, ramp_in};
@@ -51,6 +55,31 @@ impl LockedTorque {
         let ramp = ramp_in(t, self.ramp_s);
         let phase = self.order * crank_rad;
         mean + ramp * self.harmonics.iter().map(|h| h.amplitude * (h.multiple * phase + h.phase).sin()).sum::<f64>()
+    }
+}
+
+/// An engine's oscillating torque at a joint, `τ = scale · r(t) · T̃(q_c, q̇_c)`: the engine's
+/// order series ([`OscillatingSeries`]) at the crank's angle and rate at that instant, every
+/// harmonic led by `phase`, ramped in by r over `ramp_s`. Through a run-up its inertia part grows
+/// with the square of the crank's speed as it does on a real engine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EngineTorque {
+    /// The joint it acts at (index in the mechanism), child against parent.
+    pub joint: usize,
+    /// Share of the engine torque at this joint.
+    pub scale: f64,
+    /// Phase lead of every harmonic, rad.
+    pub phase: f64,
+    /// Ramp-in, s (0: none).
+    pub ramp_s: f64,
+    /// The engine's series.
+    pub series: OscillatingSeries,
+}
+
+impl EngineTorque {
+    /// The torque at time `t` with the crank at `crank_rad` turning at `crank_rate` (rad/s), N·m.
+    pub fn torque(&self, t: f64, crank_rad: f64, crank_rate: f64) -> f64 {
+        self.scale * ramp_in(t, self.ramp_s) * self.series.torque(crank_rad, crank_rate, self.phase)
     }
 }
 
@@ -103,6 +132,7 @@ pub struct Drive {
     w: DMatrix<f64>,
     crank: usize,
     torques: Vec<(usize, LockedTorque)>,
+    engines: Vec<(usize, EngineTorque)>,
     prescribed: Option<(usize, Prescribed)>,
     governor: Option<(usize, Governor)>,
     m: DMatrix<f64>,
@@ -137,6 +167,7 @@ impl Drive {
             w: mech.speeds.w_matrix(&parents),
             crank,
             torques,
+            engines: Vec::new(),
             prescribed,
             governor: None,
             m: DMatrix::zeros(n, n),
@@ -155,6 +186,21 @@ impl Drive {
             }
         })?;
         self.governor = Some((c, g));
+        Ok(self)
+    }
+
+    /// Adds engine torques (to any added before); each joint must have a coordinate.
+    pub fn with_engine_torques(mut self, torques: Vec<EngineTorque>) -> Result<Self> {
+        for t in torques {
+            let mech = self.kane.mechanism();
+            let c = mech.joints.get(t.joint).and_then(|_| mech.coordinate(t.joint)).ok_or_else(|| {
+                crate::error::Error::Model {
+                    mechanism: mech.name.clone(),
+                    message: format!("engine torque: joint #{} has no coordinate (Fixed or out of range)", t.joint),
+                }
+            })?;
+            self.engines.push((c, t));
+        }
         Ok(self)
     }
 
@@ -194,6 +240,16 @@ impl Drive {
             let tau = lt.torque(t, crank);
             for r in 0..n {
                 self.f[r] += tau * self.winv[(*c, r)];
+            }
+        }
+        if !self.engines.is_empty() {
+            // q̇_crank = (W⁻¹u)_crank: the engine's speed at this instant.
+            let rate: f64 = (0..n).map(|r| self.winv[(self.crank, r)] * u[r]).sum();
+            for (c, e) in &self.engines {
+                let tau = e.torque(t, crank, rate);
+                for r in 0..n {
+                    self.f[r] += tau * self.winv[(*c, r)];
+                }
             }
         }
         if let Some((c, g)) = self.governor {

@@ -3,6 +3,8 @@
 //! prescribed (`time::drive`), with torques at any joints whose orders are locked to the spin
 //! joint's angle; the response and every element tracked into an order–rpm map
 //! (`signal::order_rpm_map`: angle-domain blocks of whole revolutions) and cut along orders.
+//! An `engine` adds its torque from cylinder pressure, crank-locked like the torques, its
+//! amplitudes and phases following the spin joint's rate at each instant (`time::drive::EngineTorque`).
 //!
 //! The feed-forward torque of a `Torque` run-up is the rigid-rotation torque
 //! `T(t) = J·α + Σc·Ω_ref(t)`: J the polar inertia of everything the spin joint carries turning
@@ -16,7 +18,7 @@ use super::{JointTorqueSpec, Output, Results, SpeedProfile, Study, TransientSpec
 use crate::error::Result;
 use crate::model::excitation::{Excitation, rpm_to_rad_s};
 use crate::signal::{AngleOptions, OrderMap, order_rpm_map};
-use crate::time::drive::{Drive, Governor, LockedTorque, Prescribed, rigid_inertia};
+use crate::time::drive::{Drive, EngineTorque, Governor, LockedTorque, Prescribed, rigid_inertia};
 use crate::time::probe::{Outcome, Probe, Recorder, simulate_rhs};
 use report::render;
 pub(crate) use report::tables;
@@ -129,10 +131,21 @@ pub(crate) fn cut_orders(spec: &TransientSpec) -> Vec<f64> {
     }
     let mut orders: Vec<f64> =
         spec.torques.iter().flat_map(|t| t.harmonics.iter().map(move |h| h.multiple * t.order)).collect();
+    orders.extend(engine_orders(spec));
     orders.sort_by(f64::total_cmp);
     orders.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
     orders.truncate(8);
     orders
+}
+
+/// The engine's orders that carry torque at the profile's highest speed: above 1e-6 of the
+/// largest (a balanced engine's cancelled orders are left out; they sit at rounding level).
+fn engine_orders(spec: &TransientSpec) -> Vec<f64> {
+    let Some(series) = spec.engine.as_ref().and_then(|e| e.series.as_ref()) else { return Vec::new() };
+    let (a, b) = spec.speed.rpm_range();
+    let h = series.harmonics(rpm_to_rad_s(a.max(b)), 0.5);
+    let largest = h.iter().fold(0.0f64, |m, x| m.max(x.amplitude));
+    h.iter().filter(|x| x.amplitude > 1e-6 * largest).map(|x| 0.5 * x.multiple).collect()
 }
 
 /// `(α in rad/s², ramp length in s)` of a run-up profile; zero for `Free`.
@@ -241,6 +254,16 @@ pub(crate) fn compute(
     // A mesh torque balances the torques at driven joints as this run applies them.
     rec.use_torques_of(&kane);
     let mut drive = Drive::new(kane, spin, torques, prescribed)?;
+    if let Some(e) = &spec.engine {
+        // Resolved at load; a spec built without loading has no series and no engine torque.
+        let series = e.series.clone().unwrap_or_default();
+        let shares = study.excited_joints(mech, &e.excite);
+        let engine = shares
+            .into_iter()
+            .map(|(joint, scale, phase)| EngineTorque { joint, scale, phase, ramp_s: e.ramp_s, series: series.clone() })
+            .collect();
+        drive = drive.with_engine_torques(engine)?;
+    }
     if let SpeedProfile::Torque { governor_s: Some(tau), .. } = spec.speed {
         drive = drive.with_governor(Governor {
             joint: spin,

@@ -200,6 +200,16 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
         r.sim.stats.accepted,
         r.sim.rhs_evals()
     );
+    if let Some(e) = &spec.engine {
+        let orders = e.series.as_ref().map(|s| s.orders()).unwrap_or_default();
+        let list = |o: &[f64]| o.iter().map(|v| fmt_num(*v)).collect::<Vec<_>>().join(", ");
+        let _ = writeln!(
+            md,
+            "Engine `{}`: its oscillating torque at the spin joint's angle and rate of each instant, orders {} (amplitudes following the speed); its mean torque is not applied.\n",
+            e.file,
+            list(&orders)
+        );
+    }
     let target = spec.speed.rpm_range().1;
     if !matches!(spec.speed, SpeedProfile::Free { .. })
         && r.sim.error.is_none()

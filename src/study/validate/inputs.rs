@@ -132,6 +132,32 @@ pub(super) fn check_transient(
             }
         }
     }
+    if let Some(e) = &t.engine {
+        // The engine's order, highest order and ramp were checked when it was loaded.
+        check_excite(src, spec, mech, &at("engine.excite"), &e.excite)?;
+        let excited: Vec<(String, usize)> = if e.excite.is_empty() {
+            vec![(at("engine"), spin)]
+        } else {
+            e.excite
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    let path = at(&format!("engine.excite[{i}].joint"));
+                    let j = joint(&path, &x.joint)?;
+                    Ok((path, j))
+                })
+                .collect::<Result<_>>()?
+        };
+        for (path, j) in excited {
+            if prescribed && j == spin {
+                return Err(src.error(
+                    &path,
+                    "the spin joint's speed is prescribed: its drive would take up the engine torque (excite \
+                     another joint, or run the speed with `Torque(…)`)",
+                ));
+            }
+        }
+    }
     let m = &t.map;
     if !(8..=1024).contains(&m.samples_per_rev) {
         return Err(src.error(&at("map.samples_per_rev"), "need 8 to 1024 points per revolution"));

@@ -438,7 +438,8 @@ fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::HbmSpec) -> Re
     if !needs_orders && h.overlay.is_some() {
         return Err(src.error(&at("overlay"), "sweeps can only be overlaid on order branches"));
     }
-    if needs_amplitudes {
+    // An engine (resolved at load, where its fields are checked) gives the amplitudes.
+    if needs_amplitudes && h.engine.is_none() {
         torques(src, &at("amplitudes"), &h.amplitudes, false)?;
     } else if !h.amplitudes.is_empty() {
         return Err(src.error(&at("amplitudes"), format!("{what}: leave `amplitudes` out")));
