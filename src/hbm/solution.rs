@@ -204,16 +204,7 @@ impl HbmSolution {
     /// [`HbmSolution::element_torque`] at several orders `multiples·n` from one series: the
     /// amplitude at each, and the peak once.
     pub fn element_torques(&self, j: usize, k: f64, c: f64, multiples: &[f64]) -> (Vec<f64>, f64) {
-        let series = self.element_torque_series(j, k, c);
-        let amps = multiples
-            .iter()
-            .map(|&m| {
-                self.harmonic_of(m)
-                    .filter(|&h| h <= self.harmonics)
-                    .map_or(0.0, |h| series[2 * h - 1].hypot(series[2 * h]))
-            })
-            .collect();
-        (amps, self.series_peak(&series))
+        self.series_torques(&self.element_torque_series(j, k, c), multiples)
     }
 
     /// `max_τ |Σ_{h≥1} c_{2h−1} cos hτ + c_{2h} sin hτ|` of a series laid out like one

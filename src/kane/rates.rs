@@ -50,15 +50,7 @@ impl Kane {
             // A revolute root outside the world frame is the basis itself: its (cyclic) angle is
             // never turned into a sine and cosine.
             let mo = if root && !world && nd.kind == JointKind::Revolute {
-                JointMotion {
-                    cos: 1.0,
-                    sin: 0.0,
-                    origin: nd.at,
-                    omega: 1.0,
-                    velocity: Vec2::zeros(),
-                    bias_alpha: 0.0,
-                    bias_acc: Vec2::zeros(),
-                }
+                JointMotion { omega: 1.0, ..JointMotion::still(nd.at) }
             } else {
                 nd.kind.motion(nd.at, qj)
             };

@@ -261,15 +261,7 @@ impl Kane {
         let (qd, ud) = (&mut qd[..N], &mut ud[..N]);
         let g = self.gravity;
         // Everything that calls out (excitations, joint motions) first.
-        let mut mo = [JointMotion {
-            cos: 1.0,
-            sin: 0.0,
-            origin: Vec2::zeros(),
-            omega: 1.0,
-            velocity: Vec2::zeros(),
-            bias_alpha: 0.0,
-            bias_acc: Vec2::zeros(),
-        }; N];
+        let mut mo = [JointMotion { omega: 1.0, ..JointMotion::still(Vec2::zeros()) }; N];
         for (j, mo) in mo.iter_mut().enumerate() {
             if s.basis[j] {
                 mo.origin = nodes[j].at;

@@ -86,6 +86,23 @@ pub struct JointMotion {
     pub bias_acc: Vec2,
 }
 
+impl JointMotion {
+    /// The motion of a joint that does not move its child: the child's frame at `at`, parallel
+    /// to the parent's, with zero columns and bias terms.
+    #[inline]
+    pub fn still(at: Vec2) -> JointMotion {
+        JointMotion {
+            cos: 1.0,
+            sin: 0.0,
+            origin: at,
+            omega: 0.0,
+            velocity: Vec2::zeros(),
+            bias_alpha: 0.0,
+            bias_acc: Vec2::zeros(),
+        }
+    }
+}
+
 impl JointKind {
     /// Number of coordinates (and generalized speeds) the joint owns: 1, or 0 for `Fixed`.
     pub fn dof(self) -> usize {
@@ -150,15 +167,7 @@ impl JointKind {
     /// coordinate), for a joint at point `at` of the parent frame (m).
     #[inline]
     pub fn motion(self, at: Vec2, q: f64) -> JointMotion {
-        let still = JointMotion {
-            cos: 1.0,
-            sin: 0.0,
-            origin: at,
-            omega: 0.0,
-            velocity: Vec2::zeros(),
-            bias_alpha: 0.0,
-            bias_acc: Vec2::zeros(),
-        };
+        let still = JointMotion::still(at);
         match self {
             JointKind::Revolute => {
                 let (sin, cos) = q.sin_cos();
@@ -195,21 +204,12 @@ impl JointKind {
     /// as the path's own. For a kind other than `Path` the rollers stand still at `at`.
     #[inline]
     pub fn roller_motion(self, at: Vec2, q: f64, centre: Vec2, turn_rate: f64) -> JointMotion {
-        let mut out = JointMotion {
-            cos: 1.0,
-            sin: 0.0,
-            origin: at,
-            omega: 0.0,
-            velocity: Vec2::zeros(),
-            bias_alpha: 0.0,
-            bias_acc: Vec2::zeros(),
-        };
         if let JointKind::Path { shape, mount, .. } = self {
             let (ms, mc) = mount.sin_cos();
             let s = self.limited(q);
             let p = shape.at(s);
             let (sin, cos) = (turn_rate * s).sin_cos();
-            out = JointMotion {
+            return JointMotion {
                 cos,
                 sin,
                 origin: at + rotate_cs(mc, ms, 0.5 * (centre + p.position)),
@@ -219,7 +219,7 @@ impl JointKind {
                 bias_acc: rotate_cs(mc, ms, 0.5 * p.curvature),
             };
         }
-        out
+        JointMotion::still(at)
     }
 
     /// The kind with its parameters checked and normalised (a prismatic axis to unit length), or

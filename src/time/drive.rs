@@ -176,15 +176,19 @@ impl Drive {
         })
     }
 
+    /// The coordinate of joint `joint`, or an error saying which input (`what`) named a joint
+    /// without one (Fixed, or out of range).
+    fn coordinate_of(&self, joint: usize, what: &str) -> Result<usize> {
+        let mech = self.kane.mechanism();
+        mech.joints.get(joint).and_then(|_| mech.coordinate(joint)).ok_or_else(|| crate::error::Error::Model {
+            mechanism: mech.name.clone(),
+            message: format!("{what}: joint #{joint} has no coordinate (Fixed or out of range)"),
+        })
+    }
+
     /// Adds a speed governor (replacing any earlier one); its joint must have a coordinate.
     pub fn with_governor(mut self, g: Governor) -> Result<Self> {
-        let mech = self.kane.mechanism();
-        let c = mech.joints.get(g.joint).and_then(|_| mech.coordinate(g.joint)).ok_or_else(|| {
-            crate::error::Error::Model {
-                mechanism: mech.name.clone(),
-                message: format!("governor: joint #{} has no coordinate (Fixed or out of range)", g.joint),
-            }
-        })?;
+        let c = self.coordinate_of(g.joint, "governor")?;
         self.governor = Some((c, g));
         Ok(self)
     }
@@ -192,13 +196,7 @@ impl Drive {
     /// Adds engine torques (to any added before); each joint must have a coordinate.
     pub fn with_engine_torques(mut self, torques: Vec<EngineTorque>) -> Result<Self> {
         for t in torques {
-            let mech = self.kane.mechanism();
-            let c = mech.joints.get(t.joint).and_then(|_| mech.coordinate(t.joint)).ok_or_else(|| {
-                crate::error::Error::Model {
-                    mechanism: mech.name.clone(),
-                    message: format!("engine torque: joint #{} has no coordinate (Fixed or out of range)", t.joint),
-                }
-            })?;
+            let c = self.coordinate_of(t.joint, "engine torque")?;
             self.engines.push((c, t));
         }
         Ok(self)
