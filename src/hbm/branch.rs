@@ -299,7 +299,8 @@ mod tests {
     /// A branch point at order n with the given multipliers (the rest of the solution is inert).
     fn point(n: f64, multipliers: &[Complex<f64>]) -> BranchPoint {
         let max_modulus = multipliers.iter().map(|m| m.norm()).fold(0.0, f64::max);
-        let stability = Stability { multipliers: multipliers.to_vec(), max_modulus, stable: max_modulus < 1.0 };
+        let stability =
+            Stability { multipliers: multipliers.to_vec(), max_modulus, stable: max_modulus < 1.0, blocks: Vec::new() };
         let solution = HbmSolution {
             order: n,
             omega: 100.0,

@@ -108,7 +108,7 @@ pub use branch::{Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, F
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
-pub use stability::Stability;
+pub use stability::{FloquetBlock, Stability};
 
 use crate::kane::Kane;
 use crate::model::coupling::Couplings;
@@ -143,6 +143,14 @@ pub enum HbmError {
     Singular {
         /// Excitation order n.
         order: f64,
+    },
+    /// The eigenvalues of the monodromy matrix could not be found within the iteration cap.
+    #[error("harmonic balance at order {order}: the Floquet multipliers ({dim} × {dim} monodromy) did not converge")]
+    Eigen {
+        /// Excitation order n.
+        order: f64,
+        /// Size of the eigenproblem.
+        dim: usize,
     },
     /// The iteration produced a non-finite number.
     #[error("harmonic balance at order {order}: non-finite value (diverged)")]

@@ -32,15 +32,40 @@ use std::f64::consts::PI;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stability {
     /// The 2n_dof − 1 physical Floquet multipliers (the trivial +1 of the cyclic spin angle is
-    /// removed), by decreasing modulus.
+    /// removed), by decreasing modulus; a block's multipliers appear `multiplicity` times.
     pub multipliers: Vec<Complex<f64>>,
+    /// The groups the multipliers were computed in: one block holding all of them on the general
+    /// route; on a cyclic route the unison block and the non-unison (wavenumber) blocks, each
+    /// standing for `multiplicity` identical copies. Bifurcation test functions are evaluated per
+    /// block, so a multiplier repeated by symmetry crosses once, not `multiplicity` times.
+    pub blocks: Vec<FloquetBlock>,
     /// Largest modulus of the multipliers.
     pub max_modulus: f64,
     /// True when every multiplier lies inside the unit circle (asymptotically stable).
     pub stable: bool,
 }
 
+/// Floquet multipliers computed together from one block of the variational equations.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FloquetBlock {
+    /// What the block describes (`all`, `unison`, `wavenumbers 1..N-1`, …).
+    pub label: String,
+    /// How many identical copies of this block the full problem holds (1 on the general route).
+    pub multiplicity: usize,
+    /// The block's multipliers, by decreasing modulus.
+    pub multipliers: Vec<Complex<f64>>,
+}
+
 impl Stability {
+    /// A verdict from blocks: the multipliers of every block, repeated by its multiplicity.
+    pub fn from_blocks(blocks: Vec<FloquetBlock>) -> Self {
+        let mut multipliers: Vec<Complex<f64>> =
+            blocks.iter().flat_map(|b| (0..b.multiplicity).flat_map(|_| b.multipliers.iter().copied())).collect();
+        multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
+        let max_modulus = multipliers.first().map_or(0.0, |m| m.norm());
+        Self { multipliers, max_modulus, stable: max_modulus < 1.0, blocks }
+    }
+
     /// The multiplier of largest modulus (the critical one when unstable).
     pub fn critical(&self) -> Option<Complex<f64>> {
         self.multipliers.first().copied()
@@ -122,11 +147,28 @@ impl Hbm {
         // The cyclic spin angle's trivial +1 is not a physical multiplier; with gravity the spin
         // angle is a state like the others.
         let reduced = if self.cyclic { phi.remove_row(spin).remove_column(spin) } else { phi };
-        let mut multipliers: Vec<Complex<f64>> = reduced.complex_eigenvalues().iter().copied().collect();
+        let mut multipliers =
+            eigenvalues(reduced).ok_or(HbmError::Eigen { order, dim: 2 * n - usize::from(self.cyclic) })?;
         multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
-        let max_modulus = multipliers.first().map_or(0.0, |m| m.norm());
-        Ok(Stability { multipliers, max_modulus, stable: max_modulus < 1.0 })
+        Ok(Stability::from_blocks(vec![FloquetBlock { label: "all".into(), multiplicity: 1, multipliers }]))
     }
+}
+
+/// Eigenvalues of a real square matrix by a method bounded in work; None when it does not
+/// converge. faer's real Schur form (Hessenberg reduction, then a Francis double-shift QR with
+/// exceptional shifts and aggressive early deflation, as LAPACK's dhseqr) converges on the
+/// repeated multipliers that identical absorbers give and stops with an error after its
+/// iteration cap. nalgebra's `complex_eigenvalues` has neither: its QR never returned on four
+/// identical pendulums (issue 26), and capped it stops there without a result.
+pub(crate) fn eigenvalues(m: DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
+    let d = m.nrows();
+    if d == 0 {
+        return Some(Vec::new());
+    }
+    let f = faer::Mat::<f64>::from_fn(d, d, |i, j| m[(i, j)]);
+    let ev = f.eigenvalues().ok()?;
+    let out: Vec<Complex<f64>> = ev.iter().map(|c| Complex::new(c.re, c.im)).collect();
+    out.iter().all(|c| c.re.is_finite() && c.im.is_finite()).then_some(out)
 }
 
 /// Φ(T), row-major 2n × 2n, of `ż = 𝒜 z`, `𝒜 = [[0, I], [−K, −L]]`, by RK4 with steps
