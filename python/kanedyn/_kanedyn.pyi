@@ -356,6 +356,8 @@ class _Fold(TypedDict):
 class _Bifurcation(TypedDict):
     order: float
     kind: str
+    # "fold", "branch point", "period doubling" or "Neimark–Sacker".
+    classification: str
     after: int
     gains_stability: bool
     unstable_after: int

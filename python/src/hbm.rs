@@ -170,6 +170,7 @@ fn hbm_branch(
                     BifurcationKind::NeimarkSacker => "NeimarkSacker",
                 },
             )?;
+            d.set_item("classification", b.class.words())?;
             d.set_item("after", b.after)?;
             d.set_item("gains_stability", b.gains_stability)?;
             d.set_item("unstable_after", b.unstable_after)?;
@@ -243,7 +244,8 @@ pub struct HbmBranch {
     #[pyo3(get)]
     folds: Py<PyList>,
     /// Floquet multiplier crossings of the unit circle, each a dict: ``order``, ``kind``
-    /// (``"PlusOne"``, ``"PeriodDoubling"``, ``"NeimarkSacker"``), ``after``,
+    /// (``"PlusOne"``, ``"PeriodDoubling"``, ``"NeimarkSacker"``), ``classification`` (``"fold"``,
+    /// ``"branch point"``, ``"period doubling"``, ``"Neimark–Sacker"``), ``after``,
     /// ``gains_stability``, ``unstable_after`` (multipliers outside the circle after it).
     #[pyo3(get)]
     bifurcations: Py<PyList>,

@@ -117,6 +117,34 @@ pub enum BifurcationKind {
     NeimarkSacker,
 }
 
+/// What a bifurcation is, by the branch's geometry and the crossing multiplier: a +1 crossing is
+/// a fold when the parameter turns back there, otherwise a branch point (another branch crosses:
+/// symmetry breaking, such as the loss of unison of identical absorbers, or a transcritical
+/// point).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BifurcationClass {
+    /// A turning point of the parameter (a jump of a sweep).
+    Fold,
+    /// A +1 crossing where the parameter goes on: another branch crosses this one.
+    BranchPoint,
+    /// A real multiplier through −1: a branch of period-doubled motions starts.
+    PeriodDoubling,
+    /// A complex pair through the unit circle: quasi-periodic motions start.
+    NeimarkSacker,
+}
+
+impl BifurcationClass {
+    /// The class in words, for summaries.
+    pub fn words(self) -> &'static str {
+        match self {
+            BifurcationClass::Fold => "fold",
+            BifurcationClass::BranchPoint => "branch point",
+            BifurcationClass::PeriodDoubling => "period doubling",
+            BifurcationClass::NeimarkSacker => "Neimark–Sacker",
+        }
+    }
+}
+
 /// A crossing of the unit circle by Floquet multipliers between two successive branch points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bifurcation {
@@ -130,6 +158,8 @@ pub struct Bifurcation {
     pub parameter: f64,
     /// The kind, by the argument of the critical multiplier on the unstable side.
     pub kind: BifurcationKind,
+    /// Fold or branch point (for +1), period doubling or Neimark–Sacker.
+    pub class: BifurcationClass,
     /// True when the branch becomes stable at this change (in the direction of the branch).
     pub gains_stability: bool,
     /// Number of multipliers outside the unit circle after the change (0: stable).
@@ -274,15 +304,23 @@ pub(super) fn bifurcations(points: &[BranchPoint], folds: &[Fold]) -> Vec<Bifurc
         let (m_more, m_fewer) = (mu.norm(), partner.map_or(1.0, |p| p.norm()));
         let (ma, mb) = if na > nb { (m_more, m_fewer) } else { (m_fewer, m_more) };
         let f = if mb != ma { ((1.0 - ma) / (mb - ma)).clamp(0.0, 1.0) } else { 0.5 };
-        let (order, parameter) = match folds.iter().find(|fd| fd.after == i) {
-            Some(fd) if kind == BifurcationKind::PlusOne => (fd.order, fd.parameter),
+        let fold = folds.iter().find(|fd| fd.after == i).filter(|_| kind == BifurcationKind::PlusOne);
+        let (order, parameter) = match fold {
+            Some(fd) => (fd.order, fd.parameter),
             _ => (w[0].order + f * (w[1].order - w[0].order), w[0].parameter + f * (w[1].parameter - w[0].parameter)),
+        };
+        let class = match kind {
+            BifurcationKind::PlusOne if fold.is_some() => BifurcationClass::Fold,
+            BifurcationKind::PlusOne => BifurcationClass::BranchPoint,
+            BifurcationKind::PeriodDoubling => BifurcationClass::PeriodDoubling,
+            BifurcationKind::NeimarkSacker => BifurcationClass::NeimarkSacker,
         };
         out.push(Bifurcation {
             after: i,
             order,
             parameter,
             kind,
+            class,
             gains_stability: b.stable && !a.stable,
             unstable_after: nb,
         });

@@ -34,7 +34,7 @@
 
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
-use super::{Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
+use super::{BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 use super::{Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::kane::Kane;
 use crate::model::excitation::Harmonic;
@@ -52,7 +52,8 @@ pub struct ContinuationOptions {
     /// response is unstable only for n ≈ 3.081–3.095, which the default 0.1 can step over and
     /// 0.02 resolves, `tests/hbm.rs`); lower it where such stretches matter.
     pub ds_max: f64,
-    /// Largest number of points on a branch.
+    /// Largest number of points on a branch (a bound on the work: the paper's branches take
+    /// 60–800 points from `ds_max` 0.1 down to 0.001).
     pub max_points: usize,
     /// Newton iterations allowed per corrector.
     pub corrector_iter: usize,
@@ -71,7 +72,7 @@ impl Default for ContinuationOptions {
             ds: 0.01,
             ds_min: 1e-7,
             ds_max: 0.1,
-            max_points: 2000,
+            max_points: 20_000,
             corrector_iter: 14,
             min_cos: 0.98,
             stability: true,
@@ -279,12 +280,24 @@ impl Hbm {
         let mut s = 0.0;
         // The previous point's tangent and the chord to it.
         let mut prev: Option<(DVector<f64>, f64)> = None;
+        // A step already aimed at a suspected pair of crossings, and a step already tried past a
+        // point where the corrector failed at every smaller step, since the last accepted point.
+        let (mut aimed, mut jumped) = (false, false);
+        let aim_floor = 1e-3 * copts.ds.min(copts.ds_max);
+        let mut last_chord = copts.ds;
         let end = loop {
             if points.len() >= copts.max_points {
                 break BranchEnd::MaxPoints;
             }
             if ds < copts.ds_min {
-                break BranchEnd::StepTooSmall;
+                // The corrector fails at every step close to the last point (a branch point of
+                // several coinciding branches, where the bordered matrix is singular in more than
+                // one direction): try once to step across it, then give up.
+                if jumped {
+                    break BranchEnd::StepTooSmall;
+                }
+                jumped = true;
+                ds = (4.0 * last_chord).min(copts.ds_max);
             }
             // Quadratic predictor: the tangent's change over the last step estimates the branch's
             // curvature, which makes the predictor error third order in ds instead of second.
@@ -317,6 +330,28 @@ impl Hbm {
             }
             let chord = (&y - &cur.y).norm();
             let (l_new, l_old) = (y[m], cur.y[m]);
+            let cand = self.branch_point(&su, &y, Some(&t), s + chord, iters, copts.stability)?;
+            // A pair of crossings (two folds, or a multiplier out of the unit circle and back)
+            // inside one step leaves the test functions with the same sign at both ends; the
+            // quadratic through the last two points and this one shows the dip. Aim the step at
+            // the dip's extremum instead (at most twice per step): a crossing there is then a sign
+            // change between accepted points, whatever the step limit.
+            if !aimed
+                && points.len() >= 2
+                && let Some(s_dip) = dip(&points[points.len() - 2], &points[points.len() - 1], &cand)
+            {
+                // Not below a floor, and by at most 5× at a time: a zero of odd multiplicity
+                // above one (a multiplier repeated by symmetry) looks like a dip from either side
+                // and would otherwise draw the steps towards it without end.
+                let aimed_ds = ((s_dip - s) * ds / chord).max(0.2 * ds).max(aim_floor);
+                if aimed_ds < ds {
+                    aimed = true;
+                    ds = aimed_ds;
+                    continue;
+                }
+            }
+            aimed = false;
+            jumped = false;
             // Leaving the range: finish exactly at its end by a solve at fixed parameter.
             let past_target = dir * (l_new - l_to) >= 0.0;
             let past_start = dir * (l_new - l_from) < 0.0;
@@ -375,7 +410,8 @@ impl Hbm {
                 folds.push(fold);
             }
             s += chord;
-            points.push(self.branch_point(&su, &y, Some(&t), s, iters, copts.stability)?);
+            last_chord = chord;
+            points.push(cand);
             prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;
             if iters <= 7 && refreshes <= 1 {
@@ -395,8 +431,13 @@ impl Hbm {
     /// Locates each crossing that is not a fold by bisection along its segment: states from
     /// [`Branch::interpolate`] as guesses, solved at the fixed parameter (the segment holds no
     /// fold, so the parameter is monotone along it and the solve is regular), the count of
-    /// multipliers outside the unit circle deciding the side, 30 halvings (the segment to 1e-9).
-    /// A crossing whose bisection fails keeps its interpolated location.
+    /// multipliers outside the unit circle deciding the side, 20 halvings (the segment to 1e-6).
+    /// A branch point (+1) is then finished by a secant search (Illinois) on the determinant of
+    /// ∂R̂/∂x, which vanishes where the periodic problem has a second solution direction: its
+    /// location is then limited by the corrector's tolerance, not by the monodromy's accuracy
+    /// (~1e-7 in the multipliers, which moves a crossing by ~1e-6 in the order). A crossing
+    /// whose bisection fails keeps its interpolated location; when the determinant keeps its sign
+    /// (a multiplier repeated an even number of times by symmetry) the bisection's.
     fn refine_crossings(&mut self, su: &Setup, branch: &mut Branch) {
         for k in 0..branch.bifurcations.len() {
             let i = branch.bifurcations[k].after;
@@ -406,7 +447,7 @@ impl Hbm {
             let Some(before) = branch.points[i].solution.stability.as_ref().map(Stability::outside) else { continue };
             let (mut lo, mut hi) = (0.0, 1.0);
             let mut found = None;
-            for _ in 0..30 {
+            for _ in 0..20 {
                 let mid = 0.5 * (lo + hi);
                 let Some(guess) = branch.interpolate(i, mid) else { break };
                 let lambda = su.param.value(&guess) / su.p_ref;
@@ -419,12 +460,162 @@ impl Hbm {
                 }
                 found = Some((sol.order, lambda * su.p_ref));
             }
+            if branch.bifurcations[k].kind == BifurcationKind::PlusOne
+                && found.is_some()
+                && let Some(at) = self.secant_on_determinant(su, branch, i, lo, hi)
+            {
+                found = Some(at);
+            }
             if let Some((order, parameter)) = found {
                 let b = &mut branch.bifurcations[k];
                 (b.order, b.parameter) = (order, parameter);
             }
         }
     }
+
+    /// The solution at fraction σ of segment i, solved at the interpolated parameter, and the
+    /// sign and ln |·| of det ∂R̂/∂x there.
+    fn determinant_at(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<(HbmSolution, f64, f64)> {
+        let guess = branch.interpolate(i, sigma)?;
+        let lambda = su.param.value(&guess) / su.p_ref;
+        let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+        let x = self.unknowns_from(Some(&sol));
+        self.assemble(&x, &su.at(lambda), Some(su.param));
+        let lu = self.jac.clone().lu();
+        let u = lu.u();
+        let (mut sign, mut log) = (lu.p().determinant::<f64>(), 0.0);
+        for d in u.diagonal().iter() {
+            sign *= d.signum();
+            log += d.abs().ln();
+        }
+        log.is_finite().then_some((sol, sign, log))
+    }
+
+    /// det ∂R̂/∂x = 0 inside [lo, hi] of segment i (a bracket of the multiplier count's
+    /// bisection): the cubic through the determinant at lo, hi and one bracket width beyond each,
+    /// as a function of the parameter, and its root in the bracket; the order and parameter
+    /// there. Newton at fixed parameter does not converge to 1e-10 right at the branch point (its
+    /// Jacobian is singular there), so the determinant is sampled where it does and interpolated
+    /// in between: over a bracket of ~1e-6 of the segment it is linear to many digits. None when
+    /// the determinant has the same sign at lo and hi, or a solve fails.
+    fn secant_on_determinant(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
+        let w = hi - lo;
+        let mut samples = Vec::with_capacity(4);
+        for sigma in [lo - w, lo, hi, hi + w] {
+            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma.clamp(0.0, 1.0))?;
+            samples.push((su.lambda(&sol), sign, log, sol.order));
+        }
+        let (l_lo, l_hi) = (samples[1].0, samples[2].0);
+        if samples[1].1 == samples[2].1 || l_lo == l_hi {
+            return None;
+        }
+        // Values relative to the largest magnitude, so that the interpolation sees O(1) numbers.
+        let reference = samples.iter().map(|x| x.2).fold(f64::NEG_INFINITY, f64::max);
+        let pts: Vec<(f64, f64)> = samples.iter().map(|&(l, sg, lg, _)| (l, sg * (lg - reference).exp())).collect();
+        let cubic = |l: f64| {
+            pts.iter()
+                .enumerate()
+                .map(|(k, &(lk, fk))| {
+                    fk * pts
+                        .iter()
+                        .enumerate()
+                        .filter(|&(j, _)| j != k)
+                        .map(|(_, &(lj, _))| (l - lj) / (lk - lj))
+                        .product::<f64>()
+                })
+                .sum::<f64>()
+        };
+        let (mut a, mut b) = (l_lo, l_hi);
+        let fa = cubic(a);
+        if fa.signum() == cubic(b).signum() {
+            return None;
+        }
+        for _ in 0..100 {
+            let mid = 0.5 * (a + b);
+            if cubic(mid).signum() == fa.signum() {
+                a = mid;
+            } else {
+                b = mid;
+            }
+        }
+        let lambda = 0.5 * (a + b);
+        // The order: n itself on an order branch, the fixed order otherwise.
+        let order = if su.param == Parameter::Order { lambda } else { samples[1].3 };
+        Some((order, lambda * su.p_ref))
+    }
+}
+
+/// The test functions of a branch point whose sign changes mark the events of a branch, each as
+/// (sign, ln |value|) so that products over many multipliers neither overflow nor underflow:
+/// dλ/ds (folds), and per Floquet block Π(μ − 1) (a real multiplier through +1), Π(μ + 1)
+/// (through −1) and Π_{i<j}(μ_i μ_j − 1) (a complex pair through the unit circle: Neimark–Sacker;
+/// it also vanishes at a neutral saddle, μ_i μ_j = 1 with both real). Products of all the
+/// block's multipliers are symmetric functions of them, so they stay smooth where a complex
+/// pair meets on the real axis and splits.
+fn test_functions(p: &BranchPoint) -> Vec<(f64, f64)> {
+    let mut out = vec![(p.slope.signum(), p.slope.abs().ln())];
+    let Some(st) = &p.solution.stability else { return out };
+    let product = |fs: &mut dyn Iterator<Item = nalgebra::Complex<f64>>| {
+        let (mut sign, mut log) = (nalgebra::Complex::new(1.0, 0.0), 0.0);
+        for f in fs {
+            let r = f.norm();
+            log += r.ln();
+            if r > 0.0 {
+                sign *= f / r;
+            }
+        }
+        (sign.re.signum(), log)
+    };
+    let one = nalgebra::Complex::new(1.0, 0.0);
+    for b in &st.blocks {
+        let mu = &b.multipliers;
+        out.push(product(&mut mu.iter().map(|m| m - one)));
+        out.push(product(&mut mu.iter().map(|m| m + one)));
+        out.push(product(
+            &mut (0..mu.len()).flat_map(|i| (i + 1..mu.len()).map(move |j| (i, j))).map(|(i, j)| mu[i] * mu[j] - one),
+        ));
+    }
+    out
+}
+
+/// Where a test function is suspected to dip through zero and back between `b` and `c` (both
+/// with the same sign): the extremum of the quadratic through the three points' values (in
+/// arclength), when it lies between b and c and has the other sign. The values are taken
+/// relative to b's magnitude. The earliest such extremum over the test functions, as an
+/// arclength; None when no test function dips.
+fn dip(a: &BranchPoint, b: &BranchPoint, c: &BranchPoint) -> Option<f64> {
+    let (ta, tb, tc) = (test_functions(a), test_functions(b), test_functions(c));
+    if ta.len() != tb.len() || tb.len() != tc.len() {
+        return None;
+    }
+    let (s0, s1, s2) = (a.arclength, b.arclength, c.arclength);
+    if !(s0 < s1 && s1 < s2) {
+        return None;
+    }
+    let mut best: Option<f64> = None;
+    for ((fa, fb), fc) in ta.iter().zip(&tb).zip(&tc) {
+        if fb.0 != fc.0 || fb.0 == 0.0 || !(fa.1.is_finite() && fb.1.is_finite() && fc.1.is_finite()) {
+            continue;
+        }
+        let v = |f: &(f64, f64)| f.0 * (f.1 - fb.1).clamp(-700.0, 700.0).exp();
+        let (y0, y1, y2) = (v(fa), v(fb), v(fc));
+        // Newton's divided differences: q(s) = y1 + d1 (s − s1) + d2 (s − s1)(s − s2).
+        let d1 = (y2 - y1) / (s2 - s1);
+        let d2 = ((y2 - y1) / (s2 - s1) - (y1 - y0) / (s1 - s0)) / (s2 - s0);
+        if d2 == 0.0 || !d2.is_finite() {
+            continue;
+        }
+        // q'(s) = d1 + d2 (2s − s1 − s2) = 0.
+        let s_ext = 0.5 * (s1 + s2) - 0.5 * d1 / d2;
+        if !(s1 < s_ext && s_ext < s2) {
+            continue;
+        }
+        let q = y1 + d1 * (s_ext - s1) + d2 * (s_ext - s1) * (s_ext - s2);
+        if q.signum() != fb.0 {
+            best = Some(best.map_or(s_ext, |x: f64| x.min(s_ext)));
+        }
+    }
+    best
 }
 
 /// One-call convenience: the branch of periodic solutions of `kane`'s mechanism from order

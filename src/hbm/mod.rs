@@ -104,7 +104,9 @@ mod sample;
 mod solution;
 mod stability;
 
-pub use branch::{Bifurcation, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
+pub use branch::{
+    Bifurcation, BifurcationClass, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter,
+};
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;

@@ -316,7 +316,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 bifurcations: b
                     .bifurcations
                     .iter()
-                    .map(|x| (x.parameter * ax.to_unit, format!("{:?}", x.kind)))
+                    .map(|x| (x.parameter * ax.to_unit, x.class.words().to_string()))
                     .collect(),
                 wall_s,
                 end: format!("{:?}", b.end),
