@@ -7,7 +7,7 @@ use super::sweep::SweepRun;
 use super::table::Table;
 use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
 use crate::error::{Error, Result};
-use crate::hbm::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
+use crate::hbm::{Branch, BranchEnd, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
@@ -267,6 +267,24 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 }
             };
             let p = &b.points;
+            // A branch that could not go on is a failure of its own (its points are kept).
+            let stalled = match b.end {
+                BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
+                BranchEnd::MaxPoints => Some("it reached the largest number of points"),
+                BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
+            };
+            if let (Some(reason), Some(last)) = (stalled, p.last()) {
+                failures.push(format!(
+                    "{} branch{}, continued from {from}: stopped because {reason}, at {} = {:.7} {} after {} points \
+                     (the points found are kept)",
+                    spec.name,
+                    if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") },
+                    ax.column,
+                    last.parameter * ax.to_unit,
+                    ax.unit,
+                    p.len()
+                ));
+            }
             let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
             let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
             let mut add = |sol: &HbmSolution, stable: Option<bool>| {
