@@ -31,6 +31,17 @@
 //! in p jumps, so the fold orders of an order branch are the jump orders of the paper's up- and
 //! down-sweeps (Figs. 3, 4). Each detected fold is refined by a bracketing secant search
 //! (Illinois) on `dλ/ds = 0` along the arclength.
+//!
+//! Events at any step. Each point carries test functions: dλ/ds, and per Floquet block the
+//! products Π(μ − 1), Π(μ + 1) and Π_{i<j}(μ_i μ_j − 1), whose sign changes mark a fold or
+//! branch point, a period doubling and a Neimark–Sacker point (the classical test functions of
+//! periodic orbits, as in Seydel's *Practical Bifurcation and Stability Analysis*). A pair of
+//! crossings inside one step leaves every sign unchanged; the quadratic through the test
+//! function's last three values then has an extremum of the other sign inside the step, and the
+//! step is shortened to land on it (once per step, by at most 5×, not below a floor), so the two
+//! crossings become sign changes between accepted points. Crossings are bracketed by the count
+//! of multipliers outside the unit circle (bisection along the segment); a branch point is then
+//! located on det ∂R̂/∂x, which vanishes there exactly for the truncated problem.
 
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
@@ -47,10 +58,9 @@ pub struct ContinuationOptions {
     pub ds: f64,
     /// Smallest step before giving up.
     pub ds_min: f64,
-    /// Largest step. Multiplier crossings are found between successive points, so a stretch of
-    /// instability shorter than a step can pass unseen (two pendulums at 500 N·m: the unison
-    /// response is unstable only for n ≈ 3.081–3.095, which the default 0.1 can step over and
-    /// 0.02 resolves, `tests/hbm.rs`); lower it where such stretches matter.
+    /// Largest step. Events do not depend on it: a pair of crossings inside one step (two
+    /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
+    /// function, and the step is aimed at it (`tests/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
     pub ds_max: f64,
     /// Largest number of points on a branch (a bound on the work: the paper's branches take
     /// 60–800 points from `ds_max` 0.1 down to 0.001).

@@ -192,8 +192,8 @@ pub struct HbmSpec {
     #[serde(default)]
     pub parameter: HbmParameter,
     /// Largest arclength step of the continuation (default 0.1, in the norm of the Fourier
-    /// unknowns in rad and the scaled parameter). Stability changes are found between points, so
-    /// lower it to resolve short unstable stretches (see `ContinuationOptions::ds_max`).
+    /// unknowns in rad and the scaled parameter). Folds and multiplier crossings are found at any
+    /// step (see `ContinuationOptions::ds_max`); it sets how densely the branch is drawn.
     #[serde(default)]
     pub max_step: Option<f64>,
     /// The joints the oscillating torque acts at, each with its share and phase lead (default:
