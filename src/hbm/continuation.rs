@@ -285,6 +285,8 @@ impl Hbm {
         let mut cur = Cursor { y: y0, t: t0 };
         let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
         let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, sol0.iterations, copts.stability)?];
+        // The accepted points' arclengths and test functions (each computed once).
+        let mut tests = vec![(0.0, test_functions(&points[0]))];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
         let mut s = 0.0;
@@ -340,28 +342,6 @@ impl Hbm {
             }
             let chord = (&y - &cur.y).norm();
             let (l_new, l_old) = (y[m], cur.y[m]);
-            let cand = self.branch_point(&su, &y, Some(&t), s + chord, iters, copts.stability)?;
-            // A pair of crossings (two folds, or a multiplier out of the unit circle and back)
-            // inside one step leaves the test functions with the same sign at both ends; the
-            // quadratic through the last two points and this one shows the dip. Aim the step at
-            // the dip's extremum instead (at most twice per step): a crossing there is then a sign
-            // change between accepted points, whatever the step limit.
-            if !aimed
-                && points.len() >= 2
-                && let Some(s_dip) = dip(&points[points.len() - 2], &points[points.len() - 1], &cand)
-            {
-                // Not below a floor, and by at most 5× at a time: a zero of odd multiplicity
-                // above one (a multiplier repeated by symmetry) looks like a dip from either side
-                // and would otherwise draw the steps towards it without end.
-                let aimed_ds = ((s_dip - s) * ds / chord).max(0.2 * ds).max(aim_floor);
-                if aimed_ds < ds {
-                    aimed = true;
-                    ds = aimed_ds;
-                    continue;
-                }
-            }
-            aimed = false;
-            jumped = false;
             // Leaving the range: finish exactly at its end by a solve at fixed parameter.
             let past_target = dir * (l_new - l_to) >= 0.0;
             let past_start = dir * (l_new - l_from) < 0.0;
@@ -386,6 +366,29 @@ impl Hbm {
                 points.push(self.branch_point(&su, &y_end, Some(&t_end), s, iters, copts.stability)?);
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
             }
+            let cand = self.branch_point(&su, &y, Some(&t), s + chord, iters, copts.stability)?;
+            // A pair of crossings (two folds, or a multiplier out of the unit circle and back)
+            // inside one step leaves the test functions with the same sign at both ends; the
+            // quadratic through the last two points and this one shows the dip. Aim the step at
+            // the dip's extremum instead (once per step): a crossing there is then a sign
+            // change between accepted points, whatever the step limit.
+            if !aimed
+                && points.len() >= 2
+                && let Some(s_dip) =
+                    dip(&tests[tests.len() - 2], &tests[tests.len() - 1], &(cand.arclength, test_functions(&cand)))
+            {
+                // Not below a floor, and by at most 5× at a time: a zero of odd multiplicity
+                // above one (a multiplier repeated by symmetry) looks like a dip from either side
+                // and would otherwise draw the steps towards it without end.
+                let aimed_ds = ((s_dip - s) * ds / chord).max(0.2 * ds).max(aim_floor);
+                if aimed_ds < ds {
+                    aimed = true;
+                    ds = aimed_ds;
+                    continue;
+                }
+            }
+            aimed = false;
+            jumped = false;
             if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
                 let kind = if cur.t[m] > 0.0 { FoldKind::Maximum } else { FoldKind::Minimum };
                 let refined =
@@ -421,6 +424,7 @@ impl Hbm {
             }
             s += chord;
             last_chord = chord;
+            tests.push((cand.arclength, test_functions(&cand)));
             points.push(cand);
             prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;
@@ -590,20 +594,17 @@ fn test_functions(p: &BranchPoint) -> Vec<(f64, f64)> {
 
 /// Where a test function is suspected to dip through zero and back between `b` and `c` (both
 /// with the same sign): the extremum of the quadratic through the three points' values (in
-/// arclength), when it lies between b and c and has the other sign. The values are taken
-/// relative to b's magnitude. The earliest such extremum over the test functions, as an
-/// arclength; None when no test function dips.
-fn dip(a: &BranchPoint, b: &BranchPoint, c: &BranchPoint) -> Option<f64> {
-    let (ta, tb, tc) = (test_functions(a), test_functions(b), test_functions(c));
-    if ta.len() != tb.len() || tb.len() != tc.len() {
-        return None;
-    }
-    let (s0, s1, s2) = (a.arclength, b.arclength, c.arclength);
-    if !(s0 < s1 && s1 < s2) {
+/// arclength), when it lies between b and c and has the other sign. Each point is its arclength
+/// and [`test_functions`]; the values are taken relative to b's magnitude. The earliest such
+/// extremum over the test functions, as an arclength; None when no test function dips.
+fn dip(a: &(f64, Vec<(f64, f64)>), b: &(f64, Vec<(f64, f64)>), c: &(f64, Vec<(f64, f64)>)) -> Option<f64> {
+    let ((s0, ta), (s1, tb), (s2, tc)) = (a, b, c);
+    let (s0, s1, s2) = (*s0, *s1, *s2);
+    if ta.len() != tb.len() || tb.len() != tc.len() || !(s0 < s1 && s1 < s2) {
         return None;
     }
     let mut best: Option<f64> = None;
-    for ((fa, fb), fc) in ta.iter().zip(&tb).zip(&tc) {
+    for ((fa, fb), fc) in ta.iter().zip(tb).zip(tc) {
         if fb.0 != fc.0 || fb.0 == 0.0 || !(fa.1.is_finite() && fb.1.is_finite() && fc.1.is_finite()) {
             continue;
         }
@@ -642,4 +643,29 @@ pub fn continue_in_order(
     copts: &ContinuationOptions,
 ) -> Result<Branch, HbmError> {
     Hbm::new(kane, spin_joint, omega, harmonics, options)?.continue_in_order(n_from, n_to, None, copts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::dip;
+
+    /// A test function as (sign, ln |value|).
+    fn tf(v: f64) -> (f64, f64) {
+        (v.signum(), v.abs().ln())
+    }
+
+    /// `(s − 1)² − 0.01` is positive at s = −1, 0 and 2 but negative around s = 1: the dip is
+    /// found at the parabola's vertex, s = 1 (exact, the quadratic is the function); a monotone
+    /// function and one whose vertex keeps the sign give none.
+    #[test]
+    fn a_dip_between_points_is_found_at_its_vertex() {
+        let f = |s: f64| (s - 1.0) * (s - 1.0) - 0.01;
+        let p = |s: f64, g: &dyn Fn(f64) -> f64| (s, vec![tf(g(s))]);
+        let at = dip(&p(-1.0, &f), &p(0.0, &f), &p(2.0, &f)).unwrap();
+        assert!((at - 1.0).abs() < 1e-12, "{at}");
+        let g = |s: f64| 1.0 + s;
+        assert_eq!(dip(&p(-0.5, &g), &p(0.0, &g), &p(2.0, &g)), None);
+        let h = |s: f64| (s - 1.0) * (s - 1.0) + 0.01;
+        assert_eq!(dip(&p(-1.0, &h), &p(0.0, &h), &p(2.0, &h)), None);
+    }
 }

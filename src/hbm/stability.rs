@@ -154,21 +154,29 @@ impl Hbm {
     }
 }
 
-/// Eigenvalues of a real square matrix by a method bounded in work; None when it does not
-/// converge. faer's real Schur form (Hessenberg reduction, then a Francis double-shift QR with
-/// exceptional shifts and aggressive early deflation, as LAPACK's dhseqr) converges on the
-/// repeated multipliers that identical absorbers give and stops with an error after its
-/// iteration cap. nalgebra's `complex_eigenvalues` has neither: its QR never returned on four
-/// identical pendulums (issue 26), and capped it stops there without a result.
+/// Eigenvalues of a real square matrix by methods bounded in work; None when neither converges.
+/// First nalgebra's real Schur form with an iteration cap (30 sweeps per row): on the sizes of
+/// the paper's absorbers it costs a third of faer's instructions (`BENCHMARKS.md`). Its Francis
+/// QR has no exceptional shifts, though, and never returned on the repeated multipliers of 4
+/// identical pendulums at 500 N·m (issue 26); where the cap stops it, faer's real Schur form
+/// (Hessenberg reduction, Francis double-shift QR with exceptional shifts and aggressive early
+/// deflation, as LAPACK's dhseqr, itself capped) takes over.
 pub(crate) fn eigenvalues(m: DMatrix<f64>) -> Option<Vec<Complex<f64>>> {
     let d = m.nrows();
     if d == 0 {
         return Some(Vec::new());
     }
+    let finite = |v: &[Complex<f64>]| v.iter().all(|c| c.re.is_finite() && c.im.is_finite());
+    if let Some(s) = nalgebra::Schur::try_new(m.clone(), f64::EPSILON, 30 * d) {
+        let out: Vec<Complex<f64>> = s.complex_eigenvalues().iter().copied().collect();
+        if finite(&out) {
+            return Some(out);
+        }
+    }
     let f = faer::Mat::<f64>::from_fn(d, d, |i, j| m[(i, j)]);
     let ev = f.eigenvalues().ok()?;
     let out: Vec<Complex<f64>> = ev.iter().map(|c| Complex::new(c.re, c.im)).collect();
-    out.iter().all(|c| c.re.is_finite() && c.im.is_finite()).then_some(out)
+    finite(&out).then_some(out)
 }
 
 /// Φ(T), row-major 2n × 2n, of `ż = 𝒜 z`, `𝒜 = [[0, I], [−K, −L]]`, by RK4 with steps
