@@ -245,3 +245,49 @@ fn two_pendulums_lose_unison_on_the_cyclic_route() {
     assert!(st.blocks[0].multipliers.iter().all(|m| m.norm() < 1.0), "{:?}", st.blocks[0]);
     assert!(st.blocks[1].multipliers.iter().any(|m| m.norm() > 1.0 && m.im == 0.0 && m.re > 0.0), "{:?}", st.blocks[1]);
 }
+
+/// A study on four identical pendulums (examples/cpva4.ron) takes the cyclic route on its own,
+/// says so per branch in the summary and in the results, and its branches are full-size: the
+/// rotor's accelerations equal those of the same study on the single pendulum of
+/// examples/cpva.ron (the general route), point by point to 1e-9 relative (the same bound
+/// argument as above, through the summary's rounding-free numbers).
+#[test]
+fn a_study_reports_its_route_per_branch() {
+    use kanedyn::io::Source;
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = |mech: &str| {
+        format!(
+            r#"Study(
+    name: "cyclic_route",
+    mechanism: "{mech}",
+    spin_joint: "spin",
+    response_body: "rotor",
+    analyses: [
+        HarmonicBalance(name: "hbm", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [500.0], harmonics: 10),
+    ],
+)"#
+        )
+    };
+    let mut runs = Vec::new();
+    for mech in ["cpva4.ron", "cpva.ron"] {
+        let src = Source::from_text("examples/cyclic_route_test.ron", &text(mech));
+        let study = Study::from_source(src, &LoadOptions::default()).unwrap();
+        let out = std::env::temp_dir().join(format!("kanedyn_cyclic_{mech}_{}", std::process::id()));
+        let r = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+        std::fs::remove_dir_all(&out).ok();
+        runs.push(r);
+    }
+    let (four, one) = (&runs[0], &runs[1]);
+    assert_eq!(four.hbm.len(), 2);
+    for (b, b1) in four.hbm.iter().zip(&one.hbm) {
+        assert_eq!((b.route.as_str(), b1.route.as_str()), ("cyclic", "general"));
+        assert!(b.route_detail.contains("4 × pivot_1…pivot_4 on rotor"), "{}", b.route_detail);
+        assert_eq!(b.accel[0].len(), b1.accel[0].len());
+        for (x, y) in b.accel[0].iter().zip(&b1.accel[0]) {
+            assert!((x - y).abs() <= 1e-9 * y.abs(), "{x} vs {y}");
+        }
+        assert_eq!(b.elements.len(), b1.elements.len());
+    }
+    assert!(four.summary.contains("| route |"), "{}", four.summary);
+    assert!(four.summary.contains("cyclic (4 × pivot_1…pivot_4 on rotor)"), "{}", four.summary);
+}

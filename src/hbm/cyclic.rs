@@ -645,3 +645,77 @@ fn empty() -> HbmSolution {
         stability: None,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::excitation::rpm_to_rad_s;
+    use crate::model::speeds::Speeds;
+
+    /// The structure the non-unison block rests on (module docs, item 2), read from the general
+    /// problem's per-sample A, B, C at a unison solution of three pendulums, for both speed
+    /// choices: a pendulum's rows have no entry in another pendulum's columns, every pendulum
+    /// has the same diagonal block, and the rotor's row has the same entry in every pendulum's
+    /// column (it sees their sum). The cross entries are exactly zero (a pendulum's row does not
+    /// read another's coordinates); the equal ones differ by the rounding of the central
+    /// differences (ε/h ≈ 1e-10 times the row's terms, measured ≤ 1.3e-9 of the largest entry
+    /// with joint rates): bound 1e-8 of the largest entry.
+    #[test]
+    fn members_couple_only_through_the_sum_the_parent_sees() {
+        for speeds in [Speeds::AbsoluteAngularVelocities, Speeds::JointRates] {
+            let mut mech = crate::cpva::CpvaParams::canonical().with_pendulums(3).mechanism(None).unwrap();
+            mech.speeds = speeds;
+            let kane = Kane::new(&mech).unwrap();
+            let h = [Harmonic { multiple: 1.0, amplitude: 200.0, phase: 0.0 }];
+            let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, HbmOptions::default()).unwrap();
+            let sol = hbm.solve(3.05, None).unwrap();
+            hbm.stability(&sol).unwrap();
+            let n = hbm.n;
+            let nn = n * n;
+            let largest = hbm.samples.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let tol = 1e-8 * largest;
+            let mut worst = 0.0f64;
+            for abc in hbm.samples.chunks_exact(3 * nn) {
+                for m in abc.chunks_exact(nn) {
+                    let e = |i: usize, k: usize| m[i * n + k];
+                    for j in 1..n {
+                        for k in 1..n {
+                            assert!(j == k || e(j, k) == 0.0, "{speeds:?}: entry ({j}, {k}) = {:e}", e(j, k));
+                        }
+                        worst = worst.max((e(j, j) - e(1, 1)).abs());
+                        worst = worst.max((e(0, j) - e(0, 1)).abs());
+                        worst = worst.max((e(j, 0) - e(1, 0)).abs());
+                    }
+                }
+            }
+            assert!(worst <= tol, "{speeds:?}: {worst:e} of {largest:e}");
+        }
+    }
+
+    /// The reduced mechanism of a set of four: the rotor and one pendulum with four times the
+    /// mass, inertia and damper of one member (the single pendulum of the same rotor), the
+    /// coordinates of the three others mapped to it.
+    #[test]
+    fn the_reduced_mechanism_is_the_single_pendulum() {
+        let p = crate::cpva::CpvaParams::canonical();
+        let four = p.with_pendulums(4).mechanism(None).unwrap();
+        let one = p.mechanism(None).unwrap();
+        let kane = Kane::new(&four).unwrap();
+        let Route::Cyclic { sets } = detect(&four, kane.joint_torques(), 0, &[0]) else { panic!("not cyclic") };
+        assert_eq!(sets[0].members, ["pivot_1", "pivot_2", "pivot_3", "pivot_4"]);
+        assert_eq!(sets[0].member_dof, 1);
+        let red = reduce(&four, kane.joint_torques(), &sets);
+        assert_eq!(red.coord_map, [0, 1, 1, 1, 1]);
+        assert_eq!(red.coord_back, [0, 1]);
+        assert_eq!(red.non_unison[0].coordinates, [1]);
+        assert_eq!(red.non_unison[0].multiplicity, 3);
+        assert_eq!(red.mech.bodies.len(), 2);
+        for (a, b) in red.mech.bodies.iter().zip(&one.bodies) {
+            assert!((a.inertia.mass - b.inertia.mass).abs() <= 1e-15 * b.inertia.mass);
+            assert!((a.inertia.i_com - b.inertia.i_com).abs() <= 1e-15 * b.inertia.i_com);
+            assert!((a.inertia.com - b.inertia.com).norm() <= 1e-15);
+        }
+        assert!((red.mech.joints[1].damper - one.joints[1].damper).abs() <= 1e-18);
+        assert_eq!(red.mech.joints[1].at, one.joints[1].at);
+    }
+}
