@@ -112,6 +112,20 @@ fn every_count_finishes_and_its_unison_branch_is_the_one_pendulum_branch() {
                 hbm.route()
             );
             assert!(diff <= 1e-10, "N = {n}, {torque} N·m: {diff:e}");
+            // At 500 N·m two or more pendulums lose unison (n ≈ 3.08137 to 3.09461): the cyclic
+            // route sees both +1 crossings in the non-unison block at the default step too.
+            if torque == 500.0 && n > 1 {
+                let off: Vec<f64> = b
+                    .bifurcations
+                    .iter()
+                    .filter(|x| x.kind == BifurcationKind::PlusOne && !b.folds.iter().any(|f| f.after == x.after))
+                    .map(|x| x.order)
+                    .collect();
+                assert_eq!(off.len(), 2, "N = {n}: {:?}", b.bifurcations);
+                for (x, quoted) in off.iter().zip([3.08137, 3.09461]) {
+                    assert!((x - quoted).abs() <= 1e-5, "N = {n}: {x} vs {quoted}");
+                }
+            }
             assert!(worst_mu <= 1e-9, "N = {n}, {torque} N·m: {worst_mu:e}");
         }
     }
@@ -290,4 +304,69 @@ fn a_study_reports_its_route_per_branch() {
     }
     assert!(four.summary.contains("| route |"), "{}", four.summary);
     assert!(four.summary.contains("cyclic (4 × pivot_1…pivot_4 on rotor)"), "{}", four.summary);
+}
+
+/// Identical path absorbers (translating, on the tautochronic epicycloid of
+/// examples/paths/epicycloid.ron, end stops included) mounted at 0, 2π/3 and 4π/3: the route
+/// finds the set through the path mounts (their joint point is the rotor axis), its unison
+/// branch is the single absorber's of the example (the stops' stiffness and damping split by 3
+/// round back to the example's: bound 1e-10 as above), and its multipliers are the general
+/// solver's on the three absorbers at every point (bound 1e-8 as above).
+#[test]
+fn identical_path_absorbers_take_the_cyclic_route() {
+    use kanedyn::io::{ReadPolicy, Source};
+    let absorber = |k: usize, mount: f64| {
+        format!(
+            r#"Joint(name: "path_{k}", kind: Path(shape: Epicycloid(rho0: 0.18520936507683606, n_tilde: 3.11), mount: {mount:?}),
+                parent: "rotor", child: "absorber_{k}", at: (0.0, 0.0), damper: 0.72,
+                stops: (lower: -0.0165, upper: 0.0165, stiffness: {:?}, damping: {:?})),"#,
+            1.0e9 / 3.0,
+            4.6e4 / 3.0
+        )
+    };
+    let third = 2.0 * std::f64::consts::PI / 3.0;
+    let text = format!(
+        r#"Mechanism(
+    name: "three_paths",
+    speeds: AbsoluteAngularVelocities,
+    bodies: [
+        Body(name: "rotor", mass: 110.0, com: (0.0, 0.0), inertia: 3.443504355127701),
+        Body(name: "absorber_1", mass: 2.0, com: (0.0, 0.0), inertia: 0.00007200000000000001),
+        Body(name: "absorber_2", mass: 2.0, com: (0.0, 0.0), inertia: 0.00007200000000000001),
+        Body(name: "absorber_3", mass: 2.0, com: (0.0, 0.0), inertia: 0.00007200000000000001),
+    ],
+    joints: [
+        Joint(name: "spin", kind: Revolute, parent: "ground", child: "rotor", at: (0.0, 0.0)),
+        {} {} {}
+    ],
+    loads: [GroundDamper(body: "rotor", c: 5e-3)],
+)"#,
+        absorber(1, 0.0),
+        absorber(2, third),
+        absorber(3, 2.0 * third)
+    );
+    let three =
+        Mechanism::from_source(&Source::from_text("three_paths.ron", &text), &ReadPolicy::unrestricted()).unwrap();
+    let one = Mechanism::from_file(std::path::Path::new("examples/paths/epicycloid.ron")).unwrap();
+    let copts = ContinuationOptions::default();
+    let mut cyc = routed(&three, 40.0);
+    assert_eq!(sets(cyc.route()), vec![3], "{}", cyc.route());
+    let b = cyc.continue_in_order(2.9, 3.3, None, &copts).unwrap();
+    let b1 = routed(&one, 40.0).continue_in_order(2.9, 3.3, None, &copts).unwrap();
+    let diff = branch_difference(&b, &b1).expect("same points");
+    let kane = Kane::new(&three).unwrap();
+    let mut general_hbm = Hbm::new(&kane, 0, omega(), &single(40.0), HbmOptions::default()).unwrap();
+    let mut worst_mu = 0.0f64;
+    for p in &b.points {
+        let sol = general_hbm.solve(p.order, Some(&p.solution)).unwrap_or_else(|_| p.solution.clone());
+        let general = general_hbm.stability(&sol).unwrap();
+        worst_mu =
+            worst_mu.max(multiset_distance(&p.solution.stability.as_ref().unwrap().multipliers, &general.multipliers));
+    }
+    println!(
+        "three path absorbers: {} points, branch vs one absorber {diff:.1e}, multipliers vs general {worst_mu:.1e}",
+        b.points.len()
+    );
+    assert!(diff <= 1e-10, "{diff:e}");
+    assert!(worst_mu <= 1e-8, "{worst_mu:e}");
 }
