@@ -271,8 +271,11 @@ pub fn detect(mech: &Mechanism, torques: &[JointTorque], spin_joint: usize, inpu
         return general("gears");
     }
     let mut sets = Vec::new();
+    // Joints inside a set's members: a set nested in another's members is left to the general
+    // equations of the reduced problem (its parent is then a representative), not reduced twice.
+    let mut in_set = vec![false; mech.joints.len()];
     for p in 0..mech.bodies.len() {
-        if !fixed_origin(mech, p) {
+        if in_set[p] || !fixed_origin(mech, p) {
             continue;
         }
         let children: Vec<usize> = (0..mech.joints.len()).filter(|&j| mech.joints[j].parent == Some(p)).collect();
@@ -304,6 +307,9 @@ pub fn detect(mech: &Mechanism, torques: &[JointTorque], spin_joint: usize, inpu
                     return Route::General { reason: format!("mistuned: {why}") };
                 }
             }
+            for &j in members.iter().flat_map(|s| s.iter()) {
+                in_set[j] = true;
+            }
             sets.push(CyclicSet {
                 parent: mech.bodies[p].name.clone(),
                 members: members.iter().map(|s| mech.joints[s[0]].name.clone()).collect(),
@@ -318,7 +324,6 @@ pub fn detect(mech: &Mechanism, torques: &[JointTorque], spin_joint: usize, inpu
 #[derive(Debug, Clone)]
 struct Reduction {
     mech: Mechanism,
-    torques: Vec<JointTorque>,
     /// Full joint → reduced joint (a member's joint → the representative's).
     joint_map: Vec<usize>,
     /// Full coordinate → reduced coordinate.
@@ -419,10 +424,8 @@ fn reduce(mech: &Mechanism, torques: &[JointTorque], sets: &[CyclicSet]) -> Redu
             JointTorque { joint: new_index[t.joint], excitation: e }
         })
         .collect();
-    out.loads.joint_torques.retain(|t| !removed[t.joint]);
-    for t in &mut out.loads.joint_torques {
-        t.joint = new_index[t.joint];
-    }
+    // The evaluator's torques (they may differ from the file's), scaled and renumbered.
+    out.loads.joint_torques = reduced_torques;
     let keep: Vec<usize> = (0..nj).filter(|&j| !removed[j]).collect();
     out.bodies = keep.iter().map(|&j| out.bodies[j].clone()).collect();
     out.joints = keep.iter().map(|&j| out.joints[j].clone()).collect();
@@ -455,7 +458,7 @@ fn reduce(mech: &Mechanism, torques: &[JointTorque], sets: &[CyclicSet]) -> Redu
             multiplicity: n - 1,
         })
         .collect();
-    Reduction { mech: out, torques: reduced_torques, joint_map, coord_map, coord_back, non_unison }
+    Reduction { mech: out, joint_map, coord_map, coord_back, non_unison }
 }
 
 /// A harmonic-balance problem with its route chosen ([`detect`]): on the cyclic route the
@@ -490,10 +493,7 @@ impl RoutedHbm {
             return Self::general(kane, spin_joint, omega, forcing, inputs, options, route);
         };
         let red = reduce(mech, kane.joint_torques(), sets);
-        let mut rkane = Kane::new(&red.mech).map_err(|e| HbmError::Invalid(format!("reduced mechanism: {e}")))?;
-        for t in &red.torques {
-            rkane.set_joint_torque(t.joint, t.excitation.clone());
-        }
+        let rkane = Kane::new(&red.mech).map_err(|e| HbmError::Invalid(format!("reduced mechanism: {e}")))?;
         let rinputs: Vec<(usize, f64, f64)> = inputs.iter().map(|&(j, s, p)| (red.joint_map[j], s, p)).collect();
         let mut hbm =
             Hbm::with_speed_forcing(&rkane, red.joint_map[spin_joint], omega, forcing.0, forcing.1, &rinputs, options)?;
@@ -560,8 +560,28 @@ impl RoutedHbm {
     /// [`Hbm::stability`] of a full-size solution (in unison on the cyclic route): on the cyclic
     /// route its blocks are the unison one and one per set, each with its multiplicity.
     pub fn stability(&mut self, sol: &HbmSolution) -> Result<Stability, HbmError> {
+        if !self.in_unison(sol) {
+            return Err(HbmError::Invalid(
+                "cyclic route: the solution is not in unison (its stability needs the general route)".into(),
+            ));
+        }
         let sol = self.restrict(sol);
         self.hbm.stability(&sol)
+    }
+
+    /// Whether every member of each set has its representative's coefficients (to 1e-12 rad
+    /// relative to the largest coefficient); always true on the general route.
+    fn in_unison(&self, sol: &HbmSolution) -> bool {
+        let Some(red) = &self.reduction else { return true };
+        let nb = 2 * sol.harmonics + 1;
+        if sol.coefficients.len() != red.coord_map.len() * nb {
+            return true;
+        }
+        let scale = sol.coefficients.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        red.coord_map.iter().enumerate().all(|(c, &r)| {
+            let rep = red.coord_back[r];
+            (0..nb).all(|h| (sol.coefficients[c * nb + h] - sol.coefficients[rep * nb + h]).abs() <= 1e-12 * scale)
+        })
     }
 
     /// [`Hbm::continue_in`] on the route, the branch full-size.
