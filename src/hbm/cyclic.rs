@@ -77,7 +77,7 @@ pub struct CyclicSet {
     pub parent: String,
     /// The members' inboard joints, the representative (the first in the mechanism) first.
     pub members: Vec<String>,
-    /// Coordinates of one member (m): its non-unison Floquet block is 2m × 2m.
+    /// Number m of coordinates of one member: its non-unison Floquet block is 2m × 2m.
     pub member_dof: usize,
 }
 
