@@ -80,7 +80,9 @@ impl Stability {
 impl Hbm {
     /// Floquet multipliers of a solution of this problem (see the module docs of
     /// [`crate::hbm`]): monodromy by RK4 over the variational equations with
-    /// [`super::HbmOptions::stability_samples`] samples per period.
+    /// [`super::HbmOptions::stability_samples`] samples per period. One block (`all`) on the
+    /// general route; on the reduced problem of the cyclic route ([`super::RoutedHbm`]) the
+    /// `unison` block and one non-unison block per identical set, each from its own monodromy.
     pub fn stability(&mut self, sol: &HbmSolution) -> Result<Stability, HbmError> {
         let ns = self.opts.stability_samples;
         let order = sol.order;
