@@ -1,14 +1,17 @@
 //! `kanedyn.hbm_branch`: a branch of periodic steady states by harmonic balance, continued in
 //! the excitation order, with Floquet stability, folds and bifurcations, as NumPy arrays.
 //!
-//! The branch is the library's: [`Hbm::new`] and [`Hbm::continue_in`] with the options a
+//! The branch is the library's: [`RoutedHbm::new`] (the route a study takes: identical
+//! absorbers by one scaled representative) and [`RoutedHbm::continue_in`] with the options a
 //! study's `HarmonicBalance` uses, and the amplitudes read by
 //! [`kanedyn::study::hbm::body_accel`], so the arrays equal the study's CSV columns.
 
 use crate::arrays::{check_number, matrix, vector};
 use crate::errors::{EngineError, argument_error, guard, message_of, model_error, to_py};
 use crate::mechanism::Mechanism;
-use kanedyn::hbm::{BifurcationKind, BranchEnd, ContinuationOptions, FoldKind, Hbm, HbmError, HbmOptions, Parameter};
+use kanedyn::hbm::{
+    BifurcationKind, BranchEnd, ContinuationOptions, FoldKind, HbmError, HbmOptions, Parameter, RoutedHbm,
+};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
 use kanedyn::study::hbm::body_accel;
@@ -133,7 +136,9 @@ fn hbm_branch(
             _ => EngineError::new_err(message_of(&e)),
         };
         let opts = HbmOptions { harmonics, ..HbmOptions::default() };
-        let mut hbm = Hbm::new(&kane, spin, rpm_to_rad_s(rpm), &excitation, opts).map_err(hbm_err)?;
+        let forcing = (&excitation[..], &[][..]);
+        let mut hbm =
+            RoutedHbm::new(&kane, spin, rpm_to_rad_s(rpm), forcing, &[(spin, 1.0, 0.0)], opts).map_err(hbm_err)?;
         // The study's continuation options (study::hbm::branch_in).
         let defaults = ContinuationOptions::default();
         let copts = ContinuationOptions { ds_max: max_step, ds: defaults.ds.min(max_step), stability, ..defaults };
@@ -199,6 +204,7 @@ fn hbm_branch(
             .to_string(),
             newton_iterations: branch.newton_iterations,
             wall_s,
+            route: hbm.route().to_string(),
             rpm,
             amplitude,
             harmonics,
@@ -259,6 +265,10 @@ pub struct HbmBranch {
     /// Wall time of the continuation, s.
     #[pyo3(get)]
     wall_s: f64,
+    /// How the branch was solved, in words: ``"cyclic (…)"`` (identical absorbers by one scaled
+    /// representative, the sets named) or ``"general (…)"`` with the reason.
+    #[pyo3(get)]
+    route: String,
     /// Mean speed, rpm.
     #[pyo3(get)]
     rpm: f64,

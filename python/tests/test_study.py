@@ -218,7 +218,7 @@ def test_results_json_numbers_equal_the_summary(cli_run):
         ]
         compared += 1
 
-    # Harmonic balance: per branch the counts, folds, bifurcations, jumps and time.
+    # Harmonic balance: per branch the counts, route, folds, bifurcations, jumps and time.
     hbm = by_name["hbm"]
     _, [rows] = tables_of(summary, "Harmonic balance `hbm`")
     for row, b, f in zip(rows, hbm["result"]["branches"], hbm["findings"]["branches"]):
@@ -227,6 +227,7 @@ def test_results_json_numbers_equal_the_summary(cli_run):
             rust_display(b["amplitude"]),
             rust_display(b["from"]),
             str(f["points"]),
+            b["route_detail"],
             f"{f['stable']} / {f['unstable']}",
             ", ".join(f"{x:.5f}" for x in b["folds"]) or "none",
             ", ".join(f"{k} at {o:.5f}" for o, k in b["bifurcations"]) or "none",

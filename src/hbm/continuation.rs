@@ -294,7 +294,7 @@ impl Hbm {
         let mut prev: Option<(DVector<f64>, f64)> = None;
         // A step already aimed at a suspected pair of crossings, and a step already tried past a
         // point where the corrector failed at every smaller step, since the last accepted point.
-        let (mut aimed, mut jumped) = (false, false);
+        let (mut aimed, mut jumped, mut misses): (Option<usize>, bool, Vec<u32>) = (None, false, Vec::new());
         let aim_floor = 1e-3 * copts.ds.min(copts.ds_max);
         let mut last_chord = copts.ds;
         let end = loop {
@@ -341,6 +341,13 @@ impl Hbm {
                 continue;
             }
             let chord = (&y - &cur.y).norm();
+            // The chord must follow the tangent as the tangents follow each other: a corrector
+            // that lands on another sheet of an S-shaped branch (both sheets with the same
+            // direction there, so the tangents agree) leaves along a chord at a large angle.
+            if chord > 0.0 && (&y - &cur.y).dot(&cur.t) < copts.min_cos * chord && ds > copts.ds_min {
+                ds *= 0.5;
+                continue;
+            }
             let (l_new, l_old) = (y[m], cur.y[m]);
             // Leaving the range: finish exactly at its end by a solve at fixed parameter.
             let past_target = dir * (l_new - l_to) >= 0.0;
@@ -372,22 +379,43 @@ impl Hbm {
             // quadratic through the last two points and this one shows the dip. Aim the step at
             // the dip's extremum instead (once per step): a crossing there is then a sign
             // change between accepted points, whatever the step limit.
-            if !aimed
-                && points.len() >= 2
-                && let Some(s_dip) =
-                    dip(&tests[tests.len() - 2], &tests[tests.len() - 1], &(cand.arclength, test_functions(&cand)))
+            let cand_tests = (cand.arclength, test_functions(&cand));
+            let predicted = if points.len() >= 2 {
+                dip(&tests[tests.len() - 2], &tests[tests.len() - 1], &cand_tests)
+            } else {
+                Vec::new()
+            };
+            misses.resize(cand_tests.1.len(), 0);
+            let target = predicted.iter().filter(|(j, _)| misses[*j] < 3).min_by(|a, b| a.1.total_cmp(&b.1)).copied();
+            if aimed.is_none()
+                && let Some((j, s_dip)) = target
             {
                 // Not below a floor, and by at most 5× at a time: a zero of odd multiplicity
                 // above one (a multiplier repeated by symmetry) looks like a dip from either side
                 // and would otherwise draw the steps towards it without end.
                 let aimed_ds = ((s_dip - s) * ds / chord).max(0.2 * ds).max(aim_floor);
                 if aimed_ds < ds {
-                    aimed = true;
+                    aimed = Some(j);
                     ds = aimed_ds;
                     continue;
                 }
             }
-            aimed = false;
+            // An aimed step that showed no sign change of its test function was a false alarm (a
+            // zero of higher multiplicity, or a near miss); after three in a row that function
+            // is not aimed at until it changes sign or stops dipping, so such a zero cannot hold
+            // the steps small. Each test function keeps its own count.
+            if let Some((_, last)) = tests.last()
+                && last.len() == cand_tests.1.len()
+            {
+                for (j, m) in misses.iter_mut().enumerate() {
+                    if last[j].0 != cand_tests.1[j].0 || !predicted.iter().any(|(k, _)| *k == j) {
+                        *m = 0;
+                    } else if aimed == Some(j) {
+                        *m += 1;
+                    }
+                }
+            }
+            aimed = None;
             jumped = false;
             if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
                 let kind = if cur.t[m] > 0.0 { FoldKind::Maximum } else { FoldKind::Minimum };
@@ -424,7 +452,7 @@ impl Hbm {
             }
             s += chord;
             last_chord = chord;
-            tests.push((cand.arclength, test_functions(&cand)));
+            tests.push(cand_tests);
             points.push(cand);
             prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;
@@ -459,6 +487,14 @@ impl Hbm {
                 continue;
             }
             let Some(before) = branch.points[i].solution.stability.as_ref().map(Stability::outside) else { continue };
+            if branch.bifurcations[k].kind == BifurcationKind::PlusOne
+                && !self.non_unison.is_empty()
+                && let Some((order, parameter)) = self.secant_on_block(su, branch, i)
+            {
+                let b = &mut branch.bifurcations[k];
+                (b.order, b.parameter) = (order, parameter);
+                continue;
+            }
             let (mut lo, mut hi) = (0.0, 1.0);
             let mut found = None;
             for _ in 0..20 {
@@ -490,19 +526,94 @@ impl Hbm {
     /// The solution at fraction σ of segment i, solved at the interpolated parameter, and the
     /// sign and ln |·| of det ∂R̂/∂x there.
     fn determinant_at(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<(HbmSolution, f64, f64)> {
+        let (sol, dets) = self.determinants_at(su, branch, i, sigma, None)?;
+        Some((sol, dets[0].0, dets[0].1))
+    }
+
+    /// [`Self::determinant_at`] for the whole ∂R̂/∂x (`block` None) or for the rows and columns
+    /// of one non-unison set of the cyclic route (`block` Some(k): the Galerkin form of that
+    /// set's variational equations with the parent held, whose determinant vanishes where its
+    /// Floquet block has a multiplier +1).
+    fn determinants_at(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        i: usize,
+        sigma: f64,
+        block: Option<usize>,
+    ) -> Option<(HbmSolution, Vec<(f64, f64)>)> {
         let guess = branch.interpolate(i, sigma)?;
         let lambda = su.param.value(&guess) / su.p_ref;
         let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
         let x = self.unknowns_from(Some(&sol));
         self.assemble(&x, &su.at(lambda), Some(su.param));
-        let lu = self.jac.clone().lu();
+        let matrix = match block {
+            None => self.jac.clone(),
+            Some(k) => {
+                let nb = self.nb;
+                let idx: Vec<usize> =
+                    self.non_unison.get(k)?.coordinates.iter().flat_map(|&c| c * nb..(c + 1) * nb).collect();
+                nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| self.jac[(idx[r], idx[c])])
+            }
+        };
+        let lu = matrix.lu();
         let u = lu.u();
         let (mut sign, mut log) = (lu.p().determinant::<f64>(), 0.0);
         for d in u.diagonal().iter() {
             sign *= d.signum();
             log += d.abs().ln();
         }
-        log.is_finite().then_some((sol, sign, log))
+        log.is_finite().then_some((sol, vec![(sign, log)]))
+    }
+
+    /// A branch point of a non-unison set on the cyclic route: Illinois regula falsi along
+    /// segment i on the determinant of the set's block of ∂R̂/∂x, when it changes sign between
+    /// the segment's ends. The reduced problem itself stays regular there (the non-unison motion
+    /// is not among its unknowns), so every solve converges and no Floquet analysis is needed:
+    /// a few solves instead of the count's bisection. To 1e-12 of the segment or 40 solves.
+    fn secant_on_block(&mut self, su: &Setup, branch: &Branch, i: usize) -> Option<(f64, f64)> {
+        for k in 0..self.non_unison.len() {
+            let (_, da) = self.determinants_at(su, branch, i, 0.0, Some(k))?;
+            let (_, db) = self.determinants_at(su, branch, i, 1.0, Some(k))?;
+            let ((sa, la), (sb, lb)) = (da[0], db[0]);
+            if sa == sb {
+                continue;
+            }
+            let reference = la.max(lb);
+            let (mut s0, mut f0) = (0.0f64, sa * (la - reference).exp());
+            let (mut s1, mut f1) = (1.0, sb * (lb - reference).exp());
+            let mut side = 0;
+            let mut best = None;
+            for _ in 0..40 {
+                if (s1 - s0).abs() <= 1e-12 || f1 == f0 {
+                    break;
+                }
+                let s = (s1 - f1 * (s1 - s0) / (f1 - f0)).clamp(s0.min(s1), s0.max(s1));
+                let (sol, d) = self.determinants_at(su, branch, i, s, Some(k))?;
+                best = Some((sol.order, su.param.value(&sol)));
+                let f = d[0].0 * (d[0].1 - reference).exp();
+                if f == 0.0 {
+                    break;
+                }
+                if f.signum() == f0.signum() {
+                    (s0, f0) = (s, f);
+                    if side == -1 {
+                        f1 *= 0.5;
+                    }
+                    side = -1;
+                } else {
+                    (s1, f1) = (s, f);
+                    if side == 1 {
+                        f0 *= 0.5;
+                    }
+                    side = 1;
+                }
+            }
+            if best.is_some() {
+                return best;
+            }
+        }
+        None
     }
 
     /// det ∂R̂/∂x = 0 inside [lo, hi] of segment i (a bracket of the multiplier count's
@@ -595,16 +706,16 @@ fn test_functions(p: &BranchPoint) -> Vec<(f64, f64)> {
 /// Where a test function is suspected to dip through zero and back between `b` and `c` (both
 /// with the same sign): the extremum of the quadratic through the three points' values (in
 /// arclength), when it lies between b and c and has the other sign. Each point is its arclength
-/// and [`test_functions`]; the values are taken relative to b's magnitude. The earliest such
-/// extremum over the test functions, as an arclength; None when no test function dips.
-fn dip(a: &(f64, Vec<(f64, f64)>), b: &(f64, Vec<(f64, f64)>), c: &(f64, Vec<(f64, f64)>)) -> Option<f64> {
+/// and [`test_functions`]; the values are taken relative to b's magnitude. Each dipping test
+/// function's index with its extremum's arclength.
+fn dip(a: &(f64, Vec<(f64, f64)>), b: &(f64, Vec<(f64, f64)>), c: &(f64, Vec<(f64, f64)>)) -> Vec<(usize, f64)> {
     let ((s0, ta), (s1, tb), (s2, tc)) = (a, b, c);
     let (s0, s1, s2) = (*s0, *s1, *s2);
     if ta.len() != tb.len() || tb.len() != tc.len() || !(s0 < s1 && s1 < s2) {
-        return None;
+        return Vec::new();
     }
-    let mut best: Option<f64> = None;
-    for ((fa, fb), fc) in ta.iter().zip(tb).zip(tc) {
+    let mut out = Vec::new();
+    for (j, ((fa, fb), fc)) in ta.iter().zip(tb).zip(tc).enumerate() {
         if fb.0 != fc.0 || fb.0 == 0.0 || !(fa.1.is_finite() && fb.1.is_finite() && fc.1.is_finite()) {
             continue;
         }
@@ -623,10 +734,10 @@ fn dip(a: &(f64, Vec<(f64, f64)>), b: &(f64, Vec<(f64, f64)>), c: &(f64, Vec<(f6
         }
         let q = y1 + d1 * (s_ext - s1) + d2 * (s_ext - s1) * (s_ext - s2);
         if q.signum() != fb.0 {
-            best = Some(best.map_or(s_ext, |x: f64| x.min(s_ext)));
+            out.push((j, s_ext));
         }
     }
-    best
+    out
 }
 
 /// One-call convenience: the branch of periodic solutions of `kane`'s mechanism from order
@@ -661,11 +772,12 @@ mod tests {
     fn a_dip_between_points_is_found_at_its_vertex() {
         let f = |s: f64| (s - 1.0) * (s - 1.0) - 0.01;
         let p = |s: f64, g: &dyn Fn(f64) -> f64| (s, vec![tf(g(s))]);
-        let at = dip(&p(-1.0, &f), &p(0.0, &f), &p(2.0, &f)).unwrap();
-        assert!((at - 1.0).abs() < 1e-12, "{at}");
+        let found = dip(&p(-1.0, &f), &p(0.0, &f), &p(2.0, &f));
+        assert_eq!(found.len(), 1);
+        assert!(found[0].0 == 0 && (found[0].1 - 1.0).abs() < 1e-12, "{found:?}");
         let g = |s: f64| 1.0 + s;
-        assert_eq!(dip(&p(-0.5, &g), &p(0.0, &g), &p(2.0, &g)), None);
+        assert!(dip(&p(-0.5, &g), &p(0.0, &g), &p(2.0, &g)).is_empty());
         let h = |s: f64| (s - 1.0) * (s - 1.0) + 0.01;
-        assert_eq!(dip(&p(-1.0, &h), &p(0.0, &h), &p(2.0, &h)), None);
+        assert!(dip(&p(-1.0, &h), &p(0.0, &h), &p(2.0, &h)).is_empty());
     }
 }

@@ -8,8 +8,9 @@
 //! are in submodules, their public items re-exported here: `solution` ([`HbmSolution`] and its
 //! read-outs), `sample` (the residual and its derivatives at one time sample), `assembly` (the
 //! AFT residual and the spectral Jacobian), `aft` (the real FFTs), `branch` (the branch data
-//! model and the continued [`Parameter`]), `continuation` (the pseudo-arclength walk) and
-//! `stability` (Floquet multipliers).
+//! model and the continued [`Parameter`]), `continuation` (the pseudo-arclength walk),
+//! `stability` (Floquet multipliers) and `cyclic` (identical absorbers by one representative,
+//! [`RoutedHbm`] and its [`Route`]).
 //!
 //! # Formulation
 //!
@@ -99,6 +100,7 @@ mod assembly;
 mod branch;
 mod continuation;
 mod corrector;
+mod cyclic;
 mod reaction;
 mod sample;
 mod solution;
@@ -108,6 +110,7 @@ pub use branch::{
     Bifurcation, BifurcationClass, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter,
 };
 pub use continuation::{ContinuationOptions, continue_in_order};
+pub use cyclic::{CyclicSet, Route, RoutedHbm, detect};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};
@@ -278,6 +281,9 @@ pub struct Hbm {
     gp: DVector<f64>,
     /// The joint couplings by coordinate, for their harmonic content ([`Hbm::coupling_tail`]).
     couplings: Vec<(usize, Couplings)>,
+    /// On the cyclic route, the reduced problem's non-unison Floquet blocks, one per identical
+    /// set ([`cyclic`]); empty otherwise.
+    non_unison: Vec<cyclic::NonUnison>,
 }
 
 impl Hbm {
@@ -483,6 +489,7 @@ impl Hbm {
         let ev = Evaluator::new(kane, speeds, parents, (0..n * n).map(|i| w[(i / n, i % n)]).collect(), g);
         Ok(Self {
             couplings,
+            non_unison: Vec::new(),
             ev,
             n,
             spin,

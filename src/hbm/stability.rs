@@ -80,7 +80,9 @@ impl Stability {
 impl Hbm {
     /// Floquet multipliers of a solution of this problem (see the module docs of
     /// [`crate::hbm`]): monodromy by RK4 over the variational equations with
-    /// [`super::HbmOptions::stability_samples`] samples per period.
+    /// [`super::HbmOptions::stability_samples`] samples per period. One block (`all`) on the
+    /// general route; on the reduced problem of the cyclic route ([`super::RoutedHbm`]) the
+    /// `unison` block and one non-unison block per identical set, each from its own monodromy.
     pub fn stability(&mut self, sol: &HbmSolution) -> Result<Stability, HbmError> {
         let ns = self.opts.stability_samples;
         let order = sol.order;
@@ -90,7 +92,6 @@ impl Hbm {
         if sol.ndof() != self.n || sol.spin != self.spin {
             return Err(HbmError::Invalid("solution belongs to another mechanism or spin joint".into()));
         }
-        let (n, spin, d) = (self.n, self.spin, 2 * self.n);
         // Per-sample derivatives at this solution (reused when the last Jacobian was assembled
         // there, as in the continuation), interpolated to the N_s stability samples.
         let x = self.unknowns_from(Some(sol));
@@ -101,26 +102,63 @@ impl Hbm {
         if !self.samples_at.as_ref().is_some_and(same) {
             self.assemble(&x, &at, Some(super::Parameter::Order));
         }
+        let period = 2.0 * PI / sol.base_frequency;
+        let all: Vec<usize> = (0..self.n).collect();
+        // The cyclic spin angle's trivial +1 is not a physical multiplier; with gravity the spin
+        // angle is a state like the others.
+        let drop = self.cyclic.then_some(self.spin);
+        let multipliers = self.block_multipliers(&all, drop, order, period)?;
+        if self.non_unison.is_empty() {
+            return Ok(Stability::from_blocks(vec![FloquetBlock {
+                label: "all".into(),
+                multiplicity: 1,
+                multipliers,
+            }]));
+        }
+        // A reduced problem of the cyclic route: its own multipliers are the unison ones; each
+        // identical set adds its representative's block with the parent held, once per
+        // non-zero wavenumber (`super::cyclic`).
+        let mut blocks = vec![FloquetBlock { label: "unison".into(), multiplicity: 1, multipliers }];
+        for set in self.non_unison.clone() {
+            let multipliers = self.block_multipliers(&set.coordinates, None, order, period)?;
+            blocks.push(FloquetBlock { label: set.label, multiplicity: set.multiplicity, multipliers });
+        }
+        Ok(Stability::from_blocks(blocks))
+    }
+
+    /// The Floquet multipliers of the variational equations restricted to the coordinates
+    /// `coords` (rows and columns of A, B, C at the samples of the last assembly; the other
+    /// coordinates held at zero deviation), by decreasing modulus, without the state of the
+    /// coordinate `drop` (the cyclic spin angle). `coords` must be an invariant set of the
+    /// variational equations for the result to be multipliers of the whole problem: all
+    /// coordinates, or a member of an identical set under non-unison motion.
+    fn block_multipliers(
+        &mut self,
+        coords: &[usize],
+        drop: Option<usize>,
+        order: f64,
+        period: f64,
+    ) -> Result<Vec<Complex<f64>>, HbmError> {
+        let ns = self.opts.stability_samples;
+        let (nf, nb) = (self.n, coords.len());
         let nt = self.aft.nt;
-        let nn = n * n;
-        let w0 = sol.base_frequency;
-        let period = 2.0 * PI / w0;
+        let nn = nf * nf;
         // [K | L] = C⁻¹ [A | B] at the N_t samples, stored as 2n² series of N_t values (entry
-        // (i, c) of the n × 2n block is series i·2n + c).
-        let m2 = 2 * nn;
+        // (i, c) of the n × 2n block is series i·2n + c), n = coords.len().
+        let m2 = 2 * nb * nb;
         let mut kl = vec![0.0; m2 * nt];
         let mut ck = vec![0.0; m2];
-        let mut c = vec![0.0; nn];
+        let mut c = vec![0.0; nb * nb];
         for j in 0..nt {
             let abc = &self.samples[j * 3 * nn..(j + 1) * 3 * nn];
-            for i in 0..n {
-                for k in 0..n {
-                    ck[i * 2 * n + k] = abc[i * n + k];
-                    ck[i * 2 * n + n + k] = abc[nn + i * n + k];
+            for (i, &ri) in coords.iter().enumerate() {
+                for (k, &ck_) in coords.iter().enumerate() {
+                    ck[i * 2 * nb + k] = abc[ri * nf + ck_];
+                    ck[i * 2 * nb + nb + k] = abc[nn + ri * nf + ck_];
+                    c[i * nb + k] = abc[2 * nn + ri * nf + ck_];
                 }
             }
-            c.copy_from_slice(&abc[2 * nn..]);
-            if !solve_in_place(&mut c, &mut ck, n, 2 * n) {
+            if !solve_in_place(&mut c, &mut ck, nb, 2 * nb) {
                 return Err(HbmError::Singular { order });
             }
             for (e, &v) in ck.iter().enumerate() {
@@ -139,18 +177,19 @@ impl Hbm {
                 sys[j * m2 + e] = v;
             }
         }
-        let phi = monodromy(&sys, n, ns, period);
+        let d = 2 * nb;
+        let phi = monodromy(&sys, nb, ns, period);
         let phi = DMatrix::from_row_slice(d, d, &phi);
         if phi.iter().any(|v| !v.is_finite()) {
             return Err(HbmError::NonFinite { order });
         }
-        // The cyclic spin angle's trivial +1 is not a physical multiplier; with gravity the spin
-        // angle is a state like the others.
-        let reduced = if self.cyclic { phi.remove_row(spin).remove_column(spin) } else { phi };
-        let mut multipliers =
-            eigenvalues(reduced).ok_or(HbmError::Eigen { order, dim: 2 * n - usize::from(self.cyclic) })?;
+        let (reduced, dim) = match drop.and_then(|k| coords.iter().position(|&c| c == k)) {
+            Some(p) => (phi.remove_row(p).remove_column(p), d - 1),
+            None => (phi, d),
+        };
+        let mut multipliers = eigenvalues(reduced).ok_or(HbmError::Eigen { order, dim })?;
         multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
-        Ok(Stability::from_blocks(vec![FloquetBlock { label: "all".into(), multiplicity: 1, multipliers }]))
+        Ok(multipliers)
     }
 }
 

@@ -7,7 +7,7 @@ use super::sweep::SweepRun;
 use super::table::Table;
 use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
 use crate::error::{Error, Result};
-use crate::hbm::{Branch, BranchEnd, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter};
+use crate::hbm::{Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, RoutedHbm};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
@@ -44,6 +44,12 @@ pub struct HbmBranch {
     pub bifurcations: Vec<(f64, String)>,
     /// Wall time of the continuation, s.
     pub wall_s: f64,
+    /// How the branch was solved: `general` (every coordinate an unknown) or `cyclic` (identical
+    /// absorbers by one scaled representative, [`crate::hbm::Route`]).
+    pub route: String,
+    /// The route in words: the identical sets (`cyclic (4 × pivot_1…pivot_4 on rotor)`), or why
+    /// the general route was taken (`general (no identical absorbers)`).
+    pub route_detail: String,
     /// How the branch ended, in words.
     pub end: String,
     /// The parameter value the continuation started from.
@@ -122,7 +128,7 @@ pub(crate) fn branch(
     h: usize,
     from: f64,
     to: f64,
-) -> Result<(Hbm, Branch, f64)> {
+) -> Result<(RoutedHbm, Branch, f64)> {
     branch_in(study, omega, (harmonics, &[]), excite, h, Parameter::Order, from, to, None)
 }
 
@@ -130,6 +136,8 @@ pub(crate) fn branch(
 /// torque scale) for the excitation `forcing` at mean speed `omega` (rad/s), with the largest
 /// step `max_step` (None: the default). The forcing is `(harmonics, per Ω²)`: the terms in N·m
 /// and those that scale with the speed squared (an engine's inertia torque; empty otherwise).
+/// The route is chosen here ([`RoutedHbm::new`]): identical absorbers are solved by one scaled
+/// representative, and the branch is returned full-size either way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn branch_in(
     study: &Study,
@@ -141,7 +149,7 @@ pub(crate) fn branch_in(
     from: f64,
     to: f64,
     max_step: Option<f64>,
-) -> Result<(Hbm, Branch, f64)> {
+) -> Result<(RoutedHbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
     let inputs = study.excited_joints(&study.mechanism, excite);
@@ -156,8 +164,8 @@ pub(crate) fn branch_in(
     {
         harmonics.push(Harmonic { multiple: 1.0 / order, amplitude: 0.0, phase: 0.0 });
     }
-    let mut hbm = Hbm::with_speed_forcing(&kane, study.spin, omega, &harmonics, per_omega2, &inputs, opts)
-        .map_err(hbm_error(study))?;
+    let mut hbm =
+        RoutedHbm::new(&kane, study.spin, omega, (&harmonics, per_omega2), &inputs, opts).map_err(hbm_error(study))?;
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);
@@ -258,7 +266,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 to * scale,
                 spec.max_step,
             );
-            let (_, b, wall_s) = match solved {
+            let (hbm, b, wall_s) = match solved {
                 Ok(x) => x,
                 Err(e) => {
                     let what = if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") };
@@ -337,6 +345,8 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                     .map(|x| (x.parameter * ax.to_unit, x.class.words().to_string()))
                     .collect(),
                 wall_s,
+                route: hbm.route().name().to_string(),
+                route_detail: hbm.route().to_string(),
                 end: format!("{:?}", b.end),
                 from,
             });
@@ -559,14 +569,14 @@ pub(crate) fn render(
     let _ = writeln!(md, "## Harmonic balance `{}`: {head}, H = {}\n", spec.name, spec.harmonics);
     let _ = writeln!(
         md,
-        "| T_n (N·m) | continued from ({}) | points | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |",
+        "| T_n (N·m) | continued from ({}) | points | route | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |",
         ax.column
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
     for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
+            "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
             match (&spec.engine, br.amplitude.is_nan()) {
                 (Some(_), _) => "engine".to_string(),
                 (None, true) => "continued".to_string(),
@@ -574,6 +584,7 @@ pub(crate) fn render(
             },
             br.from,
             f.points,
+            br.route_detail,
             f.stable,
             f.unstable,
             list(&br.folds),

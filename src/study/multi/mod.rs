@@ -431,7 +431,7 @@ type Ramp = (Option<HbmState>, Option<f64>);
 /// fold's s is returned instead of a state. The locked twin reports the study's elements that
 /// it keeps.
 fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: bool) -> Result<Ramp> {
-    use crate::hbm::{ContinuationOptions, FoldKind, Hbm, HbmOptions, Parameter};
+    use crate::hbm::{ContinuationOptions, FoldKind, HbmOptions, Parameter, RoutedHbm};
     let omega = rpm_to_rad_s(p.rpm);
     let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
     let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
@@ -440,7 +440,7 @@ fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: boo
     let inputs = study.excited_joints(mech, &spec.excite);
     let opts = HbmOptions { harmonics: 10, ..HbmOptions::default() };
     let err = super::hbm::hbm_error(study);
-    let mut hbm = Hbm::with_inputs(&kane, spin, omega, &p.harmonics, &inputs, opts).map_err(&err)?;
+    let mut hbm = RoutedHbm::new(&kane, spin, omega, (&p.harmonics, &[]), &inputs, opts).map_err(&err)?;
     let param = Parameter::TorqueScale { order: spec.order };
     let up = hbm.continue_in(param, 0.01, 1.0, None, &ContinuationOptions::default()).map_err(&err)?;
     let fold = up.folds.first().filter(|f| f.kind == FoldKind::Maximum).map(|f| f.parameter);
