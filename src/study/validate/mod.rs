@@ -13,6 +13,7 @@ use std::f64::consts::PI;
 
 mod inputs;
 pub mod limits;
+mod outputs;
 pub use inputs::MAX_TRANSIENT_S;
 use inputs::{check_excite, check_transient};
 
@@ -332,7 +333,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
             }
         }
     }
-    Ok(())
+    outputs::check_unique(spec, src)
 }
 
 /// A free oscillation: a speed, a joint with a coordinate other than the spin joint, and
