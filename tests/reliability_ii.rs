@@ -113,3 +113,119 @@ fn a_run_file_of_a_sweep_cannot_be_overwritten_by_another_analysis() {
     assert_located(&e, "analyses[0].mechanisms[1].label");
     assert!(e.contains("`c_a_b_x.csv`"), "{e}");
 }
+
+// ---- Item 1: physical ranges ----
+
+/// A two-body mechanism: a rotor and, on joint `j` (kind and extras given), a second body; and
+/// `extra` at the end (gears).
+fn mechanism(joint: &str, extra: &str) -> String {
+    format!(
+        r#"Mechanism(
+    name: "m",
+    bodies: [
+        Body(name: "rotor", mass: 110.0, inertia: 3.4),
+        Body(name: "b", mass: 6.0, inertia: 0.0002),
+    ],
+    joints: [
+        Joint(name: "spin", parent: "ground", child: "rotor"),
+        Joint(name: "j", parent: "rotor", child: "b", {joint}),
+    ],
+    {extra}
+)
+"#
+    )
+}
+
+/// The error of loading mechanism text `text` as `bad.ron`.
+fn mechanism_error(s: &Scratch, text: &str) -> String {
+    match kanedyn::model::mechanism::Mechanism::from_file(&s.write("bad.ron", text)) {
+        Ok(_) => panic!("expected an error for\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Each used to be accepted: "finite and positive" (or "non-zero") was the only rule, so a gear
+/// ratio of 1e-300 passed and a 31-point linear response on it never finished; an epicycloid
+/// order of 1e9, a bifilar length of 1e-300, a billion rollers and a friction smoothing of
+/// 1e-300 went through without a word. Now each is a located error stating the accepted range;
+/// the values just inside each range still load.
+#[test]
+fn extreme_mechanism_values_are_refused_with_the_range() {
+    let s = Scratch::new("ranges");
+    let epicycloid = |n: &str| format!("kind: Path(shape: Epicycloid(rho0: 0.185, n_tilde: {n}), mount: 0.0)");
+    let bifilar = |l: &str| format!("kind: Path(shape: Bifilar(radius: 0.17, length: {l}), mount: 0.0)");
+    let rollers = |n: &str| {
+        format!(
+            "kind: Path(shape: Epicycloid(rho0: 0.185, n_tilde: 3.1), mount: 0.0), rollers: Rollers(count: {n}, \
+             mass: 0.08, inertia: 1.44e-6, radius: 0.006, spread: 0.03)"
+        )
+    };
+    let friction = |e: &str| format!("friction: (torque: 6.0, smoothing: {e})");
+    let gear = |r: &str| {
+        mechanism("", &format!("gears: [Gear(joint: \"j\", follows: \"spin\", ratio: {r})],"))
+            .replace("child: \"b\", ", "child: \"b\"")
+            .replace("Joint(name: \"j\", parent: \"rotor\"", "Joint(name: \"j\", parent: \"ground\"")
+    };
+    let cases: Vec<(String, String, &str, &str)> = vec![
+        (gear("1e-300"), gear("1e-6"), "gears[0].ratio", "1e-6..=1e6"),
+        (gear("-2e6"), gear("-1e6"), "gears[0].ratio", "1e-6..=1e6"),
+        (mechanism(&epicycloid("1e9"), ""), mechanism(&epicycloid("1000.0"), ""), "n_tilde", "1e-3..=1e3"),
+        (mechanism(&bifilar("1e-300"), ""), mechanism(&bifilar("1e-6"), ""), "length", "1e-6..=1e3"),
+        (mechanism(&rollers("1000000000"), ""), mechanism(&rollers("100"), ""), "count", "1 to 100 rollers"),
+        (mechanism(&friction("1e-300"), ""), mechanism(&friction("1e-6"), ""), "smoothing", "1e-6..=1e3"),
+    ];
+    for (bad, good, field, range) in cases {
+        let e = mechanism_error(&s, &bad);
+        println!("{e}");
+        let after = e.split("bad.ron:").nth(1).unwrap_or_else(|| panic!("no file in: {e}"));
+        assert!(after.split(':').next().unwrap().parse::<usize>().is_ok(), "no line in: {e}");
+        assert!(e.contains("(field `") && e.contains(field), "field {field} not named in: {e}");
+        assert!(e.contains(range), "range {range} not stated in: {e}");
+        let p = s.write("good.ron", &good);
+        kanedyn::model::mechanism::Mechanism::from_file(&p).unwrap_or_else(|e| panic!("should load: {e}\n{good}"));
+    }
+}
+
+/// One cylinder's pressure table over 0..720° in steps of 10°: the example engine's pulse
+/// (1 bar base, 90 bar peak 12° after TDC, 30° wide), plus a drift that grows evenly to `seam`
+/// bar at the last point (a transducer's drift): the step across the seam is then `seam`.
+fn pressure_table(seam: f64) -> String {
+    let points: Vec<String> = (0..72)
+        .map(|i| {
+            let a = 10.0 * i as f64;
+            let d = if a > 360.0 { a - 720.0 } else { a };
+            let p = 1.0 + 89.0 * (-0.5 * ((d - 12.0) / 30.0f64).powi(2)).exp() + seam * a / 710.0;
+            format!("({a:.1}, {p:.6})")
+        })
+        .collect();
+    format!(
+        "Engine(name: \"e\", bore_m: 0.11, stroke_m: 0.12, rod_m: 0.2, reciprocating_mass_kg: 1.6, firing_order: [1],\n\
+         pressure: Table([\n{}\n]))\n",
+        points.join(",\n")
+    )
+}
+
+/// Used to pass silently: a table with an 80-bar step across the 720° → 0° seam, closed by the
+/// periodic spline with a swing nobody measured. Now the error names the table's last point and
+/// says the table is not periodic; the same table without the step loads.
+#[test]
+fn a_pressure_table_that_does_not_close_is_refused() {
+    let s = Scratch::new("seam");
+    std::fs::create_dir_all(s.0.join("engines")).unwrap();
+    let study = |engine: &str| {
+        format!(
+            "Study(name: \"s\", mechanism: \"cpva.ron\", analyses: [MultiOrder(name: \"m\", order: 3.0, \
+             engine: \"engines/{engine}\", speeds: [(rpm: 1000.0)], time_domain: false, linear: true)])\n"
+        )
+    };
+    s.write("engines/seam.ron", &pressure_table(80.0));
+    s.write("engines/closed.ron", &pressure_table(0.0));
+    let e = s.load_error(&study("seam.ron"));
+    println!("{e}");
+    assert!(e.contains("seam.ron:") && e.contains("(field `pressure[71]`)"), "{e}");
+    // At the last point's own line (the table has one point a line, from line 3).
+    assert!(e.contains("seam.ron:74:"), "{e}");
+    assert!(e.contains("not periodic across the 720° → 0° seam"), "{e}");
+    let p = s.write("ok.ron", &study("closed.ron"));
+    Study::from_file(&p).unwrap_or_else(|e| panic!("the closed table should load: {e}"));
+}
