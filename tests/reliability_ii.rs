@@ -229,3 +229,49 @@ fn a_pressure_table_that_does_not_close_is_refused() {
     let p = s.write("ok.ron", &study("closed.ron"));
     Study::from_file(&p).unwrap_or_else(|e| panic!("the closed table should load: {e}"));
 }
+
+// ---- Item 2: the watchdog ----
+
+/// An analysis that runs far past its plan used to run on as long as it liked (a stiff 2 s
+/// transient planned at 0.01 s ran past 11 s), holding up the whole study. Now each analysis
+/// gets `factor × plan + floor` of wall time: past that its time runs stop with a located
+/// Failures entry, and the analyses before and after it keep their results. Here the watchdog
+/// is set tight (no multiple of the plan, 0.3 s) so that a transient of 5000 s overruns it.
+#[test]
+fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
+    use kanedyn::study::plan::{Limits, Watchdog};
+    use kanedyn::study::{LoadOptions, RunOptions, run};
+    let s = Scratch::new("watchdog");
+    let text = r#"Study(
+    name: "w",
+    mechanism: "cpva.ron",
+    lock: ["pivot"],
+    analyses: [
+        Campbell(name: "before", rpm_min: 0.0, rpm_max: 2000.0, points: 5),
+        Transient(name: "long", duration_s: 5000.0, speed: Free(rpm: 1000.0), angles: [("pivot", 0.3)],
+                  write_time_series: false),
+        LinearResponse(name: "after", rpm: 1000.0, from: 0.9, to: 1.1, points: 11),
+    ],
+)
+"#;
+    let path = s.write("w.ron", text);
+    let limits = Limits { watchdog: Watchdog { factor: 0.0, floor_s: 0.3 }, ..Limits::default() };
+    let study = Study::from_file_with(&path, &LoadOptions { limits, ..LoadOptions::default() }).unwrap();
+    let planned = study.plan().analyses[1].cpu_s;
+    let start = std::time::Instant::now();
+    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let took = start.elapsed().as_secs_f64();
+    println!("transient planned at {planned:.2} s CPU; study stopped after {took:.2} s; {:?}", report.failures);
+    // The transient alone is planned at several seconds; stopped at 0.3 s the study ends well
+    // before that even on a loaded machine.
+    assert!(planned > 3.0, "the transient should be planned long, got {planned} s");
+    assert!(took < planned, "the watchdog did not stop the transient: {took} s");
+    assert_eq!(report.failures.len(), 1, "{:?}", report.failures);
+    let f = &report.failures[0];
+    assert!(f.starts_with("Transient `long` (") && f.contains("w.ron:7:9"), "{f}");
+    assert!(f.contains("stopped by the watchdog") && f.contains("time budget of 0.3 s"), "{f}");
+    let dir = s.0.join("out").join("w");
+    for file in ["before.csv", "before.svg", "after_as_built.csv", "after.svg", "summary.md"] {
+        assert!(dir.join(file).exists(), "{file} missing");
+    }
+}

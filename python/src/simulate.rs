@@ -217,8 +217,16 @@ fn simulate(
             kane.set_joint_torque(joint, Excitation::constant(value));
         }
         let mut rec = Recorder::new(mech, &probes).map_err(|e| to_py(py, &e))?;
-        let opts =
-            IntegrateOptions { rtol, atol, sample_rate_hz: sample_hz, sample_derivatives: false, max_steps, h0, h_max };
+        let opts = IntegrateOptions {
+            rtol,
+            atol,
+            sample_rate_hz: sample_hz,
+            sample_derivatives: false,
+            max_steps,
+            h0,
+            h_max,
+            deadline: None,
+        };
         // The run holds no Python object: other threads may run meanwhile.
         let (outcome, rec) = py.detach(move || {
             let outcome = run(&mut kane, &x, t0, t1, &opts, &mut rec, &mut |_| {});

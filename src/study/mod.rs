@@ -172,6 +172,7 @@ impl Study {
     /// A study from its parsed spec (`src` is the study file, for locating errors): reads the
     /// mechanism, resolves every name and checks every field and the estimated work.
     pub(crate) fn from_spec(mut spec: StudySpec, src: Source, opts: &LoadOptions) -> Result<Self> {
+        spec.integration.watchdog = opts.limits.watchdog;
         let policy = opts.policy_for(&src.file);
         let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
         engine_harmonics(&mut spec, &src, &policy, &base)?;
@@ -263,6 +264,22 @@ impl Study {
             return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
         }
         Ok(study)
+    }
+
+    /// A copy whose time runs (its comparisons' too) stop `budget_s` of wall time from now.
+    fn with_deadline(&self, budget_s: f64) -> Study {
+        let mut s = self.clone();
+        let at = std::time::Instant::now()
+            .checked_add(std::time::Duration::from_secs_f64(budget_s.min(1e9)))
+            .unwrap_or_else(|| std::time::Instant::now() + std::time::Duration::from_secs(1 << 30));
+        let deadline = Some(spec::Deadline { at, budget_s });
+        s.spec.integration.deadline = deadline;
+        for (_, subs) in &mut s.comparisons {
+            for (_, sub) in subs {
+                sub.spec.integration.deadline = deadline;
+            }
+        }
+        s
     }
 
     /// Mean torque that holds the spin joint's subtree in rigid rotation at `omega` (rad/s): the
@@ -561,9 +578,13 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     );
     // The absorbers' properties once, before the analyses (empty without an absorber).
     let mut sections = crate::model::absorber::markdown(&study.mechanism);
+    let plan = study.plan();
     for (k, a) in study.spec.analyses.iter().enumerate() {
         let where_ = study.source.locate(&format!("analyses[{k}]")).to_string();
-        let (section, completed) = run_guarded(study, a, &where_, &dir, &progress, &mut report);
+        // The watchdog: this analysis's loops stop once it overruns its plan by the set factor.
+        let budget_s = study.spec.integration.watchdog.budget_s(plan.analyses[k].cpu_s);
+        let timed = study.with_deadline(budget_s);
+        let (section, completed) = run_guarded(&timed, a, &where_, &dir, &progress, &mut report);
         report.completed.push(completed);
         sections += &section;
     }

@@ -42,12 +42,48 @@ pub struct Limits {
     pub max_output_bytes: f64,
     /// Largest estimated CPU time of the whole study, s (`--max-cpu-hours`).
     pub max_cpu_s: f64,
+    /// How long each analysis may run against its plan.
+    pub watchdog: Watchdog,
 }
 
 impl Default for Limits {
     /// 2 GiB of memory, 2 GiB of files, 12 CPU hours: a night's run on a shared machine.
     fn default() -> Self {
-        Self { max_memory_bytes: 2.0 * GIB, max_output_bytes: 2.0 * GIB, max_cpu_s: 12.0 * 3600.0 }
+        Self {
+            max_memory_bytes: 2.0 * GIB,
+            max_output_bytes: 2.0 * GIB,
+            max_cpu_s: 12.0 * 3600.0,
+            watchdog: Watchdog::default(),
+        }
+    }
+}
+
+/// The watchdog of a run: an analysis may take `factor ×` its planned CPU time plus `floor_s`
+/// of wall time; past that its time runs stop (a located entry under Failures) and the study
+/// goes on with the next analysis. The plan is an upper bound within a few times (see the
+/// module docs and `tests/plan_calibration.rs`), so only an analysis whose cost the plan cannot
+/// see (a stiff model, a branch that creeps) reaches the limit; the floor keeps a loaded
+/// machine from stopping small analyses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Watchdog {
+    /// Multiple of the planned CPU time.
+    pub factor: f64,
+    /// Wall time added to it, s.
+    pub floor_s: f64,
+}
+
+impl Default for Watchdog {
+    /// Ten times the plan plus a minute.
+    fn default() -> Self {
+        Self { factor: 10.0, floor_s: 60.0 }
+    }
+}
+
+impl Watchdog {
+    /// The wall-time budget of an analysis planned at `cpu_s`.
+    pub fn budget_s(&self, cpu_s: f64) -> f64 {
+        let b = self.factor * cpu_s + self.floor_s;
+        if b.is_finite() { b } else { f64::MAX }
     }
 }
 
