@@ -275,3 +275,52 @@ fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
         assert!(dir.join(file).exists(), "{file} missing");
     }
 }
+
+// ---- Locations ----
+
+/// A second run into a folder another run holds used to be refused as "mechanism ``: output
+/// folder … is being written …", a mechanism error with an empty name. Now the message leads
+/// with the folder.
+#[test]
+fn a_busy_output_folder_is_named() {
+    use kanedyn::study::{RunOptions, run};
+    let s = Scratch::new("busy");
+    let path = s.write("b.ron", &circle_study(FREE).replace("name: \"s\"", "name: \"b\""));
+    let study = Study::from_file(&path).unwrap();
+    let out = s.0.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(out.join(".b.lock")).unwrap();
+    lock.lock().unwrap();
+    let e = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).err().expect("refused").to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{}: output folder busy: it is being written by another kanedyn run",
+            out.join("b").display()
+        )),
+        "{e}"
+    );
+    assert!(!e.contains("mechanism ``"), "{e}");
+}
+
+/// A study whose mechanism or engine is a folder, a pipe or a file over the size cap used to be
+/// refused naming that file only, not the study field that named it. Now the error is located
+/// at the field and still names the file and why.
+#[test]
+fn a_refused_input_file_is_located_at_the_field_that_names_it() {
+    let s = Scratch::new("wholefile");
+    std::fs::create_dir_all(s.0.join("adir")).unwrap();
+    s.write("big.ron", &" ".repeat(2_000_000));
+    for (file, why) in [("adir", "not a regular file (a folder)"), ("big.ron", "more than the limit")] {
+        let e = s.load_error(&format!(
+            "Study(name: \"x\", mechanism: \"{file}\", analyses: [Campbell(name: \"c\", rpm_min: 0.0, rpm_max: 100.0, points: 3)])\n"
+        ));
+        assert_located(&e, "mechanism");
+        assert!(e.contains(&format!("{file}: ")) && e.contains(why), "{e}");
+        let e = s.load_error(&format!(
+            "Study(name: \"x\", mechanism: \"cpva.ron\", analyses: [MultiOrder(name: \"m\", order: 3.0, engine: \"{file}\", \
+             speeds: [(rpm: 1000.0)], time_domain: false, linear: true)])\n"
+        ));
+        assert_located(&e, "analyses[0].engine");
+        assert!(e.contains(why), "{e}");
+    }
+}

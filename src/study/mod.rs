@@ -179,6 +179,9 @@ impl Study {
         let mech_path = policy.resolve(&base, &spec.mechanism).map_err(|m| src.error("mechanism", m))?;
         let mechanism = Mechanism::from_file_with(&mech_path, &policy).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
+            other if matches!(&other, Error::Input { location, .. } if location.file == mech_path) => {
+                whole_file_at(other, &src, "mechanism")
+            }
             other => other,
         })?;
         let joint_names = || mechanism.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ");
@@ -411,7 +414,7 @@ fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, bas
         }
         let esrc = Source::read_with(&path, policy).map_err(|e| match e {
             Error::Io { .. } => src.error(field, format!("cannot read engine file: {e}")),
-            other => other,
+            other => whole_file_at(other, &src, field),
         })?;
         let engine = Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
         engines.insert(path, engine.clone());
@@ -756,6 +759,18 @@ pub(crate) fn finite_text(text: &str) -> String {
         rest = &rest[end..];
     }
     out
+}
+
+/// An error about a whole file that a study names (a folder, a pipe, a file over the size cap:
+/// no line, no field), moved to the study field that named it; other errors unchanged. Such
+/// errors used to name the file alone, not where the study asked for it.
+fn whole_file_at(e: Error, src: &Source, field: &str) -> Error {
+    match e {
+        Error::Input { location, message } if location.line_col.is_none() && location.path.is_empty() => {
+            src.error(field, format!("{}: {message}", location.file.display()))
+        }
+        other => other,
+    }
 }
 
 /// A number for a summary table, or `undefined` when it is not finite.
