@@ -291,7 +291,10 @@ fn a_busy_output_folder_is_named() {
     std::fs::create_dir_all(&out).unwrap();
     let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(out.join(".b.lock")).unwrap();
     lock.lock().unwrap();
-    let e = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).err().expect("refused").to_string();
+    let e = match run(&study, &RunOptions { out: Some(out.clone()), progress: false }) {
+        Ok(_) => panic!("a run into a locked folder should be refused"),
+        Err(e) => e.to_string(),
+    };
     assert!(
         e.starts_with(&format!(
             "{}: output folder busy: it is being written by another kanedyn run",

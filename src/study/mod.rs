@@ -414,7 +414,7 @@ fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, bas
         }
         let esrc = Source::read_with(&path, policy).map_err(|e| match e {
             Error::Io { .. } => src.error(field, format!("cannot read engine file: {e}")),
-            other => whole_file_at(other, &src, field),
+            other => whole_file_at(other, src, field),
         })?;
         let engine = Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
         engines.insert(path, engine.clone());
