@@ -228,6 +228,17 @@ const CASE_SETUP_S: f64 = 50e-6;
 /// tolerance.
 const STABLE_STEP_RATES: f64 = 3.0;
 
+/// Cost of the order tracking per sample of a window and per `log₂` of its length, s (a
+/// windowed real FFT and the band sums): a 20 s sweep sampled at 1 MHz (81 windows of 2·10⁶
+/// samples, found by `tests/fuzz_runs.rs`) spends about a second per run here, which the plan
+/// did not count.
+const STFT_PER_POINT_S: f64 = 3e-10;
+
+/// Estimated CPU time of the order tracking of `windows` windows of `samples` samples each.
+fn stft_s(windows: f64, samples: f64) -> f64 {
+    windows * samples * samples.max(2.0).log2() * STFT_PER_POINT_S
+}
+
 /// Cost of one right-hand side of a mechanism with `n` degrees of freedom, s.
 fn rhs_s(n: f64) -> f64 {
     RHS_BASE_S + RHS_PER_DOF2_S * n * n
@@ -322,7 +333,9 @@ impl Study {
                                 + r * windows * 32.0 * s.multiples.len() as f64,
                             output_bytes: r * samples * series_cols * CSV_CELL_BYTES
                                 + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
-                            cpu_s: r * time_run_s(self, s.duration_s, f),
+                            cpu_s: r
+                                * (time_run_s(self, s.duration_s, f)
+                                    + stft_s(windows, spec.order_tracking.window_s * fs)),
                             driver: if s.write_time_series { "write_time_series" } else { "duration_s" },
                             ..base
                         }
