@@ -164,6 +164,33 @@ impl Engine {
                 if let Some(i) = points.windows(2).position(|w| w[1].0 <= w[0].0) {
                     return bad(&format!("pressure[{}]", i + 1), "the angles must increase".into());
                 }
+                // The spline is periodic: a table whose end does not join its start would be
+                // closed by a swing nobody measured (an 80-bar step across the seam used to
+                // pass silently). The seam may be as steep as the table's own steepest part,
+                // with a margin, plus 0.1 bar of noise.
+                let (first, last) = (points[0], points[points.len() - 1]);
+                let steepest =
+                    points.windows(2).map(|w| (w[1].1 - w[0].1).abs() / (w[1].0 - w[0].0)).fold(0.0, f64::max);
+                let gap = 720.0 - last.0 + first.0;
+                let jump = (first.1 - last.1).abs();
+                let factor = crate::model::ranges::PRESSURE_SEAM_FACTOR;
+                if jump > factor * steepest * gap + 0.1 {
+                    return bad(
+                        &format!("pressure[{}]", points.len() - 1),
+                        format!(
+                            "the table is not periodic across the 720° → 0° seam: it steps from {} bar at {}° to {} bar \
+                             at {}° + 720°, {:.3} bar/°, more than {factor} × the steepest slope inside the table \
+                             ({:.3} bar/°); the periodic spline would close the gap with an invented swing. Give one \
+                             whole cycle whose end joins its start",
+                            last.1,
+                            last.0,
+                            first.1,
+                            first.0,
+                            jump / gap,
+                            steepest
+                        ),
+                    );
+                }
                 let xs: Vec<f64> = points.iter().map(|p| p.0.to_radians()).collect();
                 let ys: Vec<f64> = points.iter().map(|p| p.1 * 1e5).collect();
                 Some(PeriodicSpline::new(&xs, &ys, 4.0 * PI))

@@ -253,7 +253,14 @@ fn the_plan_counts_every_case() {
     .unwrap();
     let (one, many) = (&alone.plan().analyses[0], &grid.plan().analyses[0]);
     assert_eq!(many.runs, 40 * one.runs);
-    assert!((many.cpu_s - 40.0 * one.cpu_s).abs() <= 1e-12 * many.cpu_s);
+    // Each case costs its analysis plus the setting up of the case (issue 25: a fraction of a
+    // millisecond, which dominates only for tiny analyses).
+    assert!(
+        many.cpu_s >= 40.0 * one.cpu_s && many.cpu_s <= 40.0 * one.cpu_s * 1.001,
+        "{} vs {}",
+        many.cpu_s,
+        one.cpu_s
+    );
     // 100 000 such cases exceed the default 12 CPU hours: refused at load, at the sampling.
     let err = load(&study_text(&format!(
         r#"        DesignStudy(name: "d", parameters: [(name: "T", quantity: TorqueAmplitude, from: 1.0, to: 100.0)], sampling: MonteCarlo(n: 100000, seed: 1), analysis: {inner}),"#

@@ -47,6 +47,12 @@ pub fn read_finite(py: Python<'_>, name: &str, values: &Bound<'_, PyAny>) -> PyR
 }
 
 /// Refuses a number that is not finite (or not positive when `positive`), naming it.
+/// A limit the command line applies too (`kanedyn::study::validate::limits`, one function for
+/// both): its reason as an `ArgumentError` naming the argument.
+pub fn limit(py: Python<'_>, name: &str, check: Result<(), String>) -> PyResult<()> {
+    check.map_err(|reason| argument_error(py, format!("{name}: {reason} (the limit of the kanedyn command line)")))
+}
+
 pub fn check_number(py: Python<'_>, name: &str, v: f64, positive: bool) -> PyResult<()> {
     if !v.is_finite() || (positive && v <= 0.0) {
         let what = if positive { "a finite, positive number" } else { "finite" };

@@ -6,7 +6,7 @@
 //! study's `HarmonicBalance` uses, and the amplitudes read by
 //! [`kanedyn::study::hbm::body_accel`], so the arrays equal the study's CSV columns.
 
-use crate::arrays::{check_number, matrix, vector};
+use crate::arrays::{check_number, limit, matrix, vector};
 use crate::errors::{EngineError, argument_error, guard, message_of, model_error, to_py};
 use crate::mechanism::Mechanism;
 use kanedyn::hbm::{
@@ -15,6 +15,7 @@ use kanedyn::hbm::{
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
 use kanedyn::study::hbm::body_accel;
+use kanedyn::study::validate::limits;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -128,6 +129,20 @@ fn hbm_branch(
         }
         if let Some(m) = multiples.iter().find(|m| !(m.is_finite() && **m > 0.0)) {
             return Err(argument_error(py, format!("multiples must be finite and positive, got {m}")));
+        }
+        // The command line's bounds (`harmonics=10**9` used to abort the interpreter allocating
+        // the Jacobian).
+        limit(py, "rpm", limits::check_rpm(rpm, false))?;
+        limit(py, "amplitude", limits::check_torque(amplitude))?;
+        limit(py, "order_from", limits::check_order(order_from))?;
+        limit(py, "order_to", limits::check_order(order_to))?;
+        limit(py, "harmonics", limits::check_harmonics(harmonics))?;
+        limit(py, "max_step", limits::check_max_step(max_step))?;
+        if multiples.len() > 64 {
+            return Err(argument_error(py, format!("multiples: give at most 64, got {}", multiples.len())));
+        }
+        for m in &multiples {
+            limit(py, "multiples", limits::check_order(*m))?;
         }
         let kane = Kane::new(mech).map_err(|e| to_py(py, &e))?;
         let excitation = [Harmonic { multiple: 1.0, amplitude, phase: 0.0 }];

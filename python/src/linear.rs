@@ -6,7 +6,7 @@
 //! response normalised by a locked twin, called as a study's `LinearResponse` calls them, so the
 //! numbers equal the study's CSV columns.
 
-use crate::arrays::{check_number, dmatrix, matrix, read_finite, vector};
+use crate::arrays::{check_number, dmatrix, limit, matrix, read_finite, vector};
 use crate::errors::{EngineError, argument_error, guard, message_of, model_error, to_py};
 use crate::mechanism::Mechanism;
 use kanedyn::linear::{
@@ -14,6 +14,7 @@ use kanedyn::linear::{
 };
 use kanedyn::model::excitation::rpm_to_rad_s;
 use kanedyn::model::mechanism::Mechanism as Mech;
+use kanedyn::study::validate::limits;
 use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyComplex, PyDict, PyList, PyTuple};
@@ -97,6 +98,9 @@ fn linearize(
     guard(|| {
         let mech = mechanism.mech.clone();
         check_number(py, "rpm", rpm, false)?;
+        // A standstill is a linearisation too (a Campbell diagram starts there); a negative speed
+        // used to be accepted.
+        limit(py, "rpm", limits::check_rpm(rpm, true))?;
         let guess = match &guess {
             Some(g) => Some(read_finite(py, "guess", g)?),
             None => None,
@@ -298,7 +302,15 @@ impl Linearization {
         lock: Vec<String>,
     ) -> PyResult<OrderResponse> {
         guard(|| {
+            // Counted before the copy: 1e8 orders used to run for minutes.
+            if let Ok(n) = orders.len() {
+                limit(py, "orders", limits::check_point_count(n))?;
+            }
             let orders = read_finite(py, "orders", &orders)?;
+            limit(py, "orders", limits::check_point_count(orders.len()))?;
+            for (i, &n) in orders.iter().enumerate() {
+                limit(py, &format!("orders[{i}]"), limits::check_order(n))?;
+            }
             let err = |e: LinearError| linear_error(py, &self.mech, &e);
             let spec = ResponseSpec {
                 spin_joint: self.spin_joint().to_string(),

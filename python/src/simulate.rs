@@ -5,11 +5,12 @@
 //! that ends early keeps the samples up to there and says why, as the library does; only bad
 //! arguments raise.
 
-use crate::arrays::{check_number, vector};
+use crate::arrays::{check_number, limit, vector};
 use crate::errors::{argument_error, guard, message_of, to_py};
 use crate::mechanism::Mechanism;
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
+use kanedyn::study::validate::limits;
 use kanedyn::time::integrate::{IntegrateError, IntegrateOptions};
 use kanedyn::time::probe::{Outcome, Probe, ProbeKind, Recorder, simulate as run};
 use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn};
@@ -198,6 +199,15 @@ fn simulate(
         if max_steps == 0 {
             return Err(argument_error(py, "max_steps must be at least 1"));
         }
+        // The command line's bounds: a day of simulated time at most, a tolerance the error
+        // estimate can meet, and samples that fit the default memory limit (a sample rate of
+        // 1e12 used to abort the interpreter on the failed allocation; t1 = 1e300 ran for minutes).
+        limit(py, "t1", limits::check_run_time(t0, t1))?;
+        limit(py, "rtol", limits::check_rtol(rtol))?;
+        if let Some(hz) = sample_hz {
+            limit(py, "sample_hz", limits::check_sample_hz(hz))?;
+            limit(py, "sample_hz", limits::check_samples(t1 - t0, hz, probes.len() + 1))?;
+        }
         let torques = match &joint_torques {
             Some(jt) => mechanism.read_torques(py, jt)?,
             None => Vec::new(),
@@ -207,8 +217,16 @@ fn simulate(
             kane.set_joint_torque(joint, Excitation::constant(value));
         }
         let mut rec = Recorder::new(mech, &probes).map_err(|e| to_py(py, &e))?;
-        let opts =
-            IntegrateOptions { rtol, atol, sample_rate_hz: sample_hz, sample_derivatives: false, max_steps, h0, h_max };
+        let opts = IntegrateOptions {
+            rtol,
+            atol,
+            sample_rate_hz: sample_hz,
+            sample_derivatives: false,
+            max_steps,
+            h0,
+            h_max,
+            deadline: None,
+        };
         // The run holds no Python object: other threads may run meanwhile.
         let (outcome, rec) = py.detach(move || {
             let outcome = run(&mut kane, &x, t0, t1, &opts, &mut rec, &mut |_| {});

@@ -106,6 +106,7 @@ impl LimitArgs {
                 max_memory_bytes: self.max_memory_mb * mb,
                 max_output_bytes: self.max_output_mb * mb,
                 max_cpu_s: self.max_cpu_hours * 3600.0,
+                ..Limits::default()
             },
             allow_read: self.allow_read.clone(),
             allow_any_path: self.allow_any_path,

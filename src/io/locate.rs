@@ -24,6 +24,7 @@ pub fn locate(text: &str, path: &str) -> Option<usize> {
     let mut pos = skip_attributes(b, 0);
     for seg in parse_path(path) {
         let inner = enter_group(b, pos)?;
+        let inner = through_newtype(b, pos, inner, &seg);
         pos = match seg {
             Seg::Field(name) => find_field(b, inner, name)?,
             Seg::Index(i) => find_index(b, inner, i)?,
@@ -42,6 +43,7 @@ pub(super) fn locate_nearest(text: &str, path: &str) -> Option<usize> {
     }
     for seg in parse_path(path) {
         let Some(inner) = enter_group(b, pos) else { break };
+        let inner = through_newtype(b, pos, inner, &seg);
         let next = match seg {
             Seg::Field(name) => find_field(b, inner, name),
             Seg::Index(i) => find_index(b, inner, i),
@@ -192,6 +194,19 @@ fn skip_value(b: &[u8], i: usize) -> usize {
 }
 
 /// Positions just inside the group of the value at `i` (after an optional type name).
+/// An index into a list that a named newtype variant wraps (`pressure: Table([…])`, whose serde
+/// path is `pressure[71]`): the group entered at `value` is the variant's `(`, so step into its
+/// `[` too. `inner` is the position after the `(`.
+fn through_newtype(b: &[u8], value: usize, inner: usize, seg: &Seg) -> usize {
+    let named = b.get(ws(b, value)).is_some_and(|&c| is_word(c));
+    let list = ws(b, inner);
+    if matches!(seg, Seg::Index(_)) && named && b[inner - 1] == b'(' && b.get(list) == Some(&b'[') {
+        list + 1
+    } else {
+        inner
+    }
+}
+
 fn enter_group(b: &[u8], i: usize) -> Option<usize> {
     let mut i = ws(b, i);
     while i < b.len() && is_word(b[i]) {

@@ -205,10 +205,15 @@ impl Friction {
                 format!("friction level must be finite and non-negative (N·m or N), got {}", self.torque),
             ));
         }
-        if !(self.smoothing.is_finite() && self.smoothing > 0.0) {
+        let range = &super::ranges::FRICTION_SMOOTHING;
+        if !super::ranges::within(self.smoothing, range) {
             return Err((
                 "smoothing".into(),
-                format!("smoothing rate ε must be finite and positive (rad/s or m/s), got {}", self.smoothing),
+                format!(
+                    "smoothing rate ε must lie in {} (rad/s or m/s), got {:e}",
+                    super::ranges::show(range),
+                    self.smoothing
+                ),
             ));
         }
         Ok(())

@@ -172,10 +172,14 @@ pub(crate) fn resolve(
         if joint == follows {
             return Err(src.error(&format!("{path}.follows"), format!("joint `{}` cannot follow itself", g.joint)));
         }
-        if !(g.ratio.is_finite() && g.ratio != 0.0) {
+        if !super::ranges::within(g.ratio.abs(), &super::ranges::GEAR_RATIO) {
             return Err(src.error(
                 &format!("{path}.ratio"),
-                format!("the ratio q̇_joint / q̇_follows must be finite and non-zero, got {}", g.ratio),
+                format!(
+                    "the ratio q̇_joint / q̇_follows must be non-zero and finite, its size in {} (either sign), got {:e}",
+                    super::ranges::show(&super::ranges::GEAR_RATIO),
+                    g.ratio
+                ),
             ));
         }
         if !g.offset.is_finite() {

@@ -16,5 +16,6 @@ pub mod loads;
 pub mod math;
 pub mod mechanism;
 pub mod path;
+pub mod ranges;
 pub mod shape;
 pub mod speeds;

@@ -76,7 +76,7 @@ fn inner_name(c: &str, label: &str, analysis: &str) -> String {
 
 /// `a` renamed for mechanism `label` of comparison `c` (a harmonic balance's sweep overlay
 /// renamed alike).
-fn renamed(c: &str, label: &str, a: &AnalysisSpec) -> AnalysisSpec {
+pub(crate) fn renamed(c: &str, label: &str, a: &AnalysisSpec) -> AnalysisSpec {
     let mut a = a.clone();
     let name = |n: &mut String| *n = inner_name(c, label, n);
     match &mut a {

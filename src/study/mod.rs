@@ -172,12 +172,16 @@ impl Study {
     /// A study from its parsed spec (`src` is the study file, for locating errors): reads the
     /// mechanism, resolves every name and checks every field and the estimated work.
     pub(crate) fn from_spec(mut spec: StudySpec, src: Source, opts: &LoadOptions) -> Result<Self> {
+        spec.integration.watchdog = opts.limits.watchdog;
         let policy = opts.policy_for(&src.file);
         let base = src.file.parent().map(Path::to_path_buf).unwrap_or_default();
         engine_harmonics(&mut spec, &src, &policy, &base)?;
         let mech_path = policy.resolve(&base, &spec.mechanism).map_err(|m| src.error("mechanism", m))?;
         let mechanism = Mechanism::from_file_with(&mech_path, &policy).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
+            other if matches!(&other, Error::Input { location, .. } if location.file == mech_path) => {
+                whole_file_at(other, &src, "mechanism")
+            }
             other => other,
         })?;
         let joint_names = || mechanism.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>().join(", ");
@@ -263,6 +267,22 @@ impl Study {
             return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
         }
         Ok(study)
+    }
+
+    /// A copy whose time runs (its comparisons' too) stop `budget_s` of wall time from now.
+    fn with_deadline(&self, budget_s: f64) -> Study {
+        let mut s = self.clone();
+        let at = std::time::Instant::now()
+            .checked_add(std::time::Duration::from_secs_f64(budget_s.min(1e9)))
+            .unwrap_or_else(|| std::time::Instant::now() + std::time::Duration::from_secs(1 << 30));
+        let deadline = Some(spec::Deadline { at, budget_s });
+        s.spec.integration.deadline = deadline;
+        for (_, subs) in &mut s.comparisons {
+            for (_, sub) in subs {
+                sub.spec.integration.deadline = deadline;
+            }
+        }
+        s
     }
 
     /// Mean torque that holds the spin joint's subtree in rigid rotation at `omega` (rad/s): the
@@ -394,7 +414,7 @@ fn engine_harmonics(spec: &mut StudySpec, src: &Source, policy: &ReadPolicy, bas
         }
         let esrc = Source::read_with(&path, policy).map_err(|e| match e {
             Error::Io { .. } => src.error(field, format!("cannot read engine file: {e}")),
-            other => other,
+            other => whole_file_at(other, src, field),
         })?;
         let engine = Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
         engines.insert(path, engine.clone());
@@ -561,9 +581,13 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     );
     // The absorbers' properties once, before the analyses (empty without an absorber).
     let mut sections = crate::model::absorber::markdown(&study.mechanism);
+    let plan = study.plan();
     for (k, a) in study.spec.analyses.iter().enumerate() {
         let where_ = study.source.locate(&format!("analyses[{k}]")).to_string();
-        let (section, completed) = run_guarded(study, a, &where_, &dir, &progress, &mut report);
+        // The watchdog: this analysis's loops stop once it overruns its plan by the set factor.
+        let budget_s = study.spec.integration.watchdog.budget_s(plan.analyses[k].cpu_s);
+        let timed = study.with_deadline(budget_s);
+        let (section, completed) = run_guarded(&timed, a, &where_, &dir, &progress, &mut report);
         report.completed.push(completed);
         sections += &section;
     }
@@ -578,6 +602,9 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
         );
     }
     md += &sections;
+    for f in &mut report.failures {
+        *f = finite_text(f);
+    }
     if !report.failures.is_empty() {
         let _ = writeln!(md, "## Failures\n");
         for f in &report.failures {
@@ -585,6 +612,7 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
         }
         md.push('\n');
     }
+    let md = finite_text(&md);
     let path = dir.join("summary.md");
     write_file(&path, &md)?;
     report.files.push(path);
@@ -701,6 +729,50 @@ pub(crate) fn ratio(a: f64, reference: f64, scale: f64) -> f64 {
     if reference.abs() > 1e-5 * scale.abs() && reference != 0.0 { a / reference } else { f64::NAN }
 }
 
+/// The last guard of the promise that no output reads `NaN` or `inf`: every such word outside
+/// backticks (names are quoted in backticks, so a mechanism called `inf` keeps its name) becomes
+/// "undefined". The summaries format their numbers with [`cell`] and friends; this catches a
+/// number a formatter missed, e.g. in a solver's error message, before it reaches summary.md,
+/// results.json or report.html (issue 25: a multi-order run printed "NaN (locked 1.7e-14)").
+/// A word here runs over letters, digits and `-+._/\`, so a path such as `/tmp/nan/s.ron` is
+/// one word and left alone.
+pub(crate) fn finite_text(text: &str) -> String {
+    let word_char = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '+' | '.' | '_' | '/' | '\\');
+    let mut out = String::with_capacity(text.len());
+    let mut quoted = false;
+    let mut rest = text;
+    while let Some(c) = rest.chars().next() {
+        if !word_char(c) {
+            quoted ^= c == '`';
+            out.push(c);
+            rest = &rest[c.len_utf8()..];
+            continue;
+        }
+        let end = rest.find(|c: char| !word_char(c)).unwrap_or(rest.len());
+        let word = &rest[..end];
+        let bare = word.trim_start_matches(['-', '+']).to_ascii_lowercase();
+        if !quoted && matches!(bare.as_str(), "nan" | "inf" | "infinity") {
+            out.push_str("undefined");
+        } else {
+            out.push_str(word);
+        }
+        rest = &rest[end..];
+    }
+    out
+}
+
+/// An error about a whole file that a study names (a folder, a pipe, a file over the size cap:
+/// no line, no field), moved to the study field that named it; other errors unchanged. Such
+/// errors used to name the file alone, not where the study asked for it.
+fn whole_file_at(e: Error, src: &Source, field: &str) -> Error {
+    match e {
+        Error::Input { location, message } if location.line_col.is_none() && location.path.is_empty() => {
+            src.error(field, format!("{}: {message}", location.file.display()))
+        }
+        other => other,
+    }
+}
+
 /// A number for a summary table, or `undefined` when it is not finite.
 pub(crate) fn cell(v: f64, precision: usize) -> String {
     if v.is_finite() { format!("{v:.precision$}") } else { "undefined".into() }
@@ -727,4 +799,17 @@ pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Res
         w.write_record(&rec).map_err(io)?;
     }
     w.flush().map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
+}
+
+#[cfg(test)]
+mod finite_text_tests {
+    use super::finite_text;
+
+    #[test]
+    fn non_finite_words_become_undefined_but_names_and_paths_stay() {
+        assert_eq!(finite_text("| NaN (locked 1.7e-14) |"), "| undefined (locked 1.7e-14) |");
+        assert_eq!(finite_text("t = -inf, x = Infinity"), "t = undefined, x = undefined");
+        assert_eq!(finite_text("mechanism `inf` at /tmp/nan/s.ron:3:4"), "mechanism `inf` at /tmp/nan/s.ron:3:4");
+        assert_eq!(finite_text("information, finite, 1e-300, inflow"), "information, finite, 1e-300, inflow");
+    }
 }

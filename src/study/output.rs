@@ -28,9 +28,13 @@ impl OutputDir {
     pub(crate) fn begin(root: &Path, name: &str) -> Result<Self> {
         let single = matches!(Path::new(name).components().collect::<Vec<_>>()[..], [Component::Normal(_)]);
         if !single || name.starts_with('.') {
-            return Err(Error::Model {
-                mechanism: String::new(),
-                message: format!("study name `{}` is not a plain folder name", name.escape_debug()),
+            return Err(Error::Io {
+                file: root.join(name),
+                action: "cannot write",
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    format!("study name `{}` is not a plain folder name", name.escape_debug()),
+                ),
             });
         }
         std::fs::create_dir_all(root).map_err(io(root, "cannot create"))?;
@@ -43,14 +47,19 @@ impl OutputDir {
             .map_err(io(&lock_path, "cannot create"))?;
         match lock.try_lock() {
             Ok(()) => {}
+            // The folder's path leads the message (it used to read "mechanism ``:", a
+            // mechanism error with no mechanism).
             Err(TryLockError::WouldBlock) => {
-                return Err(Error::Model {
-                    mechanism: String::new(),
-                    message: format!(
-                        "output folder {} is being written by another kanedyn run (lock {}): wait for it to \
-                         finish or give another --out",
-                        root.join(name).display(),
-                        lock_path.display()
+                return Err(Error::Io {
+                    file: root.join(name),
+                    action: "output folder busy",
+                    source: std::io::Error::new(
+                        std::io::ErrorKind::WouldBlock,
+                        format!(
+                            "it is being written by another kanedyn run (lock {}): wait for it to finish or give \
+                             another --out",
+                            lock_path.display()
+                        ),
                     ),
                 });
             }

@@ -42,12 +42,48 @@ pub struct Limits {
     pub max_output_bytes: f64,
     /// Largest estimated CPU time of the whole study, s (`--max-cpu-hours`).
     pub max_cpu_s: f64,
+    /// How long each analysis may run against its plan.
+    pub watchdog: Watchdog,
 }
 
 impl Default for Limits {
     /// 2 GiB of memory, 2 GiB of files, 12 CPU hours: a night's run on a shared machine.
     fn default() -> Self {
-        Self { max_memory_bytes: 2.0 * GIB, max_output_bytes: 2.0 * GIB, max_cpu_s: 12.0 * 3600.0 }
+        Self {
+            max_memory_bytes: 2.0 * GIB,
+            max_output_bytes: 2.0 * GIB,
+            max_cpu_s: 12.0 * 3600.0,
+            watchdog: Watchdog::default(),
+        }
+    }
+}
+
+/// The watchdog of a run: an analysis may take `factor ×` its planned CPU time plus `floor_s`
+/// of wall time; past that its time runs stop (a located entry under Failures) and the study
+/// goes on with the next analysis. The plan is an upper bound within a few times (see the
+/// module docs and `tests/plan_calibration.rs`), so only an analysis whose cost the plan cannot
+/// see (a stiff model, a branch that creeps) reaches the limit; the floor keeps a loaded
+/// machine from stopping small analyses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Watchdog {
+    /// Multiple of the planned CPU time.
+    pub factor: f64,
+    /// Wall time added to it, s.
+    pub floor_s: f64,
+}
+
+impl Default for Watchdog {
+    /// Ten times the plan plus a minute.
+    fn default() -> Self {
+        Self { factor: 10.0, floor_s: 60.0 }
+    }
+}
+
+impl Watchdog {
+    /// The wall-time budget of an analysis planned at `cpu_s`.
+    pub fn budget_s(&self, cpu_s: f64) -> f64 {
+        let b = self.factor * cpu_s + self.floor_s;
+        if b.is_finite() { b } else { f64::MAX }
     }
 }
 
@@ -167,18 +203,95 @@ impl fmt::Display for Plan {
     }
 }
 
+/// Fixed cost of one linear analysis (an operating point by Newton, the modes with the spin free
+/// and held, of the mechanism and its locked twin), s, plus [`LINEAR_SETUP_PER_DOF3_S`]`·DOF³`;
+/// a design study of a two-point linear response spent ~130 µs per case on the CPVA and ~720 µs
+/// on the truck driveline, all of it here, where the estimate had counted none.
+const LINEAR_SETUP_S: f64 = 100e-6;
+/// See [`LINEAR_SETUP_S`].
+const LINEAR_SETUP_PER_DOF3_S: f64 = 6e-6;
+/// Cost of one Campbell point (the equilibrium and the eigenproblems with the spin free and held,
+/// tracked between speeds), s, plus [`CAMPBELL_PER_DOF3_S`]`·DOF³`: measured 45 µs on the
+/// dual-mass flywheel and the CPVA (2 DOF) and 105 µs on the truck driveline (5 DOF), where the
+/// estimate had been 6.6 µs.
+const CAMPBELL_POINT_S: f64 = 60e-6;
+/// See [`CAMPBELL_POINT_S`].
+const CAMPBELL_PER_DOF3_S: f64 = 1e-6;
+/// Fixed cost of one design-study case (the mechanism rebuilt with the case's values, its
+/// equations of motion and its locked twin checked), s, plus a `DOF³` part like the linear
+/// analyses'.
+const CASE_SETUP_S: f64 = 50e-6;
+/// An explicit Runge–Kutta method is stable for steps below about this many time constants of
+/// the fastest decay (DOP853's stability region reaches ~−6 on the real axis, and its step
+/// control keeps about half of that): a damper whose
+/// decay rate `c/J` is far above the excitation forces steps of `~3/(c/J)` whatever the
+/// tolerance.
+const STABLE_STEP_RATES: f64 = 3.0;
+
+/// Cost of the order tracking per sample of a window and per `log₂` of its length, s (a
+/// windowed real FFT and the band sums): a 20 s sweep sampled at 1 MHz (81 windows of 2·10⁶
+/// samples, found by `tests/fuzz_runs.rs`) spends about a second per run here, which the plan
+/// did not count.
+const STFT_PER_POINT_S: f64 = 3e-10;
+
+/// Estimated CPU time of the order tracking of `windows` windows of `samples` samples each.
+fn stft_s(windows: f64, samples: f64) -> f64 {
+    windows * samples * samples.max(2.0).log2() * STFT_PER_POINT_S
+}
+
 /// Cost of one right-hand side of a mechanism with `n` degrees of freedom, s.
 fn rhs_s(n: f64) -> f64 {
     RHS_BASE_S + RHS_PER_DOF2_S * n * n
 }
 
 /// Estimated CPU time of one time-domain run over `duration_s` whose highest excitation line is
-/// at `f_hz`, sampled at `fs`, capped by the integrator's step limit.
+/// at `f_hz`, sampled at `fs`, capped by the integrator's step limit. The mechanism's own time
+/// scales count too ([`time_scales`]): its fastest spring's natural frequency is a line the
+/// steps must resolve like an excitation, and its fastest damper's decay rate bounds the stable
+/// step (a stiff shaft damper used to make a run take 10 to 1000 times its estimate).
 fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
     let i = study.spec.integration;
     let n = study.mechanism.ndof() as f64;
-    let steps = (duration_s * STEPS_PER_PERIOD * f_hz.max(1.0) * (1e-9 / i.rtol).powf(0.125)).min(i.max_steps as f64);
+    let (f_spring, decay) = time_scales(&study.mechanism);
+    let accurate = duration_s * STEPS_PER_PERIOD * f_hz.max(f_spring).max(1.0) * (1e-9 / i.rtol).powf(0.125);
+    let stable = duration_s * decay / STABLE_STEP_RATES;
+    let steps = accurate.max(stable).min(i.max_steps as f64);
     (12.0 * steps + duration_s * i.sample_hz) * rhs_s(n)
+}
+
+/// The mechanism's fastest time scales at q = 0: the highest `√(k/J)/2π` of its joint springs
+/// (the stiffest stage of a staged spring) and the highest decay rate `c/J` of its joint and
+/// ground dampers, Hz and 1/s, with `1/J` the diagonal of the inverse mass matrix at the joint's
+/// coordinate (the compliance a torque there meets; for a ground damper, of the body's first
+/// joint). A coarse bound, not an eigen-analysis: it is there to see a stiff model, which the
+/// excitation alone does not show. `(0, 0)` when the mass matrix cannot be formed or the
+/// mechanism is too large to factor here (over 200 coordinates).
+pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f64) {
+    let n = mech.ndof();
+    if n == 0 || n > 200 {
+        return (0.0, 0.0);
+    }
+    let Ok(mut kane) = crate::kane::Kane::new(mech) else { return (0.0, 0.0) };
+    let m = kane.mass_matrix(&vec![0.0; n]).clone();
+    let Some(inv) = m.try_inverse() else { return (0.0, 0.0) };
+    let compliance = |k: usize| inv[(k, k)].max(0.0);
+    let (mut f, mut decay) = (0.0_f64, 0.0_f64);
+    for j in &mech.joints {
+        let Some(k) = j.coordinate else { continue };
+        let stiffest =
+            j.couplings.stages.as_ref().map_or(0.0, |s| {
+                s.drive.iter().chain(s.coast.iter().flatten()).map(|st| st.stiffness).fold(0.0, f64::max)
+            });
+        let stiffness = j.spring.map_or(0.0, |s| s.stiffness).max(stiffest);
+        f = f.max((stiffness * compliance(k)).max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
+        decay = decay.max(j.damper * compliance(k));
+    }
+    for g in &mech.loads.ground_dampers {
+        if let Some(k) = mech.joints.get(g.body).and_then(|j| j.coordinate) {
+            decay = decay.max(g.c * compliance(k));
+        }
+    }
+    (if f.is_finite() { f } else { 0.0 }, if decay.is_finite() { decay } else { 0.0 })
 }
 
 impl Study {
@@ -220,7 +333,9 @@ impl Study {
                                 + r * windows * 32.0 * s.multiples.len() as f64,
                             output_bytes: r * samples * series_cols * CSV_CELL_BYTES
                                 + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
-                            cpu_s: r * time_run_s(self, s.duration_s, f),
+                            cpu_s: r
+                                * (time_run_s(self, s.duration_s, f)
+                                    + stft_s(windows, spec.order_tracking.window_s * fs)),
                             driver: if s.write_time_series { "write_time_series" } else { "duration_s" },
                             ..base
                         }
@@ -255,7 +370,10 @@ impl Study {
                             samples_per_run: p,
                             memory_bytes: runs as f64 * p * 8.0 * 8.0,
                             output_bytes: runs as f64 * p * 5.0 * CSV_CELL_BYTES,
-                            cpu_s: runs as f64 * p * 2.0 * (1e-6 + 20e-9 * n * n * n),
+                            cpu_s: runs as f64
+                                * (LINEAR_SETUP_S
+                                    + LINEAR_SETUP_PER_DOF3_S * n * n * n
+                                    + p * 2.0 * (1e-6 + 20e-9 * n * n * n)),
                             driver: "points",
                             ..base
                         }
@@ -267,7 +385,9 @@ impl Study {
                             samples_per_run: p,
                             memory_bytes: p * (4.0 * n + c.orders.len() as f64) * 8.0,
                             output_bytes: p * (2.0 * n + c.orders.len() as f64 + 1.0) * CSV_CELL_BYTES,
-                            cpu_s: p * (5e-6 + 200e-9 * n * n * n),
+                            cpu_s: LINEAR_SETUP_S
+                                + LINEAR_SETUP_PER_DOF3_S * n * n * n
+                                + p * (CAMPBELL_POINT_S + CAMPBELL_PER_DOF3_S * n * n * n),
                             driver: "points",
                             ..base
                         }
@@ -382,6 +502,7 @@ fn design_plan(study: &Study, spec: &super::DesignSpec, base: AnalysisPlan) -> A
     alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
     let inner = alone.plan().analyses.into_iter().next();
     let n = super::design::case_count(spec) as f64;
+    let dof = study.mechanism.ndof() as f64;
     let parallel = std::thread::available_parallelism().map_or(1, |p| p.get()) as f64;
     let columns = (1 + spec.parameters.len() + super::design::result_columns(study, spec).len()) as f64;
     // A row's cells, plus the status and a message of up to ~200 characters.
@@ -392,7 +513,7 @@ fn design_plan(study: &Study, spec: &super::DesignSpec, base: AnalysisPlan) -> A
             samples_per_run: a.samples_per_run,
             memory_bytes: a.memory_bytes * n.min(parallel) + table_bytes,
             output_bytes: table_bytes,
-            cpu_s: n * a.cpu_s,
+            cpu_s: n * (a.cpu_s + CASE_SETUP_S + LINEAR_SETUP_PER_DOF3_S * dof * dof * dof),
             driver: "sampling",
             ..base
         },

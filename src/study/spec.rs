@@ -62,11 +62,43 @@ pub struct IntegrationSpec {
     pub sample_hz: f64,
     /// Step limit per run (default 50 million).
     pub max_steps: usize,
+    /// How long the analysis running now may take, derived from its plan by the study runner
+    /// (the watchdog of [`super::run`]); never read from a file.
+    #[serde(skip)]
+    pub deadline: Option<Deadline>,
+    /// How generous the watchdog is (from the load options' [`super::plan::Limits`]); never read
+    /// from a file.
+    #[serde(skip)]
+    pub watchdog: super::plan::Watchdog,
+}
+
+/// When a running analysis must stop, and the time budget that gave that instant (for the
+/// message).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Deadline {
+    /// The instant past which every loop that checks it stops.
+    pub at: std::time::Instant,
+    /// The budget, s of wall time from the analysis's start.
+    pub budget_s: f64,
+}
+
+impl Deadline {
+    /// Whether the deadline has passed.
+    pub fn passed(&self) -> bool {
+        std::time::Instant::now() >= self.at
+    }
 }
 
 impl Default for IntegrationSpec {
     fn default() -> Self {
-        Self { rtol: 1e-9, atol: 1e-9, sample_hz: 2000.0, max_steps: 50_000_000 }
+        Self {
+            rtol: 1e-9,
+            atol: 1e-9,
+            sample_hz: 2000.0,
+            max_steps: 50_000_000,
+            deadline: None,
+            watchdog: super::plan::Watchdog::default(),
+        }
     }
 }
 

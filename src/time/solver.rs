@@ -28,6 +28,9 @@ pub struct IntegrateOptions {
     pub h0: Option<f64>,
     /// Largest step size, s (`None`: unbounded).
     pub h_max: Option<f64>,
+    /// A wall-clock instant past which the run stops with [`IntegrateError::Deadline`], with
+    /// the budget it came from in seconds (`None`: no deadline). The study's watchdog sets it.
+    pub deadline: Option<(std::time::Instant, f64)>,
 }
 
 impl Default for IntegrateOptions {
@@ -40,6 +43,7 @@ impl Default for IntegrateOptions {
             max_steps: 100_000_000,
             h0: None,
             h_max: None,
+            deadline: None,
         }
     }
 }
@@ -157,6 +161,19 @@ pub enum IntegrateError {
         /// Counters.
         stats: IntegrateStats,
     },
+    /// The run went past [`IntegrateOptions::deadline`]: its analysis overran its time budget.
+    #[error(
+        "stopped by the watchdog at t = {t_reached} s: the analysis overran its time budget of {budget_s:.1} s \
+         (a multiple of its planned CPU time, see `kanedyn check`); {stats}"
+    )]
+    Deadline {
+        /// The budget, s.
+        budget_s: f64,
+        /// Time reached, s.
+        t_reached: f64,
+        /// Counters.
+        stats: IntegrateStats,
+    },
     /// Any other failure reported by the ODE crate.
     #[error("integrator failed at t = {t_reached} s: {message}; {stats}")]
     Solver {
@@ -179,6 +196,7 @@ impl IntegrateError {
             | Self::MaxSteps { t_reached, .. }
             | Self::Engine { t_reached, .. }
             | Self::Stiff { t_reached, .. }
+            | Self::Deadline { t_reached, .. }
             | Self::Solver { t_reached, .. } => *t_reached,
         }
     }
@@ -192,6 +210,7 @@ impl IntegrateError {
             | Self::MaxSteps { stats, .. }
             | Self::Engine { stats, .. }
             | Self::Stiff { stats, .. }
+            | Self::Deadline { stats, .. }
             | Self::Solver { stats, .. } => *stats,
         }
     }

@@ -148,11 +148,15 @@ impl GeneralPath {
 
     fn tabulate(&mut self) -> Result<(), (&'static str, String)> {
         let (rho0, n_tilde) = (self.rho0, self.n_tilde);
-        if !(rho0.is_finite() && rho0 > 0.0) {
-            return Err(("rho0", format!("the vertex radius ρ₀ (m) must be finite and positive, got {rho0}")));
+        use crate::model::ranges::{PATH_LENGTH_M, PATH_ORDER, show, within};
+        if !within(rho0, &PATH_LENGTH_M) {
+            return Err((
+                "rho0",
+                format!("the vertex radius ρ₀ (m) must lie in {}, got {rho0:e}", show(&PATH_LENGTH_M)),
+            ));
         }
-        if !(n_tilde.is_finite() && n_tilde > 0.0) {
-            return Err(("n_tilde", format!("the path order ñ must be finite and positive, got {n_tilde}")));
+        if !within(n_tilde, &PATH_ORDER) {
+            return Err(("n_tilde", format!("the path order ñ must lie in {}, got {n_tilde:e}", show(&PATH_ORDER))));
         }
         for (field, list, what) in [("x", &self.x, "x₄, x₆, …"), ("alpha", &self.alpha, "α₁, α₃, …")] {
             if list.len() > MAX_COEFFICIENTS {

@@ -374,21 +374,22 @@ impl PathShape {
 
     /// Checks the parameters: the field that is wrong and why.
     pub fn check(self) -> Result<(), (&'static str, String)> {
-        let positive = |field: &'static str, v: f64, what: &str| {
-            if v.is_finite() && v > 0.0 {
+        use crate::model::ranges::{PATH_LENGTH_M, PATH_ORDER, show, within};
+        let inside = |field: &'static str, v: f64, what: &str, range| {
+            if within(v, range) {
                 Ok(())
             } else {
-                Err((field, format!("{what} must be finite and positive, got {v}")))
+                Err((field, format!("{what} must lie in {}, got {v:e}", show(range))))
             }
         };
         match self {
             PathShape::Circle { radius, length } | PathShape::Bifilar { radius, length } => {
-                positive("radius", radius, "the pivot radius R (m)")?;
-                positive("length", length, "the path radius L (m)")
+                inside("radius", radius, "the pivot radius R (m)", &PATH_LENGTH_M)?;
+                inside("length", length, "the path radius L (m)", &PATH_LENGTH_M)
             }
             PathShape::Epicycloid { rho0, n_tilde, alpha1 } => {
-                positive("rho0", rho0, "the vertex radius ρ₀ (m)")?;
-                positive("n_tilde", n_tilde, "the path order ñ")?;
+                inside("rho0", rho0, "the vertex radius ρ₀ (m)", &PATH_LENGTH_M)?;
+                inside("n_tilde", n_tilde, "the path order ñ", &PATH_ORDER)?;
                 if alpha1.is_finite() {
                     Ok(())
                 } else {

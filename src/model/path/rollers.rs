@@ -69,8 +69,15 @@ impl Rollers {
 
     /// Checks the numbers: the field that is wrong and why.
     pub fn check(&self) -> Result<(), (&'static str, String)> {
-        if self.count == 0 {
-            return Err(("count", "a roller set needs at least one roller, got count 0".into()));
+        let most = crate::model::ranges::MAX_ROLLERS;
+        if self.count == 0 || self.count > most {
+            return Err((
+                "count",
+                format!(
+                    "a roller set has 1 to {most} rollers (at least one carries the absorber), got count {}",
+                    self.count
+                ),
+            ));
         }
         for (field, v, what) in [
             ("mass", self.mass, "the roller mass (kg)"),

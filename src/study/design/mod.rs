@@ -334,6 +334,22 @@ fn finite_max(v: impl IntoIterator<Item = f64>) -> f64 {
 /// into the caller: a panic becomes a failed row.
 pub fn run_case(study: &Study, spec: &DesignSpec, index: usize, values: &[f64]) -> CaseRow {
     let n_results = result_columns(study, spec).len();
+    // Past the watchdog's deadline the remaining cases are not started.
+    if let Some(d) = study.spec.integration.deadline
+        && d.passed()
+    {
+        let error = format!(
+            "not run: the design study overran its time budget of {:.1} s (stopped by the watchdog)",
+            d.budget_s
+        );
+        return CaseRow {
+            index,
+            values: values.to_vec(),
+            results: vec![f64::NAN; n_results],
+            status: CaseStatus::Failed,
+            error,
+        };
+    }
     let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| case_results(study, spec, values)));
     let (results, status, error) = match attempt {
         Ok(Ok((results, failures))) if failures.is_empty() => (results, CaseStatus::Ok, String::new()),

@@ -121,6 +121,12 @@ pub(super) fn fmt_mult(m: f64) -> String {
     crate::study::sweep::fmt_num(m)
 }
 
+/// A number in exponent form for a summary table, or "not measured" when it is not finite (a
+/// run that failed before it could be measured).
+fn sci(v: f64, precision: usize) -> String {
+    if v.is_finite() { format!("{v:.precision$e}") } else { "not measured".into() }
+}
+
 fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## Multi-order response `{}`: n = {}, steady states\n", spec.name, spec.order);
@@ -170,18 +176,22 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
             }
         }
         if gravity {
-            let g = |v: Option<f64>| v.map_or("undefined".into(), |v| format!("{v:.4e}"));
+            let g = |v: Option<f64>| {
+                v.map_or("undefined".into(), |v| if v.is_finite() { format!("{v:.4e}") } else { "undefined".into() })
+            };
             let _ = write!(row, " {} | {} |", g(s.linear_gravity), g(s.linear_gravity_locked));
         }
         if let Some(resp) = &s.response {
+            // A run that stopped before two windows were compared has no change (NaN): it
+            // used to print "NaN (locked 1.7e-14)" next to its Failures entry.
             let _ = write!(
                 row,
-                " {:.1e}{} | {:.4} | {:.0} | {:.2e} |",
-                resp.change,
-                s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {:.1e})", l.change)),
-                resp.max_relative_angle,
-                resp.time_s,
-                resp.speed_correction
+                " {}{} | {} | {} | {} |",
+                sci(resp.change, 1),
+                s.locked.as_ref().map_or(String::new(), |l| format!(" (locked {})", sci(l.change, 1))),
+                cell(resp.max_relative_angle, 4),
+                cell(resp.time_s, 0),
+                sci(resp.speed_correction, 2)
             );
         }
         let _ = writeln!(md, "{row}");
@@ -210,13 +220,13 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
                         Some(false) => "unstable",
                         None => "?",
                     };
-                    let amps: Vec<String> = h.amplitudes.iter().map(|a| format!("{a:.3}")).collect();
+                    let amps: Vec<String> = h.amplitudes.iter().map(|a| cell(*a, 3)).collect();
                     format!("({}; {st})", amps.join(", "))
                 })
                 .collect();
-            let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{:.2e} relative", d));
+            let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{} relative", sci(d, 2)));
             let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
-                format!("ends at {:.4} × the torques (fold): only the upper state remains", f)
+                format!("ends at {} × the torques (fold): only the upper state remains", cell(f, 4))
             });
             let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
         }
@@ -254,7 +264,7 @@ fn ramp_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         }
     }
     let _ = writeln!(md, "{head}\n{rule}");
-    let fold = |f: Option<f64>| f.map_or("–".to_string(), |f| format!("fold at s = {f:.4}"));
+    let fold = |f: Option<f64>| f.map_or("–".to_string(), |f| format!("fold at s = {}", cell(f, 4)));
     for s in &r.speeds {
         let mut row = format!("| {} |", s.rpm);
         for k in 0..spec.multiples.len() {

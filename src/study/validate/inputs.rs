@@ -7,8 +7,9 @@ use crate::io::Source;
 use crate::model::mechanism::Mechanism;
 use crate::study::StudySpec;
 
-/// Longest transient, s of simulated time (a day); the estimated work is checked in `plan`.
-pub const MAX_TRANSIENT_S: f64 = 86_400.0;
+/// Longest transient, s of simulated time (a day, the limit of every time run,
+/// [`super::MAX_RUN_S`]); the estimated work is checked in `plan`.
+pub const MAX_TRANSIENT_S: f64 = super::MAX_RUN_S;
 
 pub(super) fn check_transient(
     src: &Source,

@@ -13,6 +13,7 @@ use std::f64::consts::PI;
 
 mod inputs;
 pub mod limits;
+mod outputs;
 pub use inputs::MAX_TRANSIENT_S;
 use inputs::{check_excite, check_transient};
 
@@ -64,15 +65,11 @@ fn pos(v: f64) -> bool {
 pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Source) -> Result<()> {
     // The study name was checked before its mechanism was read (`Study::from_source`).
     let i = spec.integration;
-    if !(i.rtol.is_finite() && (MIN_RTOL..=0.1).contains(&i.rtol)) {
-        return Err(src.error("integration.rtol", format!("relative tolerance must lie in {MIN_RTOL:e}..=0.1")));
-    }
+    check_rtol(i.rtol).map_err(|m| src.error("integration.rtol", m))?;
     if !(pos(i.atol) && i.atol <= 1.0) {
         return Err(src.error("integration.atol", "absolute tolerance must be finite, positive and at most 1"));
     }
-    if !(pos(i.sample_hz) && i.sample_hz <= 1e7) {
-        return Err(src.error("integration.sample_hz", "sample rate must be finite, positive and at most 1e7 Hz"));
-    }
+    check_sample_hz(i.sample_hz).map_err(|m| src.error("integration.sample_hz", m))?;
     if i.max_steps == 0 {
         return Err(src.error("integration.max_steps", "must be at least 1"));
     }
@@ -332,7 +329,7 @@ pub(crate) fn check(spec: &StudySpec, mech: &Mechanism, spin: usize, src: &Sourc
             }
         }
     }
-    Ok(())
+    outputs::check_unique(spec, src)
 }
 
 /// A free oscillation: a speed, a joint with a coordinate other than the spin joint, and
@@ -444,11 +441,9 @@ fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::HbmSpec) -> Re
     } else if !h.amplitudes.is_empty() {
         return Err(src.error(&at("amplitudes"), format!("{what}: leave `amplitudes` out")));
     }
-    if h.harmonics == 0 || h.harmonics > 64 {
-        return Err(src.error(&at("harmonics"), "need 1 to 64 harmonics"));
-    }
-    if h.max_step.is_some_and(|d| !(d.is_finite() && (1e-6..=10.0).contains(&d))) {
-        return Err(src.error(&at("max_step"), "must be finite and within 1e-6..=10"));
+    check_harmonics(h.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
+    if let Some(d) = h.max_step {
+        check_max_step(d).map_err(|m| src.error(&at("max_step"), m))?;
     }
     if h.multiples.is_empty() || h.multiples.len() > 64 {
         return Err(src.error(&at("multiples"), "give 1 to 64 harmonic multiples"));
@@ -487,19 +482,11 @@ fn modal_ratios(src: &Source, path: &str, z: &crate::linear::ModalDamping) -> Re
 }
 
 fn rpm(src: &Source, path: &str, v: f64) -> Result<()> {
-    if pos(v) && v <= MAX_RPM {
-        Ok(())
-    } else {
-        Err(src.error(path, format!("speed must be within 0 < rpm ≤ {MAX_RPM:e}")))
-    }
+    check_rpm(v, false).map_err(|m| src.error(path, m))
 }
 
 fn order(src: &Source, path: &str, v: f64) -> Result<()> {
-    if pos(v) && v <= MAX_ORDER {
-        Ok(())
-    } else {
-        Err(src.error(path, format!("must be finite, positive and at most {MAX_ORDER}, got {}", g(v))))
-    }
+    check_order(v).map_err(|m| src.error(path, m))
 }
 
 fn order_range(src: &Source, path: &str, lo: f64, hi: f64) -> Result<()> {
@@ -511,11 +498,7 @@ fn order_range(src: &Source, path: &str, lo: f64, hi: f64) -> Result<()> {
 }
 
 fn torque(src: &Source, path: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v.abs() <= MAX_TORQUE_NM {
-        Ok(())
-    } else {
-        Err(src.error(path, format!("torque must be finite, |T| ≤ {MAX_TORQUE_NM:e} N·m, got {}", g(v))))
-    }
+    check_torque(v).map_err(|m| src.error(path, m))
 }
 
 fn torques(src: &Source, path: &str, v: &[f64], allow_zero: bool) -> Result<()> {
