@@ -26,7 +26,13 @@ fn branch(pendulums: usize, torque: f64, from: f64, to: f64, ds_max: f64) -> (Hb
     let p = CpvaParams::canonical().with_pendulums(pendulums);
     let kane = Kane::new(&p.mechanism(None).unwrap()).unwrap();
     let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
-    let copts = ContinuationOptions { ds_max, ds: ContinuationOptions::default().ds.min(ds_max), ..Default::default() };
+    // At the smallest step limit a branch takes up to ~1600 points: room for them.
+    let copts = ContinuationOptions {
+        ds_max,
+        ds: ContinuationOptions::default().ds.min(ds_max),
+        max_points: 20_000,
+        ..Default::default()
+    };
     let b = hbm.continue_in_order(from, to, None, &copts).unwrap();
     (hbm, b)
 }

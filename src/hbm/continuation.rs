@@ -62,8 +62,9 @@ pub struct ContinuationOptions {
     /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
     /// function, and the step is aimed at it (`tests/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
     pub ds_max: f64,
-    /// Largest number of points on a branch (a bound on the work: the paper's branches take
-    /// 60–800 points from `ds_max` 0.1 down to 0.001).
+    /// Largest number of points on a branch (a bound on the work, and the plan's: the paper's
+    /// branches take 16–60 points at the default `ds_max`, up to ~1600 at 0.001; raise it with a
+    /// smaller step).
     pub max_points: usize,
     /// Newton iterations allowed per corrector.
     pub corrector_iter: usize,
@@ -82,7 +83,7 @@ impl Default for ContinuationOptions {
             ds: 0.01,
             ds_min: 1e-7,
             ds_max: 0.1,
-            max_points: 20_000,
+            max_points: 2000,
             corrector_iter: 14,
             min_cos: 0.98,
             stability: true,

@@ -21,6 +21,8 @@ use std::path::{Path, PathBuf};
 pub struct HbmBranch {
     /// The analysis name.
     pub analysis: String,
+    /// Why and where the branch stopped short of its range (None: it reached an end of it).
+    pub stopped_short: Option<String>,
     /// Torque amplitude T_n, N·m (NaN on a torque branch and with an engine).
     pub amplitude: f64,
     /// Orders of the branch points, in continuation order.
@@ -275,24 +277,24 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 }
             };
             let p = &b.points;
-            // A branch that could not go on is a failure of its own (its points are kept).
-            let stalled = match b.end {
+            // A branch that could not go on says why and where in the summary (its points are
+            // kept). It is not listed as a failure: the usual cause is the mechanism's own limit
+            // (an absorber driven to the end of its travel, the monodromy growing without bound).
+            let stopped = match b.end {
                 BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
                 BranchEnd::MaxPoints => Some("it reached the largest number of points"),
                 BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
             };
-            if let (Some(reason), Some(last)) = (stalled, p.last()) {
-                failures.push(format!(
-                    "{} branch{}, continued from {from}: stopped because {reason}, at {} = {:.7} {} after {} points \
-                     (the points found are kept)",
-                    spec.name,
-                    if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") },
+            let stopped_short = match (stopped, p.last()) {
+                (Some(reason), Some(last)) => Some(format!(
+                    "stopped because {reason}, at {} = {:.7} {} after {} points",
                     ax.column,
                     last.parameter * ax.to_unit,
                     ax.unit,
                     p.len()
-                ));
-            }
+                )),
+                _ => None,
+            };
             let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
             let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
             let mut add = |sol: &HbmSolution, stable: Option<bool>| {
@@ -315,6 +317,7 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 }
             }
             branches.push(HbmBranch {
+                stopped_short,
                 analysis: spec.name.clone(),
                 curve_parameter,
                 curve_accel,
@@ -606,6 +609,10 @@ pub(crate) fn render(
     for br in branches {
         if let Some(w) = coupling_warning(spec, br) {
             let _ = writeln!(md, "{w}");
+        }
+        if let Some(why) = &br.stopped_short {
+            let what = if br.amplitude.is_nan() { String::new() } else { format!(" at {} N·m", br.amplitude) };
+            let _ = writeln!(md, "- The branch{what} continued from {} {why}; its points are shown.", br.from);
         }
     }
     Ok((md, files))
