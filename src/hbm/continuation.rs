@@ -454,6 +454,9 @@ impl Hbm {
             s += chord;
             last_chord = chord;
             tests.push(cand_tests);
+            if let Some(hook) = &self.on_point {
+                (hook.0)(points.len() + 1, cand.parameter);
+            }
             points.push(cand);
             prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;

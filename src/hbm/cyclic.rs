@@ -606,6 +606,11 @@ impl RoutedHbm {
         Ok(b)
     }
 
+    /// [`Hbm::set_on_point`] on the problem solved (the reduced one on the cyclic route).
+    pub fn set_on_point(&mut self, hook: Option<super::PointHook>) {
+        self.hbm.set_on_point(hook);
+    }
+
     /// [`RoutedHbm::continue_in`] in the order.
     pub fn continue_in_order(
         &mut self,

@@ -207,6 +207,18 @@ impl Default for HbmOptions {
     }
 }
 
+/// Called by a continuation after each accepted point with the number of points so far and
+/// the continued parameter's value there (its units: n, rad/s or the torque scale), for a
+/// progress line. Shared, so that an [`Hbm`] stays `Clone`.
+#[derive(Clone)]
+pub struct PointHook(pub std::sync::Arc<dyn Fn(usize, f64) + Send + Sync>);
+
+impl std::fmt::Debug for PointHook {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("PointHook")
+    }
+}
+
 /// Where the residual is evaluated: excitation order n, mean speed Ω (rad/s), torque scale s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct At {
@@ -284,6 +296,8 @@ pub struct Hbm {
     /// On the cyclic route, the reduced problem's non-unison Floquet blocks, one per identical
     /// set ([`cyclic`]); empty otherwise.
     non_unison: Vec<cyclic::NonUnison>,
+    /// Told of every accepted point of a continuation (a progress line), if set.
+    on_point: Option<PointHook>,
 }
 
 impl Hbm {
@@ -490,6 +504,7 @@ impl Hbm {
         Ok(Self {
             couplings,
             non_unison: Vec::new(),
+            on_point: None,
             ev,
             n,
             spin,
@@ -699,6 +714,11 @@ impl Hbm {
             )));
         }
         Ok(())
+    }
+
+    /// Sets (or clears) the hook told of every accepted point of the continuations.
+    pub fn set_on_point(&mut self, hook: Option<PointHook>) {
+        self.on_point = hook;
     }
 
     /// Whether the spin angle is cyclic (no gravity and no world-frame force).

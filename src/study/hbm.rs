@@ -7,7 +7,9 @@ use super::sweep::SweepRun;
 use super::table::Table;
 use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
 use crate::error::{Error, Result};
-use crate::hbm::{Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, RoutedHbm};
+use crate::hbm::{
+    Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook, RoutedHbm,
+};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
@@ -131,7 +133,7 @@ pub(crate) fn branch(
     from: f64,
     to: f64,
 ) -> Result<(RoutedHbm, Branch, f64)> {
-    branch_in(study, omega, (harmonics, &[]), excite, h, Parameter::Order, from, to, None)
+    branch_in(study, omega, (harmonics, &[]), excite, h, Parameter::Order, from, to, None, None)
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
@@ -151,6 +153,7 @@ pub(crate) fn branch_in(
     from: f64,
     to: f64,
     max_step: Option<f64>,
+    on_point: Option<PointHook>,
 ) -> Result<(RoutedHbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
@@ -168,6 +171,7 @@ pub(crate) fn branch_in(
     }
     let mut hbm =
         RoutedHbm::new(&kane, study.spin, omega, (&harmonics, per_omega2), &inputs, opts).map_err(hbm_error(study))?;
+    hbm.set_on_point(on_point);
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);
@@ -230,8 +234,14 @@ fn forcing(spec: &HbmSpec, amp: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
 
 /// Runs the branches ([`compute`]) and writes their outputs over the sweeps already run
 /// ([`render`]).
-pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path) -> Result<Output> {
-    let (branches, failures) = compute(study, spec);
+pub(crate) fn run(
+    study: &Study,
+    spec: &HbmSpec,
+    sweeps: &[SweepRun],
+    dir: &Path,
+    progress: &super::sim::Progress,
+) -> Result<Output> {
+    let (branches, failures) = compute_with(study, spec, Some(progress));
     let (markdown, files) = render(study, spec, &branches, sweeps, dir)?;
     Ok(Output { markdown, files, failures, results: Results::Hbm(branches) })
 }
@@ -240,6 +250,15 @@ pub(crate) fn run(study: &Study, spec: &HbmSpec, sweeps: &[SweepRun], dir: &Path
 /// and bifurcations, and the drawn curve; a failed continuation is listed, never lost with the
 /// others.
 pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<String>) {
+    compute_with(study, spec, None)
+}
+
+/// [`compute`] with a progress line per branch on a terminal (points and the parameter reached).
+fn compute_with(
+    study: &Study,
+    spec: &HbmSpec,
+    progress: Option<&super::sim::Progress>,
+) -> (Vec<HbmBranch>, Vec<String>) {
     let path = study.mechanism.rotation_rates(study.body);
     let ax = axis(spec);
     // One case per amplitude (order and speed), or one with T_n = 1 N·m scaled (torque).
@@ -257,6 +276,15 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
         // lies outside the range, each reaches sheets the other cannot.
         let (lo, hi) = ax.range;
         for (from, to) in [(hi, lo), (lo, hi)] {
+            let what = if amp.is_nan() { String::new() } else { format!(" {amp} N·m") };
+            let bar = progress.map(|pr| pr.spinner(&format!("{}{what} from {from}", spec.name)));
+            let hook = bar.clone().map(|bar| {
+                let (to_unit, unit) = (ax.to_unit, ax.unit);
+                PointHook(std::sync::Arc::new(move |k: usize, p: f64| {
+                    bar.set_message(format!("{k} points, at {:.5} {unit}", p * to_unit));
+                    bar.tick();
+                }))
+            });
             let solved = branch_in(
                 study,
                 omega,
@@ -267,7 +295,11 @@ pub(crate) fn compute(study: &Study, spec: &HbmSpec) -> (Vec<HbmBranch>, Vec<Str
                 from * scale,
                 to * scale,
                 spec.max_step,
+                hook,
             );
+            if let Some(bar) = &bar {
+                bar.finish_and_clear();
+            }
             let (hbm, b, wall_s) = match solved {
                 Ok(x) => x,
                 Err(e) => {

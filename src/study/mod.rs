@@ -699,7 +699,7 @@ pub(crate) fn run_analysis(
         AnalysisSpec::MultiOrder(m) => multi::run(study, m, dir, progress)?,
         AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
         AnalysisSpec::Campbell(c) => campbell::run_campbell(study, c, dir)?,
-        AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir)?,
+        AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir, progress)?,
         AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
         AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
         AnalysisSpec::FreeOscillation(f) => backbone::run(study, f, dir)?,

@@ -22,6 +22,23 @@ impl Progress {
         Self { multi: on.then(|| MultiProgress::with_draw_target(ProgressDrawTarget::stderr())) }
     }
 
+    /// A spinner with a message line (a harmonic-balance branch: points and the parameter
+    /// reached), hidden unless progress is drawn.
+    pub(crate) fn spinner(&self, label: &str) -> ProgressBar {
+        match &self.multi {
+            None => ProgressBar::hidden(),
+            Some(m) => {
+                let bar = m.add(ProgressBar::new_spinner());
+                bar.set_style(
+                    ProgressStyle::with_template("{prefix:32} {spinner} {msg} {elapsed:>4}")
+                        .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+                );
+                bar.set_prefix(label.to_string());
+                bar
+            }
+        }
+    }
+
     /// A bar counting simulated milliseconds up to `duration_s`.
     pub(crate) fn bar(&self, duration_s: f64, label: &str) -> ProgressBar {
         match &self.multi {
