@@ -36,7 +36,7 @@ def test_branch_equals_the_cli_bit_for_bit(cpva, cli_run, amplitude, order_from,
     hbm = next(a for a in doc["analyses"] if a["name"] == "hbm")
     branch = next(x for x in hbm["result"]["branches"] if x["amplitude"] == amplitude and x["from"] == order_from)
     assert [f["order"] for f in b.folds] == branch["folds"]
-    assert [[x["order"], x["kind"]] for x in b.bifurcations] == branch["bifurcations"]
+    assert [[x["order"], x["classification"]] for x in b.bifurcations] == branch["bifurcations"]
     assert b.end == branch["end"]
 
 
@@ -55,6 +55,7 @@ def test_mean_torque_balances_the_losses_and_the_folds_bracket_the_jumps(cpva):
     assert (b.stable[between] == 0).any() and (b.stable == 1).any()
     # The middle sheet loses stability exactly at the folds (a multiplier through +1).
     assert {x["kind"] for x in b.bifurcations} == {"PlusOne"}
+    assert {x["classification"] for x in b.bifurcations} == {"fold"}
     assert b.accel.shape == (2, len(b)) and list(b.multiples) == [1.0, 2.0] and b.body == "rotor"
     # Stability off: no verdicts.
     quick = kanedyn.hbm_branch(cpva, "spin", 1000.0, 40.0, 3.3, 3.2, stability=False, multiples=[1.0])
