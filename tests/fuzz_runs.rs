@@ -12,6 +12,10 @@
 //! `cargo test --release --test fuzz_runs long -- --ignored --nocapture`. Replay one execution
 //! with `KANEDYN_FUZZ_SEED=<seed> KANEDYN_FUZZ_ONLY=<iteration>`.
 
+#[path = "support/examples.rs"]
+mod examples;
+
+use examples::copy_dir;
 use kanedyn::study::plan::{Limits, Watchdog};
 use kanedyn::study::{LoadOptions, RunOptions, Study, run};
 use std::path::Path;
@@ -36,18 +40,6 @@ impl Rng {
 const FLOATS: &[&str] = &[
     "0.0", "-1.0", "1e-300", "1e300", "NaN", "inf", "-inf", "1e-6", "1e6", "0.5", "2.9", "3.3", "1000.0", "20.0", "1e9",
 ];
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
-    }
-}
 
 /// CPU time of this process so far, s (user + system, from /proc/self/stat; 10 ms ticks): a
 /// measure a loaded machine does not inflate the way it does wall time.

@@ -3,6 +3,10 @@
 //! results.json (issue 13). The scan is of the files themselves, every CSV, Markdown and JSON file
 //! each example study writes.
 
+#[path = "support/examples.rs"]
+mod examples;
+
+use examples::copy_dir;
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::Path;
 
@@ -50,19 +54,6 @@ fn no_example_study_writes_nan_or_inf() {
     println!("{scanned} files scanned");
     assert!(scanned >= 20, "expected the outputs of the three example studies, scanned {scanned}");
     assert!(Path::new("examples/cpva_paper.ron").exists());
-}
-
-/// Copies a folder tree (the example mechanisms and their parts) for the failing studies.
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
-    }
 }
 
 /// Issue 25: failing studies must keep the promise too. The first one used to print

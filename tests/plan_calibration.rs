@@ -6,6 +6,10 @@
 //!
 //! One test in its own binary, so that no other test's threads add to the process's CPU time.
 
+#[path = "support/examples.rs"]
+mod examples;
+
+use examples::copy_dir;
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::Path;
 
@@ -17,18 +21,6 @@ fn cpu_s() -> f64 {
     let f: Vec<&str> = rest.split_whitespace().collect();
     let ticks: f64 = f[11].parse::<f64>().unwrap() + f[12].parse::<f64>().unwrap();
     ticks / 100.0
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
-    }
 }
 
 #[test]

@@ -1,6 +1,10 @@
 //! Regression tests of issue 25 ("Reliability II"): each test names what used to go wrong, on the
 //! smallest input that showed it.
 
+#[path = "support/examples.rs"]
+mod examples;
+
+use examples::copy_dir;
 use kanedyn::study::Study;
 use std::path::{Path, PathBuf};
 
@@ -33,18 +37,6 @@ impl Scratch {
 impl Drop for Scratch {
     fn drop(&mut self) {
         std::fs::remove_dir_all(&self.0).ok();
-    }
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
     }
 }
 

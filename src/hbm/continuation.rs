@@ -516,7 +516,7 @@ impl Hbm {
             }
             if branch.bifurcations[k].kind == BifurcationKind::PlusOne
                 && found.is_some()
-                && let Some(at) = self.secant_on_determinant(su, branch, i, lo, hi)
+                && let Some(at) = self.root_of_determinant(su, branch, i, lo, hi)
             {
                 found = Some(at);
             }
@@ -528,24 +528,18 @@ impl Hbm {
     }
 
     /// The solution at fraction σ of segment i, solved at the interpolated parameter, and the
-    /// sign and ln |·| of det ∂R̂/∂x there.
-    fn determinant_at(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<(HbmSolution, f64, f64)> {
-        let (sol, dets) = self.determinants_at(su, branch, i, sigma, None)?;
-        Some((sol, dets[0].0, dets[0].1))
-    }
-
-    /// [`Self::determinant_at`] for the whole ∂R̂/∂x (`block` None) or for the rows and columns
-    /// of one non-unison set of the cyclic route (`block` Some(k): the Galerkin form of that
-    /// set's variational equations with the parent held, whose determinant vanishes where its
-    /// Floquet block has a multiplier +1).
-    fn determinants_at(
+    /// sign and ln |·| of the determinant there of the whole ∂R̂/∂x (`block` None) or of the rows
+    /// and columns of one non-unison set of the cyclic route (`block` Some(k): the Galerkin form
+    /// of that set's variational equations with the parent held, whose determinant vanishes
+    /// where its Floquet block has a multiplier +1).
+    fn determinant_at(
         &mut self,
         su: &Setup,
         branch: &Branch,
         i: usize,
         sigma: f64,
         block: Option<usize>,
-    ) -> Option<(HbmSolution, Vec<(f64, f64)>)> {
+    ) -> Option<(HbmSolution, f64, f64)> {
         let guess = branch.interpolate(i, sigma)?;
         let lambda = su.param.value(&guess) / su.p_ref;
         let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
@@ -567,7 +561,7 @@ impl Hbm {
             sign *= d.signum();
             log += d.abs().ln();
         }
-        log.is_finite().then_some((sol, vec![(sign, log)]))
+        log.is_finite().then_some((sol, sign, log))
     }
 
     /// A branch point of a non-unison set on the cyclic route: Illinois regula falsi along
@@ -577,9 +571,8 @@ impl Hbm {
     /// a few solves instead of the count's bisection. To 1e-12 of the segment or 40 solves.
     fn secant_on_block(&mut self, su: &Setup, branch: &Branch, i: usize) -> Option<(f64, f64)> {
         for k in 0..self.non_unison.len() {
-            let (_, da) = self.determinants_at(su, branch, i, 0.0, Some(k))?;
-            let (_, db) = self.determinants_at(su, branch, i, 1.0, Some(k))?;
-            let ((sa, la), (sb, lb)) = (da[0], db[0]);
+            let (_, sa, la) = self.determinant_at(su, branch, i, 0.0, Some(k))?;
+            let (_, sb, lb) = self.determinant_at(su, branch, i, 1.0, Some(k))?;
             if sa == sb {
                 continue;
             }
@@ -593,9 +586,9 @@ impl Hbm {
                     break;
                 }
                 let s = (s1 - f1 * (s1 - s0) / (f1 - f0)).clamp(s0.min(s1), s0.max(s1));
-                let (sol, d) = self.determinants_at(su, branch, i, s, Some(k))?;
+                let (sol, sg, lg) = self.determinant_at(su, branch, i, s, Some(k))?;
                 best = Some((sol.order, su.param.value(&sol)));
-                let f = d[0].0 * (d[0].1 - reference).exp();
+                let f = sg * (lg - reference).exp();
                 if f == 0.0 {
                     break;
                 }
@@ -627,11 +620,11 @@ impl Hbm {
     /// Jacobian is singular there), so the determinant is sampled where it does and interpolated
     /// in between: over a bracket of ~1e-6 of the segment it is linear to many digits. None when
     /// the determinant has the same sign at lo and hi, or a solve fails.
-    fn secant_on_determinant(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
+    fn root_of_determinant(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
         let w = hi - lo;
         let mut samples = Vec::with_capacity(4);
         for sigma in [lo - w, lo, hi, hi + w] {
-            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma.clamp(0.0, 1.0))?;
+            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma.clamp(0.0, 1.0), None)?;
             samples.push((su.lambda(&sol), sign, log, sol.order));
         }
         let (l_lo, l_hi) = (samples[1].0, samples[2].0);

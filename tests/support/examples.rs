@@ -1,9 +1,11 @@
-//! Copying the paper's CPVA with its catalog parts into a scratch folder, so a study written
-//! there can name `cpva.ron` (tests/results_json.rs, tests/report_html.rs, with `#[path]`).
+//! Copying example files into a scratch folder, so a study written there can name them: the
+//! paper's CPVA with its catalog parts (tests/results_json.rs, tests/report_html.rs), or a whole
+//! folder tree (the fuzzers, the failing-study and plan tests). Included with `#[path]`.
 
 use std::path::Path;
 
 /// Copies `examples/cpva.ron` and the `bodies/` and `joints/` catalogs into `dir`.
+#[allow(dead_code)] // the tests that copy whole trees do not use it
 pub fn copy_cpva(dir: &Path) {
     for sub in ["bodies", "joints"] {
         std::fs::create_dir_all(dir.join(sub)).unwrap();
@@ -12,4 +14,18 @@ pub fn copy_cpva(dir: &Path) {
         }
     }
     std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
+}
+
+/// Copies the folder tree `from` (files and subfolders) into `to`, creating it.
+#[allow(dead_code)] // not every test that includes this module copies a whole tree
+pub fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).unwrap();
+        }
+    }
 }
