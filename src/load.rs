@@ -218,9 +218,9 @@ impl Mechanism {
                     src.error(&format!("{path}.kind.{field}"), format!("joint `{name}`: {msg}"))
                 })?;
             if let Some(rollers) = js.rollers {
-                let on = match kind {
-                    crate::model::joint::JointKind::Path { shape, .. } => rollers.check_on(shape),
-                    other => Err(("rollers", format!("rollers carry a path absorber, but this joint is {other:?}"))),
+                let on = match kind.path() {
+                    Some(p) => rollers.check_on(p.shape),
+                    None => Err(("rollers", format!("rollers carry a path absorber, but this joint is {kind:?}"))),
                 };
                 on.map_err(|(field, msg)| src.error(&format!("{path}.{field}"), format!("joint `{name}`: {msg}")))?;
             }

@@ -324,3 +324,104 @@ fn bad_joint_kinds_are_located_errors() {
     let all_fixed = "Mechanism(name: \"m\", bodies: [Body(name: \"b\", mass: 1.0, inertia: 0.1)], joints: [Joint(name: \"w\", kind: Fixed, parent: \"ground\", child: \"b\")])";
     assert!(load_error(all_fixed).contains("no coordinate to move"));
 }
+
+/// Every joint kind's columns and bias terms are the derivatives of its own transform.
+///
+/// `JointKind::motion` returns the child frame's pose (origin, angle) and, separately, the
+/// motion columns (∂origin/∂q, ∂angle/∂q) and bias terms (their second derivatives ∂²/∂q²) that
+/// the engine's forms use. Here each column is held against a fourth-order central difference of
+/// the pose, and each bias term against the same difference of the columns, at several
+/// coordinates of every kind (each path shape mounted at a skew angle, and a path's rollers).
+/// The difference's truncation error is O(h⁴)·|f⁽⁵⁾| ≈ 1e-15 at h = 1e-3 of the coordinate's
+/// scale and its rounding ≈ 1e-16/h ≈ 1e-13 relative: 1e-9 relative to the quantity's scale
+/// leaves room for both and fails on any wrong sign, factor or missing term.
+#[test]
+fn every_kind_s_columns_and_bias_are_the_derivatives_of_its_transform() {
+    use kanedyn::model::joint::JointMotion;
+    use kanedyn::model::path::{PathShape, Rollers};
+
+    // Adding a kind breaks this match: give it samples below.
+    let covered = |k: JointKind| match k {
+        JointKind::Revolute | JointKind::Prismatic { .. } | JointKind::Fixed | JointKind::Path { .. } => (),
+    };
+    let path = |shape| JointKind::Path { shape, mount: 0.7, travel: None };
+    let kinds = [
+        JointKind::Revolute,
+        JointKind::Prismatic { axis: (0.6, -0.8) },
+        JointKind::Fixed,
+        path(PathShape::Circle { radius: 0.17, length: 0.0152 }),
+        path(PathShape::Bifilar { radius: 0.17, length: 0.0152 }),
+        path(PathShape::Epicycloid { rho0: 0.185, n_tilde: 3.11, alpha1: 0.0 }),
+        path(PathShape::Epicycloid { rho0: 0.185, n_tilde: 3.11, alpha1: 10.0 }),
+        path(PathShape::general(0.185, 3.11, &[100.0], &[1.0])),
+    ];
+    let at = Vec2::new(0.03, -0.02);
+    let angle = |m: &JointMotion| m.sin.atan2(m.cos);
+    // f(q + kh) for k = -2..=2 into the fourth-order central difference.
+    let d4 = |f: &dyn Fn(f64) -> [f64; 3], q: f64, h: f64| -> [f64; 3] {
+        let (a, b, c, d) = (f(q - 2.0 * h), f(q - h), f(q + h), f(q + 2.0 * h));
+        std::array::from_fn(|i| (a[i] - 8.0 * b[i] + 8.0 * c[i] - d[i]) / (12.0 * h))
+    };
+    let mut checked = 0;
+    for kind in kinds {
+        covered(kind);
+        let scale = kind.coordinate_scale();
+        let travel = kind.travel().min(10.0 * scale);
+        let pose_scale = 0.2_f64.max(at.norm());
+        let mut motions: Vec<Box<dyn Fn(f64) -> JointMotion>> = vec![Box::new(move |q| kind.motion(at, q))];
+        if let Some(p) = kind.path()
+            && !p.shape.turns()
+        {
+            let rollers = Rollers { count: 2, mass: 0.1, inertia: 1e-5, radius: 0.006, spread: 0.0 };
+            let centre = Rollers::vertex_centre(p.shape);
+            motions.push(Box::new(move |q| kind.roller_motion(at, q, centre, rollers.turn_rate())));
+        }
+        for motion in &motions {
+            for f in [-0.6, -0.1, 0.0, 0.35, 0.8] {
+                let q = f * travel;
+                let h = 1e-3 * scale;
+                let m = motion(q);
+                let pose = |q: f64| {
+                    let m = motion(q);
+                    // Unwrapped against the angle at q, so the difference never crosses ±π.
+                    let a = angle(&m);
+                    let a0 = angle(&motion(q - 1e-9));
+                    [
+                        m.origin.x,
+                        m.origin.y,
+                        a0 + (a - a0 + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI,
+                    ]
+                };
+                let columns = |q: f64| {
+                    let m = motion(q);
+                    [m.velocity.x, m.velocity.y, m.omega]
+                };
+                let (dp, dc) = (d4(&pose, q, h), d4(&columns, q, h));
+                let col = [m.velocity.x, m.velocity.y, m.omega];
+                let bias = [m.bias_acc.x, m.bias_acc.y, m.bias_alpha];
+                let col_scale = 1.0_f64.max(pose_scale / scale);
+                let bias_scale = col_scale / scale;
+                for i in 0..3 {
+                    assert!(
+                        (col[i] - dp[i]).abs() <= 1e-9 * col_scale,
+                        "{} at q = {q}: column {i} {} vs difference {}",
+                        kind.name(),
+                        col[i],
+                        dp[i]
+                    );
+                    assert!(
+                        (bias[i] - dc[i]).abs() <= 1e-9 * bias_scale,
+                        "{} at q = {q}: bias {i} {} vs difference {}",
+                        kind.name(),
+                        bias[i],
+                        dc[i]
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    // 8 kinds and 2 roller sets (on the bifilar and the plain epicycloid, the paths that do not
+    // turn their body), 5 coordinates each.
+    assert_eq!(checked, 50);
+}

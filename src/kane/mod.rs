@@ -141,7 +141,7 @@ struct Node {
 
 /// A path joint's rollers as the engine carries them (docs/design.md, "Rollers"): one rigid
 /// body hanging from the path's parent and moved by the path's coordinate
-/// ([`JointKind::roller_motion`]); its terms are added by `Kane::add_rollers` (`rates.rs`).
+/// ([`JointKind`]'s `roller_motion`); its terms are added by `Kane::add_rollers` (`rates.rs`).
 #[derive(Debug, Clone, Copy)]
 struct Satellite {
     /// The path's parent body (`GROUND_PARENT` for ground).
@@ -341,7 +341,7 @@ impl Kane {
                 i_com: r.total_inertia(),
             });
         }
-        let revolute = mech.joints.iter().all(|j| j.kind == JointKind::Revolute);
+        let revolute = mech.joints.iter().all(|j| j.kind.rotates());
         let form = match mech.speeds {
             Speeds::JointRates => Form::Rates,
             Speeds::AbsoluteAngularVelocities if revolute => Form::Pairs,

@@ -12,11 +12,11 @@
 //! joints (`ω = 1`, `v = 0`) this is `M_kl = J + S·d` and `F_k = N + τ_k`. The composite sums are
 //! accumulated child → parent in one backward pass: O(n·depth) instead of O(Σ depth²).
 //!
-//! Everything about a joint comes from [`JointKind::motion`]: its transform, its columns and its
+//! Everything about a joint comes from the joint kind's `motion` ([`crate::model::joint`]): its transform, its columns and its
 //! velocity-product terms; a new joint kind needs no change here.
 //!
 //! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
-//! path's parent and moved by the path's coordinate through [`JointKind::roller_motion`]. Kane's
+//! path's parent and moved by the path's coordinate through the kind's `roller_motion`. Kane's
 //! sums have no term between two bodies, so their terms are simply added after the composite
 //! pass ([`Kane::add_rollers`]), body by body as the textbook writes them: for every pair of
 //! columns acting on them (their own, the path's coordinate, and each ancestor's),
@@ -24,7 +24,7 @@
 //! stay the code they were.
 
 use super::{GROUND_PARENT, Kane, NO_COORD};
-use crate::model::joint::{JointKind, JointMotion};
+use crate::model::joint::JointMotion;
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 
@@ -49,7 +49,7 @@ impl Kane {
             let qj = if has_coord { q[nd.coord] } else { 0.0 };
             // A revolute root outside the world frame is the basis itself: its (cyclic) angle is
             // never turned into a sine and cosine.
-            let mo = if root && !world && nd.kind == JointKind::Revolute {
+            let mo = if root && !world && nd.kind.rotates() {
                 JointMotion { omega: 1.0, ..JointMotion::still(nd.at) }
             } else {
                 nd.kind.motion(nd.at, qj)
@@ -118,7 +118,7 @@ impl Kane {
             if nd.coord != NO_COORD {
                 let k = nd.coord;
                 let mass = nd.subtree_mass;
-                let revolute = nd.kind == JointKind::Revolute;
+                let revolute = nd.kind.rotates();
                 if forcing {
                     f[k] = if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau;
                 }
@@ -135,7 +135,7 @@ impl Kane {
                     let lc = nodes[l].coord;
                     if lc != NO_COORD {
                         let d = b.origin - a.origin;
-                        let v = if revolute && nodes[l].kind == JointKind::Revolute {
+                        let v = if revolute && nodes[l].kind.rotates() {
                             b.inertia + b.first.dot(&d)
                         } else {
                             mass * b.col_v.dot(&a.col_v)

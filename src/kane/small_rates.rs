@@ -16,9 +16,8 @@
 //!   before any other arithmetic: the path's closed form heads the longest dependency chain, and
 //!   nothing is live across the calls into libm;
 //! - a path joint's mounting rotation (`cos γ`, `sin γ`) is constant and computed here once
-//!   (skipped when γ = 0), instead of once per call inside `JointKind::motion`; the path's own
-//!   `PathShape::at` is called as the joint interface calls it, and the rotation α(s) turned
-//!   into a cosine and sine only when it is not zero (`sin_cos(±0) = (±0, 1)` exactly);
+//!   (skipped when γ = 0), instead of once per call, and handed to the joint kind's
+//!   `motion_mounted` (the one place a joint's motion is written);
 //! - a child of a root in its own frame (the basis) skips the rotations by its parent's exact
 //!   (1, 0) and the parent's exactly zero accelerations;
 //! - the per-body records are local arrays of the literal length N indexed by literal indices
@@ -41,7 +40,7 @@
 
 use super::{GROUND_PARENT, Kane, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
 use crate::error::EngineError;
-use crate::model::joint::{JointKind, JointMotion};
+use crate::model::joint::{JointMotion, PathJoint};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 use crate::model::path::PolarPath;
 
@@ -87,7 +86,7 @@ pub(super) struct Packed {
 struct PathPair {
     /// The absorber's path, its constants prepared once.
     path: PolarPath,
-    /// The joint's travel limit, m (infinite without one): `JointKind::limited`'s test.
+    /// The joint's travel limit, m (infinite without one): the joint kind's `limited` test.
     limit: f64,
     /// `J₀ + I`: the rotor's inertia about its axis plus the absorber's centroidal inertia, kg·m².
     j_sum: f64,
@@ -136,11 +135,11 @@ pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(
             p.ancestor[a][j] = true;
             a = kane.nodes[a].parent;
         }
-        p.basis[j] = root && !kane.world && nd.kind == JointKind::Revolute;
+        p.basis[j] = root && !kane.world && nd.kind.rotates();
         p.basis_parent[j] = !root && p.basis[nd.parent];
-        p.revolute[j] = nd.kind == JointKind::Revolute;
-        if let JointKind::Path { mount, .. } = nd.kind {
-            // The same `sin_cos` as `JointKind::motion`'s, once.
+        p.revolute[j] = nd.kind.rotates();
+        if let Some(PathJoint { mount, .. }) = nd.kind.path() {
+            // The same `sin_cos` as the joint's general motion takes, once.
             let (ms, mc) = mount.sin_cos();
             p.mount[j] = (mount != 0.0).then_some((mc, ms));
         }
@@ -173,7 +172,7 @@ fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
         return None;
     }
     let (r, a) = (&nodes[0], &nodes[1]);
-    let JointKind::Path { shape, travel, .. } = a.kind else { return None };
+    let PathJoint { shape, travel, .. } = a.kind.path()?;
     // The path must be drawn about the rotor axis and carry the centre of mass: then every
     // quantity is rotation-invariant (the mount angle drops out with θ(s)).
     if a.at != Vec2::zeros() || a.com_local != Vec2::zeros() || p.speed_parent[..2] != [NONE, NONE] {
@@ -199,7 +198,7 @@ fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
 /// u̇ is nearly zero carries its rounding) and far below any physical term either could lack.
 fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs, install: &Install) -> bool {
     let Some(pair) = &packed.pair else { return false };
-    let JointKind::Path { shape, .. } = kane.nodes[1].kind else { return false };
+    let Some(PathJoint { shape, .. }) = kane.nodes[1].kind.path() else { return false };
     let reach = shape.length_scale().min(0.5 * shape.travel()).min(0.5 * pair.limit);
     let mut probe = kane.clone();
     install(&mut probe, rates, packed.clone());
@@ -217,31 +216,11 @@ fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs, install: &Install)
     })
 }
 
-/// `JointKind::motion` of body `nd`'s joint at `q`, with a path's mounting rotation given
-/// (`Packed::mount`; see the module doc). The same numbers, up to the sign of a zero.
+/// The motion of body `nd`'s joint at `q`, with a path's mounting rotation prepared once
+/// (`Packed::mount`; see the module doc).
 #[inline(always)]
 fn motion(nd: &Node, mount: Option<(f64, f64)>, q: f64) -> JointMotion {
-    match nd.kind {
-        JointKind::Path { shape, .. } => {
-            // NaN beyond a user travel limit, as `JointKind::motion` does.
-            let p = shape.at(nd.kind.limited(q));
-            let (sin, cos) = if p.alpha == 0.0 { (p.alpha, 1.0) } else { p.alpha.sin_cos() };
-            let turn = |v: Vec2| match mount {
-                Some((mc, ms)) => rotate_cs(mc, ms, v),
-                None => v,
-            };
-            JointMotion {
-                cos,
-                sin,
-                origin: nd.at + turn(p.position),
-                omega: p.dalpha,
-                velocity: turn(p.tangent),
-                bias_alpha: p.ddalpha,
-                bias_acc: turn(p.curvature),
-            }
-        }
-        kind => kind.motion(nd.at, q),
-    }
+    nd.kind.motion_mounted(nd.at, q, mount)
 }
 
 impl Kane {

@@ -300,7 +300,7 @@ pub struct LinearModel {
 
 /// The Jacobians `(∂F/∂q, ∂F/∂u)` of the engine's forcing at `(q, u)`, t = 0, by central
 /// differences with two Richardson extrapolations (steps h, h/2, h/4, error O(h⁶)): h = 0.05 rad
-/// for the angles (0.05 m for slides, 0.05 times [`crate::model::joint::JointKind::coordinate_scale`] for a path's arc
+/// for the angles (0.05 m for slides, 0.05 times the joint kind's `coordinate_scale` for a path's arc
 /// length), h = 0.05·max(1, |u|) for the speeds (F is quadratic in u, so the central
 /// difference is exact there up to rounding). Time-dependent torques are frozen at t = 0.
 pub fn forcing_jacobians(kane: &mut Kane, q: &[f64], u: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {

@@ -24,7 +24,7 @@
 //! the pivot (eq. 15).
 
 use crate::model::inertia::PlanarInertia;
-use crate::model::joint::JointKind;
+use crate::model::joint::PathJoint;
 use crate::model::math::{Vec2, rotate_cs};
 use crate::model::mechanism::Mechanism;
 use crate::model::path::{PathShape, Rollers};
@@ -144,72 +144,68 @@ pub fn absorbers(mech: &Mechanism) -> Vec<Absorber> {
         if m.is_nan() || m <= 0.0 {
             continue;
         }
-        match joint.kind {
-            JointKind::Path { shape, travel, .. } => {
-                let (rho0_2, n2, x4, alpha) = shape.taylor();
-                let (plain, plain_kappa) = path_orders(m, i, n2, x4, alpha);
-                // Rollers are accepted only on a translating absorber (α = 0, checked at load).
-                let (nt2, kappa) = match joint.rollers {
-                    Some(r) => roller_orders(m, rho0_2, n2, x4, &r),
-                    None => (plain, plain_kappa),
-                };
-                // Massive rollers add |c̄(s)|², never exactly quadratic, to the potential.
-                let heavy_rollers = joint.rollers.is_some_and(|r| r.total_mass() > 0.0);
-                let kind = match shape {
-                    PathShape::Circle { .. } => "Circle",
-                    PathShape::Bifilar { .. } => "Bifilar",
-                    PathShape::Epicycloid { .. } => "Epicycloid",
-                    PathShape::General(_) => "General",
-                };
-                // Constant (m + I α'²) and exactly quadratic ρ²: the reduced equation is linear.
-                let tautochronic = if !heavy_rollers && (shape.is_epicycloid() || (i == 0.0 && is_quadratic(shape))) {
-                    Tautochronism::Exact
-                } else if kappa == 0.0 {
-                    Tautochronism::LeadingOrder
-                } else {
-                    Tautochronism::No
-                };
-                out.push(Absorber {
-                    joint: joint.name.clone(),
-                    kind,
-                    mass: m,
-                    inertia: i,
-                    com_offset: carried.com.norm(),
-                    tuning_order_squared: nt2,
-                    nonlinear: kappa,
-                    travel: shape.travel(),
-                    travel_limit: travel,
-                    tautochronic,
-                    rollers: joint.rollers,
-                    plain_tuning_order_squared: plain,
-                });
+        if let Some(PathJoint { shape, travel, .. }) = joint.kind.path() {
+            let (rho0_2, n2, x4, alpha) = shape.taylor();
+            let (plain, plain_kappa) = path_orders(m, i, n2, x4, alpha);
+            // Rollers are accepted only on a translating absorber (α = 0, checked at load).
+            let (nt2, kappa) = match joint.rollers {
+                Some(r) => roller_orders(m, rho0_2, n2, x4, &r),
+                None => (plain, plain_kappa),
+            };
+            // Massive rollers add |c̄(s)|², never exactly quadratic, to the potential.
+            let heavy_rollers = joint.rollers.is_some_and(|r| r.total_mass() > 0.0);
+            let kind = match shape {
+                PathShape::Circle { .. } => "Circle",
+                PathShape::Bifilar { .. } => "Bifilar",
+                PathShape::Epicycloid { .. } => "Epicycloid",
+                PathShape::General(_) => "General",
+            };
+            // Constant (m + I α'²) and exactly quadratic ρ²: the reduced equation is linear.
+            let tautochronic = if !heavy_rollers && (shape.is_epicycloid() || (i == 0.0 && is_quadratic(shape))) {
+                Tautochronism::Exact
+            } else if kappa == 0.0 {
+                Tautochronism::LeadingOrder
+            } else {
+                Tautochronism::No
+            };
+            out.push(Absorber {
+                joint: joint.name.clone(),
+                kind,
+                mass: m,
+                inertia: i,
+                com_offset: carried.com.norm(),
+                tuning_order_squared: nt2,
+                nonlinear: kappa,
+                travel: shape.travel(),
+                travel_limit: travel,
+                tautochronic,
+                rollers: joint.rollers,
+                plain_tuning_order_squared: plain,
+            });
+        } else if joint.kind.rotates() {
+            // A pendulum on a rotor: the parent is a root body spinning about its own origin.
+            let Some(p) = joint.parent else { continue };
+            let rotor = mech.joints[p].parent.is_none() && mech.joints[p].kind.rotates();
+            let (r, l) = (joint.at.norm(), carried.com.norm());
+            if !(rotor && r > 0.0 && l > 0.0) {
+                continue;
             }
-            JointKind::Revolute => {
-                // A pendulum on a rotor: the parent is a root body spinning about its own origin.
-                let Some(p) = joint.parent else { continue };
-                let rotor = mech.joints[p].parent.is_none() && mech.joints[p].kind == JointKind::Revolute;
-                let (r, l) = (joint.at.norm(), carried.com.norm());
-                if !(rotor && r > 0.0 && l > 0.0) {
-                    continue;
-                }
-                let (_, n2, x4, alpha) = PathShape::Circle { radius: r, length: l }.taylor();
-                let (nt2, kappa) = path_orders(m, i, n2, x4, alpha);
-                out.push(Absorber {
-                    joint: joint.name.clone(),
-                    kind: "Revolute pendulum",
-                    mass: m,
-                    inertia: i,
-                    com_offset: 0.0,
-                    tuning_order_squared: nt2,
-                    nonlinear: kappa,
-                    travel: f64::INFINITY,
-                    travel_limit: None,
-                    tautochronic: Tautochronism::No,
-                    rollers: None,
-                    plain_tuning_order_squared: nt2,
-                });
-            }
-            _ => {}
+            let (_, n2, x4, alpha) = PathShape::Circle { radius: r, length: l }.taylor();
+            let (nt2, kappa) = path_orders(m, i, n2, x4, alpha);
+            out.push(Absorber {
+                joint: joint.name.clone(),
+                kind: "Revolute pendulum",
+                mass: m,
+                inertia: i,
+                com_offset: 0.0,
+                tuning_order_squared: nt2,
+                nonlinear: kappa,
+                travel: f64::INFINITY,
+                travel_limit: None,
+                tautochronic: Tautochronism::No,
+                rollers: None,
+                plain_tuning_order_squared: nt2,
+            });
         }
     }
     out

@@ -6,7 +6,6 @@
 
 use crate::error::{Error, Result};
 use crate::model::gears::{Follow, Gear, renumber};
-use crate::model::joint::JointKind;
 use crate::model::mechanism::Mechanism;
 use crate::model::speeds::Speeds;
 
@@ -91,7 +90,7 @@ impl Mechanism {
             }
             let meshed = self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == j || g.follows == j));
             let sprung = joint.spring.is_some_and(|sp| sp.stiffness != 0.0);
-            if joint.parent.is_some() || joint.kind != JointKind::Revolute || sprung || meshed {
+            if joint.parent.is_some() || !joint.kind.rotates() || sprung || meshed {
                 return Some(format!(
                     "joint `{}` is geared to the spin joint `{}` and {}, so the spin angle is not cyclic; the \
                      linear analysis needs it cyclic (put the compliance in a shaft spring after a rigid gear, or \

@@ -24,7 +24,7 @@
 use crate::error::Result;
 use crate::io::Source;
 use crate::io::known_list;
-use crate::model::joint::{Joint, JointKind};
+use crate::model::joint::Joint;
 use crate::model::speeds::Speeds;
 use serde::{Deserialize, Serialize};
 
@@ -152,19 +152,9 @@ pub(crate) fn resolve(
                     format!("unknown joint `{name}` (joints: {})", known_list(joints.iter().map(|j| j.name.as_str()))),
                 ));
             };
-            match joints[j].kind {
-                JointKind::Revolute | JointKind::Prismatic { .. } => Ok(j),
-                JointKind::Fixed => Err(src.error(
-                    &format!("{path}.{field}"),
-                    format!("joint `{name}` is Fixed: it has no coordinate to couple"),
-                )),
-                JointKind::Path { .. } => Err(src.error(
-                    &format!("{path}.{field}"),
-                    format!(
-                        "joint `{name}` is a path joint: couplings join revolute and prismatic joints (a gear does \
-                         not drive an absorber along its path)"
-                    ),
-                )),
+            match joints[j].kind.uncouplable() {
+                None => Ok(j),
+                Some(why) => Err(src.error(&format!("{path}.{field}"), format!("joint `{name}` {why}"))),
             }
         };
         let joint = joint_of("joint", &g.joint)?;

@@ -103,7 +103,92 @@ impl JointMotion {
     }
 }
 
+/// A path joint's parameters ([`JointKind::Path`]'s fields), for callers that need the path itself
+/// rather than one of [`JointKind`]'s answers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathJoint {
+    /// The curve and rotation law.
+    pub shape: PathShape,
+    /// Mounting angle of the vertex direction in the parent frame, rad.
+    pub mount: f64,
+    /// The user's travel limit, m, when one is given.
+    pub travel: Option<f64>,
+}
+
 impl JointKind {
+    /// The kind's name as written in RON and shown in reports and the Python package:
+    /// `Revolute`, `Prismatic`, `Fixed` or `Path`.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "Revolute",
+            JointKind::Prismatic { .. } => "Prismatic",
+            JointKind::Fixed => "Fixed",
+            JointKind::Path { .. } => "Path",
+        }
+    }
+
+    /// The path's parameters for a path joint, `None` for the other kinds.
+    #[inline]
+    pub fn path(self) -> Option<PathJoint> {
+        match self {
+            JointKind::Path { shape, mount, travel } => Some(PathJoint { shape, mount, travel }),
+            JointKind::Revolute | JointKind::Prismatic { .. } | JointKind::Fixed => None,
+        }
+    }
+
+    /// The unit slide axis of a prismatic joint (in the parent frame, once loaded), `None` for the
+    /// other kinds.
+    pub fn slide_axis(self) -> Option<Vec2> {
+        match self {
+            JointKind::Prismatic { axis } => Some(Vec2::new(axis.0, axis.1)),
+            JointKind::Revolute | JointKind::Fixed | JointKind::Path { .. } => None,
+        }
+    }
+
+    /// The direction the kind fixes in its parent's frame, which turns with the parent: a slide
+    /// axis, or a path's vertex direction (its mount); `None` for a revolute or fixed joint, whose
+    /// only geometry is the joint point.
+    pub fn direction(self) -> Option<Vec2> {
+        match self {
+            JointKind::Prismatic { axis } => Some(Vec2::new(axis.0, axis.1)),
+            JointKind::Path { mount, .. } => Some(Vec2::new(mount.cos(), mount.sin())),
+            JointKind::Revolute | JointKind::Fixed => None,
+        }
+    }
+
+    /// True when the child's origin stays at the joint point whatever the coordinate (revolute
+    /// and fixed joints).
+    pub fn keeps_origin(self) -> bool {
+        match self {
+            JointKind::Revolute | JointKind::Fixed => true,
+            JointKind::Prismatic { .. } | JointKind::Path { .. } => false,
+        }
+    }
+
+    /// True when the child turns relative to the parent as the coordinate moves: a revolute
+    /// joint, or a path whose rotation law α(s) is not zero.
+    pub fn turns_child(self) -> bool {
+        match self {
+            JointKind::Revolute => true,
+            JointKind::Path { shape, .. } => shape.turns(),
+            JointKind::Prismatic { .. } | JointKind::Fixed => false,
+        }
+    }
+
+    /// Why a coupling (a gear, a mesh) cannot join this joint, as the rest of a sentence that
+    /// starts with the joint's name, or `None` when it can: couplings relate the rates of
+    /// one-coordinate joints whose coordinate is a rotation or a slide.
+    pub fn uncouplable(self) -> Option<&'static str> {
+        match self {
+            JointKind::Revolute | JointKind::Prismatic { .. } => None,
+            JointKind::Fixed => Some("is Fixed: it has no coordinate to couple"),
+            JointKind::Path { .. } => Some(
+                "is a path joint: couplings join revolute and prismatic joints (a gear does not drive an absorber \
+                 along its path)",
+            ),
+        }
+    }
+
     /// Number of coordinates (and generalized speeds) the joint owns: 1, or 0 for `Fixed`.
     pub fn dof(self) -> usize {
         match self {
@@ -178,21 +263,36 @@ impl JointKind {
                 JointMotion { origin: at + q * axis, velocity: axis, ..still }
             }
             JointKind::Fixed => still,
-            JointKind::Path { shape, mount, .. } => {
-                // The path's own frame (vertex on +x) turned by the mounting angle.
+            JointKind::Path { mount, .. } => {
                 let (ms, mc) = mount.sin_cos();
-                let p = shape.at(self.limited(q));
-                let (sin, cos) = p.alpha.sin_cos();
-                JointMotion {
-                    cos,
-                    sin,
-                    origin: at + rotate_cs(mc, ms, p.position),
-                    omega: p.dalpha,
-                    velocity: rotate_cs(mc, ms, p.tangent),
-                    bias_alpha: p.ddalpha,
-                    bias_acc: rotate_cs(mc, ms, p.curvature),
-                }
+                self.motion_mounted(at, q, Some((mc, ms)))
             }
+        }
+    }
+
+    /// [`JointKind::motion`] with a path's mounting rotation given as its cosine and sine (`None`:
+    /// no rotation, for a mount of zero), so that a caller evaluating the same joint many times
+    /// (the engine's fixed-size forms) takes the mount's `sin_cos` once; the same numbers up to
+    /// the sign of a zero. Kinds other than `Path` ignore `mount`.
+    #[inline(always)]
+    pub fn motion_mounted(self, at: Vec2, q: f64, mount: Option<(f64, f64)>) -> JointMotion {
+        let JointKind::Path { shape, .. } = self else { return self.motion(at, q) };
+        // The path's own frame (vertex on +x) turned by the mounting angle.
+        let turn = |v: Vec2| match mount {
+            Some((mc, ms)) => rotate_cs(mc, ms, v),
+            None => v,
+        };
+        let p = shape.at(self.limited(q));
+        // A translating absorber (α ≡ 0) skips the sine and cosine.
+        let (sin, cos) = if p.alpha == 0.0 { (p.alpha, 1.0) } else { p.alpha.sin_cos() };
+        JointMotion {
+            cos,
+            sin,
+            origin: at + turn(p.position),
+            omega: p.dalpha,
+            velocity: turn(p.tangent),
+            bias_alpha: p.ddalpha,
+            bias_acc: turn(p.curvature),
         }
     }
 

@@ -64,7 +64,7 @@ pub struct Mechanism {
 
 /// One path joint's rollers as the engine carries them (docs/design.md, "Rollers"): a rigid body
 /// of mass N m_r and centroidal inertia N I_r hanging from the path joint's parent, moved by the
-/// path's coordinate through [`JointKind::roller_motion`], plus the rollers' spread
+/// path's coordinate through [`JointKind`]'s `roller_motion`, plus the rollers' spread
 /// `N m_r spread²`, a constant inertia of that parent.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RollerSet {
@@ -86,7 +86,7 @@ pub struct RollerSet {
 
 impl RollerSet {
     /// The rollers' motion relative to the parent at the path's arc length `s` (m): centroid,
-    /// rotation ψ, columns and bias terms ([`JointKind::roller_motion`]).
+    /// rotation ψ, columns and bias terms ([`JointKind`]'s `roller_motion`).
     #[inline]
     pub fn motion(&self, s: f64) -> JointMotion {
         self.kind.roller_motion(self.at, s, self.centre, self.rollers.turn_rate())
@@ -101,7 +101,7 @@ impl Mechanism {
             .enumerate()
             .filter_map(|(j, joint)| {
                 let rollers = joint.rollers?;
-                let JointKind::Path { shape, .. } = joint.kind else { return None };
+                let shape = joint.kind.path()?.shape;
                 Some(RollerSet {
                     joint: j,
                     parent: joint.parent,
@@ -160,10 +160,7 @@ impl Mechanism {
     /// path's rotation law α(s) in it, which [`Mechanism::rotation_coordinates`] and the body
     /// probes built on it do not sum (they add revolute angles only), so callers refuse it.
     pub fn turning_path_above(&self, body: usize) -> Option<usize> {
-        self.path_to(body).into_iter().rev().find(|&j| match self.joints[j].kind {
-            JointKind::Path { shape, .. } => shape.turns(),
-            _ => false,
-        })
+        self.path_to(body).into_iter().rev().find(|&j| self.joints[j].kind.path().is_some_and(|p| p.shape.turns()))
     }
 
     /// The coordinates of the rotating joints on the path from ground to body `body`, root first:
@@ -191,13 +188,10 @@ impl Mechanism {
     pub fn path_out_of_travel(&self, q: &[f64]) -> Option<crate::error::EngineError> {
         // Only path joints have an end: a NaN angle of another joint is the engine's own
         // non-finite error, not a path's.
-        self.joints.iter().filter(|j| matches!(j.kind, crate::model::joint::JointKind::Path { .. })).find_map(|j| {
+        self.joints.iter().filter_map(|j| Some((j, j.kind.path()?))).find_map(|(j, path)| {
             let s = *q.get(j.coordinate?)?;
             let travel = j.kind.travel();
-            let limit = match j.kind {
-                crate::model::joint::JointKind::Path { shape, travel: Some(t), .. } => t < shape.travel(),
-                _ => false,
-            };
+            let limit = path.travel.is_some_and(|t| t < path.shape.travel());
             // A NaN coordinate is off the path too.
             let on_path = s.abs() < travel;
             (!on_path).then(|| crate::error::EngineError::OutOfTravel {
