@@ -15,7 +15,7 @@ use std::path::PathBuf;
 /// The implicit root body's name.
 pub const GROUND: &str = "ground";
 
-/// A mechanism file as written (see the README for an annotated example).
+/// A mechanism file as written (the user guide's `docs/guide/src/mechanism.md` has an annotated example).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename = "Mechanism", deny_unknown_fields)]
 pub struct MechanismSpec {

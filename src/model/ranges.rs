@@ -3,7 +3,7 @@
 //! loop without end or divide by nothing (issue 25: a gear ratio of 1e-300 passed and a linear
 //! response then never finished; an epicycloid order ñ of 1e9, a bifilar length of 1e-300 and a
 //! roller count of 1e9 were accepted without a word). Every check that uses one states the range
-//! in its error; `README.md`, "Limits and errors", lists them.
+//! in its error; the user guide's "Limits and errors" (`docs/guide/src/limits.md`) lists them.
 
 use std::ops::RangeInclusive;
 
