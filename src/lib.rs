@@ -25,6 +25,7 @@
 //! - [`cpva`]: the paper's rotor with pendulums, as a builder and in closed form.
 
 // Index loops mirror the formulas (M_rs, paths r..s) and keep parallel arrays in step.
+#![warn(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
 pub mod error;

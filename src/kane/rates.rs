@@ -18,7 +18,7 @@
 //! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
 //! path's parent and moved by the path's coordinate through the kind's `roller_motion`. Kane's
 //! sums have no term between two bodies, so their terms are simply added after the composite
-//! pass ([`Kane::add_rollers`]), body by body as the textbook writes them: for every pair of
+//! pass (`Kane::add_rollers`), body by body as the textbook writes them: for every pair of
 //! columns acting on them (their own, the path's coordinate, and each ancestor's),
 //! `M_ab += m v_a·v_b + I ω_a ω_b` and `F_a += (f − m a⁰)·v_a + (T − I α⁰) ω_a`. The bodies' passes
 //! stay the code they were.

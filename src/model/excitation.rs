@@ -24,6 +24,7 @@ pub fn ramp_in(t: f64, ramp_s: f64) -> f64 {
     }
 }
 
+/// A speed in rpm as an angular velocity in rad/s (× 2π/60).
 pub fn rpm_to_rad_s(rpm: f64) -> f64 {
     rpm * 2.0 * PI / 60.0
 }

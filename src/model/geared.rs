@@ -18,7 +18,7 @@ impl Mechanism {
 
     /// Per joint, how its coordinate follows from the reduced state; `None` for a joint without
     /// coordinate (`Fixed`). A rigidly driven joint has `coordinate: None` in
-    /// [`Joint::coordinate`] but a `Follow` here, so its angle and rate stay readable.
+    /// [`Joint::coordinate`](crate::model::joint::Joint::coordinate) but a `Follow` here, so its angle and rate stay readable.
     pub fn follow_map(&self) -> Vec<Option<Follow>> {
         let mut out: Vec<Option<Follow>> = self
             .joints

@@ -17,7 +17,7 @@
 //!
 //! Here: the RON form ([`GearSpec`]), the resolved coupling ([`Gear`]) and the map entry from the
 //! reduced state to a joint's coordinate ([`Follow`]); validation with located errors is
-//! [`resolve`], called by [`crate::load`]. The mechanism's geared queries (its follow map, the
+//! `resolve`, called by [`crate::load`]. The mechanism's geared queries (its follow map, the
 //! unconstrained tree the engine evaluates before reducing, locking a gear train) are in
 //! [`super::geared`].
 

@@ -89,7 +89,7 @@ static INTERNED: OnceLock<Mutex<Vec<&'static GeneralPath>>> = OnceLock::new();
 impl GeneralPath {
     /// The tabulated path of these coefficients: built the first time, then shared.
     ///
-    /// NOTE: the table is leaked on purpose: [`PathShape`] (and so the `Copy` joint kind) holds a
+    /// NOTE: the table is leaked on purpose: [`PathShape`](super::PathShape) (and so the `Copy` joint kind) holds a
     /// `&'static` to it. Equal coefficients share one table, so the memory kept is one table
     /// (a few hundred bytes) per distinct path a process loads.
     pub fn intern(rho0: f64, n_tilde: f64, x: &[f64], alpha: &[f64]) -> &'static GeneralPath {

@@ -49,7 +49,7 @@ pub enum PolarPath {
 
 impl PolarPath {
     /// The rotation-invariant quantities at arc length `s` (m); NaN in every field at |s| ≥ the
-    /// travel (or a NaN s), as [`PathShape::at`].
+    /// travel (or a NaN s), as [`PathShape::at`](super::PathShape::at).
     #[inline(always)]
     pub fn at(self, s: f64) -> PolarPoint {
         match self {
