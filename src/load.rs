@@ -7,7 +7,7 @@
 
 use crate::error::{EngineError, Error, Result};
 use crate::io::known_list;
-use crate::io::{ReadPolicy, Source};
+use crate::io::{ReadPolicy, Source, catalog};
 use crate::model::body::{Body, BodySpec};
 use crate::model::coupling::Couplings;
 use crate::model::joint::{Joint, JointSpec};
@@ -448,12 +448,27 @@ fn resolve_part<T: Part>(
         ));
     }
     let here = format!("{path}.part");
-    let file = policy.resolve(base, part).map_err(|msg| referrer.error(&here, msg))?;
-    let src = Source::read_with(&file, policy).map_err(|e| referrer.error(&here, e.to_string()))?;
+    // A catalog part's own `part` names another catalog part, with or without the prefix: the
+    // catalog is its folder.
+    let in_catalog = referrer.file.to_str().is_some_and(|f| f.starts_with(catalog::PREFIX));
+    let (src, folder) = match catalog::name_of(part).or(in_catalog.then_some(part)) {
+        Some(name) => {
+            let text = catalog::text(name).map_err(|msg| referrer.error(&here, msg))?;
+            (Source::from_text(&format!("{}{name}", catalog::PREFIX), text), None)
+        }
+        None => {
+            let file = policy.resolve(base, part).map_err(|msg| referrer.error(&here, msg))?;
+            let src = Source::read_with(&file, policy).map_err(|e| referrer.error(&here, e.to_string()))?;
+            (src, Some(folder_of(&file)))
+        }
+    };
     let spec: T = src.parse_as(T::KIND)?;
     spec.check_numbers(&src, "")?;
     match spec.part() {
-        Some(inner) => Ok(resolve_part::<T>(&folder_of(&file), inner, &src, "", policy, depth + 1)?.merged(&spec)),
+        Some(inner) => {
+            let folder = folder.unwrap_or_default();
+            Ok(resolve_part::<T>(&folder, inner, &src, "", policy, depth + 1)?.merged(&spec))
+        }
         None => Ok(spec),
     }
 }

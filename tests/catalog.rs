@@ -22,8 +22,8 @@ fn ron_files(dir: &str) -> Vec<std::path::PathBuf> {
 
 #[test]
 fn every_catalog_part_parses() {
-    let bodies = ron_files("examples/bodies");
-    let joints = ron_files("examples/joints");
+    let bodies = ron_files("bodies");
+    let joints = ron_files("joints");
     assert!(bodies.len() >= 3 && joints.len() >= 2);
     for p in bodies {
         let src = Source::read(&p).unwrap();
@@ -71,4 +71,51 @@ fn example_files_equal_the_builder() {
             assert!((da[i] - db[i]).abs() <= 1e-10 * db[i].abs().max(1.0), "{file}[{i}]: {} vs {}", da[i], db[i]);
         }
     }
+}
+
+/// The shipped catalog compiled into the library is exactly the top-level `bodies/` and
+/// `joints/` folders, file for file and byte for byte.
+#[test]
+fn the_embedded_catalog_is_the_top_level_folders() {
+    use kanedyn::io::catalog::PARTS;
+    let mut on_disk: Vec<String> = ["bodies", "joints"]
+        .iter()
+        .flat_map(|d| {
+            ron_files(d).into_iter().map(move |p| format!("{d}/{}", p.file_name().unwrap().to_str().unwrap()))
+        })
+        .collect();
+    on_disk.sort();
+    let embedded: Vec<String> = PARTS.iter().map(|(n, _)| n.to_string()).collect();
+    assert_eq!(embedded, on_disk, "src/io/catalog.rs's PARTS must list every part of bodies/ and joints/");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (name, text) in PARTS {
+        assert_eq!(*text, std::fs::read_to_string(root.join(name)).unwrap(), "{name}");
+    }
+    assert!(on_disk.iter().filter(|n| n.starts_with("bodies/")).count() >= 3);
+    assert!(on_disk.iter().filter(|n| n.starts_with("joints/")).count() >= 3);
+}
+
+/// A mechanism in a folder with no parts of its own builds from `catalog:` names (the parts
+/// never touch the disk), equals the example that names the same parts, and a catalog name that
+/// does not exist is a located error listing the parts there are.
+#[test]
+fn catalog_parts_load_from_anywhere_and_unknown_ones_are_located() {
+    let dir = std::env::temp_dir().join(format!("kanedyn-catalog-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("examples/cpva.ron")).unwrap();
+    assert!(text.contains("part: \"catalog:bodies/flywheel_rotor.ron\""));
+    std::fs::write(dir.join("alone.ron"), &text).unwrap();
+    let mut alone = Mechanism::from_file(&dir.join("alone.ron")).unwrap();
+    let example = Mechanism::from_file(&root.join("examples/cpva.ron")).unwrap();
+    alone.file = example.file.clone();
+    assert_eq!(alone, example);
+    // Unknown part: the error names the mechanism file, line:column, field and the catalog.
+    let bad = text.replace("catalog:bodies/cpva_pendulum.ron", "catalog:bodies/cpva_pendulm.ron");
+    std::fs::write(dir.join("bad.ron"), &bad).unwrap();
+    let e = format!("{:#}", Mechanism::from_file(&dir.join("bad.ron")).unwrap_err());
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(e.contains("bad.ron:9:") && e.contains("bodies[1].part"), "{e}");
+    assert!(e.contains("no part `bodies/cpva_pendulm.ron` in the shipped catalog"), "{e}");
+    assert!(e.contains("bodies/cpva_pendulum.ron"), "{e}");
 }

@@ -561,10 +561,10 @@ fn a_study_warns_when_the_coupling_harmonics_have_not_converged() {
     // rad/s), balanced with 4 harmonics only: the summary must say the coupling force has not
     // converged.
     let dir = std::env::temp_dir().join(format!("kanedyn_couplings_study_{}", std::process::id()));
-    std::fs::create_dir_all(dir.join("joints")).unwrap();
+    std::fs::create_dir_all(&dir).unwrap();
+    // The arc spring comes from the shipped catalog.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     std::fs::copy(root.join("dmf.ron"), dir.join("dmf.ron")).unwrap();
-    std::fs::copy(root.join("joints/dmf_arc_spring.ron"), dir.join("joints/dmf_arc_spring.ron")).unwrap();
     std::fs::write(
         dir.join("s.ron"),
         r#"Study(

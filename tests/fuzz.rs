@@ -2,9 +2,9 @@
 //! mechanism, study and catalog-part files (issue 11, "Reliability and security of study runs").
 //!
 //! # What it fuzzes
-//! The corpus is every `examples/*.ron` file and every catalog part (`bodies/`, `joints/`, or
-//! `examples/bodies/`, `examples/joints/`, whichever exist). Each execution takes one corpus file,
-//! applies 1–4 mutations ([`mutate::MUTATORS`]: byte flips and replacements, token deletion,
+//!
+//! The corpus is every `examples/*.ron` file and every catalog part (`bodies/`, `joints/`). Each
+//! execution takes one corpus file, applies 1–4 mutations ([`mutate::MUTATORS`]: byte flips and replacements, token deletion,
 //! duplication and swaps, numbers replaced by extremes such as `1e19`, `NaN` or 10^5 digits,
 //! strings replaced by 10^5 characters, `".."`, `"/etc/passwd"`, `"/dev/zero"`, …, a value wrapped
 //! in 1000–100 000 brackets, a list element repeated up to 1000 times, a splice from another
@@ -270,7 +270,7 @@ const TREE: &[&str] = &["examples", "bodies", "joints"];
 
 fn load_corpus(root: &Path) -> Vec<Seed> {
     let mut seeds = Vec::new();
-    for dir in ["examples", "bodies", "joints", "examples/bodies", "examples/joints"] {
+    for dir in TREE {
         let Ok(entries) = std::fs::read_dir(root.join(dir)) else { continue };
         let mut files: Vec<PathBuf> = entries
             .filter_map(|e| e.ok().map(|e| e.path()))

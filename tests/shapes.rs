@@ -181,7 +181,7 @@ fn an_off_centre_hole_shifts_the_centre_of_mass_away() {
 #[test]
 fn catalog_flywheel_and_an_override_of_its_density() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let src = Source::read(&root.join("examples/bodies/steel_disc_flywheel.ron")).unwrap();
+    let src = Source::read(&root.join("bodies/steel_disc_flywheel.ron")).unwrap();
     let spec: BodySpec = src.parse().unwrap();
     let steel = spec.inertia_props(&src, "").unwrap();
     let (rho, t, ro, ri) = (7850.0, 0.025, 0.2, 0.03);
@@ -189,7 +189,7 @@ fn catalog_flywheel_and_an_override_of_its_density() {
     assert_props("steel flywheel", steel, m, (0.0, 0.0), m * (ro * ro + ri * ri) / 2.0, ro);
     // Through a mechanism, overriding the density (aluminium) scales mass and inertia alike.
     let dir = tmp("override");
-    std::fs::copy(root.join("examples/bodies/steel_disc_flywheel.ron"), dir.join("fw.ron")).unwrap();
+    std::fs::copy(root.join("bodies/steel_disc_flywheel.ron"), dir.join("fw.ron")).unwrap();
     let mech = dir.join("m.ron");
     std::fs::write(
         &mech,

@@ -15,7 +15,7 @@ use kanedyn::time::integrate::{IntegrateOptions, integrate};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
-// The canonical rotor-CPVA (examples/bodies/*.ron): rotor inertia, pendulum mass, centre of mass
+// The canonical rotor-CPVA (bodies/*.ron): rotor inertia, pendulum mass, centre of mass
 // from the pivot, inertia about it, pivot radius, dampers.
 const J_R: f64 = 3.443504355127701;
 const M: f64 = 6.0;

@@ -7,13 +7,13 @@
 use kanedyn::study::{RunOptions, Study, StudyReport, run};
 use std::path::{Path, PathBuf};
 
-/// Canonical rotor inertia (examples/bodies/flywheel_rotor.ron), kg·m², split into a core and a
+/// Canonical rotor inertia (bodies/flywheel_rotor.ron), kg·m², split into a core and a
 /// hub on the axis below.
 const ROTOR_I: f64 = 3.443504355127701;
 const HUB_I: f64 = 0.443504355127701;
 
 fn mechanism(welded: bool) -> String {
-    // The canonical pendulum (examples/bodies/cpva_pendulum.ron): n_t = 3.11.
+    // The canonical pendulum (bodies/cpva_pendulum.ron): n_t = 3.11.
     let pendulum =
         r#"Body(name: "pendulum", mass: 6.0, com: (0.015209365076836064, 0.0), inertia: 0.00021600000000000002)"#;
     let loads = r#"loads: [GroundDamper(body: "rotor", c: 5e-3)]"#;

@@ -28,7 +28,7 @@ def free_cpva():
     """The paper's rotor-CPVA without dampers, torques or losses."""
     start, end = CPVA.index("    loads: ["), CPVA.index("\n    ],\n)") + len("\n    ],\n")
     text = CPVA[:start] + "    loads: [],\n" + CPVA[end:]
-    text = text.replace('part: "joints/cpva_pivot.ron", parent', 'part: "joints/cpva_pivot.ron", damper: 0.0, parent')
+    text = text.replace('part: "catalog:joints/cpva_pivot.ron", parent', 'part: "catalog:joints/cpva_pivot.ron", damper: 0.0, parent')
     assert text != CPVA
     m = kanedyn.Mechanism.from_str(text, name=str(EXAMPLES / "cpva_free.ron"))
     info = m.check()

@@ -9,6 +9,7 @@
 //! Files are read under a [`ReadPolicy`] (folders and sizes); the field-path scanner that turns
 //! a path into a line:column is the private module `locate`.
 
+pub mod catalog;
 mod locate;
 
 pub use locate::{line_col, locate};

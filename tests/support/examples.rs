@@ -1,18 +1,13 @@
 //! Copying example files into a scratch folder, so a study written there can name them: the
-//! paper's CPVA with its catalog parts (tests/results_json.rs, tests/report_html.rs), or a whole
+//! paper's CPVA (tests/results_json.rs, tests/report_html.rs), or a whole
 //! folder tree (the fuzzers, the failing-study and plan tests). Included with `#[path]`.
 
 use std::path::Path;
 
-/// Copies `examples/cpva.ron` and the `bodies/` and `joints/` catalogs into `dir`.
+/// Copies `examples/cpva.ron` into `dir` (its parts come from the shipped catalog).
 #[allow(dead_code)] // the tests that copy whole trees do not use it
 pub fn copy_cpva(dir: &Path) {
-    for sub in ["bodies", "joints"] {
-        std::fs::create_dir_all(dir.join(sub)).unwrap();
-        for e in std::fs::read_dir(Path::new("examples").join(sub)).unwrap().flatten() {
-            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
-        }
-    }
+    std::fs::create_dir_all(dir).unwrap();
     std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
 }
 
