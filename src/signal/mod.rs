@@ -10,6 +10,10 @@
 //!   constant increments of the simulated rotor angle θ, so FFT bins of a block are orders
 //!   (cycles per revolution) directly and speed fluctuations do not smear them.
 //!
+//! The transforms are real-input FFTs planned by `realfft` (rustfft underneath, which picks
+//! radix, mixed-radix or Bluestein's algorithm per length), one plan per block length reused
+//! over the blocks.
+//!
 //! # Amplitude calibration
 //! Both methods report the peak amplitude of the equivalent sinusoid,
 //! `A = 2·sqrt(Σ_band |X_k|² / (N·Σw²))`, with N the block length in samples and `w` the
