@@ -1,7 +1,8 @@
 //! Issue 25, item 7 (whole runs): a seeded fuzzer that runs whole studies, not only loads them.
-//! Each execution fills a three-analysis study (linear response, Campbell diagram, order sweep
-//! on the paper's CPVA) with numbers drawn from a pool of ordinary and hostile values, loads it
-//! and, when it loads, runs it with a tight watchdog (3 × plan + 1 s) and the CPU limit at 5 s.
+//! Each execution fills a five-analysis study (linear response, Campbell diagram, order sweep,
+//! harmonic-balance branch, free oscillation on the paper's CPVA) with numbers drawn from a pool of ordinary and hostile values, loads it
+//! and, when it loads, runs it with a tight watchdog (3 × plan + 1 s) and the CPU limit at 60 s (the
+//! harmonic-balance plan bounds a branch by its 2000-point cap, so 5 s would refuse nearly all).
 //! Every execution must end in a located load error or a run that returns within the watchdog's
 //! budget (3 × its plan + 1 s, plus 0.5 s for its files, as CPU time measured in-process: the
 //! short and long tests are never run together), whose files hold no NaN or inf text and are
@@ -9,7 +10,8 @@
 //! pendulum) is stopped by the watchdog.
 //!
 //! The short version (40 executions) runs with the normal tests; the long one is
-//! `cargo test --release --test fuzz_runs long -- --ignored --nocapture`. Replay one execution
+//! `cargo test --release --test fuzz_runs long -- --ignored --nocapture` (2000 executions, or
+//! `KANEDYN_FUZZ_EXECUTIONS`). Replay one execution
 //! with `KANEDYN_FUZZ_SEED=<seed> KANEDYN_FUZZ_ONLY=<iteration>`.
 
 #[path = "support/examples.rs"]
@@ -59,16 +61,21 @@ fn non_finite_word(text: &str) -> bool {
 
 /// The study of execution `i`: each number from the pool or its usual value.
 fn study_text(rng: &mut Rng) -> String {
-    let mut f = |usual: &'static str| if rng.next().is_multiple_of(8) { rng.pick(FLOATS) } else { usual };
+    let mut f = |usual: &'static str| if rng.next().is_multiple_of(16) { rng.pick(FLOATS) } else { usual };
     let (rtol, fs, rpm, from, to) = (f("1e-9"), f("2000.0"), f("1000.0"), f("0.9"), f("1.2"));
     let (rpm2, omin, omax, dur, amp) = (f("2000.0"), f("2.9"), f("3.3"), f("20.0"), f("40.0"));
     let points = ["11", "11", "11", "31", "2", "0", "1000000", "11"][(rng.next() % 8) as usize];
+    let harmonics = ["10", "10", "10", "5", "1", "0", "64", "65"][(rng.next() % 8) as usize];
+    let mut g = |usual: &'static str| if rng.next().is_multiple_of(16) { rng.pick(FLOATS) } else { usual };
+    let (swing, hamp) = (g("0.5"), g("40.0"));
     format!(
         "Study(name: \"f\", mechanism: \"cpva.ron\", lock: [\"pivot\"], integration: (rtol: {rtol}, sample_hz: {fs}),\n\
          analyses: [\n\
          LinearResponse(name: \"l\", rpm: {rpm}, from: {from}, to: {to}, points: {points}),\n\
          Campbell(name: \"c\", rpm_min: 0.0, rpm_max: {rpm2}, points: {points}),\n\
          OrderSweep(name: \"s\", rpm: {rpm}, order_min: {omin}, order_max: {omax}, duration_s: {dur}, amplitudes: [{amp}], directions: [Up]),\n\
+         HarmonicBalance(name: \"h\", rpm: {rpm}, order_min: {omin}, order_max: {omax}, amplitudes: [{hamp}], harmonics: {harmonics}),\n\
+         FreeOscillation(name: \"o\", rpm: {rpm}, joint: \"pivot\", amplitudes: [0.1, {swing}]),\n\
          ])\n"
     )
 }
@@ -78,7 +85,7 @@ fn fuzz(seed: u64, executions: usize) {
     std::fs::remove_dir_all(&root).ok();
     copy_dir(Path::new("examples"), &root);
     let only: Option<usize> = std::env::var("KANEDYN_FUZZ_ONLY").ok().and_then(|v| v.parse().ok());
-    let limits = Limits { max_cpu_s: 5.0, watchdog: Watchdog { factor: 3.0, floor_s: 1.0 }, ..Limits::default() };
+    let limits = Limits { max_cpu_s: 60.0, watchdog: Watchdog { factor: 3.0, floor_s: 1.0 }, ..Limits::default() };
     let opts = LoadOptions { limits, ..LoadOptions::default() };
     let (mut refused, mut ran, mut watchdog, mut slowest) = (0, 0, 0, 0.0_f64);
     for i in 0..executions {
@@ -133,5 +140,6 @@ fn short() {
 #[ignore]
 fn long() {
     let seed = std::env::var("KANEDYN_FUZZ_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(2525);
-    fuzz(seed, 2000);
+    let executions = std::env::var("KANEDYN_FUZZ_EXECUTIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(2000);
+    fuzz(seed, executions);
 }
