@@ -143,15 +143,7 @@ fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
     );
     assert!(text.contains("gravity: (0.0, -9.81)"));
     std::fs::write(dir.join("m.ron"), &text).unwrap();
-    // Its catalog parts, beside it as in examples/.
-    for sub in ["bodies", "joints"] {
-        std::fs::create_dir_all(dir.join(sub)).unwrap();
-        for e in std::fs::read_dir(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(sub)).unwrap()
-        {
-            let e = e.unwrap();
-            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
-        }
-    }
+    // Its catalog parts come from the shipped catalog.
     let study_text = |parameter: &str| {
         format!(
             r#"Study(name: "g", mechanism: "m.ron", analyses: [

@@ -194,13 +194,6 @@ fn study_dir(tag: &str, text: &str) -> std::path::PathBuf {
     );
     assert!(mech.contains("gravity: (0.0, -9.81)"));
     std::fs::write(dir.join("m.ron"), mech).unwrap();
-    for sub in ["bodies", "joints"] {
-        std::fs::create_dir_all(dir.join(sub)).unwrap();
-        for e in std::fs::read_dir(root.join(sub)).unwrap() {
-            let e = e.unwrap();
-            std::fs::copy(e.path(), dir.join(sub).join(e.file_name())).unwrap();
-        }
-    }
     std::fs::write(dir.join("s.ron"), text).unwrap();
     dir
 }

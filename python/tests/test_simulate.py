@@ -39,8 +39,6 @@ def free_cpva():
 def test_simulate_equals_the_cli_time_series_bit_for_bit(cli, tmp_path):
     # The study's sweep replaces the spin joint's torque by T_m + 40 sin(Ω∫n dt), n from 2.9 to
     # 3.3 over 8 s, ramped in over 1 s; the Python mechanism carries the same excitation itself.
-    for sub in ("bodies", "joints"):
-        shutil.copytree(EXAMPLES / sub, tmp_path / sub)
     shutil.copy(EXAMPLES / "cpva.ron", tmp_path / "cpva.ron")
     mean = "0.5235987755982988"
     (tmp_path / "ts.ron").write_text(

@@ -273,8 +273,6 @@ def test_a_run_without_out_leaves_nothing_behind():
 
 
 def test_a_failing_analysis_is_reported_and_the_others_kept(tmp_path):
-    for sub in ("bodies", "joints"):
-        shutil.copytree(EXAMPLES / sub, tmp_path / sub)
     shutil.copy(EXAMPLES / "cpva.ron", tmp_path / "cpva.ron")
     (tmp_path / "iso.ron").write_text(
         """Study(
