@@ -1,15 +1,17 @@
 //! Campbell data ([`campbell`]): the eigen-analysis of [`LinearModel::modes`] repeated over spin
 //! speed, each speed linearised from the previous one's equilibrium, the modes tracked across
-//! speeds by the modal assurance criterion (MAC) of their coordinate shapes, with the
+//! speeds by the modal assurance criterion (MAC) of their shapes in the kinetic-energy inner
+//! product, the grid refined by halving wherever a track's MAC falls below 0.9, with the
 //! engine-order lines `f = n·rpm/60` and their crossings with the modes: the resonance speeds
 //! of torsional practice, where order n excites a mode. A crossing is where the mode's
-//! eigen-order `f·60/rpm` equals n; it is bracketed on the speed grid and located by bisection
-//! on the eigen-order, each probe speed linearised afresh and its mode picked by MAC with the
-//! track's shape at the bracket.
+//! eigen-order `f·60/rpm` equals n; it is bracketed between the refined tracking steps and
+//! located by bisection on the eigen-order of the crossing's own mode, each probe speed
+//! linearised afresh and its mode picked by MAC with the bracket's shapes.
 
 use super::{C64, Damping, LinResult, LinearModel, ModalDamping, Spin};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
+use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
 /// One tracked mode over the speeds of a Campbell diagram.
@@ -75,22 +77,223 @@ pub struct Campbell {
 /// Relative speed tolerance of a located crossing (the bisection stops below it).
 pub const CROSSING_RTOL: f64 = 1e-9;
 
-/// Modal assurance criterion of two complex shapes, in [0, 1].
-fn mac(a: &[C64], b: &[C64]) -> f64 {
-    let dot: C64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
-    let na: f64 = a.iter().map(|x| x.norm_sqr()).sum();
-    let nb: f64 = b.iter().map(|x| x.norm_sqr()).sum();
-    if na == 0.0 || nb == 0.0 { 0.0 } else { dot.norm_sqr() / (na * nb) }
+/// The smallest kinetic-energy MAC between a track's shape at one accepted speed and its mode
+/// at the next: below it the step is halved, so that every track follows one continuous branch
+/// of eigenvectors (distinct undamped modes are orthogonal in this measure, so a mode that is
+/// not the track's scores near 0, and 0.9 leaves room for the shape's own turning).
+const TRACK_MAC: f64 = 0.9;
+
+/// How often a grid interval may be halved for tracking (1/1024 of it at most).
+const MAX_HALVINGS: u32 = 10;
+
+/// Modal assurance criterion of two complex shapes in the kinetic-energy inner product
+/// `⟨a, b⟩ = aᴴ M b` (shapes in the speeds u, M the mass matrix there), in [0, 1].
+fn mac(mass: &DMatrix<f64>, a: &[C64], b: &[C64]) -> f64 {
+    let inner = |x: &[C64], y: &[C64]| -> C64 {
+        let mut sum = C64::new(0.0, 0.0);
+        for (i, xi) in x.iter().enumerate() {
+            let mut row = C64::new(0.0, 0.0);
+            for (j, yj) in y.iter().enumerate() {
+                row += mass[(i, j)] * yj;
+            }
+            sum += xi.conj() * row;
+        }
+        sum
+    };
+    let (ab, aa, bb) = (inner(a, b), inner(a, a).re, inner(b, b).re);
+    if aa <= 0.0 || bb <= 0.0 { 0.0 } else { ab.norm_sqr() / (aa * bb) }
+}
+
+/// One track's mode at one speed.
+#[derive(Debug, Clone)]
+struct TrackMode {
+    label: String,
+    frequency_hz: f64,
+    natural_frequency_hz: f64,
+    damping_ratio: f64,
+    shape_u: Vec<C64>,
+}
+
+/// An accepted speed of the tracking: its equilibrium (the next speed's start) and each track's
+/// mode, in track order.
+#[derive(Debug, Clone)]
+struct Step {
+    rpm: f64,
+    equilibrium: Vec<f64>,
+    modes: Vec<TrackMode>,
+}
+
+impl Step {
+    /// Track `t`'s eigen-order f·60/rpm (+∞ at standstill for a mode of non-zero frequency,
+    /// which every order line starts below; NaN for a zero-frequency mode there).
+    fn eigen_order(&self, t: usize) -> f64 {
+        let f = self.modes[t].frequency_hz;
+        if self.rpm > 0.0 {
+            f * 60.0 / self.rpm
+        } else if f > 0.0 {
+            f64::INFINITY
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// What tracking and locating need to linearise at a speed.
+struct Tracker<'a> {
+    mech: &'a Mechanism,
+    spin_joint: &'a str,
+    spin: Spin,
+    damping: Damping,
+    modal: Option<&'a ModalDamping>,
+}
+
+impl Tracker<'_> {
+    /// The equilibrium, mass matrix and vibration modes at `rpm`, linearised from `guess`.
+    fn sample(&self, rpm: f64, guess: Option<&[f64]>) -> LinResult<(Vec<f64>, DMatrix<f64>, Vec<TrackMode>)> {
+        let model = LinearModel::new(self.mech, self.spin_joint, rpm_to_rad_s(rpm), guess)?;
+        let model = match self.modal {
+            Some(z) => model.with_modal_damping(self.spin, z)?,
+            None => model,
+        };
+        let modes = model
+            .modes(self.spin, self.damping)?
+            .modes
+            .into_iter()
+            .map(|m| TrackMode {
+                label: m.label,
+                frequency_hz: m.frequency_hz,
+                natural_frequency_hz: m.natural_frequency_rad_s / (2.0 * PI),
+                damping_ratio: m.damping_ratio,
+                shape_u: m.shape_u,
+            })
+            .collect();
+        Ok((model.op.q.clone(), model.mass.clone(), modes))
+    }
+
+    /// The first speed: its modes in order of natural frequency make the tracks.
+    fn first(&self, rpm: f64, guess: Option<&[f64]>) -> LinResult<Step> {
+        let (equilibrium, _, mut modes) = self.sample(rpm, guess)?;
+        modes.sort_by(|a, b| a.natural_frequency_hz.total_cmp(&b.natural_frequency_hz));
+        Ok(Step { rpm, equilibrium, modes })
+    }
+
+    /// The tracks from `prev` to `rpm`: each track takes the mode of largest MAC with its shape
+    /// (greedy, largest first). When a track's best is below [`TRACK_MAC`] (and its mode is not
+    /// one of a repeated pair, whose shapes are not unique), the step is halved, up to
+    /// [`MAX_HALVINGS`] times (not from standstill); `on_step` sees every accepted step, the intermediate ones too.
+    fn advance(
+        &self,
+        prev: &Step,
+        rpm: f64,
+        halvings: u32,
+        on_step: &mut dyn FnMut(&Step, &Step) -> LinResult<()>,
+    ) -> LinResult<Step> {
+        let (equilibrium, mass, modes) = self.sample(rpm, Some(&prev.equilibrium))?;
+        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+        for (t, track) in prev.modes.iter().enumerate() {
+            for (m, mode) in modes.iter().enumerate() {
+                pairs.push((mac(&mass, &track.shape_u, &mode.shape_u), t, m));
+            }
+        }
+        pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut taken: Vec<Option<(usize, f64)>> = vec![None; prev.modes.len()];
+        let mut m_done = vec![false; modes.len()];
+        for (value, t, m) in pairs {
+            if taken[t].is_some() || m_done[m] {
+                continue;
+            }
+            taken[t] = Some((m, value));
+            m_done[m] = true;
+        }
+        let repeated = |m: usize| {
+            let f = modes[m].frequency_hz;
+            modes.iter().enumerate().any(|(k, o)| k != m && (o.frequency_hz - f).abs() <= 1e-6 * f.abs().max(1e-12))
+        };
+        let unsure = taken.iter().any(|x| x.is_none_or(|(m, value)| value < TRACK_MAC && !repeated(m)));
+        // From standstill no halving: a zero-frequency mode there (a pendulum without
+        // centrifugal stiffness) has no shape to continue, and speeds near zero have no
+        // well-conditioned equilibrium to halve towards.
+        if unsure && halvings < MAX_HALVINGS && prev.rpm > 0.0 {
+            let mid = self.advance(prev, 0.5 * (prev.rpm + rpm), halvings + 1, on_step)?;
+            return self.advance(&mid, rpm, halvings + 1, on_step);
+        }
+        let modes = taken
+            .iter()
+            .map(|x| {
+                x.map(|(m, _)| modes[m].clone())
+                    .ok_or_else(|| super::LinearError::Invalid(format!("a mode was lost at {rpm} rpm")))
+            })
+            .collect::<LinResult<Vec<TrackMode>>>()?;
+        let step = Step { rpm, equilibrium, modes };
+        on_step(prev, &step)?;
+        Ok(step)
+    }
+
+    /// Track `t`'s crossings with the order lines between two accepted steps (a sign change of
+    /// eigen-order − n), each located by bisection on the track's own mode.
+    fn crossings(&self, orders: &[f64], t: usize, a: &Step, b: &Step, out: &mut Vec<Crossing>) -> LinResult<()> {
+        for &n in orders {
+            let (g0, g1) = (a.eigen_order(t) - n, b.eigen_order(t) - n);
+            if !(g0.is_finite() || g0 == f64::INFINITY) || !g1.is_finite() || g0 == 0.0 || g0.signum() == g1.signum() {
+                continue;
+            }
+            let (rpm, frequency_hz, label) = if g1 == 0.0 {
+                (b.rpm, b.modes[t].frequency_hz, b.modes[t].label.clone())
+            } else {
+                self.locate(n, t, a, b, g0 > 0.0)?
+            };
+            out.push(Crossing { order: n, track: t, rpm, frequency_hz, label, rank: 0 });
+        }
+        Ok(())
+    }
+
+    /// Bisection on `eigen-order − n` of track `t` between the accepted steps `a` (where the
+    /// eigen-order is above n when `above`) and `b`, to [`CROSSING_RTOL`] in speed. Each probe is
+    /// linearised from `a`'s equilibrium and takes the mode of largest MAC with the shape at the
+    /// nearer end of the bracket, which moves with it: (rpm, frequency in Hz, label).
+    fn locate(&self, n: f64, t: usize, a: &Step, b: &Step, above: bool) -> LinResult<(f64, f64, String)> {
+        let (mut lo, mut hi) = (a.rpm, b.rpm);
+        let (mut shape_lo, mut shape_hi) = (a.modes[t].shape_u.clone(), b.modes[t].shape_u.clone());
+        let mut label = b.modes[t].label.clone();
+        for _ in 0..200 {
+            if hi - lo <= CROSSING_RTOL * hi {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let (_, mass, modes) = self.sample(mid, Some(&a.equilibrium))?;
+            let score = |m: &TrackMode| mac(&mass, &shape_lo, &m.shape_u).max(mac(&mass, &shape_hi, &m.shape_u));
+            let best = modes
+                .into_iter()
+                .max_by(|x, y| score(x).total_cmp(&score(y)))
+                .ok_or_else(|| super::LinearError::Invalid(format!("no vibration mode at {mid} rpm")))?;
+            let eo = best.frequency_hz * 60.0 / mid;
+            label = best.label.clone();
+            if ((eo - n) > 0.0) == above {
+                lo = mid;
+                shape_lo = best.shape_u;
+            } else {
+                hi = mid;
+                shape_hi = best.shape_u;
+            }
+        }
+        // The bracket's midpoint, with the line's frequency there (the mode's equals it to the
+        // bracket's width).
+        let r = 0.5 * (lo + hi);
+        Ok((r, n * r / 60.0, label))
+    }
 }
 
 /// Campbell data of `mech` spinning on `spin_joint` over `rpm` (each speed linearised from the
 /// previous speed's equilibrium, the first from `guess`), with the order lines of `orders`.
 ///
 /// Tracking: at the first speed the modes are sorted by natural frequency; at each next speed
-/// each track takes the mode whose coordinate shape q has the largest MAC with the track's
-/// previous shape (greedy, largest MAC first). This follows a mode through a crossing with
-/// another as long as the shapes stay distinct; repeated roots (identical pendulums) have no
-/// unique shapes and are tracked by order only.
+/// each track takes the mode whose shape has the largest MAC, in the kinetic-energy inner
+/// product, with the track's previous shape (greedy, largest MAC first). Where a track's best
+/// MAC falls below 0.9 (modes veering, or a coarse grid) the step is halved until it does not,
+/// so the tracks follow continuous branches of eigenvectors and do not depend on the grid;
+/// repeated roots (identical pendulums) have no unique shapes and are tracked by order only.
+/// Crossings are found between these refined steps and located on the crossing track's own
+/// mode ([`CROSSING_RTOL`]).
 ///
 /// With `modal` the mechanism's dampers are replaced by modal damping
 /// ([`LinearModel::with_modal_damping`], modes taken with the same `spin`) at every speed, and the
@@ -107,61 +310,54 @@ pub fn campbell(
     guess: Option<&[f64]>,
 ) -> LinResult<Campbell> {
     let damping = if modal.is_some() { Damping::Damped } else { damping };
-    let mut guess: Option<Vec<f64>> = guess.map(<[f64]>::to_vec);
-    let mut tracks: Vec<CampbellTrack> = Vec::new();
-    let mut last: Vec<Vec<C64>> = Vec::new();
-    // Per speed: the equilibrium (a start for the bisection) and each track's shape.
-    let mut equilibria: Vec<Vec<f64>> = Vec::with_capacity(rpm.len());
-    let mut shapes: Vec<Vec<Vec<C64>>> = Vec::with_capacity(rpm.len());
-    for (i, &r) in rpm.iter().enumerate() {
-        let model = LinearModel::new(mech, spin_joint, rpm_to_rad_s(r), guess.as_deref())?;
-        guess = Some(model.op.q.clone());
-        let model = match modal {
-            Some(z) => model.with_modal_damping(spin, z)?,
-            None => model,
-        };
-        equilibria.push(model.op.q.clone());
-        let mut modal = model.modes(spin, damping)?;
-        if i == 0 {
-            modal.modes.sort_by(|a, b| a.natural_frequency_rad_s.total_cmp(&b.natural_frequency_rad_s));
-            for m in &modal.modes {
-                tracks.push(CampbellTrack {
-                    label: String::new(),
-                    labels: vec![m.label.clone()],
-                    frequency_hz: vec![m.frequency_hz],
-                    natural_frequency_hz: vec![m.natural_frequency_rad_s / (2.0 * PI)],
-                    damping_ratio: vec![m.damping_ratio],
-                    rank: Vec::new(),
+    let tracker = Tracker { mech, spin_joint, spin, damping, modal };
+    let Some(&r0) = rpm.first() else {
+        return Ok(Campbell { rpm: Vec::new(), tracks: Vec::new(), order_lines: Vec::new(), crossings: Vec::new() });
+    };
+    let mut step = tracker.first(r0, guess)?;
+    let mut tracks: Vec<CampbellTrack> = step
+        .modes
+        .iter()
+        .map(|m| CampbellTrack {
+            label: String::new(),
+            labels: vec![m.label.clone()],
+            frequency_hz: vec![m.frequency_hz],
+            natural_frequency_hz: vec![m.natural_frequency_hz],
+            damping_ratio: vec![m.damping_ratio],
+            rank: Vec::new(),
+        })
+        .collect();
+    let mut crossings = Vec::new();
+    // A line through a mode exactly at the first speed.
+    for t in 0..tracks.len() {
+        for &n in orders {
+            if step.eigen_order(t) == n {
+                let m = &step.modes[t];
+                crossings.push(Crossing {
+                    order: n,
+                    track: t,
+                    rpm: r0,
+                    frequency_hz: m.frequency_hz,
+                    label: m.label.clone(),
+                    rank: 0,
                 });
-                last.push(m.shape_q.clone());
-            }
-            shapes.push(last.clone());
-            continue;
-        }
-        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-        for (t, shape) in last.iter().enumerate() {
-            for (m, mode) in modal.modes.iter().enumerate() {
-                pairs.push((mac(shape, &mode.shape_q), t, m));
             }
         }
-        pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let mut t_done = vec![false; tracks.len()];
-        let mut m_done = vec![false; modal.modes.len()];
-        for (_, t, m) in pairs {
-            if t_done[t] || m_done[m] {
-                continue;
+    }
+    for &r in &rpm[1..] {
+        let mut on_step = |a: &Step, b: &Step| -> LinResult<()> {
+            for t in 0..a.modes.len() {
+                tracker.crossings(orders, t, a, b, &mut crossings)?;
             }
-            t_done[t] = true;
-            m_done[m] = true;
-            let mode = &modal.modes[m];
-            let tr = &mut tracks[t];
-            tr.labels.push(mode.label.clone());
-            tr.frequency_hz.push(mode.frequency_hz);
-            tr.natural_frequency_hz.push(mode.natural_frequency_rad_s / (2.0 * PI));
-            tr.damping_ratio.push(mode.damping_ratio);
-            last[t] = mode.shape_q.clone();
+            Ok(())
+        };
+        step = tracker.advance(&step, r, 0, &mut on_step)?;
+        for (tr, m) in tracks.iter_mut().zip(&step.modes) {
+            tr.labels.push(m.label.clone());
+            tr.frequency_hz.push(m.frequency_hz);
+            tr.natural_frequency_hz.push(m.natural_frequency_hz);
+            tr.damping_ratio.push(m.damping_ratio);
         }
-        shapes.push(last.clone());
     }
     for tr in &mut tracks {
         let mut best = (0, String::new());
@@ -177,47 +373,6 @@ pub fn campbell(
         .iter()
         .map(|&n| OrderLine { order: n, frequency_hz: rpm.iter().map(|&r| n * r / 60.0).collect() })
         .collect();
-    let mut crossings = Vec::new();
-    let ctx = Bisection { mech, spin_joint, spin, damping, modal };
-    for (t, tr) in tracks.iter().enumerate() {
-        // Eigen-order at each grid speed; +∞ at standstill for a mode of non-zero frequency
-        // (every order line starts below it there).
-        let eo: Vec<f64> = rpm
-            .iter()
-            .zip(&tr.frequency_hz)
-            .map(|(&r, &f)| {
-                if r > 0.0 {
-                    f * 60.0 / r
-                } else if f > 0.0 {
-                    f64::INFINITY
-                } else {
-                    f64::NAN
-                }
-            })
-            .collect();
-        for &n in orders {
-            for i in 0..rpm.len().saturating_sub(1) {
-                let (g0, g1) = (eo[i] - n, eo[i + 1] - n);
-                if !(g0.is_finite() || g0 == f64::INFINITY) || !g1.is_finite() {
-                    continue;
-                }
-                // A crossing inside (i, i+1], or exactly at the first grid speed.
-                let at_start = i == 0 && g0 == 0.0;
-                if !(at_start || (g0 != 0.0 && g0.signum() != g1.signum())) {
-                    continue;
-                }
-                let (r, f, label) = if at_start {
-                    (rpm[0], tr.frequency_hz[0], tr.labels[0].clone())
-                } else if g1 == 0.0 {
-                    (rpm[i + 1], tr.frequency_hz[i + 1], tr.labels[i + 1].clone())
-                } else {
-                    let at = (equilibria[i].as_slice(), shapes[i][t].as_slice());
-                    ctx.locate(n, (rpm[i], g0 > 0.0), rpm[i + 1], at, tr.labels[i + 1].clone())?
-                };
-                crossings.push(Crossing { order: n, track: t, rpm: r, frequency_hz: f, label, rank: 0 });
-            }
-        }
-    }
     crossings.sort_by(|a, b| a.rpm.total_cmp(&b.rpm).then(a.order.total_cmp(&b.order)));
     for i in 0..rpm.len() {
         let mut by_f: Vec<usize> = (0..tracks.len()).collect();
@@ -242,63 +397,5 @@ fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
             let u = (x - xs[i - 1]) / (xs[i] - xs[i - 1]);
             ys[i - 1] + u * (ys[i] - ys[i - 1])
         }
-    }
-}
-
-/// What the bisection for a crossing needs to linearise at a probe speed.
-struct Bisection<'a> {
-    mech: &'a Mechanism,
-    spin_joint: &'a str,
-    spin: Spin,
-    damping: Damping,
-    modal: Option<&'a ModalDamping>,
-}
-
-impl Bisection<'_> {
-    /// The mode nearest (by MAC) to `shape` at `r` rpm, linearised from `guess`: its eigen-order
-    /// (damped frequency over speed) and label.
-    fn mode_at(&self, r: f64, guess: &[f64], shape: &[C64]) -> LinResult<(f64, String)> {
-        let model = LinearModel::new(self.mech, self.spin_joint, rpm_to_rad_s(r), Some(guess))?;
-        let model = match self.modal {
-            Some(z) => model.with_modal_damping(self.spin, z)?,
-            None => model,
-        };
-        let modal = model.modes(self.spin, self.damping)?;
-        let best = modal
-            .modes
-            .iter()
-            .max_by(|a, b| mac(shape, &a.shape_q).total_cmp(&mac(shape, &b.shape_q)))
-            .ok_or_else(|| super::LinearError::Invalid(format!("no vibration mode at {r} rpm")))?;
-        Ok((best.frequency_hz * 60.0 / r, best.label.clone()))
-    }
-
-    /// Bisection on `eigen-order − n` between `lo` rpm (where the eigen-order is above n when
-    /// `above`) and `hi` rpm, to [`CROSSING_RTOL`] in speed: (rpm, frequency in Hz, label; the
-    /// label is `label` when the bracket needed no probe).
-    fn locate(
-        &self,
-        n: f64,
-        (mut lo, above): (f64, bool),
-        mut hi: f64,
-        (guess, shape): (&[f64], &[C64]),
-        mut label: String,
-    ) -> LinResult<(f64, f64, String)> {
-        for _ in 0..200 {
-            if hi - lo <= CROSSING_RTOL * hi {
-                break;
-            }
-            let mid = 0.5 * (lo + hi);
-            let (eo, l) = self.mode_at(mid, guess, shape)?;
-            label = l;
-            if ((eo - n) > 0.0) == above {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        // The bracket's midpoint, with the line's frequency there (the mode's equals it to the
-        // bracket's width).
-        let r = 0.5 * (lo + hi);
-        Ok((r, n * r / 60.0, label))
     }
 }
