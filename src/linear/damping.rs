@@ -8,6 +8,11 @@
 //! which gives mode i exactly the ratio ζ_i when G vanishes (a drivetrain of shafts) and to first
 //! order otherwise. Modes of zero frequency (the free spin) get no damping. The speeds' matrix
 //! follows from `C_q = −Wᵀ F_u W`: `F_u = −W⁻ᵀ (G + C) W⁻¹`.
+//!
+//! Torsional practice gives damping both ways at once (a propeller's or a damper's own viscous
+//! loss, and a modal ratio for the shafting's material damping), so the modal matrix may also be
+//! added to the mechanism's dampers instead of replacing them ([`ModalCombination::Add`]): then
+//! `F_u = −W⁻ᵀ (G + C_dampers + C) W⁻¹`, the modes and their ω_i still those of M and K.
 
 use super::{Damping, LinResult, LinearError, LinearModel, Spin};
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -43,14 +48,40 @@ impl ModalDamping {
     }
 }
 
+/// How modal damping meets the mechanism's own dampers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ModalCombination {
+    /// The modal matrix replaces the dampers (the ratios are the whole damping).
+    #[default]
+    Replace,
+    /// The modal matrix adds to the dampers (the ratios are extra, e.g. material damping).
+    Add,
+}
+
 impl LinearModel {
     /// The same linear model with the mechanism's dampers replaced by modal damping `zeta` (see
     /// the module doc), the modes taken with the spin `spin` (held: the spin coordinate is left
     /// out; free: it is kept, and its zero-frequency mode gets no damping). Errors when a ratio is
     /// missing for a vibration mode, or the mass matrix is not positive definite.
     pub fn with_modal_damping(&self, spin: Spin, zeta: &ModalDamping) -> LinResult<LinearModel> {
+        self.with_modal_damping_combined(spin, zeta, ModalCombination::Replace)
+    }
+
+    /// [`LinearModel::with_modal_damping`] with the modal matrix replacing the mechanism's
+    /// dampers or added to them (`combine`).
+    pub fn with_modal_damping_combined(
+        &self,
+        spin: Spin,
+        zeta: &ModalDamping,
+        combine: ModalCombination,
+    ) -> LinResult<LinearModel> {
         let n = self.ndof();
         let second = self.second_order(Damping::Undamped);
+        // The velocity matrix the modal one adds to: G alone, or G with the dampers.
+        let base_c = match combine {
+            ModalCombination::Replace => second.c.clone(),
+            ModalCombination::Add => self.second_order(Damping::Damped).c,
+        };
         let s = self.op.spin_coordinate;
         let kept: Vec<usize> = (0..n).filter(|&j| spin == Spin::Free || j != s).collect();
         let pick = |m: &DMatrix<f64>| DMatrix::from_fn(kept.len(), kept.len(), |i, j| m[(kept[i], kept[j])]);
@@ -87,7 +118,7 @@ impl LinearModel {
             let mphi = &m * phi;
             c += (2.0 * z * w2.sqrt()) * &mphi * mphi.transpose();
         }
-        let mut c_full = second.c.clone();
+        let mut c_full = base_c;
         for (a, &i) in kept.iter().enumerate() {
             for (b, &j) in kept.iter().enumerate() {
                 c_full[(i, j)] += c[(a, b)];

@@ -74,7 +74,7 @@ mod multi_order;
 mod response;
 
 pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell};
-pub use damping::ModalDamping;
+pub use damping::{ModalCombination, ModalDamping};
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{GravityLine, HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
 pub use response::{Extremes, FrfPoint, Input, OrderResponse, ResponseSpec};
