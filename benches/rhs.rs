@@ -2,7 +2,8 @@
 //! against the hand-written closed form of eq. (7) at the same state and time (both
 //! allocation-free, both evaluating the same excitation torque), the same rotor with its absorber
 //! on a path joint (the epicycloid of examples/cpva_epicycloid.ron, and the circle that is the
-//! paper's pendulum in s = Lφ), and planar chains of N links.
+//! paper's pendulum in s = Lφ), planar chains of N links, and the paper's rotor carrying N
+//! pendulums with M solved along the tree (the default from 7 speeds on) and densely.
 
 #[path = "support/cpva_rhs.rs"]
 mod cpva_rhs;
@@ -93,6 +94,25 @@ fn rhs(c: &mut Criterion) {
                 black_box(xd[n])
             })
         });
+    }
+    // A rotor with N identical pendulums: M is an arrowhead, which the tree's factorisation
+    // solves in O(N) and the dense LDLᵀ in O(N³).
+    for pendulums in [8, 16, 32, 64] {
+        let mech = kanedyn::cpva::CpvaParams::canonical().with_pendulums(pendulums).mechanism(None).unwrap();
+        let n = mech.ndof();
+        let x: Vec<f64> = (0..2 * n).map(|i| 0.1 + 0.05 * i as f64).collect();
+        let mut xd = vec![0.0; 2 * n];
+        let tree = Kane::new(&mech).unwrap();
+        let mut dense = tree.clone();
+        dense.use_dense_factorisation();
+        for (route, mut k) in [("pendulums_tree", tree), ("pendulums_dense", dense)] {
+            g.bench_with_input(BenchmarkId::new(route, pendulums), &pendulums, |b, _| {
+                b.iter(|| {
+                    k.rhs(black_box(0.5), black_box(&x), &mut xd).unwrap();
+                    black_box(xd[n])
+                })
+            });
+        }
     }
     g.finish();
 }

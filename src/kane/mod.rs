@@ -237,6 +237,10 @@ pub struct Kane {
     small: Option<small::Small>,
     /// The unconstrained tree of a mechanism with couplings ([`Form::Geared`]).
     geared: Option<Box<reduce::Geared>>,
+    /// Per speed, the nearest speed above it in the tree (`NONE` for a root's), when the
+    /// right-hand side solves `M u̇ = F` by the tree's own factorisation
+    /// ([`Kane::factor_solve_tree`]); `None`: the dense LDLᵀ.
+    tree: Option<Vec<usize>>,
     // Work buffers.
     /// The joints of one ancestor walk, for [`Kane::residual_jacobian`] (capacity n).
     walk: Vec<usize>,
@@ -387,6 +391,7 @@ impl Kane {
             pairs,
             small: None,
             geared: None,
+            tree: None,
             n,
             nb,
             speed_parent,
@@ -417,7 +422,44 @@ impl Kane {
         k.evaluate(0.0, &zeros, &zeros, false);
         k.factor_solve(&mut zeros)?;
         k.small = k.small_form();
+        k.tree = k.tree_order();
         Ok(k)
+    }
+
+    /// The speeds' tree (each speed's nearest speed above it) when the right-hand side should
+    /// factorise M along it: M of a tree is nonzero only between a speed and its ancestors, so
+    /// the leaves-first factorisation costs Σ_k (depth_k + 1)² instead of the dense n³/6, and
+    /// is chosen beyond the fixed-size instances (n > 6) where it halves the work at least (a
+    /// rotor with 8 pendulums on: measured in BENCHMARKS.md). A geared mechanism's reduced M couples across branches: dense.
+    fn tree_order(&self) -> Option<Vec<usize>> {
+        let n = self.n;
+        if n <= 6 || self.form == Form::Geared {
+            return None;
+        }
+        let mut above = vec![NONE; n];
+        let mut cost = 0.0;
+        for (k, up) in above.iter_mut().enumerate() {
+            let mut b = self.nodes[self.joint_of[k]].parent;
+            while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
+                b = self.nodes[b].parent;
+            }
+            if b != GROUND_PARENT {
+                *up = self.nodes[b].coord;
+                if *up >= k {
+                    return None;
+                }
+            }
+        }
+        for k in 0..n {
+            let (mut depth, mut a) = (1.0, above[k]);
+            while a != NONE {
+                depth += 1.0;
+                a = above[a];
+            }
+            cost += depth * depth;
+        }
+        let dense = (n * n * n) as f64 / 6.0;
+        (2.0 * cost < dense).then_some(above)
     }
 
     /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
@@ -425,6 +467,18 @@ impl Kane {
     fn small_form(&self) -> Option<small::Small> {
         // Rollers take the general forms too (`Kane::add_rollers`).
         if self.couplings.is_empty() && self.rollers.is_empty() { small::Small::new(self) } else { None }
+    }
+
+    /// True when the right-hand side solves `M u̇ = F` along the tree (the leaves-first
+    /// factorisation of [`crate::kane::ldlt`]), false when by the dense LDLᵀ; chosen at build.
+    pub fn factorises_along_tree(&self) -> bool {
+        self.tree.is_some()
+    }
+
+    /// Makes the right-hand side use the dense LDLᵀ whatever the tree (for checks and benchmarks
+    /// of the two routes against each other).
+    pub fn use_dense_factorisation(&mut self) {
+        self.tree = None;
     }
 
     /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
@@ -628,7 +682,11 @@ impl Kane {
                 *qd = self.state[j].qdot;
             }
         }
-        self.factor_solve_n::<N>(ud)?;
+        if N == 0 && self.tree.is_some() {
+            self.factor_solve_tree(ud)?;
+        } else {
+            self.factor_solve_n::<N>(ud)?;
+        }
         Ok(())
     }
 
