@@ -566,9 +566,9 @@ fn a_study_reports_driven_joints_through_their_gear() {
     // The example with its catalog parts written inline (parts must sit below the file).
     let mech = std::fs::read_to_string("examples/geared_cpva.ron")
         .unwrap()
-        .replace("part: \"bodies/flywheel_rotor.ron\"", "mass: 110.0, inertia: 3.44")
-        .replace("part: \"bodies/cpva_pendulum.ron\"", "mass: 6.0, com: (0.0152, 0.0), inertia: 2.16e-4")
-        .replace("part: \"joints/cpva_pivot.ron\", ", "damper: 5e-4, ");
+        .replace("part: \"catalog:bodies/flywheel_rotor.ron\"", "mass: 110.0, inertia: 3.44")
+        .replace("part: \"catalog:bodies/cpva_pendulum.ron\"", "mass: 6.0, com: (0.0152, 0.0), inertia: 2.16e-4")
+        .replace("part: \"catalog:joints/cpva_pivot.ron\", ", "damper: 5e-4, ");
     std::fs::write(dir.join("m.ron"), mech).unwrap();
     let ratio = -0.3125f64;
     let mut reports = Vec::new();

@@ -350,7 +350,7 @@ fn bad_general_path_input_is_a_located_error() {
 /// The catalog's general-path part loads in a mechanism, and its properties are the closed forms.
 #[test]
 fn catalog_general_part_loads() {
-    let text = "Mechanism(\n    name: \"m\",\n    bodies: [\n        Body(name: \"rotor\", mass: 10.0, inertia: 0.36),\n        Body(name: \"absorber\", mass: 6.0, inertia: 2.16e-4),\n    ],\n    joints: [\n        Joint(name: \"spin\", parent: \"ground\", child: \"rotor\"),\n        Joint(name: \"path\", part: \"joints/path_general.ron\", parent: \"rotor\", child: \"absorber\"),\n    ],\n)\n";
+    let text = "Mechanism(\n    name: \"m\",\n    bodies: [\n        Body(name: \"rotor\", mass: 10.0, inertia: 0.36),\n        Body(name: \"absorber\", mass: 6.0, inertia: 2.16e-4),\n    ],\n    joints: [\n        Joint(name: \"spin\", parent: \"ground\", child: \"rotor\"),\n        Joint(name: \"path\", part: \"catalog:joints/path_general.ron\", parent: \"rotor\", child: \"absorber\"),\n    ],\n)\n";
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let file = dir.join("general_part_test.ron");
     let src = Source::from_text(file.to_str().unwrap(), text);

@@ -449,9 +449,9 @@ fn bad_rollers_are_located_errors() {
 #[test]
 fn catalog_rollers_part_loads() {
     let text = "Mechanism(\n    name: \"m\",\n    speeds: AbsoluteAngularVelocities,\n    bodies: [\n        \
-                Body(name: \"rotor\", part: \"bodies/flywheel_rotor.ron\"),\n        Body(name: \"absorber\", mass: 6.0, \
+                Body(name: \"rotor\", part: \"catalog:bodies/flywheel_rotor.ron\"),\n        Body(name: \"absorber\", mass: 6.0, \
                 inertia: 2.16e-4),\n    ],\n    joints: [\n        Joint(name: \"spin\", parent: \"ground\", child: \
-                \"rotor\"),\n        Joint(name: \"path\", part: \"joints/path_rollers.ron\", parent: \"rotor\", child: \
+                \"rotor\"),\n        Joint(name: \"path\", part: \"catalog:joints/path_rollers.ron\", parent: \"rotor\", child: \
                 \"absorber\"),\n    ],\n)\n";
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     let file = dir.join("rollers_part_test.ron");
