@@ -13,7 +13,6 @@ use crate::errors::{EngineError, argument_error, guard, to_py};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
-use kanedyn::model::joint::JointKind;
 use kanedyn::model::mechanism::Mechanism as Mech;
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -504,14 +503,8 @@ impl Mechanism {
             for (k, j) in mech.joints.iter().enumerate() {
                 let d = PyDict::new(py);
                 d.set_item("name", &j.name)?;
-                let (kind, axis) = match j.kind {
-                    JointKind::Revolute => ("Revolute", None),
-                    JointKind::Prismatic { axis } => ("Prismatic", Some(axis)),
-                    JointKind::Fixed => ("Fixed", None),
-                    JointKind::Path { .. } => ("Path", None),
-                };
-                d.set_item("kind", kind)?;
-                d.set_item("axis", axis)?;
+                d.set_item("kind", j.kind.name())?;
+                d.set_item("axis", j.kind.slide_axis().map(|a| (a.x, a.y)))?;
                 d.set_item("parent", j.parent.map_or("ground", |p| mech.bodies[p].name.as_str()))?;
                 d.set_item("child", &mech.bodies[k].name)?;
                 d.set_item("at", pair(j.at))?;
