@@ -61,7 +61,6 @@
 use super::{Branch, ContinuationOptions, Hbm, HbmError, HbmOptions, HbmSolution, Parameter, Stability};
 use crate::kane::Kane;
 use crate::model::excitation::Harmonic;
-use crate::model::joint::JointKind;
 use crate::model::loads::JointTorque;
 use crate::model::math::{Vec2, rotate_cs};
 use crate::model::mechanism::Mechanism;
@@ -150,18 +149,12 @@ fn subtree(mech: &Mechanism, j: usize) -> Vec<usize> {
 }
 
 /// The shape of a subtree: per joint, its parent's position in the list and its kind's variant.
-fn shape(mech: &Mechanism, sub: &[usize]) -> Vec<(Option<usize>, u8)> {
+fn shape(mech: &Mechanism, sub: &[usize]) -> Vec<(Option<usize>, &'static str)> {
     sub.iter()
         .map(|&j| {
             let joint = &mech.joints[j];
             let parent = joint.parent.and_then(|p| sub.iter().position(|&x| x == p));
-            let kind = match joint.kind {
-                JointKind::Revolute => 0,
-                JointKind::Prismatic { .. } => 1,
-                JointKind::Fixed => 2,
-                JointKind::Path { .. } => 3,
-            };
-            (parent, kind)
+            (parent, joint.kind.name())
         })
         .collect()
 }
@@ -177,11 +170,7 @@ fn vectors(mech: &Mechanism, sub: &[usize]) -> Vec<Vec2> {
     for &j in sub {
         let joint = &mech.joints[j];
         out.push(joint.at);
-        match joint.kind {
-            JointKind::Prismatic { axis } => out.push(Vec2::new(axis.0, axis.1)),
-            JointKind::Path { mount, .. } => out.push(Vec2::new(mount.cos(), mount.sin())),
-            _ => {}
-        }
+        out.extend(joint.kind.direction());
         out.push(mech.bodies[j].inertia.com);
     }
     out
@@ -208,10 +197,10 @@ fn difference(mech: &Mechanism, torques: &[JointTorque], c: &[usize], d: &[usize
         let (a, b) = (&mech.joints[jc], &mech.joints[jd]);
         let (ba, bb) = (&mech.bodies[jc].inertia, &mech.bodies[jd].inertia);
         let name = &b.name;
-        let kinds_equal = match (a.kind, b.kind) {
-            (JointKind::Path { shape: sa, travel: ta, .. }, JointKind::Path { shape: sb, travel: tb, .. }) => {
-                sa == sb && ta == tb
-            }
+        // The shapes agree (checked before); a path's curve and travel must too (its mount is
+        // among the vectors that turn).
+        let kinds_equal = match (a.kind.path(), b.kind.path()) {
+            (Some(pa), Some(pb)) => pa.shape == pb.shape && pa.travel == pb.travel,
             _ => true,
         };
         if !kinds_equal {
@@ -253,8 +242,7 @@ fn difference(mech: &Mechanism, torques: &[JointTorque], c: &[usize], d: &[usize
 fn fixed_origin(mech: &Mechanism, p: usize) -> bool {
     mech.path_to(p).iter().all(|&j| {
         let joint = &mech.joints[j];
-        matches!(joint.kind, JointKind::Revolute | JointKind::Fixed)
-            && (joint.parent.is_none() || joint.at == Vec2::zeros())
+        joint.kind.keeps_origin() && (joint.parent.is_none() || joint.at == Vec2::zeros())
     })
 }
 
