@@ -43,6 +43,7 @@
 //! of multipliers outside the unit circle (bisection along the segment); a branch point is then
 //! located on det ∂R̂/∂x, which vanishes there exactly for the truncated problem.
 
+use super::blocklu::Factor;
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
 use super::{BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
@@ -284,7 +285,7 @@ impl Hbm {
         e_l[m] = 1.0;
         let t0 = self.tangent(&su, &e_l, order)? * dir;
         let mut cur = Cursor { y: y0, t: t0 };
-        let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
+        let mut chord_m = Chord { lu: self.factor(Some((&su, &cur.t))), update: None };
         let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, sol0.iterations, copts.stability)?];
         // The accepted points' arclengths and test functions (each computed once).
         let mut tests = vec![(0.0, test_functions(&points[0]))];
@@ -545,22 +546,16 @@ impl Hbm {
         let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
         let x = self.unknowns_from(Some(&sol));
         self.assemble(&x, &su.at(lambda), Some(su.param));
-        let matrix = match block {
-            None => self.jac.clone(),
+        let (sign, log) = match block {
+            None => self.factor(None).determinant(),
             Some(k) => {
                 let nb = self.nb;
                 let idx: Vec<usize> =
                     self.non_unison.get(k)?.coordinates.iter().flat_map(|&c| c * nb..(c + 1) * nb).collect();
-                nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| self.jac[(idx[r], idx[c])])
+                let matrix = nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| self.jac[(idx[r], idx[c])]);
+                Factor::Dense(matrix.lu()).determinant()
             }
         };
-        let lu = matrix.lu();
-        let u = lu.u();
-        let (mut sign, mut log) = (lu.p().determinant::<f64>(), 0.0);
-        for d in u.diagonal().iter() {
-            sign *= d.signum();
-            log += d.abs().ln();
-        }
         log.is_finite().then_some((sol, sign, log))
     }
 

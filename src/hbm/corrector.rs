@@ -4,6 +4,7 @@
 //! yields, Newton's method on it, and the Newton–chord iteration with good-Broyden updates
 //! (Kelley §7.3) that reuses one factorisation per point.
 
+use super::blocklu::{BlockLu, Factor};
 use super::{At, Hbm, HbmError, HbmSolution, Parameter};
 use nalgebra::{DMatrix, DVector};
 
@@ -42,15 +43,13 @@ impl Setup {
     }
 }
 
-type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
-
 /// A factorised bordered matrix for the chord iterations. The matrix bordered by the new tangent
 /// t differs from the one factorised for computing t (bordered by the previous tangent t₀) in
 /// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
 /// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
 /// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
 pub(super) struct Chord {
-    pub(super) lu: Lu,
+    pub(super) lu: Factor,
     pub(super) update: Option<(DVector<f64>, DVector<f64>, f64)>,
 }
 
@@ -66,6 +65,27 @@ impl Chord {
 }
 
 impl Hbm {
+    /// The Jacobian in the buffers factorised, bordered by `[∂R̂/∂λ; rowᵀ]` when `row` is given:
+    /// by block elimination along the tree where its pattern allows it (more than two
+    /// coordinates; `blocklu`), densely otherwise (the paper's rotor, two coordinates, stays on
+    /// the dense LU).
+    pub(super) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
+        if self.n > 2 {
+            let col = border.map(|(su, _)| &self.gp * su.p_ref);
+            let block = match (&col, border) {
+                (Some(col), Some((_, row))) => BlockLu::new(&self.jac, Some((col, row)), self.n, self.nb, self.spin),
+                _ => BlockLu::new(&self.jac, None, self.n, self.nb, self.spin),
+            };
+            if let Some(b) = block {
+                return Factor::Block(Box::new(b));
+            }
+        }
+        match border {
+            Some((su, row)) => Factor::Dense(self.bordered(su, row).lu()),
+            None => Factor::Dense(self.jac.clone().lu()),
+        }
+    }
+
     /// The bordered matrix `[[J, ∂R̂/∂λ], [rowᵀ]]` from the work buffers (∂R̂/∂λ = p_ref ∂R̂/∂p).
     pub(super) fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
         let m = self.unknowns();
@@ -91,7 +111,7 @@ impl Hbm {
         let m = self.unknowns();
         let mut rhs = DVector::zeros(m + 1);
         rhs[m] = 1.0;
-        let lu = self.bordered(su, row).lu();
+        let lu = self.factor(Some((su, row)));
         let z = lu.solve(&rhs).ok_or(HbmError::Singular { order })?;
         let norm = z.norm();
         if !norm.is_finite() || norm == 0.0 {
@@ -124,7 +144,7 @@ impl Hbm {
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
-            let dy = self.bordered(su, t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let dy = self.factor(Some((su, t))).solve(&rhs).ok_or(HbmError::Singular { order })?;
             step = dy.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });
@@ -190,7 +210,7 @@ impl Hbm {
             let mut step = s.amax();
             if it > 1 && step > 0.5 * last && refreshes < max_refresh {
                 self.assemble(&x, &at, Some(su.param));
-                let f = Chord { lu: self.bordered(su, t).lu(), update: None };
+                let f = Chord { lu: self.factor(Some((su, t))), update: None };
                 s = -f.solve(&rhs).ok_or(HbmError::Singular { order })?;
                 step = s.amax();
                 fresh = Some(f);

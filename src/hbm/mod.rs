@@ -97,6 +97,7 @@
 
 mod aft;
 mod assembly;
+mod blocklu;
 mod branch;
 mod continuation;
 mod corrector;
@@ -734,7 +735,7 @@ impl Hbm {
         let mut step = f64::INFINITY;
         for it in 1..=self.opts.max_iter {
             self.assemble(&x, at, Some(Parameter::Order));
-            let dx = self.jac.clone().lu().solve(&self.rhat).ok_or(HbmError::Singular { order })?;
+            let dx = self.factor(None).solve(&self.rhat).ok_or(HbmError::Singular { order })?;
             step = dx.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });
