@@ -16,7 +16,7 @@ pub(super) struct Evaluator {
     pub(super) speeds: Speeds,
     pub(super) parents: Vec<Option<usize>>,
     /// W, row-major.
-    w: Vec<f64>,
+    pub(super) w: Vec<f64>,
     /// Generalized force (in speeds) of a unit torque in the spin joint.
     pub(super) g: Vec<f64>,
     u: Vec<f64>,
