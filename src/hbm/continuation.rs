@@ -297,6 +297,7 @@ impl Hbm {
         // A step already aimed at a suspected pair of crossings, and a step already tried past a
         // point where the corrector failed at every smaller step, since the last accepted point.
         let (mut aimed, mut jumped, mut misses): (Option<usize>, bool, Vec<u32>) = (None, false, Vec::new());
+        let mut quiet: Vec<u32> = Vec::new();
         let aim_floor = 1e-3 * copts.ds.min(copts.ds_max);
         let mut last_chord = copts.ds;
         let end = loop {
@@ -403,14 +404,23 @@ impl Hbm {
                 }
             }
             // An aimed step that showed no sign change of its test function was a false alarm (a
-            // zero of higher multiplicity, or a near miss); after three in a row that function
-            // is not aimed at until it changes sign or stops dipping, so such a zero cannot hold
-            // the steps small. Each test function keeps its own count.
+            // zero of higher multiplicity, a near miss, or a product of many multipliers that
+            // decays like an exponential, which a quadratic takes for a dip); after three that
+            // function is not aimed at until it changes sign or stops dipping for four points in
+            // a row, so such a zero cannot hold the steps small. (Counting only aimed steps that
+            // still dipped let 16 mistuned pendulums aim at every other step: the aimed point
+            // lands past the false extremum, the next step dips again.) Each test function keeps
+            // its own count.
+            quiet.resize(cand_tests.1.len(), 0);
             if let Some((_, last)) = tests.last()
                 && last.len() == cand_tests.1.len()
             {
-                for (j, m) in misses.iter_mut().enumerate() {
-                    if last[j].0 != cand_tests.1[j].0 || !predicted.iter().any(|(k, _)| *k == j) {
+                for (j, (m, q)) in misses.iter_mut().zip(quiet.iter_mut()).enumerate() {
+                    // An aimed step dipped at its full length; the shortened one usually does
+                    // not (it lands on the extremum), which is no sign of a quiet function.
+                    let dips = aimed == Some(j) || predicted.iter().any(|(k, _)| *k == j);
+                    *q = if dips { 0 } else { *q + 1 };
+                    if last[j].0 != cand_tests.1[j].0 || *q >= 4 {
                         *m = 0;
                     } else if aimed == Some(j) {
                         *m += 1;

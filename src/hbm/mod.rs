@@ -276,6 +276,8 @@ pub struct Hbm {
     spectra: Vec<Complex<f64>>,
     /// `(C_m, S_m)`, m = −2H..=2H, of each of those series.
     unfolded: Vec<(f64, f64)>,
+    /// Which of those series were zero at every sample in the last assembly.
+    zero_series: Vec<bool>,
     q: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
@@ -527,6 +529,7 @@ impl Hbm {
             series: vec![0.0; nt],
             spectra: vec![Complex::default(); 3 * n * n * (nt / 2 + 1)],
             unfolded: vec![(0.0, 0.0); 3 * n * n * (4 * opts.harmonics + 1)],
+            zero_series: vec![false; 3 * n * n],
             q: vec![0.0; n],
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
