@@ -604,14 +604,14 @@ pub(crate) fn render(
     let _ = writeln!(md, "## Harmonic balance `{}`: {head}, H = {}\n", spec.name, spec.harmonics);
     let _ = writeln!(
         md,
-        "| T_n (N·m) | continued from ({}) | points | route | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |",
+        "| T_n (N·m) | continued from ({}) | points | route | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | per point (ms) | end |",
         ax.column
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
+            "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {:.3} | {} |",
             match (&spec.engine, br.amplitude.is_nan()) {
                 (Some(_), _) => "engine".to_string(),
                 (None, true) => "continued".to_string(),
@@ -634,6 +634,9 @@ pub(crate) fn render(
                 d.map_or("none".into(), |v| format!("{v:.4}"))
             )),
             1e3 * br.wall_s,
+            // The cost per point, which the route and the mechanism's size set (the points
+            // count the branch's shape).
+            1e3 * br.wall_s / f.points.max(1) as f64,
             br.end
         );
     }
