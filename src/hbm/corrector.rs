@@ -70,7 +70,7 @@ impl Hbm {
     /// coordinates; `blocklu`), densely otherwise (the paper's rotor, two coordinates, stays on
     /// the dense LU).
     pub(super) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
-        if self.n > 2 {
+        if self.n > 6 {
             let col = border.map(|(su, _)| &self.gp * su.p_ref);
             let block = match (&col, border) {
                 (Some(col), Some((_, row))) => BlockLu::new(&self.jac, Some((col, row)), self.n, self.nb, self.spin),
