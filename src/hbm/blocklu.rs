@@ -104,13 +104,14 @@ fn lu_determinant(lu: &Lu) -> (f64, f64) {
 }
 
 impl BlockLu {
-    /// Block elimination of `[[j, col], [rowᵀ]]` (the border absent when `border` is None) with
+    /// Block elimination of `[[j S, col], [rowᵀ]]` (S = diag(`scale`) scales the columns of j;
+    /// neither is there when `border` is None) with
     /// `n` diagonal blocks of size `nb` in `j`, the block `keep` never eliminated on its own.
     /// None when no block can be eliminated with less fill than the dense LU (the caller then
     /// factorises densely) or an eliminated block is refused (module docs).
     pub(super) fn new(
         j: &DMatrix<f64>,
-        border: Option<(&DVector<f64>, &DVector<f64>)>,
+        border: Option<(&DVector<f64>, &DVector<f64>, &[f64])>,
         n: usize,
         nb: usize,
         keep: usize,
@@ -127,11 +128,17 @@ impl BlockLu {
             for bk in 0..n {
                 let view = j.view((bi * nb, bk * nb), (nb, nb));
                 if view.iter().any(|&v| v != 0.0) {
-                    blocks[bi * nblk + bk] = Some(view.into_owned());
+                    let mut b = view.into_owned();
+                    if let Some((_, _, scale)) = border {
+                        for (c, mut col) in b.column_iter_mut().enumerate() {
+                            col *= scale[bk * nb + c];
+                        }
+                    }
+                    blocks[bi * nblk + bk] = Some(b);
                 }
             }
         }
-        if let Some((col, row)) = border {
+        if let Some((col, row, _)) = border {
             for b in 0..n {
                 blocks[b * nblk + n] = Some(DMatrix::from_column_slice(nb, 1, &col.as_slice()[b * nb..(b + 1) * nb]));
                 blocks[n * nblk + b] = Some(DMatrix::from_row_slice(1, nb, &row.as_slice()[b * nb..(b + 1) * nb]));
@@ -273,7 +280,8 @@ mod tests {
         full.view_mut((0, m), (m, 1)).copy_from(&col);
         full.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
         let r = DVector::from_fn(m + 1, |i, _| (i as f64).cos());
-        let block = BlockLu::new(&j, Some((&col, &row)), n, nb, 0).expect("an arrow is eliminated by blocks");
+        let ones = vec![1.0; m];
+        let block = BlockLu::new(&j, Some((&col, &row, &ones)), n, nb, 0).expect("an arrow is eliminated by blocks");
         assert_eq!(block.steps.len(), n - 2);
         let (xb, xd) = (block.solve(&r).unwrap(), full.clone().lu().solve(&r).unwrap());
         assert!((&xb - &xd).amax() < 1e-12 * xd.amax(), "{:e}", (&xb - &xd).amax());

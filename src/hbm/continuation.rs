@@ -113,12 +113,12 @@ impl Hbm {
         let slope = tangent.map_or(0.0, |t| t[m]);
         let (mut d_coefficients, mut d_mean_torque) = (Vec::new(), 0.0);
         if let Some(t) = tangent {
-            d_coefficients = t.as_slice()[..m].to_vec();
+            d_coefficients = su.x_of(t.as_slice(), m);
             let gauge = self.spin * self.nb;
             d_mean_torque = d_coefficients[gauge] * self.t_scale;
             d_coefficients[gauge] = 0.0;
         }
-        let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+        let x = su.x_of(y.as_slice(), m);
         let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
         if stability && self.opts.stability_samples > 0 {
             sol.stability = Some(self.stability(&sol)?);
@@ -143,8 +143,7 @@ impl Hbm {
     fn y_of(&self, su: &Setup, sol: &HbmSolution) -> DVector<f64> {
         let m = self.unknowns();
         let x = self.unknowns_from(Some(sol));
-        let mut y = DVector::zeros(m + 1);
-        y.rows_mut(0, m).copy_from_slice(&x);
+        let mut y = DVector::from_fn(m + 1, |i, _| if i < m { x[i] * su.w(i) } else { 0.0 });
         y[m] = su.lambda(sol);
         y
     }
@@ -185,7 +184,7 @@ impl Hbm {
             };
             *iterations += it;
             let order = su.at(y[m]).order;
-            self.assemble(&y.as_slice()[..m], &su.at(y[m]), Some(su.param));
+            self.assemble(&su.x_of(y.as_slice(), m), &su.at(y[m]), Some(su.param));
             let (t, c) = self.tangent_chord(su, &a.t, order).ok()?;
             lu = Some(Chord { lu: c.lu, update: None });
             let f = t[m];
@@ -271,7 +270,7 @@ impl Hbm {
             );
         }
         self.check_base(order)?;
-        let su = Setup { param: parameter, p_ref, base: self.at(order) };
+        let su = Setup::new(self, parameter, p_ref, self.at(order));
         let (l_from, l_to) = (from / p_ref, to / p_ref);
         let m = self.unknowns();
         let dir = (l_to - l_from).signum();
@@ -280,7 +279,7 @@ impl Hbm {
         newton += sol0.iterations;
         let y0 = self.y_of(&su, &sol0);
         // Initial tangent: the row e_λ fixes dλ = 1, then the sign follows the direction.
-        self.assemble(&y0.as_slice()[..m], &su.at(l_from), Some(parameter));
+        self.assemble(&su.x_of(y0.as_slice(), m), &su.at(l_from), Some(parameter));
         let mut e_l = DVector::zeros(m + 1);
         e_l[m] = 1.0;
         let t0 = self.tangent(&su, &e_l, order)? * dir;
@@ -331,7 +330,7 @@ impl Hbm {
             newton += iters;
             // The Jacobian at the new point gives its tangent and the next chord matrix.
             let at = su.at(y[m]);
-            self.assemble(&y.as_slice()[..m], &at, Some(parameter));
+            self.assemble(&su.x_of(y.as_slice(), m), &at, Some(parameter));
             let (t, next_chord) = match self.tangent_chord(&su, &cur.t, at.order) {
                 Ok(r) => r,
                 Err(_) => {
@@ -359,7 +358,7 @@ impl Hbm {
                 let l_end = if past_target { l_to } else { l_from };
                 let frac = (l_end - l_old) / (l_new - l_old);
                 let y_guess = &cur.y + (&y - &cur.y) * frac;
-                let x_guess: Vec<f64> = y_guess.rows(0, m).iter().copied().collect();
+                let x_guess = su.x_of(y_guess.as_slice(), m);
                 let guess_sol = self.solution_from(&x_guess, &su.at(l_end), 0);
                 let y_end = match self.solve_at(&su.at(l_end), Some(&guess_sol)) {
                     Ok(sol) => {
@@ -371,7 +370,7 @@ impl Hbm {
                 s += (&y_end - &cur.y).norm();
                 // The tangent at the end point itself (for the dense output); the Jacobian is
                 // the one the stability analysis needs there anyway.
-                self.assemble(&y_end.as_slice()[..m], &su.at(y_end[m]), Some(parameter));
+                self.assemble(&su.x_of(y_end.as_slice(), m), &su.at(y_end[m]), Some(parameter));
                 let t_end = self.tangent(&su, &t, su.at(y_end[m]).order).unwrap_or(t);
                 points.push(self.branch_point(&su, &y_end, Some(&t_end), s, iters, copts.stability)?);
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };

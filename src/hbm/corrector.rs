@@ -8,15 +8,40 @@ use super::blocklu::{BlockLu, Factor};
 use super::{At, Hbm, HbmError, HbmSolution, Parameter};
 use nalgebra::{DMatrix, DVector};
 
-/// A continuation's parameter, its scale and the values held fixed.
+/// A continuation's parameter, its scale and the values held fixed, and the weights of its
+/// arclength: the continuation works in `y = (w ⊙ x, λ)`, w = 1 on the spin coordinate's
+/// unknowns (its harmonics and the mean torque) and `weight` on every other coordinate's.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Setup {
     pub(super) param: Parameter,
     pub(super) p_ref: f64,
     pub(super) base: At,
+    /// The weight of the coordinates other than the spin one: 1/√(n_dof − 1), so that the
+    /// arclength measures their root mean square. N absorbers moving alike then take the steps of
+    /// one (without it a step in the parameter shrank as 1/√N: 16 mistuned pendulums took four
+    /// times the points of one); 1 for the paper's rotor and every two-coordinate problem.
+    pub(super) weight: f64,
+    /// The spin coordinate's unknowns, `spin·nb..(spin + 1)·nb`.
+    pub(super) spin: (usize, usize),
 }
 
 impl Setup {
+    /// The setup of `hbm` for `param` (scale `p_ref`, fixed values `base`).
+    pub(super) fn new(hbm: &Hbm, param: Parameter, p_ref: f64, base: At) -> Self {
+        let weight = if hbm.n > 2 { 1.0 / ((hbm.n - 1) as f64).sqrt() } else { 1.0 };
+        Self { param, p_ref, base, weight, spin: (hbm.spin * hbm.nb, (hbm.spin + 1) * hbm.nb) }
+    }
+
+    /// The arclength weight of unknown i.
+    pub(super) fn w(&self, i: usize) -> f64 {
+        if (self.spin.0..self.spin.1).contains(&i) { 1.0 } else { self.weight }
+    }
+
+    /// The unknowns x of a continuation state y (its first `m` entries divided by the weights).
+    pub(super) fn x_of(&self, y: &[f64], m: usize) -> Vec<f64> {
+        y[..m].iter().enumerate().map(|(i, v)| v / self.w(i)).collect()
+    }
+
     /// The residual's parameters at scaled parameter λ.
     pub(super) fn at(&self, lambda: f64) -> At {
         let mut at = self.base;
@@ -73,7 +98,10 @@ impl Hbm {
         if self.n > 6 {
             let col = border.map(|(su, _)| &self.gp * su.p_ref);
             let block = match (&col, border) {
-                (Some(col), Some((_, row))) => BlockLu::new(&self.jac, Some((col, row)), self.n, self.nb, self.spin),
+                (Some(col), Some((su, row))) => {
+                    let scale: Vec<f64> = (0..self.n * self.nb).map(|i| 1.0 / su.w(i)).collect();
+                    BlockLu::new(&self.jac, Some((col, row, &scale)), self.n, self.nb, self.spin)
+                }
                 _ => BlockLu::new(&self.jac, None, self.n, self.nb, self.spin),
             };
             if let Some(b) = block {
@@ -91,6 +119,15 @@ impl Hbm {
         let m = self.unknowns();
         let mut b = DMatrix::zeros(m + 1, m + 1);
         b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
+        // ∂R̂/∂y = ∂R̂/∂x / w: the continuation's unknowns are weighted (`Setup`).
+        if su.weight != 1.0 {
+            for c in 0..m {
+                let w = su.w(c);
+                if w != 1.0 {
+                    b.view_mut((0, c), (m, 1)).scale_mut(1.0 / w);
+                }
+            }
+        }
         b.view_mut((0, m), (m, 1)).copy_from(&(&self.gp * su.p_ref));
         b.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
         b
@@ -139,7 +176,7 @@ impl Hbm {
             if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
-            let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+            let x = su.x_of(y.as_slice(), m);
             self.assemble(&x, &at, Some(su.param));
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
@@ -191,7 +228,9 @@ impl Hbm {
             if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
-            x.copy_from_slice(&y.as_slice()[..m]);
+            for (i, (xi, yi)) in x.iter_mut().zip(&y.as_slice()[..m]).enumerate() {
+                *xi = yi / su.w(i);
+            }
             self.assemble(&x, &at, None);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
