@@ -2,9 +2,13 @@
 //! order n, the mean speed Ω (at fixed n) or the torque scale s (at fixed n; every oscillating
 //! amplitude T_k becomes s·T_k), see [`Parameter`].
 //!
-//! The branch is the curve `R̂(x, λ) = 0` in the space `y = (x, λ)` of the Fourier unknowns (rad;
-//! the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s, the
-//! starting speed for Ω, so that arclength steps mean the same for each). ∂R̂/∂p is exact (see
+//! The branch is the curve `R̂(x, λ) = 0` in the space `y = (w ⊙ x, λ)` of the Fourier unknowns
+//! (rad; the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s,
+//! the starting speed for Ω, so that arclength steps mean the same for each). The weights w are
+//! 1 on the spin coordinate's unknowns and 1/√(n_dof − 1) on every other coordinate's: the
+//! arclength measures the root mean square of the other coordinates, so that N absorbers moving
+//! alike take the steps of one instead of steps 1/√N as long in the parameter (two coordinates,
+//! the paper's rotor, have weight 1). ∂R̂/∂p is exact (see
 //! the module docs of [`crate::hbm`]). From a point y with unit tangent t, the predictor is
 //! `y + Δs t + ½ Δs² κ` with the curvature κ estimated from the change of the tangent over the
 //! last step, and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` on the
@@ -55,7 +59,9 @@ use nalgebra::DVector;
 /// Settings of the continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContinuationOptions {
-    /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ)).
+    /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ), the
+    /// coefficients of the coordinates other than the spin one weighted by 1/√(n_dof − 1): see
+    /// the module docs).
     pub ds: f64,
     /// Smallest step before giving up.
     pub ds_min: f64,

@@ -7,7 +7,8 @@
 //! third of its length is the formulation below, written where the code that follows it is); the parts
 //! are in submodules, their public items re-exported here: `solution` ([`HbmSolution`] and its
 //! read-outs), `sample` (the residual and its derivatives at one time sample), `assembly` (the
-//! AFT residual and the spectral Jacobian), `aft` (the real FFTs), `branch` (the branch data
+//! AFT residual and the spectral Jacobian), `blocklu` (the Jacobian's factorisation by blocks
+//! along the mechanism's tree), `aft` (the real FFTs), `branch` (the branch data
 //! model and the continued [`Parameter`]), `continuation` (the pseudo-arclength walk),
 //! `stability` (Floquet multipliers) and `cyclic` (identical absorbers by one representative,
 //! [`RoutedHbm`] and its [`Route`]).
