@@ -40,13 +40,16 @@ type Lu = LU<f64, Dyn, Dyn>;
 /// Smallest accepted ratio of an eliminated block's pivots to its largest.
 const PIVOT_RATIO: f64 = 1e-10;
 
-/// One eliminated block: its LU, and per neighbour j the blocks `B_jk` (forward elimination) and
-/// `B_kk⁻¹ B_kj` (back substitution), absent where zero.
+/// A neighbour j of an eliminated block k: j, `B_jk` (forward elimination) and `B_kk⁻¹ B_kj`
+/// (back substitution), each absent where zero.
+type Neighbour = (usize, Option<DMatrix<f64>>, Option<DMatrix<f64>>);
+
+/// One eliminated block: its LU and its neighbours.
 #[derive(Debug, Clone)]
 struct Step {
     k: usize,
     lu: Lu,
-    neighbours: Vec<(usize, Option<DMatrix<f64>>, Option<DMatrix<f64>>)>,
+    neighbours: Vec<Neighbour>,
 }
 
 /// A block-eliminated factorisation (module docs).

@@ -152,10 +152,12 @@ impl Hbm {
         let nt = self.aft.nt;
         let nn = nf * nf;
         // Beyond the fixed-size sizes, the whole mechanism by its tree (see `tree_monodromy`).
-        if tree && nb == nf && 2 * nb > 12 {
-            if let Some(phi) = self.tree_monodromy(period) {
-                return finish(phi, 2 * nb, drop, order);
-            }
+        if tree
+            && nb == nf
+            && 2 * nb > 12
+            && let Some(phi) = self.tree_monodromy(period)
+        {
+            return finish(phi, 2 * nb, drop, order);
         }
         // [K | L] = C⁻¹ [A | B] at the N_t samples, stored as 2n² series of N_t values (entry
         // (i, c) of the n × 2n block is series i·2n + c), n = coords.len().
