@@ -128,18 +128,30 @@ impl Hbm {
     fn spectral_jacobian(&mut self, w0: f64) {
         let (n, nb, nt, spin, hh) = (self.n, self.nb, self.aft.nt, self.spin, self.opts.harmonics);
         let (nn, half) = (n * n, self.aft.half_len());
-        for sidx in 0..3 * nn {
-            for j in 0..nt {
-                self.series[j] = self.samples[j * 3 * nn + sidx];
-            }
-            self.aft.spectrum(&self.series, &mut self.spectra[sidx * half..(sidx + 1) * half]);
-        }
-        // (C_m, S_m) for m = −2H..=2H per series, unfolded once so that the entries below are
-        // plain lookups.
         let width = 4 * hh + 1;
+        // A series that is zero at every sample (a pair of coordinates the tree does not couple:
+        // most of them for a rotor with many absorbers) has a zero spectrum and leaves its block
+        // zero, as `assemble` filled it: no FFT, and the block is skipped below.
+        let mut zero = std::mem::take(&mut self.zero_series);
+        zero.resize(3 * nn, false);
         for sidx in 0..3 * nn {
-            let spec = &self.spectra[sidx * half..(sidx + 1) * half];
-            for (u, v) in self.unfolded[sidx * width..(sidx + 1) * width].iter_mut().enumerate() {
+            let mut any = false;
+            for j in 0..nt {
+                let v = self.samples[j * 3 * nn + sidx];
+                self.series[j] = v;
+                any |= v != 0.0;
+            }
+            zero[sidx] = !any;
+            let unfolded = &mut self.unfolded[sidx * width..(sidx + 1) * width];
+            if !any {
+                unfolded.fill((0.0, 0.0));
+                continue;
+            }
+            let spec = &mut self.spectra[sidx * half..(sidx + 1) * half];
+            self.aft.spectrum(&self.series, spec);
+            // (C_m, S_m) for m = −2H..=2H, unfolded once so that the entries below are plain
+            // lookups.
+            for (u, v) in unfolded.iter_mut().enumerate() {
                 *v = aft::cos_sin(spec, nt, u as isize - 2 * hh as isize);
             }
         }
@@ -151,6 +163,9 @@ impl Hbm {
         for i in 0..n {
             for k in 0..n {
                 let (alpha, beta, gamma) = (i * n + k, nn + i * n + k, 2 * nn + i * n + k);
+                if zero[alpha] && zero[beta] && zero[gamma] {
+                    continue;
+                }
                 // Column-major storage: the rows (i, ·) of column (k, b) start at base(b).
                 let base = |b: usize| (k * nb + b) * dim + i * nb;
                 if k != spin {
@@ -192,6 +207,7 @@ impl Hbm {
                 }
             }
         }
+        self.zero_series = zero;
     }
 }
 

@@ -2,9 +2,13 @@
 //! order n, the mean speed Ω (at fixed n) or the torque scale s (at fixed n; every oscillating
 //! amplitude T_k becomes s·T_k), see [`Parameter`].
 //!
-//! The branch is the curve `R̂(x, λ) = 0` in the space `y = (x, λ)` of the Fourier unknowns (rad;
-//! the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s, the
-//! starting speed for Ω, so that arclength steps mean the same for each). ∂R̂/∂p is exact (see
+//! The branch is the curve `R̂(x, λ) = 0` in the space `y = (w ⊙ x, λ)` of the Fourier unknowns
+//! (rad; the scaled mean torque) and the scaled parameter `λ = p / p_ref` (p_ref = 1 for n and s,
+//! the starting speed for Ω, so that arclength steps mean the same for each). The weights w are
+//! 1 on the spin coordinate's unknowns and 1/√(n_dof − 1) on every other coordinate's: the
+//! arclength measures the root mean square of the other coordinates, so that N absorbers moving
+//! alike take the steps of one instead of steps 1/√N as long in the parameter (two coordinates,
+//! the paper's rotor, have weight 1). ∂R̂/∂p is exact (see
 //! the module docs of [`crate::hbm`]). From a point y with unit tangent t, the predictor is
 //! `y + Δs t + ½ Δs² κ` with the curvature κ estimated from the change of the tangent over the
 //! last step, and the corrector solves `R̂ = 0` together with `tᵀ(y − y_pred) = 0` on the
@@ -43,6 +47,7 @@
 //! of multipliers outside the unit circle (bisection along the segment); a branch point is then
 //! located on det ∂R̂/∂x, which vanishes there exactly for the truncated problem.
 
+use super::blocklu::Factor;
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
 use super::{BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
@@ -54,7 +59,9 @@ use nalgebra::DVector;
 /// Settings of the continuation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContinuationOptions {
-    /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ)).
+    /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ), the
+    /// coefficients of the coordinates other than the spin one weighted by 1/√(n_dof − 1): see
+    /// the module docs).
     pub ds: f64,
     /// Smallest step before giving up.
     pub ds_min: f64,
@@ -112,12 +119,12 @@ impl Hbm {
         let slope = tangent.map_or(0.0, |t| t[m]);
         let (mut d_coefficients, mut d_mean_torque) = (Vec::new(), 0.0);
         if let Some(t) = tangent {
-            d_coefficients = t.as_slice()[..m].to_vec();
+            d_coefficients = su.x_of(t.as_slice(), m);
             let gauge = self.spin * self.nb;
             d_mean_torque = d_coefficients[gauge] * self.t_scale;
             d_coefficients[gauge] = 0.0;
         }
-        let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+        let x = su.x_of(y.as_slice(), m);
         let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
         if stability && self.opts.stability_samples > 0 {
             sol.stability = Some(self.stability(&sol)?);
@@ -142,8 +149,7 @@ impl Hbm {
     fn y_of(&self, su: &Setup, sol: &HbmSolution) -> DVector<f64> {
         let m = self.unknowns();
         let x = self.unknowns_from(Some(sol));
-        let mut y = DVector::zeros(m + 1);
-        y.rows_mut(0, m).copy_from_slice(&x);
+        let mut y = DVector::from_fn(m + 1, |i, _| if i < m { x[i] * su.w(i) } else { 0.0 });
         y[m] = su.lambda(sol);
         y
     }
@@ -184,7 +190,7 @@ impl Hbm {
             };
             *iterations += it;
             let order = su.at(y[m]).order;
-            self.assemble(&y.as_slice()[..m], &su.at(y[m]), Some(su.param));
+            self.assemble(&su.x_of(y.as_slice(), m), &su.at(y[m]), Some(su.param));
             let (t, c) = self.tangent_chord(su, &a.t, order).ok()?;
             lu = Some(Chord { lu: c.lu, update: None });
             let f = t[m];
@@ -270,7 +276,7 @@ impl Hbm {
             );
         }
         self.check_base(order)?;
-        let su = Setup { param: parameter, p_ref, base: self.at(order) };
+        let su = Setup::new(self, parameter, p_ref, self.at(order));
         let (l_from, l_to) = (from / p_ref, to / p_ref);
         let m = self.unknowns();
         let dir = (l_to - l_from).signum();
@@ -279,12 +285,12 @@ impl Hbm {
         newton += sol0.iterations;
         let y0 = self.y_of(&su, &sol0);
         // Initial tangent: the row e_λ fixes dλ = 1, then the sign follows the direction.
-        self.assemble(&y0.as_slice()[..m], &su.at(l_from), Some(parameter));
+        self.assemble(&su.x_of(y0.as_slice(), m), &su.at(l_from), Some(parameter));
         let mut e_l = DVector::zeros(m + 1);
         e_l[m] = 1.0;
         let t0 = self.tangent(&su, &e_l, order)? * dir;
         let mut cur = Cursor { y: y0, t: t0 };
-        let mut chord_m = Chord { lu: self.bordered(&su, &cur.t).lu(), update: None };
+        let mut chord_m = Chord { lu: self.factor(Some((&su, &cur.t))), update: None };
         let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, sol0.iterations, copts.stability)?];
         // The accepted points' arclengths and test functions (each computed once).
         let mut tests = vec![(0.0, test_functions(&points[0]))];
@@ -296,6 +302,7 @@ impl Hbm {
         // A step already aimed at a suspected pair of crossings, and a step already tried past a
         // point where the corrector failed at every smaller step, since the last accepted point.
         let (mut aimed, mut jumped, mut misses): (Option<usize>, bool, Vec<u32>) = (None, false, Vec::new());
+        let mut quiet: Vec<u32> = Vec::new();
         let aim_floor = 1e-3 * copts.ds.min(copts.ds_max);
         let mut last_chord = copts.ds;
         let end = loop {
@@ -329,7 +336,7 @@ impl Hbm {
             newton += iters;
             // The Jacobian at the new point gives its tangent and the next chord matrix.
             let at = su.at(y[m]);
-            self.assemble(&y.as_slice()[..m], &at, Some(parameter));
+            self.assemble(&su.x_of(y.as_slice(), m), &at, Some(parameter));
             let (t, next_chord) = match self.tangent_chord(&su, &cur.t, at.order) {
                 Ok(r) => r,
                 Err(_) => {
@@ -357,7 +364,7 @@ impl Hbm {
                 let l_end = if past_target { l_to } else { l_from };
                 let frac = (l_end - l_old) / (l_new - l_old);
                 let y_guess = &cur.y + (&y - &cur.y) * frac;
-                let x_guess: Vec<f64> = y_guess.rows(0, m).iter().copied().collect();
+                let x_guess = su.x_of(y_guess.as_slice(), m);
                 let guess_sol = self.solution_from(&x_guess, &su.at(l_end), 0);
                 let y_end = match self.solve_at(&su.at(l_end), Some(&guess_sol)) {
                     Ok(sol) => {
@@ -369,7 +376,7 @@ impl Hbm {
                 s += (&y_end - &cur.y).norm();
                 // The tangent at the end point itself (for the dense output); the Jacobian is
                 // the one the stability analysis needs there anyway.
-                self.assemble(&y_end.as_slice()[..m], &su.at(y_end[m]), Some(parameter));
+                self.assemble(&su.x_of(y_end.as_slice(), m), &su.at(y_end[m]), Some(parameter));
                 let t_end = self.tangent(&su, &t, su.at(y_end[m]).order).unwrap_or(t);
                 points.push(self.branch_point(&su, &y_end, Some(&t_end), s, iters, copts.stability)?);
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
@@ -402,14 +409,23 @@ impl Hbm {
                 }
             }
             // An aimed step that showed no sign change of its test function was a false alarm (a
-            // zero of higher multiplicity, or a near miss); after three in a row that function
-            // is not aimed at until it changes sign or stops dipping, so such a zero cannot hold
-            // the steps small. Each test function keeps its own count.
+            // zero of higher multiplicity, a near miss, or a product of many multipliers that
+            // decays like an exponential, which a quadratic takes for a dip); after three that
+            // function is not aimed at until it changes sign or stops dipping for four points in
+            // a row, so such a zero cannot hold the steps small. (Counting only aimed steps that
+            // still dipped let 16 mistuned pendulums aim at every other step: the aimed point
+            // lands past the false extremum, the next step dips again.) Each test function keeps
+            // its own count.
+            quiet.resize(cand_tests.1.len(), 0);
             if let Some((_, last)) = tests.last()
                 && last.len() == cand_tests.1.len()
             {
-                for (j, m) in misses.iter_mut().enumerate() {
-                    if last[j].0 != cand_tests.1[j].0 || !predicted.iter().any(|(k, _)| *k == j) {
+                for (j, (m, q)) in misses.iter_mut().zip(quiet.iter_mut()).enumerate() {
+                    // An aimed step dipped at its full length; the shortened one usually does
+                    // not (it lands on the extremum), which is no sign of a quiet function.
+                    let dips = aimed == Some(j) || predicted.iter().any(|(k, _)| *k == j);
+                    *q = if dips { 0 } else { *q + 1 };
+                    if last[j].0 != cand_tests.1[j].0 || *q >= 4 {
                         *m = 0;
                     } else if aimed == Some(j) {
                         *m += 1;
@@ -545,22 +561,16 @@ impl Hbm {
         let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
         let x = self.unknowns_from(Some(&sol));
         self.assemble(&x, &su.at(lambda), Some(su.param));
-        let matrix = match block {
-            None => self.jac.clone(),
+        let (sign, log) = match block {
+            None => self.factor(None).determinant(),
             Some(k) => {
                 let nb = self.nb;
                 let idx: Vec<usize> =
                     self.non_unison.get(k)?.coordinates.iter().flat_map(|&c| c * nb..(c + 1) * nb).collect();
-                nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| self.jac[(idx[r], idx[c])])
+                let matrix = nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |r, c| self.jac[(idx[r], idx[c])]);
+                Factor::Dense(matrix.lu()).determinant()
             }
         };
-        let lu = matrix.lu();
-        let u = lu.u();
-        let (mut sign, mut log) = (lu.p().determinant::<f64>(), 0.0);
-        for d in u.diagonal().iter() {
-            sign *= d.signum();
-            log += d.abs().ln();
-        }
         log.is_finite().then_some((sol, sign, log))
     }
 

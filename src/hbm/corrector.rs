@@ -4,18 +4,44 @@
 //! yields, Newton's method on it, and the Newton–chord iteration with good-Broyden updates
 //! (Kelley §7.3) that reuses one factorisation per point.
 
+use super::blocklu::{BlockLu, Factor};
 use super::{At, Hbm, HbmError, HbmSolution, Parameter};
 use nalgebra::{DMatrix, DVector};
 
-/// A continuation's parameter, its scale and the values held fixed.
+/// A continuation's parameter, its scale and the values held fixed, and the weights of its
+/// arclength: the continuation works in `y = (w ⊙ x, λ)`, w = 1 on the spin coordinate's
+/// unknowns (its harmonics and the mean torque) and `weight` on every other coordinate's.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Setup {
     pub(super) param: Parameter,
     pub(super) p_ref: f64,
     pub(super) base: At,
+    /// The weight of the coordinates other than the spin one: 1/√(n_dof − 1), so that the
+    /// arclength measures their root mean square. N absorbers moving alike then take the steps of
+    /// one (without it a step in the parameter shrank as 1/√N: 16 mistuned pendulums took four
+    /// times the points of one); 1 for the paper's rotor and every two-coordinate problem.
+    pub(super) weight: f64,
+    /// The spin coordinate's unknowns, `spin·nb..(spin + 1)·nb`.
+    pub(super) spin: (usize, usize),
 }
 
 impl Setup {
+    /// The setup of `hbm` for `param` (scale `p_ref`, fixed values `base`).
+    pub(super) fn new(hbm: &Hbm, param: Parameter, p_ref: f64, base: At) -> Self {
+        let weight = if hbm.n > 2 { 1.0 / ((hbm.n - 1) as f64).sqrt() } else { 1.0 };
+        Self { param, p_ref, base, weight, spin: (hbm.spin * hbm.nb, (hbm.spin + 1) * hbm.nb) }
+    }
+
+    /// The arclength weight of unknown i.
+    pub(super) fn w(&self, i: usize) -> f64 {
+        if (self.spin.0..self.spin.1).contains(&i) { 1.0 } else { self.weight }
+    }
+
+    /// The unknowns x of a continuation state y (its first `m` entries divided by the weights).
+    pub(super) fn x_of(&self, y: &[f64], m: usize) -> Vec<f64> {
+        y[..m].iter().enumerate().map(|(i, v)| v / self.w(i)).collect()
+    }
+
     /// The residual's parameters at scaled parameter λ.
     pub(super) fn at(&self, lambda: f64) -> At {
         let mut at = self.base;
@@ -42,15 +68,13 @@ impl Setup {
     }
 }
 
-type Lu = nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
-
 /// A factorised bordered matrix for the chord iterations. The matrix bordered by the new tangent
 /// t differs from the one factorised for computing t (bordered by the previous tangent t₀) in
 /// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
 /// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
 /// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
 pub(super) struct Chord {
-    pub(super) lu: Lu,
+    pub(super) lu: Factor,
     pub(super) update: Option<(DVector<f64>, DVector<f64>, f64)>,
 }
 
@@ -66,11 +90,44 @@ impl Chord {
 }
 
 impl Hbm {
+    /// The Jacobian in the buffers factorised, bordered by `[∂R̂/∂λ; rowᵀ]` when `row` is given:
+    /// by block elimination along the tree where its pattern allows it (more than two
+    /// coordinates; `blocklu`), densely otherwise (the paper's rotor, two coordinates, stays on
+    /// the dense LU).
+    pub(super) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
+        if self.n > 6 {
+            let col = border.map(|(su, _)| &self.gp * su.p_ref);
+            let block = match (&col, border) {
+                (Some(col), Some((su, row))) => {
+                    let scale: Vec<f64> = (0..self.n * self.nb).map(|i| 1.0 / su.w(i)).collect();
+                    BlockLu::new(&self.jac, Some((col, row, &scale)), self.n, self.nb, self.spin)
+                }
+                _ => BlockLu::new(&self.jac, None, self.n, self.nb, self.spin),
+            };
+            if let Some(b) = block {
+                return Factor::Block(Box::new(b));
+            }
+        }
+        match border {
+            Some((su, row)) => Factor::Dense(self.bordered(su, row).lu()),
+            None => Factor::Dense(self.jac.clone().lu()),
+        }
+    }
+
     /// The bordered matrix `[[J, ∂R̂/∂λ], [rowᵀ]]` from the work buffers (∂R̂/∂λ = p_ref ∂R̂/∂p).
     pub(super) fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
         let m = self.unknowns();
         let mut b = DMatrix::zeros(m + 1, m + 1);
         b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
+        // ∂R̂/∂y = ∂R̂/∂x / w: the continuation's unknowns are weighted (`Setup`).
+        if su.weight != 1.0 {
+            for c in 0..m {
+                let w = su.w(c);
+                if w != 1.0 {
+                    b.view_mut((0, c), (m, 1)).scale_mut(1.0 / w);
+                }
+            }
+        }
         b.view_mut((0, m), (m, 1)).copy_from(&(&self.gp * su.p_ref));
         b.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
         b
@@ -91,7 +148,7 @@ impl Hbm {
         let m = self.unknowns();
         let mut rhs = DVector::zeros(m + 1);
         rhs[m] = 1.0;
-        let lu = self.bordered(su, row).lu();
+        let lu = self.factor(Some((su, row)));
         let z = lu.solve(&rhs).ok_or(HbmError::Singular { order })?;
         let norm = z.norm();
         if !norm.is_finite() || norm == 0.0 {
@@ -119,12 +176,12 @@ impl Hbm {
             if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
-            let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+            let x = su.x_of(y.as_slice(), m);
             self.assemble(&x, &at, Some(su.param));
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
-            let dy = self.bordered(su, t).lu().solve(&rhs).ok_or(HbmError::Singular { order })?;
+            let dy = self.factor(Some((su, t))).solve(&rhs).ok_or(HbmError::Singular { order })?;
             step = dy.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });
@@ -171,7 +228,9 @@ impl Hbm {
             if !su.valid(y[m]) {
                 return Err(HbmError::NonFinite { order });
             }
-            x.copy_from_slice(&y.as_slice()[..m]);
+            for (i, (xi, yi)) in x.iter_mut().zip(&y.as_slice()[..m]).enumerate() {
+                *xi = yi / su.w(i);
+            }
             self.assemble(&x, &at, None);
             rhs.rows_mut(0, m).copy_from(&self.rhat);
             rhs[m] = t.dot(&(&y - pred));
@@ -190,7 +249,7 @@ impl Hbm {
             let mut step = s.amax();
             if it > 1 && step > 0.5 * last && refreshes < max_refresh {
                 self.assemble(&x, &at, Some(su.param));
-                let f = Chord { lu: self.bordered(su, t).lu(), update: None };
+                let f = Chord { lu: self.factor(Some((su, t))), update: None };
                 s = -f.solve(&rhs).ok_or(HbmError::Singular { order })?;
                 step = s.amax();
                 fresh = Some(f);

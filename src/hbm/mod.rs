@@ -7,7 +7,8 @@
 //! third of its length is the formulation below, written where the code that follows it is); the parts
 //! are in submodules, their public items re-exported here: `solution` ([`HbmSolution`] and its
 //! read-outs), `sample` (the residual and its derivatives at one time sample), `assembly` (the
-//! AFT residual and the spectral Jacobian), `aft` (the real FFTs), `branch` (the branch data
+//! AFT residual and the spectral Jacobian), `blocklu` (the Jacobian's factorisation by blocks
+//! along the mechanism's tree), `aft` (the real FFTs), `branch` (the branch data
 //! model and the continued [`Parameter`]), `continuation` (the pseudo-arclength walk),
 //! `stability` (Floquet multipliers) and `cyclic` (identical absorbers by one representative,
 //! [`RoutedHbm`] and its [`Route`]).
@@ -97,6 +98,7 @@
 
 mod aft;
 mod assembly;
+mod blocklu;
 mod branch;
 mod continuation;
 mod corrector;
@@ -275,6 +277,8 @@ pub struct Hbm {
     spectra: Vec<Complex<f64>>,
     /// `(C_m, S_m)`, m = −2H..=2H, of each of those series.
     unfolded: Vec<(f64, f64)>,
+    /// Which of those series were zero at every sample in the last assembly.
+    zero_series: Vec<bool>,
     q: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
@@ -526,6 +530,7 @@ impl Hbm {
             series: vec![0.0; nt],
             spectra: vec![Complex::default(); 3 * n * n * (nt / 2 + 1)],
             unfolded: vec![(0.0, 0.0); 3 * n * n * (4 * opts.harmonics + 1)],
+            zero_series: vec![false; 3 * n * n],
             q: vec![0.0; n],
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
@@ -734,7 +739,7 @@ impl Hbm {
         let mut step = f64::INFINITY;
         for it in 1..=self.opts.max_iter {
             self.assemble(&x, at, Some(Parameter::Order));
-            let dx = self.jac.clone().lu().solve(&self.rhat).ok_or(HbmError::Singular { order })?;
+            let dx = self.factor(None).solve(&self.rhat).ok_or(HbmError::Singular { order })?;
             step = dx.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });

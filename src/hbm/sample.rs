@@ -16,7 +16,11 @@ pub(super) struct Evaluator {
     pub(super) speeds: Speeds,
     pub(super) parents: Vec<Option<usize>>,
     /// W, row-major.
-    w: Vec<f64>,
+    pub(super) w: Vec<f64>,
+    /// W's non-zeros row by row, `(k, W_jk)` for row j: `M W` and `∂R/∂u W` skip W's zeros
+    /// (most of it on a tree: the absolute speeds' W has 2n − 1 non-zeros), which summed
+    /// in the same order gives the same numbers; n³ per sample was 7 % of a 16-pendulum branch.
+    w_rows: Vec<Vec<(usize, f64)>>,
     /// Generalized force (in speeds) of a unit torque in the spin joint.
     pub(super) g: Vec<f64>,
     u: Vec<f64>,
@@ -53,7 +57,10 @@ impl Evaluator {
     /// joints' `parents`, W (row-major) and the generalized force `g` of a unit spin torque.
     pub(super) fn new(kane: Kane, speeds: Speeds, parents: Vec<Option<usize>>, w: Vec<f64>, g: Vec<f64>) -> Self {
         let n = kane.ndof();
+        let w_rows =
+            (0..n).map(|j| (0..n).filter(|&k| w[j * n + k] != 0.0).map(|k| (k, w[j * n + k])).collect()).collect();
         Self {
+            w_rows,
             kane,
             n,
             speeds,
@@ -132,14 +139,15 @@ impl Evaluator {
             for i in 0..n {
                 lin.r[i] -= self.g[i] * torque;
                 lin.a[i * n + spin] = 0.0;
-                for k in 0..n {
-                    let (mut b, mut c) = (0.0, 0.0);
-                    for j in 0..n {
-                        b += du[i * n + j] * self.w[j * n + k];
-                        c += m[i * n + j] * self.w[j * n + k];
+                let (b, c) = (&mut lin.b[i * n..(i + 1) * n], &mut lin.c[i * n..(i + 1) * n]);
+                b.fill(0.0);
+                c.fill(0.0);
+                for (j, row) in self.w_rows.iter().enumerate() {
+                    let (dij, mij) = (du[i * n + j], m[i * n + j]);
+                    for &(k, wjk) in row {
+                        b[k] += dij * wjk;
+                        c[k] += mij * wjk;
                     }
-                    lin.b[i * n + k] = b;
-                    lin.c[i * n + k] = c;
                 }
             }
             return;

@@ -133,7 +133,10 @@ pub(crate) fn branch(
     from: f64,
     to: f64,
 ) -> Result<(RoutedHbm, Branch, f64)> {
-    branch_in(study, omega, (harmonics, &[]), excite, h, Parameter::Order, from, to, None, None)
+    // Its points serve as guesses only (the multi-order analysis solves each state at its order
+    // and analyses that one): no Floquet analysis per point and no localisation of the events,
+    // which were most of the harmonic balance's cost in the truck study.
+    branch_with(study, omega, (harmonics, &[]), excite, h, Parameter::Order, (from, to), None, None, false)
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
@@ -155,6 +158,23 @@ pub(crate) fn branch_in(
     max_step: Option<f64>,
     on_point: Option<PointHook>,
 ) -> Result<(RoutedHbm, Branch, f64)> {
+    branch_with(study, omega, forcing, excite, h, parameter, (from, to), max_step, on_point, true)
+}
+
+/// [`branch_in`], with the stability of every point and the events located when `analysed`.
+#[allow(clippy::too_many_arguments)]
+fn branch_with(
+    study: &Study,
+    omega: f64,
+    forcing: (&[Harmonic], &[Harmonic]),
+    excite: &[super::ExciteAt],
+    h: usize,
+    parameter: Parameter,
+    (from, to): (f64, f64),
+    max_step: Option<f64>,
+    on_point: Option<PointHook>,
+    analysed: bool,
+) -> Result<(RoutedHbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
     let inputs = study.excited_joints(&study.mechanism, excite);
@@ -175,7 +195,13 @@ pub(crate) fn branch_in(
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
     let ds_max = max_step.unwrap_or(defaults.ds_max);
-    let copts = ContinuationOptions { ds_max, ds: defaults.ds.min(ds_max), ..defaults };
+    let copts = ContinuationOptions {
+        ds_max,
+        ds: defaults.ds.min(ds_max),
+        stability: analysed,
+        refine_folds: analysed,
+        ..defaults
+    };
     let b = hbm.continue_in(parameter, from, to, None, &copts).map_err(hbm_error(study))?;
     Ok((hbm, b, start.elapsed().as_secs_f64()))
 }
@@ -604,14 +630,14 @@ pub(crate) fn render(
     let _ = writeln!(md, "## Harmonic balance `{}`: {head}, H = {}\n", spec.name, spec.harmonics);
     let _ = writeln!(
         md,
-        "| T_n (N·m) | continued from ({}) | points | route | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | end |",
+        "| T_n (N·m) | continued from ({}) | points | route | stable / unstable | folds | other bifurcations | sweep jumps (up, down) | continuation time (ms) | per point (ms) | end |",
         ax.column
     );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
         let _ = writeln!(
             md,
-            "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",
+            "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {:.3} | {} |",
             match (&spec.engine, br.amplitude.is_nan()) {
                 (Some(_), _) => "engine".to_string(),
                 (None, true) => "continued".to_string(),
@@ -634,6 +660,9 @@ pub(crate) fn render(
                 d.map_or("none".into(), |v| format!("{v:.4}"))
             )),
             1e3 * br.wall_s,
+            // The cost per point, which the route and the mechanism's size set (the points
+            // count the branch's shape).
+            1e3 * br.wall_s / f.points.max(1) as f64,
             br.end
         );
     }

@@ -1,0 +1,116 @@
+//! The general route at scale against its baseline in one run: whole harmonic-balance branches of
+//! the canonical CPVA at 1000 rpm, 40 N·m, H = 10, n 2.9 → 3.3 and back, Floquet stability at
+//! every point, for the one-pendulum rotor (the baseline) and for the rotor with 16 pendulums
+//! mistuned by ±1 % (pendulum j's mass times `1 + 0.01 (2j/15 − 1)`, j = 0…15, the paper's
+//! pendulum split evenly as in `CpvaParams::with_pendulums`; not identical, so `RoutedHbm::new`
+//! takes the general route: 17 coordinates, 357 unknowns). Best of 5·`runs` (one pendulum) and
+//! of `runs` (16) per branch, and the ratios to the baseline measured in the same run.
+//!
+//! ```text
+//! cargo bench --bench hbm_scale
+//! HBM_SCALE_ONLY=16 cargo bench --bench hbm_scale     # the 16 pendulums once (for a profiler)
+//! HBM_SCALE_RUNS=1 cargo bench --bench hbm_scale      # fewer repetitions (default 3)
+//! ```
+
+#[path = "../tests/support/cpva_hbm.rs"]
+mod cpva_hbm;
+
+use cpva_hbm::{cpva_hbm, omega, single};
+use kanedyn::cpva::CpvaParams;
+use kanedyn::hbm::{Branch, ContinuationOptions, HbmOptions, RoutedHbm};
+use kanedyn::kane::Kane;
+use std::time::Instant;
+
+const TORQUE: f64 = 40.0;
+const PENDULUMS: usize = 16;
+
+/// One branch's figures: best wall time (s), points, corrector iterations, and its bifurcations
+/// in words.
+struct Run {
+    best: f64,
+    points: usize,
+    newton: usize,
+    events: Vec<String>,
+}
+
+impl Run {
+    fn new() -> Self {
+        Self { best: f64::INFINITY, points: 0, newton: 0, events: Vec::new() }
+    }
+
+    fn record(&mut self, seconds: f64, b: &Branch) {
+        self.best = self.best.min(seconds);
+        (self.points, self.newton) = (b.points.len(), b.newton_iterations);
+        self.events = b.bifurcations.iter().map(|e| format!("{} at {:.7}", e.class.words(), e.order)).collect();
+    }
+}
+
+fn one_pendulum(from: f64, to: f64, runs: usize) -> Run {
+    let mut r = Run::new();
+    for _ in 0..runs {
+        let mut hbm = cpva_hbm(&single(TORQUE), HbmOptions::default());
+        let t0 = Instant::now();
+        let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).unwrap();
+        r.record(t0.elapsed().as_secs_f64(), &b);
+    }
+    r
+}
+
+fn mistuned(from: f64, to: f64, runs: usize) -> Run {
+    let mut mech = CpvaParams::canonical().with_pendulums(PENDULUMS).mechanism(None).unwrap();
+    for j in 0..PENDULUMS {
+        let body = mech.body_index(&format!("pendulum_{}", j + 1)).unwrap();
+        mech.bodies[body].inertia.mass *= 1.0 + 0.01 * (2.0 * j as f64 / (PENDULUMS - 1) as f64 - 1.0);
+    }
+    let kane = Kane::new(&mech).unwrap();
+    let forcing = (&single(TORQUE)[..], &[][..]);
+    let mut r = Run::new();
+    for _ in 0..runs {
+        let mut hbm = RoutedHbm::new(&kane, 0, omega(), forcing, &[(0, 1.0, 0.0)], HbmOptions::default()).unwrap();
+        assert_eq!(hbm.route().name(), "general");
+        let t0 = Instant::now();
+        let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).unwrap();
+        r.record(t0.elapsed().as_secs_f64(), &b);
+    }
+    r
+}
+
+fn main() {
+    let only16 = std::env::var("HBM_SCALE_ONLY").is_ok_and(|v| v == "16");
+    let runs: usize = std::env::var("HBM_SCALE_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let (mut t1, mut t16) = (0.0, 0.0);
+    for (from, to) in [(2.9, 3.3), (3.3, 2.9)] {
+        let m = mistuned(from, to, if only16 { 1 } else { runs });
+        println!(
+            "hbm_scale: {PENDULUMS} mistuned, {from} → {to}: {} points, {} corrector iterations, {:.1} ms \
+             ({:.2} ms/point); {}",
+            m.points,
+            m.newton,
+            m.best * 1e3,
+            m.best * 1e3 / m.points as f64,
+            m.events.join(", ")
+        );
+        if only16 {
+            continue;
+        }
+        let one = one_pendulum(from, to, 5 * runs);
+        t1 += one.best;
+        t16 += m.best;
+        println!(
+            "hbm_scale: 1 pendulum, {from} → {to}: {} points, {} corrector iterations, {:.2} ms ({:.3} ms/point); {}",
+            one.points,
+            one.newton,
+            one.best * 1e3,
+            one.best * 1e3 / one.points as f64,
+            one.events.join(", ")
+        );
+        println!(
+            "hbm_scale: {TORQUE} N·m, {from} → {to}: {PENDULUMS} mistuned / 1 pendulum: {:.1} per branch, {:.1} per point",
+            m.best / one.best,
+            (m.best / m.points as f64) / (one.best / one.points as f64),
+        );
+    }
+    if !only16 {
+        println!("hbm_scale: both directions, {PENDULUMS} mistuned / 1 pendulum: {:.1}", t16 / t1);
+    }
+}
