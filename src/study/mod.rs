@@ -6,6 +6,7 @@
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
 
+mod analysis;
 mod backbone;
 mod campbell;
 pub mod compare;
@@ -29,10 +30,82 @@ use crate::error::{Error, Result};
 use crate::io::{ReadPolicy, Source};
 use crate::kane::Kane;
 use crate::model::mechanism::Mechanism;
+use analysis::{Analysis, Output};
+pub use backbone::FreeOscillationSpec;
+pub use campbell::CampbellSpec;
+pub use compare::{CompareMechanism, CompareSpec};
+pub use design::{DesignParameter, DesignSpec, Quantity, Sampling};
+pub use hbm::{HbmParameter, HbmSpec};
+pub use linear::{LinearResponseSpec, Variant};
+pub use multi::{MultiOrderSpec, SpeedPoint};
 pub use plan::{AnalysisPlan, Limits, Plan};
+use serde::{Deserialize, Serialize};
 pub use spec::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+pub use sweep::{Direction, SweepSpec};
+pub use transient::{EngineExcitation, JointTorqueSpec, OrderMapSpec, SpeedProfile, TransientSpec};
+
+/// Declares the analysis kinds, one line each: `Kind(Spec)` is both the study file's entry
+/// `Kind(…)` (the variant of [`AnalysisSpec`]) and the room whose [`Analysis`] runs it.
+macro_rules! analyses {
+    ($($(#[$doc:meta])* $kind:ident($spec:ty),)*) => {
+        /// One analysis of a study, as written in its `analyses` list.
+        #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+        pub enum AnalysisSpec {
+            $($(#[$doc])* $kind($spec),)*
+        }
+
+        impl AnalysisSpec {
+            /// The analysis kind as written in the study file (`OrderSweep`, …).
+            pub fn kind(&self) -> &'static str {
+                match self {
+                    $(AnalysisSpec::$kind(_) => stringify!($kind),)*
+                }
+            }
+
+            /// The analysis behind the entry, as the study driver calls it.
+            pub(crate) fn analysis(&self) -> &dyn Analysis {
+                match self {
+                    $(AnalysisSpec::$kind(a) => a,)*
+                }
+            }
+        }
+    };
+}
+
+analyses! {
+    /// Single-order excitation swept in order (the paper's load case 1, Figs. 3 and 4).
+    OrderSweep(SweepSpec),
+    /// Multi-order excitation at steady speeds (the paper's load case 2, Table 1, Fig. 5).
+    MultiOrder(MultiOrderSpec),
+    /// Linear order-domain frequency response normalised by the locked twin (eq. 22, Fig. 2).
+    LinearResponse(LinearResponseSpec),
+    /// Natural frequencies against spin speed with engine-order lines.
+    Campbell(CampbellSpec),
+    /// Periodic steady states by harmonic balance, continued in the excitation order, with
+    /// stability: the branches behind the sweeps' jumps.
+    HarmonicBalance(HbmSpec),
+    /// One analysis run over many cases of varied mechanism and excitation parameters (a grid, a
+    /// Latin hypercube or Monte Carlo), collected in one table (see [`design`]).
+    DesignStudy(DesignSpec),
+    /// A transient from a given state: free, or through a run-up or run-down of the spin speed
+    /// (driven by a torque or prescribed), with an order–rpm map of the response.
+    Transient(TransientSpec),
+    /// The free oscillation of one joint at held spin, undamped, against its release amplitude:
+    /// the absorber's backbone curve (see [`backbone`]).
+    FreeOscillation(FreeOscillationSpec),
+    /// The same analyses run on several mechanisms (e.g. absorber paths), their results overlaid
+    /// per analysis in one figure and compared in one table (see [`compare`]).
+    Compare(CompareSpec),
+}
+
+impl AnalysisSpec {
+    /// The analysis name (its file prefix).
+    pub fn name(&self) -> &str {
+        self.analysis().name()
+    }
+}
 
 /// A study ready to run: the spec, its mechanism and the locked twin, with names resolved.
 #[derive(Debug, Clone)]
@@ -663,28 +736,6 @@ pub(crate) fn run_guarded(
     (format!("## {} `{}`\n\nFailed: {failure}\n\n", a.kind(), a.name()), false)
 }
 
-/// What one analysis hands back to the study runner: its summary section, the files it wrote,
-/// the runs that failed and its results.
-pub(crate) struct Output {
-    pub markdown: String,
-    pub files: Vec<PathBuf>,
-    pub failures: Vec<String>,
-    pub results: Results,
-}
-
-/// The results of one analysis, by kind.
-pub(crate) enum Results {
-    Sweep(Vec<sweep::SweepRun>),
-    Multi(multi::MultiOrderResult),
-    Linear(linear::LinearResult),
-    Campbell(crate::linear::Campbell),
-    Hbm(Vec<hbm::HbmBranch>),
-    Design(design::DesignResult),
-    Transient(Box<transient::TransientResult>),
-    Free(backbone::FreeOscillationResult),
-    Compare(compare::CompareResult),
-}
-
 /// Runs one analysis, adding its files, failures and results to `report`; returns its section of
 /// the summary.
 pub(crate) fn run_analysis(
@@ -694,30 +745,10 @@ pub(crate) fn run_analysis(
     progress: &sim::Progress,
     report: &mut StudyReport,
 ) -> Result<String> {
-    let out = match a {
-        AnalysisSpec::OrderSweep(s) => sweep::run(study, s, dir, progress)?,
-        AnalysisSpec::MultiOrder(m) => multi::run(study, m, dir, progress)?,
-        AnalysisSpec::LinearResponse(l) => linear::run_response(study, l, dir)?,
-        AnalysisSpec::Campbell(c) => campbell::run_campbell(study, c, dir)?,
-        AnalysisSpec::HarmonicBalance(h) => hbm::run(study, h, &report.sweeps, dir, progress)?,
-        AnalysisSpec::DesignStudy(d) => design::run(study, d, dir, progress)?,
-        AnalysisSpec::Transient(t) => transient::run(study, t, dir, progress)?,
-        AnalysisSpec::FreeOscillation(f) => backbone::run(study, f, dir)?,
-        AnalysisSpec::Compare(c) => compare::run(study, c, dir, progress, report)?,
-    };
+    let out = a.analysis().run(study, &mut analysis::Bench { dir, progress, report })?;
     report.files.extend(out.files);
     report.failures.extend(out.failures);
-    match out.results {
-        Results::Sweep(runs) => report.sweeps.extend(runs),
-        Results::Multi(m) => report.multi.push(m),
-        Results::Linear(l) => report.linear.push(l),
-        Results::Campbell(c) => report.campbell.push(c),
-        Results::Hbm(b) => report.hbm.extend(b),
-        Results::Design(d) => report.designs.push(d),
-        Results::Transient(t) => report.transient.push(*t),
-        Results::Free(f) => report.free.push(f),
-        Results::Compare(c) => report.compares.push(c),
-    }
+    out.results.keep(report);
     Ok(out.markdown)
 }
 

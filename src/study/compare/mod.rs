@@ -13,11 +13,15 @@
 //! (sweeps: up solid, down dashed; branches: stable solid, unstable dashed); free oscillations
 //! draw every mechanism's backbone in one panel. The other kinds keep their own figures.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::backbone::{self, FreeOscillationResult};
 use super::hbm::HbmBranch;
 use super::sweep::SweepRun;
 use super::table::fmt_num;
-use super::{AnalysisSpec, CompareSpec, Direction, LoadOptions, Output, Results, Study, StudyReport, StudySpec};
+use super::{AnalysisSpec, Direction, LoadOptions, Output, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use crate::io::Source;
 use crate::plot::{LineStyle, Panel, Series};
@@ -205,7 +209,7 @@ pub(crate) fn run(
     }
     md.push('\n');
     md += &sections;
-    Ok(Output { markdown: md, files, failures: Vec::new(), results: Results::Compare(result) })
+    Ok(Output { markdown: md, files, failures: Vec::new(), results: Box::new(result) })
 }
 
 /// One inner analysis, contained like a top-level one; its failures carry no location prefix

@@ -2,10 +2,14 @@
 //! order (or the mean speed, or the torque amplitude), stable and unstable, with their folds,
 //! drawn over the time-domain sweeps.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::elements::{ElementResponse, from_hbm};
 use super::sweep::SweepRun;
 use super::table::Table;
-use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
+use super::{Direction, Output, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{
     Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook, RoutedHbm,
@@ -243,7 +247,7 @@ pub(crate) fn run(
 ) -> Result<Output> {
     let (branches, failures) = compute_with(study, spec, Some(progress));
     let (markdown, files) = render(study, spec, &branches, sweeps, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Hbm(branches) })
+    Ok(Output { markdown, files, failures, results: Box::new(branches) })
 }
 
 /// Every branch, continued from each end of the range per amplitude, with its stability, folds

@@ -1,0 +1,145 @@
+//! HarmonicBalance through the analysis interface: its checks, the files it may write, its plan and its run.
+
+use super::*;
+use crate::error::Result;
+use crate::io::Source;
+use crate::study::Study;
+use crate::study::StudyReport;
+use crate::study::StudySpec;
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::plan::AnalysisPlan;
+use crate::study::plan::*;
+use crate::study::validate::*;
+
+impl Analysis for HbmSpec {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn check(&self, c: &Checks<'_>) -> Result<()> {
+        let Checks { spec, mech, spin, src, k } = *c;
+        let at = |field: &str| c.at(field);
+        let h = self;
+        // A harmonic balance at a fixed order takes gravity and world-frame forces (its base
+        // period is then whole revolutions); a spring on the spin joint it cannot.
+        if !(h.parameter != HbmParameter::Order && mech.joints[spin].spring.is_none()) {
+            require_steady_spin(c, "HarmonicBalance", &h.name, false)?;
+        }
+        check_excite(src, spec, mech, &at("excite"), &h.excite)?;
+        check_hbm(src, spec, k, h)?;
+        Ok(())
+    }
+
+    fn files(&self, _locked: bool) -> Vec<String> {
+        let n = self.name.as_str();
+        let mut out = Vec::new();
+        let mut csv = |stem: String| out.push(format!("{stem}.csv"));
+        let h = self;
+        for tag in ["from_above", "from_below"] {
+            csv(format!("{n}_{tag}"));
+            for &amp in &h.amplitudes {
+                csv(format!("{n}_{}Nm_{tag}", crate::study::table::fmt_num(amp)));
+            }
+        }
+        out.extend([format!("{n}.svg"), format!("{n}_elements.svg")]);
+        out
+    }
+
+    fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
+        let (_spec, _fs, n, _locked) = crate::study::plan::basics(study);
+        let h = self;
+        let cases = if matches!(h.parameter, HbmParameter::Torque { .. }) || h.engine.is_some() {
+            1
+        } else {
+            h.amplitudes.len()
+        };
+        let runs = 2 * cases;
+        let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+        let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);
+        AnalysisPlan {
+            runs,
+            samples_per_run: points,
+            memory_bytes: runs as f64 * points * unknowns * 8.0 * 4.0,
+            output_bytes: runs as f64 * points * (4.0 + h.multiples.len() as f64) * CSV_CELL_BYTES,
+            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64),
+            driver: "harmonics",
+            ..base
+        }
+    }
+
+    fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
+        run(study, self, &bench.report.sweeps, bench.dir, bench.progress)
+    }
+}
+
+impl Kept for Vec<HbmBranch> {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.hbm.extend(*self);
+    }
+}
+
+pub(super) fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::HbmSpec) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    let order_range_given = !(h.order_min == 0.0 && h.order_max == 0.0);
+    let (needs_rpm, needs_orders, needs_amplitudes) = match h.parameter {
+        HbmParameter::Order => (true, true, true),
+        HbmParameter::Speed { order: n, rpm_min, rpm_max } => {
+            order(src, &at("parameter"), n)?;
+            if !(pos(rpm_min) && rpm_min < rpm_max && rpm_max <= MAX_RPM) {
+                return Err(src.error(&at("parameter"), format!("Speed needs 0 < rpm_min < rpm_max ≤ {MAX_RPM:e}")));
+            }
+            (false, false, true)
+        }
+        HbmParameter::Torque { order: n, min, max } => {
+            order(src, &at("parameter"), n)?;
+            if !(pos(min) && min < max && max <= MAX_TORQUE_NM) {
+                return Err(src.error(&at("parameter"), format!("Torque needs 0 < min < max ≤ {MAX_TORQUE_NM:e} N·m")));
+            }
+            (true, false, false)
+        }
+    };
+    let what = "a Speed or Torque continuation takes its range from `parameter`";
+    if needs_rpm {
+        rpm(src, &at("rpm"), h.rpm)?;
+    } else if h.rpm != 0.0 {
+        return Err(src.error(&at("rpm"), format!("{what}: leave `rpm` out")));
+    }
+    if needs_orders {
+        order_range(src, &at("order_min"), h.order_min, h.order_max)?;
+    } else if order_range_given {
+        return Err(src.error(&at("order_min"), format!("{what}: leave the order range out")));
+    }
+    if !needs_orders && h.overlay.is_some() {
+        return Err(src.error(&at("overlay"), "sweeps can only be overlaid on order branches"));
+    }
+    // An engine (resolved at load, where its fields are checked) gives the amplitudes.
+    if needs_amplitudes && h.engine.is_none() {
+        torques(src, &at("amplitudes"), &h.amplitudes, false)?;
+    } else if !h.amplitudes.is_empty() {
+        return Err(src.error(&at("amplitudes"), format!("{what}: leave `amplitudes` out")));
+    }
+    check_harmonics(h.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
+    if let Some(d) = h.max_step {
+        check_max_step(d).map_err(|m| src.error(&at("max_step"), m))?;
+    }
+    if h.multiples.is_empty() || h.multiples.len() > 64 {
+        return Err(src.error(&at("multiples"), "give 1 to 64 harmonic multiples"));
+    }
+    for (j, &m) in h.multiples.iter().enumerate() {
+        // A periodic solution holds the harmonics 1..=H of its base order only.
+        if !(m >= 1.0 && m.fract() == 0.0 && m <= h.harmonics as f64) {
+            return Err(src.error(
+                &format!("analyses[{k}].multiples[{j}]"),
+                format!("reported multiples must be whole numbers from 1 to harmonics = {}, got {m}", h.harmonics),
+            ));
+        }
+    }
+    if let Some(o) = &h.overlay {
+        let earlier =
+            spec.analyses[..k].iter().any(|a| matches!(a, crate::study::AnalysisSpec::OrderSweep(s) if &s.name == o));
+        if !earlier {
+            return Err(src.error(&at("overlay"), format!("no OrderSweep named `{o}` before this analysis")));
+        }
+    }
+    Ok(())
+}

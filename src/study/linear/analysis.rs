@@ -1,0 +1,119 @@
+//! LinearResponse through the analysis interface: its checks, the files it may write, its plan and its run.
+
+use super::*;
+use crate::error::Result;
+use crate::study::Study;
+use crate::study::StudyReport;
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::plan::AnalysisPlan;
+use crate::study::plan::*;
+use crate::study::validate::*;
+
+impl Analysis for LinearResponseSpec {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn check(&self, c: &Checks<'_>) -> Result<()> {
+        let Checks { spec, mech, spin: _, src, k } = *c;
+        let at = |field: &str| c.at(field);
+        let l = self;
+        require_steady_spin(c, "LinearResponse", &l.name, true)?;
+        check_excite(src, spec, mech, &at("excite"), &l.excite)?;
+        rpm(src, &at("rpm"), l.rpm)?;
+        if !(pos(l.from) && l.to.is_finite() && l.from < l.to && l.to <= MAX_ORDER) {
+            return Err(src.error(&at("from"), format!("need 0 < from < to ≤ {MAX_ORDER}")));
+        }
+        if l.points < 2 || l.points > MAX_POINTS {
+            return Err(src.error(&at("points"), format!("need 2 to {MAX_POINTS} points")));
+        }
+        if let Some(z) = &l.modal_damping {
+            modal_ratios(src, &at("modal_damping"), z)?;
+            if l.variants.iter().any(|v| !v.dampers.is_empty()) {
+                return Err(src.error(
+                    &at("modal_damping"),
+                    "modal damping replaces the dampers, so variants that set dampers do not apply",
+                ));
+            }
+        }
+        if l.relative && spec.lock.is_empty() {
+            return Err(src.error(
+                &at("relative"),
+                "orders relative to n_t need a locked joint (`lock`) to define the tuning order",
+            ));
+        }
+        if l.variants.len() > 32 {
+            return Err(src.error(&at("variants"), "at most 32 variants"));
+        }
+        let mut files = std::collections::HashSet::new();
+        for (j, v) in l.variants.iter().enumerate() {
+            let vp = format!("analyses[{k}].variants[{j}]");
+            if v.label.is_empty() || v.label.chars().count() > MAX_NAME_CHARS {
+                return Err(
+                    src.error(&format!("{vp}.label"), format!("label must have 1 to {MAX_NAME_CHARS} characters"))
+                );
+            }
+            if !files.insert(super::slug(&v.label)) {
+                return Err(src.error(
+                    &format!("{vp}.label"),
+                    format!("label `{}` gives the same file name as an earlier variant's", v.label),
+                ));
+            }
+            if v.dampers.len() > MAX_LIST {
+                return Err(src.error(&format!("{vp}.dampers"), format!("at most {MAX_LIST} dampers")));
+            }
+            for (d, (joint, c)) in v.dampers.iter().enumerate() {
+                let dp = format!("{vp}.dampers[{d}]");
+                if mech.joint_index(joint).is_none() {
+                    return Err(src.error(&dp, format!("unknown joint `{joint}`")));
+                }
+                if !(c.is_finite() && *c >= 0.0) {
+                    return Err(src.error(&dp, format!("damping must be finite and non-negative, got {c}")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn files(&self, _locked: bool) -> Vec<String> {
+        let n = self.name.as_str();
+        let mut out = Vec::new();
+        let mut csv = |stem: String| out.push(format!("{stem}.csv"));
+        let l = self;
+        if l.variants.is_empty() {
+            csv(format!("{n}_as_built"));
+        }
+        for v in &l.variants {
+            csv(format!("{n}_{}", super::super::linear::slug(&v.label)));
+        }
+        out.push(format!("{n}.svg"));
+        out
+    }
+
+    fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
+        let (_spec, _fs, n, _locked) = crate::study::plan::basics(study);
+        let l = self;
+        let runs = l.variants.len().max(1);
+        let p = l.points as f64;
+        AnalysisPlan {
+            runs,
+            samples_per_run: p,
+            memory_bytes: runs as f64 * p * 8.0 * 8.0,
+            output_bytes: runs as f64 * p * 5.0 * CSV_CELL_BYTES,
+            cpu_s: runs as f64
+                * (LINEAR_SETUP_S + LINEAR_SETUP_PER_DOF3_S * n * n * n + p * 2.0 * (1e-6 + 20e-9 * n * n * n)),
+            driver: "points",
+            ..base
+        }
+    }
+
+    fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
+        run_response(study, self, bench.dir)
+    }
+}
+
+impl Kept for LinearResult {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.linear.push(*self);
+    }
+}

@@ -1,0 +1,127 @@
+//! MultiOrder through the analysis interface: its checks, the files it may write, its plan and its run.
+
+use super::*;
+use crate::error::Result;
+use crate::model::excitation::rpm_to_rad_s;
+use crate::study::Study;
+use crate::study::StudyReport;
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::plan::AnalysisPlan;
+use crate::study::plan::*;
+use crate::study::validate::*;
+
+impl Analysis for MultiOrderSpec {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn check(&self, c: &Checks<'_>) -> Result<()> {
+        let Checks { spec, mech, spin: _, src, k } = *c;
+        let at = |field: &str| c.at(field);
+        let m = self;
+        let name = &m.name;
+        if require_steady_spin(c, "MultiOrder", name, true)? {
+            // Only the linear part: the steady time runs and the order-continued harmonic
+            // balance assume a steady spin.
+            let g = mech.loads.gravity;
+            let what = if g.x != 0.0 || g.y != 0.0 {
+                format!("gravity ({}, {}) m/s²", g.x, g.y)
+            } else {
+                "a world-frame point force".to_string()
+            };
+            for (on, field, part) in [
+                (m.time_domain, "time_domain", "steady time runs"),
+                (m.hbm, "hbm", "harmonic balance continued in order"),
+            ] {
+                if on {
+                    return Err(src.error(
+                        &at(field),
+                        format!(
+                            "MultiOrder `{name}`: mechanism `{}` has {what}, which makes the spinning state \
+                             periodic at order 1; the {part} of this analysis need a steady spin. Only its \
+                             linear part takes gravity (and reports the order-1 response it forces): set \
+                             `{field}: false`, or use a HarmonicBalance continued in Speed or Torque",
+                            mech.name
+                        ),
+                    ));
+                }
+            }
+        }
+        check_excite(src, spec, mech, &at("excite"), &m.excite)?;
+        order(src, &at("order"), m.order)?;
+        if m.speeds.is_empty() || m.speeds.len() > MAX_LIST {
+            return Err(src.error(&at("speeds"), format!("give 1 to {MAX_LIST} operating speeds")));
+        }
+        common(src, &at(""), &m.multiples, m.ramp_s, m.mean_torque)?;
+        if !(pos(m.steady_tol) && m.steady_tol <= 1.0) {
+            return Err(src.error(&at("steady_tol"), "must be finite, positive and at most 1"));
+        }
+        if !pos(m.window_s) {
+            return Err(src.error(&at("window_s"), "window must be finite and positive (s)"));
+        }
+        if !(m.min_time_s.is_finite() && m.min_time_s >= 0.0) {
+            return Err(src.error(&at("min_time_s"), "must be finite and non-negative (s)"));
+        }
+        if !(m.max_time_s.is_finite() && m.max_time_s >= m.ramp_s + 2.0 * m.window_s) {
+            return Err(src.error(&at("max_time_s"), "must be finite and at least ramp_s + 2·window_s (s)"));
+        }
+        if m.min_time_s > m.max_time_s {
+            return Err(src.error(&at("min_time_s"), "must not exceed max_time_s"));
+        }
+        for (j, p) in m.speeds.iter().enumerate() {
+            let sp = format!("analyses[{k}].speeds[{j}]");
+            rpm(src, &format!("{sp}.rpm"), p.rpm)?;
+            if p.harmonics.is_empty() || p.harmonics.len() > MAX_LIST {
+                return Err(src.error(&format!("{sp}.harmonics"), format!("give 1 to {MAX_LIST} harmonics")));
+            }
+            for (h, hm) in p.harmonics.iter().enumerate() {
+                let hp = format!("{sp}.harmonics[{h}]");
+                order(src, &format!("{hp}.multiple"), hm.multiple)?;
+                torque(src, &format!("{hp}.amplitude"), hm.amplitude)?;
+                if !(hm.phase.is_finite() && hm.phase.abs() <= 1e3) {
+                    return Err(src.error(&format!("{hp}.phase"), "phase must be finite, |α| ≤ 1000 rad"));
+                }
+            }
+            if m.time_domain {
+                let omega = rpm_to_rad_s(p.rpm);
+                tracking(src, &format!("{sp}.rpm"), spec, m.window_s, 2, omega, m.order, &m.multiples)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn files(&self, _locked: bool) -> Vec<String> {
+        vec![format!("{}.csv", self.name), format!("{}.svg", self.name)]
+    }
+
+    fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
+        let (_spec, fs, n, locked) = crate::study::plan::basics(study);
+        let m = self;
+        let td = usize::from(m.time_domain);
+        let runs = m.speeds.len() * td * (1 + locked);
+        // Two windows are kept per run (the steadiness test).
+        let samples = 2.0 * m.window_s * fs + 1.0;
+        let top = m.speeds.iter().flat_map(|p| p.harmonics.iter().map(move |h| h.multiple * p.rpm)).fold(0.0, f64::max);
+        let f = m.order * top / 60.0;
+        let hbm_s = if m.hbm { m.speeds.len() as f64 * 3.0 * hbm_branch_s(n, 10.0) } else { 0.0 };
+        AnalysisPlan {
+            runs,
+            samples_per_run: samples,
+            memory_bytes: runs as f64 * samples * 24.0,
+            output_bytes: m.speeds.len() as f64 * CSV_CELL_BYTES * 16.0 * m.multiples.len() as f64,
+            cpu_s: runs as f64 * time_run_s(study, m.max_time_s, f) + hbm_s,
+            driver: "max_time_s",
+            ..base
+        }
+    }
+
+    fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
+        run(study, self, bench.dir, bench.progress)
+    }
+}
+
+impl Kept for MultiOrderResult {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.multi.push(*self);
+    }
+}
