@@ -15,9 +15,12 @@
 use super::plan::AnalysisPlan;
 use super::sim::Progress;
 use super::{Study, StudyReport, StudySpec};
-use crate::error::Result;
+use crate::engine::Engine;
+use crate::error::{Error, Result};
+use crate::io::ReadPolicy;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// One kind of analysis, as the study driver sees it.
@@ -32,6 +35,12 @@ pub(crate) trait Analysis {
     /// The names of the files it may write into the study's folder: a superset of what a run
     /// writes (see `validate::outputs`). `locked` says whether the study has a locked twin.
     fn files(&self, locked: bool) -> Vec<String>;
+
+    /// Resolves what it reads besides the study file (an engine file), when the study is loaded;
+    /// most analyses read nothing else.
+    fn prepare(&mut self, _resources: &mut Resources<'_>) -> Result<()> {
+        Ok(())
+    }
 
     /// Its estimated work; `base` carries its name, kind and index and zeros elsewhere.
     fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan;
@@ -91,4 +100,55 @@ pub(crate) struct Output {
 pub(crate) trait Kept {
     /// Files the results into `report`.
     fn keep(self: Box<Self>, report: &mut StudyReport);
+}
+
+/// What an analysis may read besides the study file when the study is loaded: the engine files
+/// it names, each read and prepared once however many analyses name it.
+pub(crate) struct Resources<'a> {
+    /// The study file, to locate errors.
+    pub src: &'a Source,
+    /// Where files may be read from.
+    policy: &'a ReadPolicy,
+    /// The study file's folder, which relative paths start from.
+    base: &'a Path,
+    /// The engines read so far, by path.
+    engines: HashMap<PathBuf, Engine>,
+    /// Index of the analysis being prepared in `analyses`.
+    pub k: usize,
+}
+
+impl<'a> Resources<'a> {
+    /// Nothing read yet.
+    pub fn new(src: &'a Source, policy: &'a ReadPolicy, base: &'a Path) -> Self {
+        Self { src, policy, base, engines: HashMap::new(), k: 0 }
+    }
+
+    /// The engine in `file` (relative to the study file), named by the study field `field`;
+    /// errors are located in the study file or in the engine file.
+    pub fn engine(&mut self, field: &str, file: &str) -> Result<Engine> {
+        let src = self.src;
+        let path = self.policy.resolve(self.base, file).map_err(|e| src.error(field, e))?;
+        if let Some(e) = self.engines.get(&path) {
+            return Ok(e.clone());
+        }
+        let esrc = Source::read_with(&path, self.policy).map_err(|e| match e {
+            Error::Io { .. } => src.error(field, format!("cannot read engine file: {e}")),
+            other => whole_file_at(other, src, field),
+        })?;
+        let engine = Engine::new(esrc.parse_as("Engine")?).map_err(|(f, msg)| esrc.error(&f, msg))?;
+        self.engines.insert(path, engine.clone());
+        Ok(engine)
+    }
+}
+
+/// An error about a whole file that a study names (a folder, a pipe, a file over the size cap:
+/// no line, no field), moved to the study field that named it; other errors unchanged. Such
+/// errors used to name the file alone, not where the study asked for it.
+pub(crate) fn whole_file_at(e: Error, src: &Source, field: &str) -> Error {
+    match e {
+        Error::Input { location, message } if location.line_col.is_none() && location.path.is_empty() => {
+            src.error(field, format!("{}: {message}", location.file.display()))
+        }
+        other => other,
+    }
 }

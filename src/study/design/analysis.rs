@@ -5,7 +5,7 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
-use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
@@ -13,6 +13,21 @@ use crate::study::validate::*;
 impl Analysis for DesignSpec {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
+        let (src, k) = (r.src, r.k);
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let d = self;
+        if let AnalysisSpec::HarmonicBalance(h) = d.analysis.as_ref()
+            && h.engine.is_some()
+        {
+            return Err(src.error(
+                &at("analysis.engine"),
+                "a design study's harmonic balance takes typed amplitudes, not an engine",
+            ));
+        }
+        Ok(())
     }
 
     fn check(&self, c: &Checks<'_>) -> Result<()> {

@@ -6,7 +6,7 @@ use crate::io::Source;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
-use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
@@ -14,6 +14,39 @@ use crate::study::validate::*;
 impl Analysis for HbmSpec {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
+        let (src, k) = (r.src, r.k);
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let h = self;
+        let Some(file) = &h.engine else { return Ok(()) };
+        let HbmParameter::Speed { order, .. } = h.parameter else {
+            return Err(src.error(
+                &at("engine"),
+                "an engine's amplitudes follow the speed: only a harmonic balance return Ok(())d in                          `parameter: Speed(…)` takes one",
+            ));
+        };
+        if !h.amplitudes.is_empty() {
+            return Err(src.error(&at("amplitudes"), "give either the amplitudes or the engine, not both"));
+        }
+        if !crate::study::validate::half_multiple(order) {
+            return Err(src.error(
+                &at("parameter"),
+                format!("with an engine the order must be a multiple of ½ (its orders are), got {order}"),
+            ));
+        }
+        // The balance keeps `harmonics` multiples of the order: more from the engine
+        // would be dropped, so they are refused rather than lost.
+        if !(1..=h.harmonics.clamp(1, 64)).contains(&h.engine_multiples) {
+            return Err(src.error(
+                &at("engine_multiples"),
+                format!("need 1 to harmonics = {} multiples", h.harmonics.clamp(1, 64)),
+            ));
+        }
+        let engine = r.engine(&at("engine"), file)?;
+        h.engine_series = engine.oscillating_series(order, order * h.engine_multiples as f64);
+        Ok(())
     }
 
     fn check(&self, c: &Checks<'_>) -> Result<()> {

@@ -5,7 +5,7 @@ use crate::error::Result;
 use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
-use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
@@ -13,6 +13,59 @@ use crate::study::validate::*;
 impl Analysis for MultiOrderSpec {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
+        let (src, k) = (r.src, r.k);
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let m = self;
+        let Some(file) = &m.engine else { return Ok(()) };
+        let engine = r.engine(&at("engine"), file)?;
+        if !(1..=crate::study::validate::MAX_LIST).contains(&m.engine_multiples) {
+            return Err(
+                src.error(&at("engine_multiples"), format!("need 1 to {} multiples", crate::study::validate::MAX_LIST))
+            );
+        }
+        if !crate::study::validate::half_multiple(m.order) {
+            return Err(src.error(
+                &at("order"),
+                format!("with an engine the base order must be a multiple of ½ (its orders are), got {}", m.order),
+            ));
+        }
+        if m.speeds.len() > crate::study::validate::MAX_LIST {
+            return Err(src.error(
+                &at("speeds"),
+                format!("{} speeds; at most {}", m.speeds.len(), crate::study::validate::MAX_LIST),
+            ));
+        }
+        for (i, p) in m.speeds.iter_mut().enumerate() {
+            if !p.harmonics.is_empty() {
+                return Err(src.error(
+                    &at(&format!("speeds[{i}].harmonics")),
+                    "give either the harmonics or the analysis's engine, not both",
+                ));
+            }
+            if !(p.rpm.is_finite() && p.rpm > 0.0 && p.rpm <= crate::study::validate::MAX_RPM) {
+                return Err(src.error(&at(&format!("speeds[{i}].rpm")), "speed must be within 0 < rpm ≤ 1e6"));
+            }
+            let top = m.order * m.engine_multiples as f64;
+            let series = engine.orders(crate::model::excitation::rpm_to_rad_s(p.rpm), top);
+            p.harmonics = series
+                .harmonics
+                .iter()
+                .filter_map(|h| {
+                    let multiple = 0.5 * h.multiple / m.order;
+                    ((multiple - multiple.round()).abs() < 1e-9 && multiple >= 1.0).then(|| {
+                        crate::model::excitation::Harmonic {
+                            multiple: multiple.round(),
+                            amplitude: h.amplitude,
+                            phase: h.phase,
+                        }
+                    })
+                })
+                .collect();
+        }
+        Ok(())
     }
 
     fn check(&self, c: &Checks<'_>) -> Result<()> {

@@ -7,7 +7,7 @@ use crate::model::mechanism::Mechanism;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
-use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
@@ -15,6 +15,31 @@ use crate::study::validate::*;
 impl Analysis for TransientSpec {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
+        let (src, k) = (r.src, r.k);
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let t = self;
+        let Some(e) = &mut t.engine else { return Ok(()) };
+        if !crate::study::validate::half_multiple(e.order) {
+            return Err(src.error(
+                &at("engine.order"),
+                format!("the base order must be a multiple of ½ (the engine's orders are), got {}", e.order),
+            ));
+        }
+        if !(e.max_order.is_finite() && e.max_order >= e.order && e.max_order <= MAX_ENGINE_ORDER) {
+            return Err(src.error(
+                &at("engine.max_order"),
+                format!("must lie within order ({}) ≤ max_order ≤ {MAX_ENGINE_ORDER}", e.order),
+            ));
+        }
+        if !(e.ramp_s.is_finite() && (0.0..=crate::study::validate::MAX_TRANSIENT_S).contains(&e.ramp_s)) {
+            return Err(src.error(&at("engine.ramp_s"), "the ramp must be finite and non-negative (s)"));
+        }
+        let engine = r.engine(&at("engine.file"), &e.file)?;
+        e.series = engine.oscillating_series(e.order, e.max_order);
+        Ok(())
     }
 
     fn check(&self, c: &Checks<'_>) -> Result<()> {

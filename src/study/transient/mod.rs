@@ -15,6 +15,10 @@ mod analysis;
 mod spec;
 pub use spec::*;
 
+/// Highest order of a transient's engine series: engine orders that matter for torsional
+/// vibration stay below ~50, and each kept order costs a term in every right-hand side.
+pub const MAX_ENGINE_ORDER: f64 = 64.0;
+
 mod report;
 
 use super::sim::Progress;

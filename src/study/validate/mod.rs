@@ -60,6 +60,11 @@ pub(crate) fn pos(v: f64) -> bool {
     v.is_finite() && v > 0.0
 }
 
+/// Whether `v` is a positive multiple of ½ within [`MAX_ORDER`]: an order an engine has.
+pub(crate) fn half_multiple(v: f64) -> bool {
+    v.is_finite() && v > 0.0 && v <= MAX_ORDER && (2.0 * v).fract() == 0.0
+}
+
 /// Refuses an analysis that needs a steady spin on a mechanism whose spin is not steady (see
 /// [`steady_spin_obstacle`]). A `linear` analysis takes gravity and world-frame forces as an
 /// order-1 forcing of the steady rotation (`linear::gravity`), so only a spring on the spin joint
