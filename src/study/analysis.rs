@@ -9,9 +9,10 @@
 //!   write the same file are refused at load;
 //! - [`Analysis::plan`] estimates its work from the file alone, against the limits;
 //! - [`Analysis::run`] writes its CSV and SVG files and returns its summary section, its failures
-//!   and its results ([`Output`]); [`Kept`] files the results into the
-//!   [`StudyReport`].
+//!   and its results ([`Output`]); [`Kept`] files the results into the [`StudyReport`];
+//! - [`Analysis::json`] gives its entry in `results.json` from those results.
 
+use super::json::Json;
 use super::plan::AnalysisPlan;
 use super::sim::Progress;
 use super::{Study, StudyReport, StudySpec};
@@ -47,6 +48,11 @@ pub(crate) trait Analysis {
 
     /// Runs it, writing its files into `bench.dir`.
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output>;
+
+    /// Its entry's parts in `results.json`, from its results in `report` (None when they are
+    /// missing). `nth`: how many analyses of its kind ran to the end before it in the same list,
+    /// which finds a result that carries no name.
+    fn json(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<Json>;
 }
 
 /// What an analysis's checks see: the study as written, its mechanism and spin joint, the file

@@ -7,9 +7,11 @@ use crate::model::mechanism::Mechanism;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for FreeOscillationSpec {
     fn name(&self) -> &str {
@@ -48,6 +50,15 @@ impl Analysis for FreeOscillationSpec {
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir)
+    }
+
+    fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            order_over_linear: Vec<f64>,
+        }
+        let r = report.free.iter().find(|r| r.name == self.name)?;
+        Json::new(r, &Findings { order_over_linear: r.order_ratios() }, vec![table(r)])
     }
 }
 

@@ -5,9 +5,11 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for CampbellSpec {
     fn name(&self) -> &str {
@@ -69,10 +71,57 @@ impl Analysis for CampbellSpec {
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run_campbell(study, self, bench.dir)
     }
+
+    fn json(&self, _study: &Study, report: &StudyReport, nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            modes: Vec<ModeFindings>,
+        }
+        // A Campbell diagram carries no name: the n-th completed one is the n-th result.
+        let c = report.campbell.get(nth)?;
+        Json::new(c, &Findings { modes: mode_findings(self, c) }, campbell_tables(self, c))
+    }
 }
 
 impl Kept for crate::linear::Campbell {
     fn keep(self: Box<Self>, report: &mut StudyReport) {
         report.campbell.push(*self);
     }
+}
+
+/// The summary's reading of one tracked mode of a Campbell diagram.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModeFindings {
+    /// The mode's label (its dominant joint).
+    pub label: String,
+    /// Frequency at the lowest speed, Hz.
+    pub frequency_at_min_rpm_hz: f64,
+    /// Frequency at the highest speed, Hz.
+    pub frequency_at_max_rpm_hz: f64,
+    /// Frequency over the highest speed's rotation frequency: the mode's order there (NaN, so
+    /// `null`, at 0 rpm).
+    pub order_at_max_rpm: f64,
+    /// Whether the mode's order is the same (to 1e-6 relative) at every non-zero speed: an
+    /// order line.
+    pub order_line: bool,
+}
+
+/// The summary's reading of each tracked mode (the rule of the Campbell summary).
+fn mode_findings(spec: &CampbellSpec, c: &Campbell) -> Vec<ModeFindings> {
+    let order = |f: f64, rpm: f64| if rpm > 0.0 { f / (rpm / 60.0) } else { f64::NAN };
+    c.tracks
+        .iter()
+        .map(|t| {
+            let orders: Vec<f64> =
+                c.rpm.iter().zip(&t.frequency_hz).filter(|(r, _)| **r > 0.0).map(|(&r, &f)| order(f, r)).collect();
+            let last = t.frequency_hz.last().copied().unwrap_or(f64::NAN);
+            ModeFindings {
+                label: t.label.clone(),
+                frequency_at_min_rpm_hz: t.frequency_hz.first().copied().unwrap_or(f64::NAN),
+                frequency_at_max_rpm_hz: last,
+                order_at_max_rpm: order(last, spec.rpm_max),
+                order_line: orders.iter().all(|o| (o - orders[0]).abs() <= 1e-6 * orders[0].abs()),
+            }
+        })
+        .collect()
 }

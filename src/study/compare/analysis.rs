@@ -6,9 +6,11 @@ use crate::io::Source;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::{AnalysisEntry, Json, entries};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for CompareSpec {
     fn name(&self) -> &str {
@@ -58,6 +60,34 @@ impl Analysis for CompareSpec {
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir, bench.progress, bench.report)
     }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Mechanisms<'a> {
+            mechanisms: Vec<ComparedEntry<'a>>,
+        }
+        #[derive(Serialize)]
+        struct Findings {
+            labels: Vec<String>,
+        }
+        let r = report.compares.iter().find(|r| r.name == self.name)?;
+        let subs = &study.comparisons.iter().find(|(k, _)| study.spec.analyses[*k].name() == self.name)?.1;
+        let mechanisms: Vec<ComparedEntry> = subs
+            .iter()
+            .zip(&r.mechanisms)
+            .map(|((label, sub), m)| ComparedEntry {
+                label,
+                mechanism: &sub.mechanism.name,
+                analyses: entries(sub, report, &m.completed),
+            })
+            .collect();
+        let labels = r.mechanisms.iter().map(|m| m.label.clone()).collect();
+        // The comparison writes no table of its own: its mechanisms' analyses do.
+        let inner = mechanisms.iter().flat_map(|m| &m.analyses).flat_map(|a| a.all_tables()).cloned().collect();
+        let mut json = Json::new(&Mechanisms { mechanisms }, &Findings { labels }, Vec::new())?;
+        json.inner_tables = inner;
+        Some(json)
+    }
 }
 
 impl Kept for CompareResult {
@@ -98,4 +128,15 @@ pub(super) fn check_compare(src: &Source, k: usize, c: &super::CompareSpec) -> R
         }
     }
     Ok(())
+}
+
+// One mechanism of a comparison in the document.
+#[derive(Debug, Clone, Serialize)]
+pub struct ComparedEntry<'a> {
+    /// Its label.
+    pub label: &'a str,
+    /// Its mechanism's name.
+    pub mechanism: &'a str,
+    /// Its analyses, as the document's own entries.
+    pub analyses: Vec<AnalysisEntry<'a>>,
 }

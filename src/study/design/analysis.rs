@@ -6,6 +6,7 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
@@ -68,6 +69,11 @@ impl Analysis for DesignSpec {
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir, bench.progress)
+    }
+
+    fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        let r = report.designs.iter().find(|r| r.name == self.name)?;
+        Json::new(r, &findings(r), vec![r.table()])
     }
 }
 

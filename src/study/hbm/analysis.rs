@@ -7,9 +7,11 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for HbmSpec {
     fn name(&self) -> &str {
@@ -101,7 +103,20 @@ impl Analysis for HbmSpec {
     }
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
-        run(study, self, &bench.report.sweeps, bench.dir, bench.progress)
+        // The sweeps it draws over are its one input from the analyses before it.
+        let overlay = overlay_of(self, &bench.report.sweeps);
+        run(study, self, &overlay, bench.dir, bench.progress)
+    }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Branches<T> {
+            branches: Vec<T>,
+        }
+        let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
+        let findings = findings(study, &branches, &overlay_of(self, &report.sweeps));
+        let tables = tables(&study.mechanism, self, &branches);
+        Json::new(&Branches { branches }, &Branches { branches: findings }, tables)
     }
 }
 

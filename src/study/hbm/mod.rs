@@ -236,17 +236,17 @@ fn forcing(spec: &HbmSpec, amp: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
     (vec![Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }], Vec::new())
 }
 
-/// Runs the branches ([`compute`]) and writes their outputs over the sweeps already run
-/// ([`render`]).
+/// Runs the branches ([`compute`]) and writes their outputs over `overlay`, the runs of the
+/// order sweep the spec names ([`overlay_of`]; empty when it names none), as [`render`] does.
 pub(crate) fn run(
     study: &Study,
     spec: &HbmSpec,
-    sweeps: &[SweepRun],
+    overlay: &[&SweepRun],
     dir: &Path,
     progress: &super::sim::Progress,
 ) -> Result<Output> {
     let (branches, failures) = compute_with(study, spec, Some(progress));
-    let (markdown, files) = render(study, spec, &branches, sweeps, dir)?;
+    let (markdown, files) = render(study, spec, &branches, overlay, dir)?;
     Ok(Output { markdown, files, failures, results: Box::new(branches) })
 }
 
@@ -460,9 +460,9 @@ pub struct BranchFindings {
     pub sweep_jumps: Option<(Option<f64>, Option<f64>)>,
 }
 
-/// The summary's readings of each branch, in order ([`BranchFindings`]).
-pub fn findings(study: &Study, spec: &HbmSpec, branches: &[&HbmBranch], sweeps: &[SweepRun]) -> Vec<BranchFindings> {
-    let overlay = overlay(spec, sweeps);
+/// The summary's readings of each branch, in order ([`BranchFindings`]); `overlay` is the sweeps
+/// drawn under the branches ([`overlay_of`]), whose jumps are read next to them.
+pub fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
     // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
     let t = study.spec.order_tracking;
     let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
@@ -472,13 +472,14 @@ pub fn findings(study: &Study, spec: &HbmSpec, branches: &[&HbmBranch], sweeps: 
             points: br.order.len(),
             stable: br.stable.iter().filter(|s| **s == Some(true)).count(),
             unstable: br.stable.iter().filter(|s| **s == Some(false)).count(),
-            sweep_jumps: jump_orders(&overlay, br.amplitude, lag),
+            sweep_jumps: jump_orders(overlay, br.amplitude, lag),
         })
         .collect()
 }
 
-/// The sweeps drawn under the branches: the overlay analysis's runs, the locked twin left out.
-fn overlay<'a>(spec: &HbmSpec, sweeps: &'a [SweepRun]) -> Vec<&'a SweepRun> {
+/// The sweeps drawn under the branches, out of the runs of the analyses before it: the runs of
+/// the order sweep the spec names as its `overlay`, the locked twin left out.
+pub(crate) fn overlay_of<'a>(spec: &HbmSpec, sweeps: &'a [SweepRun]) -> Vec<&'a SweepRun> {
     match &spec.overlay {
         Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
         None => Vec::new(),
@@ -491,7 +492,7 @@ pub(crate) fn render(
     study: &Study,
     spec: &HbmSpec,
     branches: &[HbmBranch],
-    sweeps: &[SweepRun],
+    overlay: &[&SweepRun],
     dir: &Path,
 ) -> Result<(String, Vec<PathBuf>)> {
     let ax = axis(spec);
@@ -501,7 +502,6 @@ pub(crate) fn render(
         files.push(t.write_csv(dir)?);
     }
 
-    let overlay = overlay(spec, sweeps);
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
     let panels: Vec<Panel> = cases(spec)
         .into_iter()
@@ -612,7 +612,7 @@ pub(crate) fn render(
         ax.column
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|");
-    for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
+    for (br, f) in branches.iter().zip(findings(study, &refs, overlay)) {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {} |",

@@ -5,9 +5,11 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for LinearResponseSpec {
     fn name(&self) -> &str {
@@ -110,10 +112,47 @@ impl Analysis for LinearResponseSpec {
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run_response(study, self, bench.dir)
     }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            variants: Vec<VariantFindings>,
+        }
+        let r = report.linear.iter().find(|r| r.name == self.name)?;
+        Json::new(r, &Findings { variants: variant_findings(r) }, response_tables(study, self, r))
+    }
 }
 
 impl Kept for LinearResult {
     fn keep(self: Box<Self>, report: &mut StudyReport) {
         report.linear.push(*self);
     }
+}
+
+/// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
+/// the study locks no joint, so n_t is not defined, or there is no crossing).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VariantFindings {
+    /// The variant's label.
+    pub label: String,
+    /// Order of the smallest ratio over n_t.
+    pub min_order_over_nt: Option<f64>,
+    /// Order of the largest ratio over n_t.
+    pub max_order_over_nt: Option<f64>,
+    /// First order above n_t with ratio > 1, over n_t.
+    pub crossing_over_nt: Option<f64>,
+}
+
+/// The summary's orders in units of n_t, per variant.
+fn variant_findings(r: &LinearResult) -> Vec<VariantFindings> {
+    let over = |n: f64| r.n_t.map(|nt| n / nt);
+    r.variants
+        .iter()
+        .map(|v| VariantFindings {
+            label: v.label.clone(),
+            min_order_over_nt: over(v.min.0),
+            max_order_over_nt: over(v.max.0),
+            crossing_over_nt: v.crossing.and_then(over),
+        })
+        .collect()
 }

@@ -6,9 +6,11 @@ use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for MultiOrderSpec {
     fn name(&self) -> &str {
@@ -170,6 +172,15 @@ impl Analysis for MultiOrderSpec {
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir, bench.progress)
+    }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            speeds: Vec<SpeedFindings>,
+        }
+        let r = report.multi.iter().find(|r| r.name == self.name)?;
+        Json::new(r, &Findings { speeds: findings(r) }, vec![table(study, self, r)])
     }
 }
 

@@ -6,9 +6,11 @@ use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for SweepSpec {
     fn name(&self) -> &str {
@@ -103,6 +105,16 @@ impl Analysis for SweepSpec {
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir, bench.progress)
+    }
+
+    fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Runs<'a> {
+            runs: Vec<&'a SweepRun>,
+        }
+        let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
+        let (findings, tables) = (findings(self, &runs), tables(self, &runs));
+        Json::new(&Runs { runs }, &findings, tables)
     }
 }
 

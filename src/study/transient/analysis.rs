@@ -8,9 +8,11 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::*;
 use crate::study::validate::*;
+use serde::Serialize;
 
 impl Analysis for TransientSpec {
     fn name(&self) -> &str {
@@ -87,6 +89,20 @@ impl Analysis for TransientSpec {
 
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         run(study, self, bench.dir, bench.progress)
+    }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            cuts: Vec<CutFindings>,
+        }
+        let r = report.transient.iter().find(|r| r.name == self.name)?;
+        let cuts = r
+            .cuts
+            .iter()
+            .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
+            .collect();
+        Json::new(r, &Findings { cuts }, tables(study, self, r))
     }
 }
 
@@ -295,4 +311,17 @@ pub(super) fn check_transient(
         }
     }
     Ok(())
+}
+
+/// The summary's reading of one order cut of a transient.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CutFindings {
+    /// The signal cut.
+    pub signal: String,
+    /// The order, cycles/rev.
+    pub order: f64,
+    /// The largest amplitude along the cut, in the signal's unit.
+    pub peak: f64,
+    /// The speed of that block, rpm.
+    pub peak_rpm: f64,
 }
