@@ -29,6 +29,15 @@ pub(crate) trait Analysis {
     /// The analysis's name (its file prefix).
     fn name(&self) -> &str;
 
+    /// Renames it, and the analyses it names (a harmonic balance's sweep overlay), by `rename`:
+    /// a comparison runs it under a name per mechanism.
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String);
+
+    /// Whether a comparison may run it on several mechanisms.
+    fn comparable(&self) -> bool {
+        false
+    }
+
     /// Checks its fields against the study and the mechanism; an error names its field under
     /// `analyses[k]`.
     fn check(&self, c: &Checks<'_>) -> Result<()>;

@@ -18,6 +18,14 @@ impl Analysis for FreeOscillationSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         require_steady_spin(c, "FreeOscillation", &self.name, false)?;
         check_free(c.src, c.mech, c.spin, c.k, self)

@@ -16,6 +16,10 @@ impl Analysis for CampbellSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         let Checks { src, k, .. } = *c;
         let at = |field: &str| c.at(field);

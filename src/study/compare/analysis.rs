@@ -17,6 +17,10 @@ impl Analysis for CompareSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         check_compare(c.src, c.k, self)
     }
@@ -116,7 +120,7 @@ pub(super) fn check_compare(src: &Source, k: usize, c: &super::CompareSpec) -> R
         return Err(src.error(&at("analyses"), format!("need 1 to {MAX_ANALYSES} analyses")));
     }
     for (i, a) in c.analyses.iter().enumerate() {
-        if !super::allowed(a) {
+        if !a.analysis().comparable() {
             return Err(src.error(
                 &format!("analyses[{k}].analyses[{i}]"),
                 format!(

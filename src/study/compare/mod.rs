@@ -60,45 +60,15 @@ pub struct ComparedMechanism {
     pub completed: Vec<bool>,
 }
 
-/// Whether `a` may be run inside a comparison.
-pub(crate) fn allowed(a: &AnalysisSpec) -> bool {
-    matches!(
-        a,
-        AnalysisSpec::OrderSweep(_)
-            | AnalysisSpec::HarmonicBalance(_)
-            | AnalysisSpec::FreeOscillation(_)
-            | AnalysisSpec::LinearResponse(_)
-            | AnalysisSpec::MultiOrder(_)
-            | AnalysisSpec::Transient(_)
-    )
-}
-
 /// The name an analysis of comparison `c` runs under for mechanism `label`.
 fn inner_name(c: &str, label: &str, analysis: &str) -> String {
     format!("{c}_{label}_{analysis}")
 }
 
-/// `a` renamed for mechanism `label` of comparison `c` (a harmonic balance's sweep overlay
-/// renamed alike).
+/// `a` renamed for mechanism `label` of comparison `c` (with the analyses it names).
 pub(crate) fn renamed(c: &str, label: &str, a: &AnalysisSpec) -> AnalysisSpec {
     let mut a = a.clone();
-    let name = |n: &mut String| *n = inner_name(c, label, n);
-    match &mut a {
-        AnalysisSpec::OrderSweep(s) => name(&mut s.name),
-        AnalysisSpec::MultiOrder(m) => name(&mut m.name),
-        AnalysisSpec::LinearResponse(l) => name(&mut l.name),
-        AnalysisSpec::Campbell(x) => name(&mut x.name),
-        AnalysisSpec::HarmonicBalance(h) => {
-            name(&mut h.name);
-            if let Some(o) = &mut h.overlay {
-                name(o);
-            }
-        }
-        AnalysisSpec::DesignStudy(d) => name(&mut d.name),
-        AnalysisSpec::Transient(t) => name(&mut t.name),
-        AnalysisSpec::FreeOscillation(f) => name(&mut f.name),
-        AnalysisSpec::Compare(x) => name(&mut x.name),
-    }
+    a.analysis_mut().rename(&|n| inner_name(c, label, n));
     a
 }
 

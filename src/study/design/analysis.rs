@@ -16,6 +16,10 @@ impl Analysis for DesignSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
     fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
         let (src, k) = (r.src, r.k);
         let at = |f: &str| format!("analyses[{k}].{f}");

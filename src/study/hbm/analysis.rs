@@ -18,6 +18,17 @@ impl Analysis for HbmSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+        if let Some(o) = &mut self.overlay {
+            *o = rename(o);
+        }
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
         let (src, k) = (r.src, r.k);
         let at = |f: &str| format!("analyses[{k}].{f}");

@@ -16,6 +16,14 @@ impl Analysis for LinearResponseSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         let Checks { spec, mech, spin: _, src, k } = *c;
         let at = |field: &str| c.at(field);

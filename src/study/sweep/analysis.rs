@@ -17,6 +17,14 @@ impl Analysis for SweepSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         let Checks { spec, mech, spin: _, src, k: _ } = *c;
         let at = |field: &str| c.at(field);

@@ -19,6 +19,14 @@ impl Analysis for TransientSpec {
         &self.name
     }
 
+    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+        self.name = rename(&self.name);
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
         let (src, k) = (r.src, r.k);
         let at = |f: &str| format!("analyses[{k}].{f}");
