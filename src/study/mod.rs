@@ -24,6 +24,8 @@ mod sim;
 pub mod spec;
 pub mod sweep;
 mod table;
+#[cfg(test)]
+mod toy;
 pub mod transient;
 pub mod validate;
 
@@ -50,33 +52,38 @@ pub use transient::{EngineExcitation, JointTorqueSpec, MAX_ENGINE_ORDER, OrderMa
 
 /// Declares the analysis kinds, one line each: `Kind(Spec)` is both the study file's entry
 /// `Kind(…)` (the variant of [`AnalysisSpec`]) and the room whose [`Analysis`] runs it.
+/// An entry's attributes (its doc, a `cfg`) go on its variant and on its match arms alike, so a
+/// kind that exists only under a `cfg` (the unit tests' `Toy`) is matched only there.
 macro_rules! analyses {
-    ($($(#[$doc:meta])* $kind:ident($spec:ty),)*) => {
+    ($($(#[$attr:meta])* $kind:ident($spec:ty),)*) => {
         /// One analysis of a study, as written in its `analyses` list.
         #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
         pub enum AnalysisSpec {
-            $($(#[$doc])* $kind($spec),)*
+            $($(#[$attr])* $kind($spec),)*
         }
 
         impl AnalysisSpec {
             /// The analysis kind as written in the study file (`OrderSweep`, …).
+            #[allow(unused_doc_comments)]
             pub fn kind(&self) -> &'static str {
                 match self {
-                    $(AnalysisSpec::$kind(_) => stringify!($kind),)*
+                    $($(#[$attr])* AnalysisSpec::$kind(_) => stringify!($kind),)*
                 }
             }
 
             /// The analysis behind the entry, as the study driver calls it.
+            #[allow(unused_doc_comments)]
             pub(crate) fn analysis(&self) -> &dyn Analysis {
                 match self {
-                    $(AnalysisSpec::$kind(a) => a,)*
+                    $($(#[$attr])* AnalysisSpec::$kind(a) => a,)*
                 }
             }
 
             /// The analysis behind the entry, to prepare when the study is loaded.
+            #[allow(unused_doc_comments)]
             pub(crate) fn analysis_mut(&mut self) -> &mut dyn Analysis {
                 match self {
-                    $(AnalysisSpec::$kind(a) => a,)*
+                    $($(#[$attr])* AnalysisSpec::$kind(a) => a,)*
                 }
             }
         }
@@ -107,6 +114,9 @@ analyses! {
     /// The same analyses run on several mechanisms (e.g. absorber paths), their results overlaid
     /// per analysis in one figure and compared in one table (see [`compare`]).
     Compare(CompareSpec),
+    /// A toy that the unit tests alone know (see `toy`): what adding a kind takes.
+    #[cfg(test)]
+    Toy(toy::ToySpec),
 }
 
 impl AnalysisSpec {
