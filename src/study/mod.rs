@@ -5,28 +5,41 @@
 //! analyses (the paper's load cases). [`run`] executes them (independent runs in parallel with
 //! rayon), writes CSV and SVG files into `<out>/<study name>/`, and returns a summary that is also
 //! written as Markdown.
+//!
+//! The house: each kind of analysis has its room, `study/<analysis>/` (its spec types, checks,
+//! plan, run, summary section, figures, tables and JSON), and implements the `Analysis`
+//! interface (`analysis.rs`) that the driver here calls without knowing the kinds; the kinds
+//! are registered once, in [`AnalysisSpec`] (the `analyses!` list below). Shared pieces:
+//! `spec.rs` (the study file's frame and shared settings), `load.rs` (reading and checking a
+//! study), `validate/` (the checks every analysis shares and the limits), `plan.rs` (the cost
+//! model), `sim.rs` (time runs and excitation), `elements.rs`, `table.rs` and `output.rs` (what
+//! the analyses write), `json.rs` (`results.json`). See docs/design.md, "The study layout".
+//!
+//! The public face is what this module re-exports (the study file's types, [`Study`], [`run`]
+//! and the results in [`StudyReport`]) and the modules [`design`] (design studies case by case),
+//! [`json`] (the `results.json` document) and [`validate`] (the input limits, `validate::limits`).
 
 mod analysis;
 mod backbone;
 mod campbell;
-pub mod compare;
+mod compare;
 pub mod design;
 mod elements;
-pub mod hbm;
+mod hbm;
 pub mod json;
 mod linear;
 mod load;
 mod multi;
 mod output;
-pub mod plan;
+mod plan;
 mod report_html;
 mod sim;
-pub mod spec;
-pub mod sweep;
+mod spec;
+mod sweep;
 mod table;
 #[cfg(test)]
 mod toy;
-pub mod transient;
+mod transient;
 pub mod validate;
 
 use crate::error::Result;
@@ -42,7 +55,7 @@ pub use linear::{LinearResponseSpec, Variant};
 pub use load::LoadOptions;
 pub use multi::{MultiOrderSpec, SpeedPoint};
 pub(crate) use output::{cell, finite_text, ratio, write_csv, write_file};
-pub use plan::{AnalysisPlan, Limits, Plan};
+pub use plan::{AnalysisPlan, Limits, Plan, Watchdog};
 use serde::{Deserialize, Serialize};
 pub use spec::*;
 use std::fmt::Write as _;
@@ -188,9 +201,11 @@ pub struct StudyReport {
 
 pub use backbone::FreeOscillationResult;
 pub use compare::CompareResult;
+pub use hbm::{HbmBranch, body_accel, jump_orders};
 pub use linear::{GravityResponse, LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;
+pub use transient::TransientResult;
 
 /// Options of [`run`].
 #[derive(Debug, Clone, Default)]

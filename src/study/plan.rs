@@ -22,7 +22,7 @@ use std::fmt;
 
 /// DOP853 steps per period of the highest excitation line, for the estimate (the paper's sweeps
 /// take 9 to 17).
-pub const STEPS_PER_PERIOD: f64 = 20.0;
+pub(crate) const STEPS_PER_PERIOD: f64 = 20.0;
 /// Fixed cost of one right-hand side, s.
 pub(crate) const RHS_BASE_S: f64 = 40e-9;
 /// Cost of one right-hand side per squared degree of freedom, s.

@@ -30,7 +30,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Most mechanisms in one comparison (the palette's colours).
-pub const MAX_MECHANISMS: usize = 8;
+pub(crate) const MAX_MECHANISMS: usize = 8;
 
 /// The studies of one comparison: per mechanism, its label and its study.
 pub type Compared = Vec<(String, Study)>;

@@ -107,7 +107,7 @@ fn coupling_warning(spec: &HbmSpec, br: &HbmBranch) -> Option<String> {
 /// solved points lie far apart on the rotor's amplitude curve (in the 40 N·m case the straight
 /// line between two points misses the solved mid-state by 28 % of the amplitude, the Hermite
 /// mid-state by 1.2 %, `tests/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
-pub const CURVE_SUBDIVISION: usize = 8;
+pub(crate) const CURVE_SUBDIVISION: usize = 8;
 
 pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
     move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
@@ -462,7 +462,7 @@ pub struct BranchFindings {
 
 /// The summary's readings of each branch, in order ([`BranchFindings`]); `overlay` is the sweeps
 /// drawn under the branches ([`overlay_of`]), whose jumps are read next to them.
-pub fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
+pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
     // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
     let t = study.spec.order_tracking;
     let lag = ((t.window_s / t.hop_s).round() as usize).max(1);

@@ -385,7 +385,7 @@ pub struct SpeedFindings {
 }
 
 /// The summary's per-speed readings (see [`SpeedFindings`]).
-pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
+pub(crate) fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
     let k = result.multiples.len();
     result
         .speeds

@@ -385,10 +385,10 @@ pub struct AmplitudeFindings {
 }
 
 /// Up and down traces "differ" when one is this many times the other.
-pub const BRANCH_FACTOR: f64 = 1.5;
+pub(crate) const BRANCH_FACTOR: f64 = 1.5;
 
 /// The summary's readings of the runs (see [`SweepFindings`]).
-pub fn findings(spec: &SweepSpec, runs: &[&SweepRun]) -> SweepFindings {
+pub(crate) fn findings(spec: &SweepSpec, runs: &[&SweepRun]) -> SweepFindings {
     let skip = spec.ramp_s + 1.0;
     let runs_out = runs
         .iter()
