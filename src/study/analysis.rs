@@ -3,7 +3,8 @@
 //!
 //! An analysis's life in a study is spec → checks → plan → run → outputs:
 //! - its spec is the serde type of its entry in the study file (`study/<analysis>/spec.rs`),
-//!   registered once in [`AnalysisSpec`](super::AnalysisSpec);
+//!   with a `name: String` field (its file prefix), registered once in
+//!   [`AnalysisSpec`](super::AnalysisSpec);
 //! - [`Analysis::check`] refuses what it cannot run, with the file, line and field, before any
 //!   work; [`Analysis::files`] names the files it may write, so that two analyses that would
 //!   write the same file are refused at load;
@@ -26,12 +27,10 @@ use std::path::{Path, PathBuf};
 
 /// One kind of analysis, as the study driver sees it.
 pub(crate) trait Analysis {
-    /// The analysis's name (its file prefix).
-    fn name(&self) -> &str;
-
-    /// Renames it, and the analyses it names (a harmonic balance's sweep overlay), by `rename`:
-    /// a comparison runs it under a name per mechanism.
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String);
+    /// Renames the earlier analyses it names (a harmonic balance's sweep overlay) by `rename`,
+    /// when a comparison runs it under a name per mechanism (its own `name` field is renamed by
+    /// the registry); most analyses name none.
+    fn rename_references(&mut self, _rename: &dyn Fn(&str) -> String) {}
 
     /// Whether a comparison may run it on several mechanisms.
     fn comparable(&self) -> bool {

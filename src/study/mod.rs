@@ -92,6 +92,24 @@ macro_rules! analyses {
                 }
             }
 
+            /// The analysis name (its file prefix).
+            #[allow(unused_doc_comments)]
+            pub fn name(&self) -> &str {
+                match self {
+                    $($(#[$attr])* AnalysisSpec::$kind(a) => &a.name,)*
+                }
+            }
+
+            /// Renames the analysis, and the analyses it names, by `rename` (a comparison runs
+            /// it under a name per mechanism).
+            #[allow(unused_doc_comments)]
+            pub(crate) fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
+                match self {
+                    $($(#[$attr])* AnalysisSpec::$kind(a) => a.name = rename(&a.name),)*
+                }
+                self.analysis_mut().rename_references(rename);
+            }
+
             /// The analysis behind the entry, to prepare when the study is loaded.
             #[allow(unused_doc_comments)]
             pub(crate) fn analysis_mut(&mut self) -> &mut dyn Analysis {
@@ -130,13 +148,6 @@ analyses! {
     /// A toy that the unit tests alone know (see `toy`): what adding a kind takes.
     #[cfg(test)]
     Toy(toy::ToySpec),
-}
-
-impl AnalysisSpec {
-    /// The analysis name (its file prefix).
-    pub fn name(&self) -> &str {
-        self.analysis().name()
-    }
 }
 
 /// A study ready to run: the spec, its mechanism and the locked twin, with names resolved.

@@ -1,6 +1,7 @@
-//! FreeOscillation through the analysis interface: its checks, the files it may write, its plan and its run.
+//! FreeOscillation through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
 
-use super::*;
+use super::{FreeOscillationResult, FreeOscillationSpec, run, table};
 use crate::error::Result;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
@@ -9,19 +10,11 @@ use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, rhs_s, time_run_s};
+use crate::study::validate::{MAX_LIST, g, require_steady_spin, rpm};
 use serde::Serialize;
 
 impl Analysis for FreeOscillationSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn comparable(&self) -> bool {
         true
     }

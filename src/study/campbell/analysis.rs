@@ -1,25 +1,20 @@
-//! Campbell through the analysis interface: its checks, the files it may write, its plan and its run.
+//! Campbell through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
 
-use super::*;
+use super::{Campbell, CampbellSpec, campbell_tables, run_campbell};
 use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{
+    CAMPBELL_PER_DOF3_S, CAMPBELL_POINT_S, CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S,
+};
+use crate::study::validate::{MAX_POINTS, modal_ratios, order, require_steady_spin, rpm};
 use serde::Serialize;
 
 impl Analysis for CampbellSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         let Checks { src, k, .. } = *c;
         let at = |field: &str| c.at(field);

@@ -1,6 +1,7 @@
-//! Compare through the analysis interface: its checks, the files it may write, its plan and its run.
+//! Compare through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
 
-use super::*;
+use super::{CompareResult, CompareSpec, run};
 use crate::error::Result;
 use crate::io::Source;
 use crate::study::Study;
@@ -8,19 +9,11 @@ use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::{AnalysisEntry, Json, entries};
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::JSON_PER_CSV_BYTE;
+use crate::study::validate::{MAX_ANALYSES, check_file_name};
 use serde::Serialize;
 
 impl Analysis for CompareSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         check_compare(c.src, c.k, self)
     }

@@ -68,7 +68,7 @@ fn inner_name(c: &str, label: &str, analysis: &str) -> String {
 /// `a` renamed for mechanism `label` of comparison `c` (with the analyses it names).
 pub(crate) fn renamed(c: &str, label: &str, a: &AnalysisSpec) -> AnalysisSpec {
     let mut a = a.clone();
-    a.analysis_mut().rename(&|n| inner_name(c, label, n));
+    a.rename(&|n| inner_name(c, label, n));
     a
 }
 

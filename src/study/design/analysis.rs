@@ -1,6 +1,8 @@
-//! DesignStudy through the analysis interface: its checks, the files it may write, its plan and its run.
+//! DesignStudy through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`; at load it refuses an engine in
+//! the harmonic balance it runs per case.
 
-use super::*;
+use super::{AnalysisSpec, DesignResult, DesignSpec, findings, run};
 use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
@@ -8,18 +10,10 @@ use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CASE_SETUP_S, LINEAR_SETUP_PER_DOF3_S};
+use crate::study::validate::require_steady_spin;
 
 impl Analysis for DesignSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
         let (src, k) = (r.src, r.k);
         let at = |f: &str| format!("analyses[{k}].{f}");

@@ -1,6 +1,8 @@
-//! HarmonicBalance through the analysis interface: its checks, the files it may write, its plan and its run.
+//! HarmonicBalance through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`;
+//! the engine file it names, read when the study is loaded.
 
-use super::*;
+use super::{HbmBranch, HbmParameter, HbmSpec, findings, overlay_of, run, tables};
 use crate::error::Result;
 use crate::io::Source;
 use crate::study::Study;
@@ -9,17 +11,15 @@ use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s};
+use crate::study::validate::{
+    MAX_RPM, MAX_TORQUE_NM, check_excite, check_harmonics, check_max_step, order, order_range, pos,
+    require_steady_spin, rpm, torques,
+};
 use serde::Serialize;
 
 impl Analysis for HbmSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
+    fn rename_references(&mut self, rename: &dyn Fn(&str) -> String) {
         if let Some(o) = &mut self.overlay {
             *o = rename(o);
         }

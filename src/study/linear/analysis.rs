@@ -1,25 +1,20 @@
-//! LinearResponse through the analysis interface: its checks, the files it may write, its plan and its run.
+//! LinearResponse through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
 
-use super::*;
+use super::{LinearResponseSpec, LinearResult, response_tables, run_response};
 use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S};
+use crate::study::validate::{
+    MAX_LIST, MAX_NAME_CHARS, MAX_ORDER, MAX_POINTS, check_excite, modal_ratios, pos, require_steady_spin, rpm,
+};
 use serde::Serialize;
 
 impl Analysis for LinearResponseSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn comparable(&self) -> bool {
         true
     }

@@ -1,6 +1,8 @@
-//! MultiOrder through the analysis interface: its checks, the files it may write, its plan and its run.
+//! MultiOrder through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`;
+//! the engine file it names, read when the study is loaded.
 
-use super::*;
+use super::{MultiOrderResult, MultiOrderSpec, SpeedFindings, findings, run, table};
 use crate::error::Result;
 use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
@@ -8,19 +10,11 @@ use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s, time_run_s};
+use crate::study::validate::{MAX_LIST, check_excite, common, order, pos, require_steady_spin, rpm, torque, tracking};
 use serde::Serialize;
 
 impl Analysis for MultiOrderSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn comparable(&self) -> bool {
         true
     }

@@ -1,6 +1,7 @@
-//! OrderSweep through the analysis interface: its checks, the files it may write, its plan and its run.
+//! OrderSweep through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
 
-use super::*;
+use super::{Direction, SweepRun, SweepSpec, findings, fmt_num, run, tables};
 use crate::error::Result;
 use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
@@ -8,19 +9,11 @@ use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, stft_s, time_run_s};
+use crate::study::validate::{check_excite, common, g, order_range, pos, rpm, torques, tracking};
 use serde::Serialize;
 
 impl Analysis for SweepSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn comparable(&self) -> bool {
         true
     }

@@ -40,14 +40,6 @@ impl Kept for Doubled {
 }
 
 impl Analysis for ToySpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         if !self.value.is_finite() {
             return Err(c.src.error(&c.at("value"), "must be finite"));

@@ -1,6 +1,8 @@
-//! Transient through the analysis interface: its checks, the files it may write, its plan and its run.
+//! Transient through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`;
+//! the engine file it names, read when the study is loaded.
 
-use super::*;
+use super::{MAX_ENGINE_ORDER, TransientResult, TransientSpec, run, tables};
 use crate::error::Result;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
@@ -10,19 +12,11 @@ use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
-use crate::study::plan::*;
-use crate::study::validate::*;
+use crate::study::plan::{CSV_CELL_BYTES, time_run_s};
+use crate::study::validate::{MAX_LIST, MAX_RPM, MAX_TRANSIENT_S, check_excite, g, order, pos, torque};
 use serde::Serialize;
 
 impl Analysis for TransientSpec {
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn rename(&mut self, rename: &dyn Fn(&str) -> String) {
-        self.name = rename(&self.name);
-    }
-
     fn comparable(&self) -> bool {
         true
     }
