@@ -389,8 +389,7 @@ fn every_quantity_substitutes_as_if_written_in_the_files() {
     let row = &d.designs[0].cases[0];
     let cols = &d.designs[0].results;
     let get = |name: &str| row.results[cols.iter().position(|c| c.name == name).unwrap()];
-    let max =
-        |f: &dyn Fn(&kanedyn::study::hbm::HbmBranch) -> Vec<f64>| p.hbm.iter().flat_map(f).fold(f64::NAN, f64::max);
+    let max = |f: &dyn Fn(&kanedyn::study::HbmBranch) -> Vec<f64>| p.hbm.iter().flat_map(f).fold(f64::NAN, f64::max);
     // The substituted centre of mass and joint point are L·(l/L) and R·(r/R): a rounding or two
     // away from the written l and r, so the branches agree to ~1e-13, not bit for bit; 1e-9 relative.
     let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-9 * b.abs(), "{what}: {a} vs {b}");

@@ -9,7 +9,7 @@ use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, Parameter};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
-use kanedyn::study::hbm::body_accel;
+use kanedyn::study::body_accel;
 use kanedyn::study::{RunOptions, Study, run};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

@@ -18,7 +18,7 @@
 mod examples;
 
 use examples::copy_dir;
-use kanedyn::study::plan::{Limits, Watchdog};
+use kanedyn::study::{Limits, Watchdog};
 use kanedyn::study::{LoadOptions, RunOptions, Study, run};
 use std::path::Path;
 use std::time::Instant;

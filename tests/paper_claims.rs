@@ -128,7 +128,7 @@ fn multi_order_jump_at_600_rpm_and_absorption_above() {
 /// fold lies in 2.9–3.3, so the down sweep must not jump at all.
 #[test]
 fn harmonic_balance_folds_sit_at_the_sweep_jumps() {
-    use kanedyn::study::hbm::jump_orders;
+    use kanedyn::study::jump_orders;
     let r = report();
     let sweeps: Vec<&SweepRun> = r.sweeps.iter().filter(|s| !s.locked).collect();
     let folds = |amp: f64| -> Vec<f64> {

@@ -231,7 +231,7 @@ fn a_pressure_table_that_does_not_close_is_refused() {
 /// is set tight (no multiple of the plan, 0.3 s) so that a transient of 5000 s overruns it.
 #[test]
 fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
-    use kanedyn::study::plan::{Limits, Watchdog};
+    use kanedyn::study::{Limits, Watchdog};
     use kanedyn::study::{LoadOptions, RunOptions, run};
     let s = Scratch::new("watchdog");
     let text = r#"Study(

@@ -8,7 +8,6 @@
 use crate::errors::{argument_error, guard, to_py};
 use kanedyn::study::Study as LibStudy;
 use kanedyn::study::design::{self, CaseRow, DesignResult, DesignSpec};
-use kanedyn::study::json::{AnalysisResult, Document};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -90,13 +89,11 @@ pub fn table<'py>(py: Python<'py>, r: &DesignResult) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
-/// Every design study's table of a study run, by name.
-pub fn tables<'py>(py: Python<'py>, doc: &Document<'_>) -> PyResult<Bound<'py, PyDict>> {
+/// Every design study's table of a study run (its `designs`), by name.
+pub fn tables<'py>(py: Python<'py>, designs: &[DesignResult]) -> PyResult<Bound<'py, PyDict>> {
     let out = PyDict::new(py);
-    for a in &doc.analyses {
-        if let Some(AnalysisResult::DesignStudy(r)) = &a.result {
-            out.set_item(&r.name, table(py, r)?)?;
-        }
+    for r in designs {
+        out.set_item(&r.name, table(py, r)?)?;
     }
     Ok(out)
 }

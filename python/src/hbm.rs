@@ -4,7 +4,7 @@
 //! The branch is the library's: [`RoutedHbm::new`] (the route a study takes: identical
 //! absorbers by one scaled representative) and [`RoutedHbm::continue_in`] with the options a
 //! study's `HarmonicBalance` uses, and the amplitudes read by
-//! [`kanedyn::study::hbm::body_accel`], so the arrays equal the study's CSV columns.
+//! [`kanedyn::study::body_accel`], so the arrays equal the study's CSV columns.
 
 use crate::arrays::{check_number, limit, matrix, vector};
 use crate::errors::{EngineError, argument_error, guard, message_of, model_error, to_py};
@@ -14,7 +14,7 @@ use kanedyn::hbm::{
 };
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
-use kanedyn::study::hbm::body_accel;
+use kanedyn::study::body_accel;
 use kanedyn::study::validate::limits;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;

@@ -10,7 +10,7 @@ use crate::errors::{argument_error, guard, to_py};
 use crate::mechanism::Mechanism;
 use kanedyn::io::ReadPolicy;
 use kanedyn::study::json::{Document, document};
-use kanedyn::study::{Limits, LoadOptions, RunOptions, Study as LibStudy, run};
+use kanedyn::study::{Limits, LoadOptions, RunOptions, Study as LibStudy, StudyReport, run};
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -357,7 +357,7 @@ impl Study {
                 let files =
                     if temporary { Vec::new() } else { report.files.iter().map(|f| f.display().to_string()).collect() };
                 let out_dir = (!temporary).then(|| root.join(&study.spec.name).display().to_string());
-                StudyResult::new(py, &doc, report.summary.clone(), files, out_dir)
+                StudyResult::new(py, &doc, &report, files, out_dir)
             });
             if temporary {
                 // Best effort: a folder left behind in the temporary area harms nothing.
@@ -474,7 +474,7 @@ impl StudyResult {
     fn new(
         py: Python<'_>,
         doc: &Document<'_>,
-        summary: String,
+        report: &StudyReport,
         files: Vec<String>,
         out_dir: Option<String>,
     ) -> PyResult<Self> {
@@ -499,13 +499,13 @@ impl StudyResult {
         Ok(Self {
             status: doc.status.to_string(),
             failures: doc.failures.to_vec(),
-            summary,
+            summary: report.summary.clone(),
             files,
             out_dir,
             data: data.unbind(),
             tables: tables.unbind(),
             units: units.unbind(),
-            designs: crate::design::tables(py, doc)?.unbind(),
+            designs: crate::design::tables(py, &report.designs)?.unbind(),
             json,
         })
     }

@@ -2,9 +2,9 @@
 //! `summary.md`, described by the JSON Schema `docs/results.schema.json`.
 //!
 //! The document holds, per analysis of the study file (in its order):
-//! - `result`: the analysis's results as the library returns them ([`SweepRun`],
-//!   [`MultiOrderResult`], [`LinearResult`], [`Campbell`], [`HbmBranch`]), serialised field by
-//!   field;
+//! - `result`: the analysis's results as the library returns them ([`SweepRun`](super::SweepRun),
+//!   [`MultiOrderResult`](super::MultiOrderResult), [`LinearResult`](super::LinearResult), …),
+//!   serialised field by field by the analysis itself (`Analysis::json`, in its room);
 //! - `findings`: the numbers the summary reads off those results (minima, intervals, ratios,
 //!   counts), computed by the same functions the summary uses;
 //! - `tables`: the columns of every CSV file the analysis writes, with their units, in the file's
@@ -22,16 +22,11 @@
 //! The Python package builds its study results from the same [`Document`], so both hold the
 //! same data.
 
-use super::hbm::{self, BranchFindings, HbmBranch};
-use super::linear::{self, LinearResult};
-use super::multi::{self, MultiOrderResult, SpeedFindings};
-use super::sweep::{self, SweepFindings, SweepRun};
 pub use super::table::{Column, Table};
-use super::transient::{self, TransientResult};
-use super::{AnalysisSpec, CampbellSpec, Study, StudyReport, StudySpec};
+use super::{Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
-use crate::linear::Campbell;
 use serde::Serialize;
+use serde_json::value::RawValue;
 use std::path::{Path, PathBuf};
 
 /// The file name, in the study's output folder.
@@ -101,161 +96,52 @@ pub struct AnalysisEntry<'a> {
     pub status: &'static str,
     /// Its failures (entries of the document's `failures`).
     pub failures: Vec<&'a str>,
-    /// Its results (null when it failed as a whole).
-    pub result: Option<AnalysisResult<'a>>,
+    /// Its results as the library returns them, serialised field by field by the analysis
+    /// (null when it failed as a whole).
+    pub result: Option<Box<RawValue>>,
     /// What the summary reads off them (null when it failed as a whole).
-    pub findings: Option<AnalysisFindings>,
+    pub findings: Option<Box<RawValue>>,
     /// Its CSV files' columns.
     pub tables: Vec<Table>,
+    /// The columns of the CSV files the analyses inside it wrote (a comparison's mechanisms'),
+    /// which its result holds in their own entries.
+    #[serde(skip)]
+    pub inner_tables: Vec<Table>,
 }
 
 impl AnalysisEntry<'_> {
     /// This entry's tables and, for a comparison, those of every compared mechanism's analyses:
     /// one per CSV file the analysis wrote.
     pub fn all_tables(&self) -> Vec<&Table> {
-        let mut out: Vec<&Table> = self.tables.iter().collect();
-        if let Some(AnalysisResult::Compare { mechanisms }) = &self.result {
-            for m in mechanisms {
-                for a in &m.analyses {
-                    out.extend(a.all_tables());
-                }
-            }
-        }
-        out
+        self.tables.iter().chain(&self.inner_tables).collect()
     }
 }
 
-/// The results of one analysis, by kind.
-#[derive(Debug, Clone, Serialize)]
-#[serde(untagged)]
-pub enum AnalysisResult<'a> {
-    /// An order sweep's runs (the locked twin's included).
-    OrderSweep {
-        /// The runs, in the order they were run.
-        runs: Vec<&'a SweepRun>,
-    },
-    /// A multi-order analysis.
-    MultiOrder(&'a MultiOrderResult),
-    /// A linear frequency response.
-    LinearResponse(&'a LinearResult),
-    /// A Campbell diagram.
-    Campbell(&'a Campbell),
-    /// A harmonic-balance analysis's branches.
-    HarmonicBalance {
-        /// The branches, two per amplitude (from each end of the range) unless one failed.
-        branches: Vec<&'a HbmBranch>,
-    },
-    /// A design study's case table: columns, and per case its values, results, status and error.
-    DesignStudy(&'a super::design::DesignResult),
-    /// A transient or run-up.
-    Transient(&'a TransientResult),
-    /// A free oscillation's backbone.
-    FreeOscillation(&'a super::FreeOscillationResult),
-    /// A comparison: per mechanism, its analyses' entries (named `<comparison>_<label>_<analysis>`).
-    Compare {
-        /// Per mechanism, in the file's order.
-        mechanisms: Vec<ComparedEntry<'a>>,
-    },
+/// An analysis's part of its entry: its results and what the summary reads off them, each as
+/// the JSON it serialises to, and the columns of the CSV files it wrote (see
+/// `Analysis::json`).
+pub(crate) struct Json {
+    /// The results.
+    pub result: Box<RawValue>,
+    /// What the summary reads off them.
+    pub findings: Box<RawValue>,
+    /// The columns of its CSV files.
+    pub tables: Vec<Table>,
+    /// The columns of the CSV files of the analyses inside it.
+    pub inner_tables: Vec<Table>,
 }
 
-/// One mechanism of a comparison in the document.
-#[derive(Debug, Clone, Serialize)]
-pub struct ComparedEntry<'a> {
-    /// Its label.
-    pub label: &'a str,
-    /// Its mechanism's name.
-    pub mechanism: &'a str,
-    /// Its analyses, as the document's own entries.
-    pub analyses: Vec<AnalysisEntry<'a>>,
-}
-
-/// What the summary reads off one analysis's results, by kind.
-#[derive(Debug, Clone, Serialize)]
-#[serde(untagged)]
-pub enum AnalysisFindings {
-    /// See [`SweepFindings`].
-    OrderSweep(SweepFindings),
-    /// Per speed.
-    MultiOrder {
-        /// See [`SpeedFindings`].
-        speeds: Vec<SpeedFindings>,
-    },
-    /// Per damping variant.
-    LinearResponse {
-        /// See [`VariantFindings`].
-        variants: Vec<VariantFindings>,
-    },
-    /// Per tracked mode.
-    Campbell {
-        /// See [`ModeFindings`].
-        modes: Vec<ModeFindings>,
-    },
-    /// Per branch.
-    HarmonicBalance {
-        /// See [`BranchFindings`].
-        branches: Vec<BranchFindings>,
-    },
-    /// See [`super::design::DesignFindings`].
-    DesignStudy(super::design::DesignFindings),
-    /// The peaks of the order cuts and the elements' largest excursions (as in the result).
-    Transient {
-        /// Per cut: signal, order, peak and its speed.
-        cuts: Vec<CutFindings>,
-    },
-    /// The backbone read as orders relative to the linear one.
-    FreeOscillation {
-        /// Each amplitude's order over the linear order (NaN where none was measured).
-        order_over_linear: Vec<f64>,
-    },
-    /// The labels of the compared mechanisms (their findings are in their entries).
-    Compare {
-        /// The labels, in the file's order.
-        labels: Vec<String>,
-    },
-}
-
-/// The summary's reading of one order cut of a transient.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CutFindings {
-    /// The signal cut.
-    pub signal: String,
-    /// The order, cycles/rev.
-    pub order: f64,
-    /// The largest amplitude along the cut, in the signal's unit.
-    pub peak: f64,
-    /// The speed of that block, rpm.
-    pub peak_rpm: f64,
-}
-
-/// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
-/// the study locks no joint, so n_t is not defined, or there is no crossing).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct VariantFindings {
-    /// The variant's label.
-    pub label: String,
-    /// Order of the smallest ratio over n_t.
-    pub min_order_over_nt: Option<f64>,
-    /// Order of the largest ratio over n_t.
-    pub max_order_over_nt: Option<f64>,
-    /// First order above n_t with ratio > 1, over n_t.
-    pub crossing_over_nt: Option<f64>,
-}
-
-/// The summary's reading of one tracked mode of a Campbell diagram.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct ModeFindings {
-    /// The mode's label (its dominant joint).
-    pub label: String,
-    /// Frequency at the lowest speed, Hz.
-    pub frequency_at_min_rpm_hz: f64,
-    /// Frequency at the highest speed, Hz.
-    pub frequency_at_max_rpm_hz: f64,
-    /// Frequency over the highest speed's rotation frequency: the mode's order there (NaN, so
-    /// `null`, at 0 rpm).
-    pub order_at_max_rpm: f64,
-    /// Whether the mode's order is the same (to 1e-6 relative) at every non-zero speed: an
-    /// order line.
-    pub order_line: bool,
+impl Json {
+    /// The parts of an entry from the analysis's results and findings (None if they cannot be
+    /// serialised, which the types here never refuse).
+    pub fn new(result: &impl Serialize, findings: &impl Serialize, tables: Vec<Table>) -> Option<Self> {
+        Some(Self {
+            result: serde_json::value::to_raw_value(result).ok()?,
+            findings: serde_json::value::to_raw_value(findings).ok()?,
+            tables,
+            inner_tables: Vec::new(),
+        })
+    }
 }
 
 /// Writes `results.json` for `report`, a run of `study`, into `dir` and returns its path.
@@ -298,11 +184,9 @@ pub fn document<'a>(study: &'a Study, report: &'a StudyReport) -> Document<'a> {
 }
 
 /// The entries of `study`'s analyses, `completed` telling which ran to the end.
-fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: &[bool]) -> Vec<AnalysisEntry<'a>> {
-    let mut campbells = report.campbell.iter();
-    study
-        .spec
-        .analyses
+pub(crate) fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: &[bool]) -> Vec<AnalysisEntry<'a>> {
+    let analyses = &study.spec.analyses;
+    analyses
         .iter()
         .enumerate()
         .map(|(index, a)| {
@@ -314,137 +198,31 @@ fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: &[bool]) ->
                 .filter(|f| f.starts_with(&prefix) || f.contains(&inner))
                 .map(String::as_str)
                 .collect();
-            let completed = completed.get(index).copied().unwrap_or(false);
-            // The Campbell diagrams carry no name: the k-th completed one is the k-th result.
-            let campbell = match a {
-                AnalysisSpec::Campbell(_) if completed => campbells.next(),
-                _ => None,
-            };
-            let (result, findings, tables) = if completed {
-                parts(study, report, a, campbell).map_or((None, None, Vec::new()), |(r, f, t)| (Some(r), Some(f), t))
-            } else {
-                (None, None, Vec::new())
+            let completed_here = completed.get(index).copied().unwrap_or(false);
+            // How many of its kind ran to the end before it: a result that carries no name (a
+            // Campbell diagram) is found by its place among them.
+            let nth =
+                analyses[..index].iter().zip(completed).filter(|(b, done)| **done && b.kind() == a.kind()).count();
+            let parts = if completed_here { a.analysis().json(study, report, nth) } else { None };
+            let (result, findings, tables, inner_tables) = match parts {
+                Some(j) => (Some(j.result), Some(j.findings), j.tables, j.inner_tables),
+                None => (None, None, Vec::new(), Vec::new()),
             };
             let status = match (&result, failures.is_empty()) {
                 (None, _) => "failed",
                 (Some(_), true) => "complete",
                 (Some(_), false) => "partial",
             };
-            AnalysisEntry { index, kind: a.kind(), name: a.name(), status, failures, result, findings, tables }
-        })
-        .collect()
-}
-
-/// The result, findings and tables of a completed analysis (None when its result is missing).
-fn parts<'a>(
-    study: &'a Study,
-    report: &'a StudyReport,
-    a: &AnalysisSpec,
-    campbell: Option<&'a Campbell>,
-) -> Option<(AnalysisResult<'a>, AnalysisFindings, Vec<Table>)> {
-    Some(match a {
-        AnalysisSpec::OrderSweep(s) => {
-            let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == s.name).collect();
-            let (findings, tables) = (sweep::findings(s, &runs), sweep::tables(s, &runs));
-            (AnalysisResult::OrderSweep { runs }, AnalysisFindings::OrderSweep(findings), tables)
-        }
-        AnalysisSpec::MultiOrder(m) => {
-            let r = report.multi.iter().find(|r| r.name == m.name)?;
-            let speeds = multi::findings(r);
-            (AnalysisResult::MultiOrder(r), AnalysisFindings::MultiOrder { speeds }, vec![multi::table(study, m, r)])
-        }
-        AnalysisSpec::LinearResponse(l) => {
-            let r = report.linear.iter().find(|r| r.name == l.name)?;
-            let variants = linear_findings(r);
-            (
-                AnalysisResult::LinearResponse(r),
-                AnalysisFindings::LinearResponse { variants },
-                linear::response_tables(study, l, r),
-            )
-        }
-        AnalysisSpec::Campbell(c) => {
-            let r = campbell?;
-            (
-                AnalysisResult::Campbell(r),
-                AnalysisFindings::Campbell { modes: campbell_findings(c, r) },
-                super::campbell::campbell_tables(c, r),
-            )
-        }
-        AnalysisSpec::HarmonicBalance(h) => {
-            let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == h.name).collect();
-            let findings = hbm::findings(study, h, &branches, &report.sweeps);
-            let tables = hbm::tables(&study.mechanism, h, &branches);
-            (
-                AnalysisResult::HarmonicBalance { branches },
-                AnalysisFindings::HarmonicBalance { branches: findings },
+            AnalysisEntry {
+                index,
+                kind: a.kind(),
+                name: a.name(),
+                status,
+                failures,
+                result,
+                findings,
                 tables,
-            )
-        }
-        AnalysisSpec::DesignStudy(d) => {
-            let r = report.designs.iter().find(|r| r.name == d.name)?;
-            (AnalysisResult::DesignStudy(r), AnalysisFindings::DesignStudy(super::design::findings(r)), vec![r.table()])
-        }
-        AnalysisSpec::Transient(t) => {
-            let r = report.transient.iter().find(|r| r.name == t.name)?;
-            let cuts = r
-                .cuts
-                .iter()
-                .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
-                .collect();
-            (AnalysisResult::Transient(r), AnalysisFindings::Transient { cuts }, transient::tables(study, t, r))
-        }
-        AnalysisSpec::FreeOscillation(f) => {
-            let r = report.free.iter().find(|r| r.name == f.name)?;
-            let findings = AnalysisFindings::FreeOscillation { order_over_linear: r.order_ratios() };
-            (AnalysisResult::FreeOscillation(r), findings, vec![super::backbone::table(r)])
-        }
-        AnalysisSpec::Compare(c) => {
-            let r = report.compares.iter().find(|r| r.name == c.name)?;
-            let subs = &study.comparisons.iter().find(|(k, _)| study.spec.analyses[*k].name() == c.name)?.1;
-            let mechanisms = subs
-                .iter()
-                .zip(&r.mechanisms)
-                .map(|((label, sub), m)| ComparedEntry {
-                    label,
-                    mechanism: &sub.mechanism.name,
-                    analyses: entries(sub, report, &m.completed),
-                })
-                .collect();
-            let labels = r.mechanisms.iter().map(|m| m.label.clone()).collect();
-            (AnalysisResult::Compare { mechanisms }, AnalysisFindings::Compare { labels }, Vec::new())
-        }
-    })
-}
-
-/// The summary's orders in units of n_t, per variant.
-fn linear_findings(r: &LinearResult) -> Vec<VariantFindings> {
-    let over = |n: f64| r.n_t.map(|nt| n / nt);
-    r.variants
-        .iter()
-        .map(|v| VariantFindings {
-            label: v.label.clone(),
-            min_order_over_nt: over(v.min.0),
-            max_order_over_nt: over(v.max.0),
-            crossing_over_nt: v.crossing.and_then(over),
-        })
-        .collect()
-}
-
-/// The summary's reading of each tracked mode (the rule of `study::linear`'s Campbell summary).
-fn campbell_findings(spec: &CampbellSpec, c: &Campbell) -> Vec<ModeFindings> {
-    let order = |f: f64, rpm: f64| if rpm > 0.0 { f / (rpm / 60.0) } else { f64::NAN };
-    c.tracks
-        .iter()
-        .map(|t| {
-            let orders: Vec<f64> =
-                c.rpm.iter().zip(&t.frequency_hz).filter(|(r, _)| **r > 0.0).map(|(&r, &f)| order(f, r)).collect();
-            let last = t.frequency_hz.last().copied().unwrap_or(f64::NAN);
-            ModeFindings {
-                label: t.label.clone(),
-                frequency_at_min_rpm_hz: t.frequency_hz.first().copied().unwrap_or(f64::NAN),
-                frequency_at_max_rpm_hz: last,
-                order_at_max_rpm: order(last, spec.rpm_max),
-                order_line: orders.iter().all(|o| (o - orders[0]).abs() <= 1e-6 * orders[0].abs()),
+                inner_tables,
             }
         })
         .collect()

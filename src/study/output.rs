@@ -101,3 +101,84 @@ impl OutputDir {
         Ok(self.target)
     }
 }
+
+/// `a / reference`, or NaN ("undefined", an empty CSV cell) when the reference is zero or below
+/// `1e-5 · scale`: a locked (linear) twin answers only at the lines it is excited at, and its
+/// other traces are numerical noise of ~1e-6 of its largest, whose ratios would read as huge
+/// amplifications.
+pub(crate) fn ratio(a: f64, reference: f64, scale: f64) -> f64 {
+    if reference.abs() > 1e-5 * scale.abs() && reference != 0.0 { a / reference } else { f64::NAN }
+}
+
+/// The last guard of the promise that no output reads `NaN` or `inf`: every such word outside
+/// backticks (names are quoted in backticks, so a mechanism called `inf` keeps its name) becomes
+/// "undefined". The summaries format their numbers with [`cell`] and friends; this catches a
+/// number a formatter missed, e.g. in a solver's error message, before it reaches summary.md,
+/// results.json or report.html (issue 25: a multi-order run printed "NaN (locked 1.7e-14)").
+/// A word here runs over letters, digits and `-+._/\`, so a path such as `/tmp/nan/s.ron` is
+/// one word and left alone.
+pub(crate) fn finite_text(text: &str) -> String {
+    let word_char = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '+' | '.' | '_' | '/' | '\\');
+    let mut out = String::with_capacity(text.len());
+    let mut quoted = false;
+    let mut rest = text;
+    while let Some(c) = rest.chars().next() {
+        if !word_char(c) {
+            quoted ^= c == '`';
+            out.push(c);
+            rest = &rest[c.len_utf8()..];
+            continue;
+        }
+        let end = rest.find(|c: char| !word_char(c)).unwrap_or(rest.len());
+        let word = &rest[..end];
+        let bare = word.trim_start_matches(['-', '+']).to_ascii_lowercase();
+        if !quoted && matches!(bare.as_str(), "nan" | "inf" | "infinity") {
+            out.push_str("undefined");
+        } else {
+            out.push_str(word);
+        }
+        rest = &rest[end..];
+    }
+    out
+}
+
+/// A number for a summary table, or `undefined` when it is not finite.
+pub(crate) fn cell(v: f64, precision: usize) -> String {
+    if v.is_finite() { format!("{v:.precision$}") } else { "undefined".into() }
+}
+
+/// Writes a text file, naming it on failure.
+pub(crate) fn write_file(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
+}
+
+/// Writes a CSV file with a header row and columns of equal length; non-finite values are written
+/// as empty cells.
+pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<()> {
+    let io = |e: csv::Error| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e.into() };
+    let mut w = csv::Writer::from_path(path).map_err(io)?;
+    w.write_record(header).map_err(io)?;
+    let rows = columns.iter().map(|c| c.len()).min().unwrap_or(0);
+    let mut rec = Vec::with_capacity(columns.len());
+    for r in 0..rows {
+        rec.clear();
+        // A value that does not exist or apply (a ratio to a zero reference, a trace that does
+        // not reach this order) is NaN in memory and an empty cell on disk, never `NaN`/`inf`.
+        rec.extend(columns.iter().map(|c| if c[r].is_finite() { c[r].to_string() } else { String::new() }));
+        w.write_record(&rec).map_err(io)?;
+    }
+    w.flush().map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
+}
+
+#[cfg(test)]
+mod finite_text_tests {
+    use super::finite_text;
+
+    #[test]
+    fn non_finite_words_become_undefined_but_names_and_paths_stay() {
+        assert_eq!(finite_text("| NaN (locked 1.7e-14) |"), "| undefined (locked 1.7e-14) |");
+        assert_eq!(finite_text("t = -inf, x = Infinity"), "t = undefined, x = undefined");
+        assert_eq!(finite_text("mechanism `inf` at /tmp/nan/s.ron:3:4"), "mechanism `inf` at /tmp/nan/s.ron:3:4");
+        assert_eq!(finite_text("information, finite, 1e-300, inflow"), "information, finite, 1e-300, inflow");
+    }
+}

@@ -17,20 +17,20 @@
 //!   again in its table, and most once more in the analysis's results; the paper study writes
 //!   0.9 MB of CSV and a 1.9 MB `results.json`).
 
-use super::{AnalysisSpec, HbmParameter, Study};
+use super::{Study, StudySpec};
 use std::fmt;
 
 /// DOP853 steps per period of the highest excitation line, for the estimate (the paper's sweeps
 /// take 9 to 17).
-pub const STEPS_PER_PERIOD: f64 = 20.0;
+pub(crate) const STEPS_PER_PERIOD: f64 = 20.0;
 /// Fixed cost of one right-hand side, s.
-const RHS_BASE_S: f64 = 40e-9;
+pub(crate) const RHS_BASE_S: f64 = 40e-9;
 /// Cost of one right-hand side per squared degree of freedom, s.
-const RHS_PER_DOF2_S: f64 = 15e-9;
+pub(crate) const RHS_PER_DOF2_S: f64 = 15e-9;
 /// Bytes per CSV cell (a shortest round-trip f64 and a comma).
-const CSV_CELL_BYTES: f64 = 22.0;
+pub(crate) const CSV_CELL_BYTES: f64 = 22.0;
 /// Bytes of `results.json` per byte of CSV (see the module docs).
-const JSON_PER_CSV_BYTE: f64 = 2.0;
+pub(crate) const JSON_PER_CSV_BYTE: f64 = 2.0;
 
 /// Upper bounds on what a study may ask for, checked when it is loaded. Each can be raised on
 /// the command line (`kanedyn run --max-memory-mb …`).
@@ -207,40 +207,40 @@ impl fmt::Display for Plan {
 /// and held, of the mechanism and its locked twin), s, plus [`LINEAR_SETUP_PER_DOF3_S`]`·DOF³`;
 /// a design study of a two-point linear response spent ~130 µs per case on the CPVA and ~720 µs
 /// on the truck driveline, all of it here, where the estimate had counted none.
-const LINEAR_SETUP_S: f64 = 100e-6;
+pub(crate) const LINEAR_SETUP_S: f64 = 100e-6;
 /// See [`LINEAR_SETUP_S`].
-const LINEAR_SETUP_PER_DOF3_S: f64 = 6e-6;
+pub(crate) const LINEAR_SETUP_PER_DOF3_S: f64 = 6e-6;
 /// Cost of one Campbell point (the equilibrium and the eigenproblems with the spin free and held,
 /// tracked between speeds), s, plus [`CAMPBELL_PER_DOF3_S`]`·DOF³`: measured 45 µs on the
 /// dual-mass flywheel and the CPVA (2 DOF) and 105 µs on the truck driveline (5 DOF), where the
 /// estimate had been 6.6 µs.
-const CAMPBELL_POINT_S: f64 = 60e-6;
+pub(crate) const CAMPBELL_POINT_S: f64 = 60e-6;
 /// See [`CAMPBELL_POINT_S`].
-const CAMPBELL_PER_DOF3_S: f64 = 1e-6;
+pub(crate) const CAMPBELL_PER_DOF3_S: f64 = 1e-6;
 /// Fixed cost of one design-study case (the mechanism rebuilt with the case's values, its
 /// equations of motion and its locked twin checked), s, plus a `DOF³` part like the linear
 /// analyses'.
-const CASE_SETUP_S: f64 = 50e-6;
+pub(crate) const CASE_SETUP_S: f64 = 50e-6;
 /// An explicit Runge–Kutta method is stable for steps below about this many time constants of
 /// the fastest decay (DOP853's stability region reaches ~−6 on the real axis, and its step
 /// control keeps about half of that): a damper whose
 /// decay rate `c/J` is far above the excitation forces steps of `~3/(c/J)` whatever the
 /// tolerance.
-const STABLE_STEP_RATES: f64 = 3.0;
+pub(crate) const STABLE_STEP_RATES: f64 = 3.0;
 
 /// Cost of the order tracking per sample of a window and per `log₂` of its length, s (a
 /// windowed real FFT and the band sums): a 20 s sweep sampled at 1 MHz (81 windows of 2·10⁶
 /// samples, found by `tests/fuzz_runs.rs`) spends about a second per run here, which the plan
 /// did not count.
-const STFT_PER_POINT_S: f64 = 3e-10;
+pub(crate) const STFT_PER_POINT_S: f64 = 3e-10;
 
 /// Estimated CPU time of the order tracking of `windows` windows of `samples` samples each.
-fn stft_s(windows: f64, samples: f64) -> f64 {
+pub(crate) fn stft_s(windows: f64, samples: f64) -> f64 {
     windows * samples * samples.max(2.0).log2() * STFT_PER_POINT_S
 }
 
 /// Cost of one right-hand side of a mechanism with `n` degrees of freedom, s.
-fn rhs_s(n: f64) -> f64 {
+pub(crate) fn rhs_s(n: f64) -> f64 {
     RHS_BASE_S + RHS_PER_DOF2_S * n * n
 }
 
@@ -249,7 +249,7 @@ fn rhs_s(n: f64) -> f64 {
 /// scales count too ([`time_scales`]): its fastest spring's natural frequency is a line the
 /// steps must resolve like an excitation, and its fastest damper's decay rate bounds the stable
 /// step (a stiff shaft damper used to make a run take 10 to 1000 times its estimate).
-fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
+pub(crate) fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
     let i = study.spec.integration;
     let n = study.mechanism.ndof() as f64;
     let (f_spring, decay) = time_scales(&study.mechanism);
@@ -297,11 +297,8 @@ pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f6
 impl Study {
     /// The estimated work of every analysis (see the module docs of `plan` for the model).
     pub fn plan(&self) -> Plan {
-        let spec = &self.spec;
-        let fs = spec.integration.sample_hz;
-        let n = self.mechanism.ndof() as f64;
-        let locked = usize::from(self.locked.is_some());
-        let analyses = spec
+        let analyses = self
+            .spec
             .analyses
             .iter()
             .enumerate()
@@ -318,164 +315,7 @@ impl Study {
                     cpu_s: 0.0,
                     driver: "",
                 };
-                match a {
-                    AnalysisSpec::OrderSweep(s) => {
-                        let runs = s.amplitudes.len() * (s.directions.len() + locked);
-                        let samples = s.duration_s * fs + 1.0;
-                        let windows = s.duration_s / spec.order_tracking.hop_s + 1.0;
-                        let series_cols = if s.write_time_series { 4.0 + n } else { 0.0 };
-                        let f = s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * s.rpm / 60.0;
-                        let r = runs as f64;
-                        AnalysisPlan {
-                            runs,
-                            samples_per_run: samples,
-                            memory_bytes: r * samples * 8.0 * (3.0 + series_cols)
-                                + r * windows * 32.0 * s.multiples.len() as f64,
-                            output_bytes: r * samples * series_cols * CSV_CELL_BYTES
-                                + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
-                            cpu_s: r
-                                * (time_run_s(self, s.duration_s, f)
-                                    + stft_s(windows, spec.order_tracking.window_s * fs)),
-                            driver: if s.write_time_series { "write_time_series" } else { "duration_s" },
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::MultiOrder(m) => {
-                        let td = usize::from(m.time_domain);
-                        let runs = m.speeds.len() * td * (1 + locked);
-                        // Two windows are kept per run (the steadiness test).
-                        let samples = 2.0 * m.window_s * fs + 1.0;
-                        let top = m
-                            .speeds
-                            .iter()
-                            .flat_map(|p| p.harmonics.iter().map(move |h| h.multiple * p.rpm))
-                            .fold(0.0, f64::max);
-                        let f = m.order * top / 60.0;
-                        let hbm_s = if m.hbm { m.speeds.len() as f64 * 3.0 * hbm_branch_s(n, 10.0) } else { 0.0 };
-                        AnalysisPlan {
-                            runs,
-                            samples_per_run: samples,
-                            memory_bytes: runs as f64 * samples * 24.0,
-                            output_bytes: m.speeds.len() as f64 * CSV_CELL_BYTES * 16.0 * m.multiples.len() as f64,
-                            cpu_s: runs as f64 * time_run_s(self, m.max_time_s, f) + hbm_s,
-                            driver: "max_time_s",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::LinearResponse(l) => {
-                        let runs = l.variants.len().max(1);
-                        let p = l.points as f64;
-                        AnalysisPlan {
-                            runs,
-                            samples_per_run: p,
-                            memory_bytes: runs as f64 * p * 8.0 * 8.0,
-                            output_bytes: runs as f64 * p * 5.0 * CSV_CELL_BYTES,
-                            cpu_s: runs as f64
-                                * (LINEAR_SETUP_S
-                                    + LINEAR_SETUP_PER_DOF3_S * n * n * n
-                                    + p * 2.0 * (1e-6 + 20e-9 * n * n * n)),
-                            driver: "points",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::Campbell(c) => {
-                        let p = c.points as f64;
-                        AnalysisPlan {
-                            runs: 1,
-                            samples_per_run: p,
-                            memory_bytes: p * (4.0 * n + c.orders.len() as f64) * 8.0,
-                            output_bytes: p * (2.0 * n + c.orders.len() as f64 + 1.0) * CSV_CELL_BYTES,
-                            cpu_s: LINEAR_SETUP_S
-                                + LINEAR_SETUP_PER_DOF3_S * n * n * n
-                                + p * (CAMPBELL_POINT_S + CAMPBELL_PER_DOF3_S * n * n * n),
-                            driver: "points",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::HarmonicBalance(h) => {
-                        let cases = if matches!(h.parameter, HbmParameter::Torque { .. }) || h.engine.is_some() {
-                            1
-                        } else {
-                            h.amplitudes.len()
-                        };
-                        let runs = 2 * cases;
-                        let points = crate::hbm::ContinuationOptions::default().max_points as f64;
-                        let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);
-                        AnalysisPlan {
-                            runs,
-                            samples_per_run: points,
-                            memory_bytes: runs as f64 * points * unknowns * 8.0 * 4.0,
-                            output_bytes: runs as f64 * points * (4.0 + h.multiples.len() as f64) * CSV_CELL_BYTES,
-                            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64),
-                            driver: "harmonics",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::DesignStudy(d) => design_plan(self, d, base),
-                    AnalysisSpec::FreeOscillation(f) => {
-                        let runs = f.amplitudes.len();
-                        // The run waits for the slowest oscillation the analysis accepts (a
-                        // quarter of the linear frequency, assumed below order 10) and samples
-                        // 128 points per linear period.
-                        let rev_s = 60.0 / f.rpm.max(1e-9);
-                        let duration = (f.periods as f64 + 2.0) * 4.0 * rev_s;
-                        let samples = duration * 128.0 * 10.0 / rev_s;
-                        AnalysisPlan {
-                            runs,
-                            samples_per_run: samples,
-                            memory_bytes: 64.0 * runs as f64,
-                            output_bytes: runs as f64 * 4.0 * CSV_CELL_BYTES,
-                            cpu_s: runs as f64 * (time_run_s(self, duration, 10.0 / rev_s) + samples * rhs_s(n)),
-                            driver: "amplitudes",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::Compare(c) => {
-                        let subs = self.comparisons.iter().find(|(k, _)| *k == index).map(|(_, s)| s.as_slice());
-                        let plans: Vec<AnalysisPlan> =
-                            subs.unwrap_or(&[]).iter().flat_map(|(_, s)| s.plan().analyses).collect();
-                        let sum = |f: &dyn Fn(&AnalysisPlan) -> f64| plans.iter().map(f).sum::<f64>();
-                        AnalysisPlan {
-                            runs: plans.iter().map(|p| p.runs).sum(),
-                            samples_per_run: plans.iter().map(|p| p.samples_per_run).fold(0.0, f64::max),
-                            memory_bytes: sum(&|p| p.memory_bytes),
-                            // The inner plans count their JSON share already (removed here, as
-                            // it is added to every analysis below).
-                            output_bytes: sum(&|p| p.output_bytes) / (1.0 + JSON_PER_CSV_BYTE)
-                                + c.analyses.len() as f64 * 1e5,
-                            cpu_s: sum(&|p| p.cpu_s),
-                            driver: "analyses",
-                            ..base
-                        }
-                    }
-                    AnalysisSpec::Transient(t) => {
-                        let samples = t.duration_s * fs + 1.0;
-                        let e = self.elements.len() as f64;
-                        let (a, b) = t.speed.rpm_range();
-                        let revs = t.duration_s * a.max(b) / 60.0;
-                        let blocks = revs / t.map.hop_revs.max(1e-9) + 1.0;
-                        let columns = t.map.max_order * t.map.revs_per_block as f64;
-                        let series_cols =
-                            if t.write_time_series { 4.0 + 2.0 * e + 3.0 * t.reactions.len() as f64 } else { 0.0 };
-                        let top = t
-                            .torques
-                            .iter()
-                            .flat_map(|q| q.harmonics.iter().map(move |h| h.multiple * q.order))
-                            .fold(1.0, f64::max);
-                        AnalysisPlan {
-                            runs: 1,
-                            samples_per_run: samples,
-                            memory_bytes: samples * 8.0 * (4.0 + 2.0 * e) + blocks * columns * 8.0 * 2.0,
-                            output_bytes: samples * series_cols * CSV_CELL_BYTES
-                                + blocks * columns * 4.0 * CSV_CELL_BYTES,
-                            // The driven equations solve with nalgebra's dense Cholesky: a few
-                            // times the engine's own right-hand side.
-                            cpu_s: 4.0 * time_run_s(self, t.duration_s, top * a.max(b) / 60.0),
-                            driver: "duration_s",
-                            ..base
-                        }
-                    }
-                }
+                a.analysis().plan(self, base)
             })
             .map(|p| AnalysisPlan { output_bytes: p.output_bytes * (1.0 + JSON_PER_CSV_BYTE), ..p })
             .collect();
@@ -486,7 +326,7 @@ impl Study {
 /// Upper bound of one harmonic-balance branch's CPU time: `max_points` points of about 5 Newton
 /// steps, each a dense factorisation of `DOF·(2H+1)` unknowns and `4(H+1)` Jacobian samples,
 /// plus a Floquet monodromy of 256 RK4 steps on `2·DOF` states.
-fn hbm_branch_s(n: f64, h: f64) -> f64 {
+pub(crate) fn hbm_branch_s(n: f64, h: f64) -> f64 {
     let points = crate::hbm::ContinuationOptions::default().max_points as f64;
     let u = n * (2.0 * h + 1.0);
     let newton = u * u * u / 3.0 * 1e-9 + 4.0 * (h + 1.0) * rhs_s(n) * 2.0 * n;
@@ -494,29 +334,9 @@ fn hbm_branch_s(n: f64, h: f64) -> f64 {
     points * (5.0 * newton + floquet)
 }
 
-/// The estimated work of a design study: the analysis's estimate once per case (its cost does
-/// not depend on the varied values: a harmonic-balance branch is bounded by its points, a linear
-/// response by its order grid), its memory once per case running at a time, and the table.
-fn design_plan(study: &Study, spec: &super::DesignSpec, base: AnalysisPlan) -> AnalysisPlan {
-    let mut alone = study.clone();
-    alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
-    let inner = alone.plan().analyses.into_iter().next();
-    let n = super::design::case_count(spec) as f64;
-    let dof = study.mechanism.ndof() as f64;
-    let parallel = std::thread::available_parallelism().map_or(1, |p| p.get()) as f64;
-    let columns = (1 + spec.parameters.len() + super::design::result_columns(study, spec).len()) as f64;
-    // A row's cells, plus the status and a message of up to ~200 characters.
-    let table_bytes = n * (columns * 22.0 + 200.0);
-    match inner {
-        Some(a) => AnalysisPlan {
-            runs: super::design::case_count(spec).saturating_mul(a.runs),
-            samples_per_run: a.samples_per_run,
-            memory_bytes: a.memory_bytes * n.min(parallel) + table_bytes,
-            output_bytes: table_bytes,
-            cpu_s: n * (a.cpu_s + CASE_SETUP_S + LINEAR_SETUP_PER_DOF3_S * dof * dof * dof),
-            driver: "sampling",
-            ..base
-        },
-        None => base,
-    }
+/// What most estimates start from: the study as written, its sample rate (Hz), its degrees of
+/// freedom and whether a locked twin runs beside each time run (0 or 1).
+pub(crate) fn basics(study: &Study) -> (&StudySpec, f64, f64, usize) {
+    let spec = &study.spec;
+    (spec, spec.integration.sample_hz, study.mechanism.ndof() as f64, usize::from(study.locked.is_some()))
 }

@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// The file name, in the study's output folder.
-pub const FILE_NAME: &str = "report.html";
+pub(crate) const FILE_NAME: &str = "report.html";
 
 /// Text safe inside HTML (element content and quoted attributes).
 fn escape(text: &str) -> String {

@@ -1,8 +1,9 @@
 //! The study's glue between the engine, the integrator and order tracking: one time-domain run
 //! streamed into the few signals a study needs, with progress bars.
 
-use super::{IntegrationSpec, TrackingSpec};
+use super::{Deadline, ExciteAt, IntegrationSpec, Study, TrackingSpec};
 use crate::error::{Error, Result};
+use crate::kane::Kane;
 use crate::model::mechanism::Mechanism;
 use crate::signal::{OrderTrace, StftOptions, stft_order_traces};
 use crate::time::integrate::IntegrateOptions;
@@ -171,4 +172,126 @@ pub(crate) fn track(
     }
     stft_order_traces(signal, fs, omega, order_at, multiples, &opts)
         .map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
+}
+
+impl Study {
+    /// A copy whose time runs (its comparisons' too) stop `budget_s` of wall time from now.
+    pub(crate) fn with_deadline(&self, budget_s: f64) -> Study {
+        let mut s = self.clone();
+        let at = std::time::Instant::now()
+            .checked_add(std::time::Duration::from_secs_f64(budget_s.min(1e9)))
+            .unwrap_or_else(|| std::time::Instant::now() + std::time::Duration::from_secs(1 << 30));
+        let deadline = Some(Deadline { at, budget_s });
+        s.spec.integration.deadline = deadline;
+        for (_, subs) in &mut s.comparisons {
+            for (_, sub) in subs {
+                sub.spec.integration.deadline = deadline;
+            }
+        }
+        s
+    }
+
+    /// Mean torque that holds the spin joint's subtree in rigid rotation at `omega` (rad/s): the
+    /// viscous losses at the steady rates of [`Mechanism::steady_rates`], by power. A damper whose
+    /// rate is `w Ω` (a joint's relative rate, or a ground damper's body rate `Σ w` over the
+    /// rotating joints on its path) dissipates `c w² Ω²`, which the spin joint supplies as the
+    /// torque `c w² Ω`: on a plain rotor the spinning bodies' ground dampers and the spin joint's
+    /// own damper (`Σ c·Ω`; for the CPVA `T_m = c_r·Ω`), and through a gear of factor r a driven
+    /// shaft's dampers reflected as `r² c Ω`. In rigid rotation about fixed axes the inertia
+    /// forces have no moment about the axes, and joint dampers inside a rigidly turning subtree
+    /// see no relative rate. Nonlinear couplings (friction, stops) are not counted.
+    pub fn loss_torque(mech: &Mechanism, spin: usize, omega: f64) -> f64 {
+        let w = mech.steady_rates(spin);
+        let joints: f64 = mech.joints.iter().zip(&w).map(|(j, w)| j.damper * w * w).sum();
+        let body_rate = |b: usize| -> f64 {
+            mech.path_to(b).into_iter().filter(|&j| mech.joints[j].kind.rotates()).map(|j| w[j]).sum()
+        };
+        let ground: f64 = mech.loads.ground_dampers.iter().map(|g| g.c * body_rate(g.body).powi(2)).sum();
+        (joints + ground) * omega
+    }
+
+    /// The initial state of a sweep or steady run (docs/design.md): q = 0, the spin joint turning at
+    /// `omega`, every joint geared to it at its steady rate ([`Mechanism::steady_rates`]: a shaft
+    /// behind a compliant mesh turns with the train) and every other joint at rest relative to its
+    /// parent.
+    pub fn initial_state(mech: &Mechanism, spin: usize, omega: f64) -> Vec<f64> {
+        let n = mech.ndof();
+        let mut qdot = vec![0.0; n];
+        for (joint, w) in mech.joints.iter().zip(mech.steady_rates(spin)) {
+            if let Some(k) = joint.coordinate {
+                qdot[k] = w * omega;
+            }
+        }
+        let mut u = vec![0.0; n];
+        mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut u);
+        let mut x = vec![0.0; 2 * n];
+        x[n..].copy_from_slice(&u);
+        x
+    }
+
+    /// The linear analyses' inputs for an analysis's `excite` list: its joints with their shares
+    /// and phases, or the spin joint alone.
+    pub(crate) fn inputs(&self, excite: &[ExciteAt]) -> Vec<crate::linear::Input> {
+        if excite.is_empty() {
+            return vec![crate::linear::Input::unit(self.spec.spin_joint.clone())];
+        }
+        excite.iter().map(|e| crate::linear::Input { joint: e.joint.clone(), scale: e.scale, phase: e.phase }).collect()
+    }
+
+    /// An analysis's `excite` list resolved in `mech` (the mechanism or its locked twin) as
+    /// `(joint, scale, phase)`; the spin joint alone when the list is empty. The names were
+    /// checked at load (and none is locked, see `validate`).
+    pub(crate) fn excited_joints(&self, mech: &Mechanism, excite: &[ExciteAt]) -> Vec<(usize, f64, f64)> {
+        let spin = mech.joint_index(&self.spec.spin_joint).unwrap_or(self.spin);
+        if excite.is_empty() {
+            return vec![(spin, 1.0, 0.0)];
+        }
+        excite.iter().filter_map(|e| mech.joint_index(&e.joint).map(|j| (j, e.scale, e.phase))).collect()
+    }
+
+    /// Sets `kane`'s joint torques for an order excitation: `base`'s mean on the spin joint and
+    /// its harmonics, scaled and phase-shifted, at each excited joint (see [`ExciteAt`]).
+    pub(crate) fn apply_excitation(
+        &self,
+        kane: &mut Kane,
+        mech: &Mechanism,
+        excite: &[ExciteAt],
+        base: &crate::model::excitation::Excitation,
+    ) {
+        let spin = mech.joint_index(&self.spec.spin_joint).unwrap_or(self.spin);
+        let joints = self.excited_joints(mech, excite);
+        if !joints.iter().any(|j| j.0 == spin) {
+            kane.set_joint_torque(spin, crate::model::excitation::Excitation { harmonics: Vec::new(), ..base.clone() });
+        }
+        for (j, scale, phase) in joints {
+            let harmonics = base
+                .harmonics
+                .iter()
+                .map(|h| crate::model::excitation::Harmonic {
+                    amplitude: scale * h.amplitude,
+                    phase: h.phase + phase,
+                    ..*h
+                })
+                .collect();
+            // The mean stays the mechanism's own on every joint but the spin joint, as in the
+            // linear operating point and the harmonic balance (a preload such as an engine's
+            // mean torque on a joint chain must not vanish with the oscillating part).
+            let own = mech_mean(kane, j);
+            let mean = if j == spin { base.mean } else { own };
+            kane.set_joint_torque(j, crate::model::excitation::Excitation { mean, harmonics, ..base.clone() });
+        }
+    }
+
+    /// Builds the evaluator of the mechanism (or the locked twin).
+    pub(crate) fn kane(&self, locked: bool) -> Result<Kane> {
+        match (locked, &self.locked) {
+            (true, Some(m)) => Kane::new(m),
+            _ => Kane::new(&self.mechanism),
+        }
+    }
+}
+
+/// The mean of the torque the mechanism file applies at joint `j` (0 when none).
+fn mech_mean(kane: &Kane, j: usize) -> f64 {
+    kane.joint_torques().iter().find(|t| t.joint == j).map_or(0.0, |t| t.excitation.mean)
 }

@@ -3,12 +3,12 @@
 //! located at its field.
 
 use super::sampling::case_count;
+use super::{DesignParameter, DesignSpec, Quantity, Sampling};
 use super::{MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES};
 use crate::error::Result;
 use crate::io::Source;
 use crate::model::joint::JointKind;
 use crate::model::mechanism::Mechanism;
-use crate::study::spec::{DesignParameter, DesignSpec, Quantity, Sampling};
 use crate::study::validate::limits::{MAX_ORDER, MAX_RPM, MAX_TORQUE_NM, check_file_name};
 use crate::study::{AnalysisSpec, HbmParameter, StudySpec};
 

@@ -31,11 +31,14 @@
 //! failed case (an invalid mechanism, a harmonic balance that does not converge, a panic) never
 //! costs the others their results: its row says why.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 mod check;
 mod report;
 mod sampling;
 
-pub use crate::study::spec::{DesignParameter, DesignSpec, Quantity, Sampling};
 pub(crate) use check::{check, check_parameters};
 pub use sampling::{below, case_count, case_values, uniform};
 
@@ -43,7 +46,7 @@ use crate::error::{Error, Result};
 use crate::kane::Kane;
 use crate::model::joint::{JointKind, Spring};
 use crate::study::table::{Table, fmt_num};
-use crate::study::{AnalysisSpec, HbmParameter, Output, Results, Study, StudySpec};
+use crate::study::{AnalysisSpec, HbmParameter, Output, Study, StudySpec};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -516,5 +519,5 @@ pub(crate) fn run(
     crate::plot::write_svg(&svg, &[report::figure(spec, &r)], 760, 500)?;
     let files = vec![report::write_csv(&r, dir)?, svg];
     let markdown = report::summary(study, spec, &r);
-    Ok(Output { markdown, files, failures, results: Results::Design(r) })
+    Ok(Output { markdown, files, failures, results: Box::new(r) })
 }

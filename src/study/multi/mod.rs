@@ -2,12 +2,16 @@
 //! speed until the response is steady; the steady amplitude of each tracked order, with the locked
 //! twin for comparison.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 mod report;
 
 use super::elements::{ElementResponse, from_hbm, from_window, push_element_columns};
 use super::sim::{self, Progress};
 use super::table::Table;
-use super::{MultiOrderSpec, Output, Results, Study};
+use super::{Output, Study};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::study::TrackingSpec;
@@ -168,7 +172,7 @@ pub struct MultiOrderResult {
 pub(crate) fn run(study: &Study, spec: &MultiOrderSpec, dir: &Path, progress: &Progress) -> Result<Output> {
     let (result, failures) = compute(study, spec, progress);
     let (markdown, files) = render(study, spec, &result, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Multi(result) })
+    Ok(Output { markdown, files, failures, results: Box::new(result) })
 }
 
 /// The steady states at every speed (time domain, with the locked twin), the linear amplitudes
@@ -381,7 +385,7 @@ pub struct SpeedFindings {
 }
 
 /// The summary's per-speed readings (see [`SpeedFindings`]).
-pub fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
+pub(crate) fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
     let k = result.multiples.len();
     result
         .speeds

@@ -11,10 +11,18 @@
 //! rigidly (`uᵀMu` at the initial configuration), α the ramp's acceleration and `Σc·Ω` the
 //! viscous losses of rigid rotation (`Study::loss_torque`).
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
+/// Highest order of a transient's engine series: engine orders that matter for torsional
+/// vibration stay below ~50, and each kept order costs a term in every right-hand side.
+pub const MAX_ENGINE_ORDER: f64 = 64.0;
+
 mod report;
 
 use super::sim::Progress;
-use super::{JointTorqueSpec, Output, Results, SpeedProfile, Study, TransientSpec};
+use super::{Output, Study};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, rpm_to_rad_s};
 use crate::signal::{AngleOptions, OrderMap, order_rpm_map};
@@ -121,7 +129,7 @@ pub struct TransientResult {
 pub(crate) fn run(study: &Study, spec: &TransientSpec, dir: &Path, progress: &Progress) -> Result<Output> {
     let (result, failures) = compute(study, spec, progress)?;
     let (markdown, files) = render(study, spec, &result, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Transient(Box::new(result)) })
+    Ok(Output { markdown, files, failures, results: Box::new(result) })
 }
 
 /// The cut orders: as given, or every harmonic of every torque (at most 8, lowest first).

@@ -2,9 +2,13 @@
 //! shape, the engine-order lines and the resonance table of their crossings (`linear::campbell`),
 //! written as CSV, SVG and a summary section.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::linear::lin;
 use super::table::Table;
-use super::{CampbellSpec, Output, Results, Study};
+use super::{Output, Study};
 use crate::error::Result;
 use crate::linear::{Campbell, Damping, Spin, campbell};
 use crate::plot::{LineStyle, Panel, Series};
@@ -56,7 +60,7 @@ pub(crate) fn run_campbell(study: &Study, spec: &CampbellSpec, dir: &Path) -> Re
         let at = markdown.find("\n\n").map_or(markdown.len(), |i| i + 2);
         markdown.insert_str(at, &note);
     }
-    Ok(Output { markdown, files, failures, results: Results::Campbell(c) })
+    Ok(Output { markdown, files, failures, results: Box::new(c) })
 }
 
 /// The natural frequencies over the speed range, tracked by mode shape, with the order lines.

@@ -15,9 +15,13 @@
 //! share of the joint's coordinate: the circle's order falls with amplitude as
 //! `π / (2 K(sin(φ₀/2)))` (a softening path), a tautochronic path keeps it constant.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::linear::lin;
 use super::table::{Table, fmt_num};
-use super::{FreeOscillationSpec, Output, Results, Study};
+use super::{Output, Study};
 use crate::error::{Error, Result};
 use crate::kane::Kane;
 use crate::linear::{Damping, LinearModel, Spin};
@@ -100,7 +104,7 @@ pub(crate) fn run(study: &Study, spec: &FreeOscillationSpec, dir: &Path) -> Resu
     let svg = dir.join(format!("{}.svg", spec.name));
     crate::plot::write_svg(&svg, &[panel(&[(r.joint.clone(), &r)])], 760, 520)?;
     files.push(svg);
-    Ok(Output { markdown: markdown(&r), files, failures, results: Results::Free(r) })
+    Ok(Output { markdown: markdown(&r), files, failures, results: Box::new(r) })
 }
 
 /// The figure's panel: order against amplitude for each labelled result, with the linear orders

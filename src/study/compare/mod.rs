@@ -13,11 +13,15 @@
 //! (sweeps: up solid, down dashed; branches: stable solid, unstable dashed); free oscillations
 //! draw every mechanism's backbone in one panel. The other kinds keep their own figures.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::backbone::{self, FreeOscillationResult};
 use super::hbm::HbmBranch;
 use super::sweep::SweepRun;
 use super::table::fmt_num;
-use super::{AnalysisSpec, CompareSpec, Direction, LoadOptions, Output, Results, Study, StudyReport, StudySpec};
+use super::{AnalysisSpec, Direction, LoadOptions, Output, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use crate::io::Source;
 use crate::plot::{LineStyle, Panel, Series};
@@ -26,7 +30,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Most mechanisms in one comparison (the palette's colours).
-pub const MAX_MECHANISMS: usize = 8;
+pub(crate) const MAX_MECHANISMS: usize = 8;
 
 /// The studies of one comparison: per mechanism, its label and its study.
 pub type Compared = Vec<(String, Study)>;
@@ -56,45 +60,15 @@ pub struct ComparedMechanism {
     pub completed: Vec<bool>,
 }
 
-/// Whether `a` may be run inside a comparison.
-pub(crate) fn allowed(a: &AnalysisSpec) -> bool {
-    matches!(
-        a,
-        AnalysisSpec::OrderSweep(_)
-            | AnalysisSpec::HarmonicBalance(_)
-            | AnalysisSpec::FreeOscillation(_)
-            | AnalysisSpec::LinearResponse(_)
-            | AnalysisSpec::MultiOrder(_)
-            | AnalysisSpec::Transient(_)
-    )
-}
-
 /// The name an analysis of comparison `c` runs under for mechanism `label`.
 fn inner_name(c: &str, label: &str, analysis: &str) -> String {
     format!("{c}_{label}_{analysis}")
 }
 
-/// `a` renamed for mechanism `label` of comparison `c` (a harmonic balance's sweep overlay
-/// renamed alike).
+/// `a` renamed for mechanism `label` of comparison `c` (with the analyses it names).
 pub(crate) fn renamed(c: &str, label: &str, a: &AnalysisSpec) -> AnalysisSpec {
     let mut a = a.clone();
-    let name = |n: &mut String| *n = inner_name(c, label, n);
-    match &mut a {
-        AnalysisSpec::OrderSweep(s) => name(&mut s.name),
-        AnalysisSpec::MultiOrder(m) => name(&mut m.name),
-        AnalysisSpec::LinearResponse(l) => name(&mut l.name),
-        AnalysisSpec::Campbell(x) => name(&mut x.name),
-        AnalysisSpec::HarmonicBalance(h) => {
-            name(&mut h.name);
-            if let Some(o) = &mut h.overlay {
-                name(o);
-            }
-        }
-        AnalysisSpec::DesignStudy(d) => name(&mut d.name),
-        AnalysisSpec::Transient(t) => name(&mut t.name),
-        AnalysisSpec::FreeOscillation(f) => name(&mut f.name),
-        AnalysisSpec::Compare(x) => name(&mut x.name),
-    }
+    a.rename(&|n| inner_name(c, label, n));
     a
 }
 
@@ -205,7 +179,7 @@ pub(crate) fn run(
     }
     md.push('\n');
     md += &sections;
-    Ok(Output { markdown: md, files, failures: Vec::new(), results: Results::Compare(result) })
+    Ok(Output { markdown: md, files, failures: Vec::new(), results: Box::new(result) })
 }
 
 /// One inner analysis, contained like a top-level one; its failures carry no location prefix

@@ -1,10 +1,14 @@
 //! Load case 1 (paper section 4.1, Figs. 3 and 4): a single-order torque swept in order, up and
 //! down, at each amplitude; order traces of the response by the short-time FFT.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::elements::{self, ElementTraces};
 use super::sim::{self, Progress};
 use super::table::Table;
-use super::{Direction, Output, Results, Study, SweepSpec};
+use super::{Output, Study};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
@@ -73,7 +77,7 @@ struct Job {
 pub(crate) fn run(study: &Study, spec: &SweepSpec, dir: &Path, progress: &Progress) -> Result<Output> {
     let (runs, failures) = compute(study, spec, progress);
     let (markdown, files) = render(study, spec, &runs, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Sweep(runs) })
+    Ok(Output { markdown, files, failures, results: Box::new(runs) })
 }
 
 /// Runs every amplitude × direction (and the locked twin once per amplitude: it is linear, so
@@ -381,10 +385,10 @@ pub struct AmplitudeFindings {
 }
 
 /// Up and down traces "differ" when one is this many times the other.
-pub const BRANCH_FACTOR: f64 = 1.5;
+pub(crate) const BRANCH_FACTOR: f64 = 1.5;
 
 /// The summary's readings of the runs (see [`SweepFindings`]).
-pub fn findings(spec: &SweepSpec, runs: &[&SweepRun]) -> SweepFindings {
+pub(crate) fn findings(spec: &SweepSpec, runs: &[&SweepRun]) -> SweepFindings {
     let skip = spec.ramp_s + 1.0;
     let runs_out = runs
         .iter()

@@ -2,8 +2,12 @@
 //! twin (paper eq. 22, Fig. 2), per damping variant, with each element's response (the Campbell
 //! diagram is in `campbell`).
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::table::Table;
-use super::{LinearResponseSpec, Output, Results, Study};
+use super::{Output, Study};
 use crate::error::{Error, Result};
 use crate::linear::{Damping, LinearError, LinearModel, OrderResponse, ResponseSpec, Spin};
 use crate::model::excitation::rpm_to_rad_s;
@@ -132,7 +136,7 @@ fn tuning_order(study: &Study, omega: f64) -> Result<Option<f64>> {
 pub(crate) fn run_response(study: &Study, spec: &LinearResponseSpec, dir: &Path) -> Result<Output> {
     let (result, failures) = compute_response(study, spec)?;
     let (markdown, files) = render_response(study, spec, &result, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Linear(result) })
+    Ok(Output { markdown, files, failures, results: Box::new(result) })
 }
 
 /// The modes at the operating speed and, per damping variant, the order-domain response of

@@ -2,10 +2,14 @@
 //! order (or the mean speed, or the torque amplitude), stable and unstable, with their folds,
 //! drawn over the time-domain sweeps.
 
+mod analysis;
+mod spec;
+pub use spec::*;
+
 use super::elements::{ElementResponse, from_hbm};
 use super::sweep::SweepRun;
 use super::table::Table;
-use super::{Direction, HbmParameter, HbmSpec, Output, Results, Study};
+use super::{Direction, Output, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{
     Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook, RoutedHbm,
@@ -103,7 +107,7 @@ fn coupling_warning(spec: &HbmSpec, br: &HbmBranch) -> Option<String> {
 /// solved points lie far apart on the rotor's amplitude curve (in the 40 N·m case the straight
 /// line between two points misses the solved mid-state by 28 % of the amplitude, the Hermite
 /// mid-state by 1.2 %, `tests/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
-pub const CURVE_SUBDIVISION: usize = 8;
+pub(crate) const CURVE_SUBDIVISION: usize = 8;
 
 pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {
     move |e| Error::Model { mechanism: study.mechanism.name.clone(), message: format!("harmonic balance: {e}") }
@@ -258,18 +262,18 @@ fn forcing(spec: &HbmSpec, amp: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
     (vec![Harmonic { multiple: 1.0, amplitude: if amp.is_nan() { 1.0 } else { amp }, phase: 0.0 }], Vec::new())
 }
 
-/// Runs the branches ([`compute`]) and writes their outputs over the sweeps already run
-/// ([`render`]).
+/// Runs the branches ([`compute`]) and writes their outputs over `overlay`, the runs of the
+/// order sweep the spec names ([`overlay_of`]; empty when it names none), as [`render`] does.
 pub(crate) fn run(
     study: &Study,
     spec: &HbmSpec,
-    sweeps: &[SweepRun],
+    overlay: &[&SweepRun],
     dir: &Path,
     progress: &super::sim::Progress,
 ) -> Result<Output> {
     let (branches, failures) = compute_with(study, spec, Some(progress));
-    let (markdown, files) = render(study, spec, &branches, sweeps, dir)?;
-    Ok(Output { markdown, files, failures, results: Results::Hbm(branches) })
+    let (markdown, files) = render(study, spec, &branches, overlay, dir)?;
+    Ok(Output { markdown, files, failures, results: Box::new(branches) })
 }
 
 /// Every branch, continued from each end of the range per amplitude, with its stability, folds
@@ -482,9 +486,9 @@ pub struct BranchFindings {
     pub sweep_jumps: Option<(Option<f64>, Option<f64>)>,
 }
 
-/// The summary's readings of each branch, in order ([`BranchFindings`]).
-pub fn findings(study: &Study, spec: &HbmSpec, branches: &[&HbmBranch], sweeps: &[SweepRun]) -> Vec<BranchFindings> {
-    let overlay = overlay(spec, sweeps);
+/// The summary's readings of each branch, in order ([`BranchFindings`]); `overlay` is the sweeps
+/// drawn under the branches ([`overlay_of`]), whose jumps are read next to them.
+pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
     // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
     let t = study.spec.order_tracking;
     let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
@@ -494,13 +498,14 @@ pub fn findings(study: &Study, spec: &HbmSpec, branches: &[&HbmBranch], sweeps: 
             points: br.order.len(),
             stable: br.stable.iter().filter(|s| **s == Some(true)).count(),
             unstable: br.stable.iter().filter(|s| **s == Some(false)).count(),
-            sweep_jumps: jump_orders(&overlay, br.amplitude, lag),
+            sweep_jumps: jump_orders(overlay, br.amplitude, lag),
         })
         .collect()
 }
 
-/// The sweeps drawn under the branches: the overlay analysis's runs, the locked twin left out.
-fn overlay<'a>(spec: &HbmSpec, sweeps: &'a [SweepRun]) -> Vec<&'a SweepRun> {
+/// The sweeps drawn under the branches, out of the runs of the analyses before it: the runs of
+/// the order sweep the spec names as its `overlay`, the locked twin left out.
+pub(crate) fn overlay_of<'a>(spec: &HbmSpec, sweeps: &'a [SweepRun]) -> Vec<&'a SweepRun> {
     match &spec.overlay {
         Some(name) => sweeps.iter().filter(|r| &r.analysis == name && !r.locked).collect(),
         None => Vec::new(),
@@ -513,7 +518,7 @@ pub(crate) fn render(
     study: &Study,
     spec: &HbmSpec,
     branches: &[HbmBranch],
-    sweeps: &[SweepRun],
+    overlay: &[&SweepRun],
     dir: &Path,
 ) -> Result<(String, Vec<PathBuf>)> {
     let ax = axis(spec);
@@ -523,7 +528,6 @@ pub(crate) fn render(
         files.push(t.write_csv(dir)?);
     }
 
-    let overlay = overlay(spec, sweeps);
     let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
     let panels: Vec<Panel> = cases(spec)
         .into_iter()
@@ -634,7 +638,7 @@ pub(crate) fn render(
         ax.column
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
-    for (br, f) in branches.iter().zip(findings(study, spec, &refs, sweeps)) {
+    for (br, f) in branches.iter().zip(findings(study, &refs, overlay)) {
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {} / {} | {} | {} | {} | {:.1} | {:.3} | {} |",

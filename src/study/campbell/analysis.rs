@@ -1,0 +1,126 @@
+//! Campbell through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`.
+
+use super::{Campbell, CampbellSpec, campbell_tables, run_campbell};
+use crate::error::Result;
+use crate::study::Study;
+use crate::study::StudyReport;
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::json::Json;
+use crate::study::plan::AnalysisPlan;
+use crate::study::plan::{
+    CAMPBELL_PER_DOF3_S, CAMPBELL_POINT_S, CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S,
+};
+use crate::study::validate::{MAX_POINTS, modal_ratios, order, require_steady_spin, rpm};
+use serde::Serialize;
+
+impl Analysis for CampbellSpec {
+    fn check(&self, c: &Checks<'_>) -> Result<()> {
+        let Checks { src, k, .. } = *c;
+        let at = |field: &str| c.at(field);
+        require_steady_spin(c, "Campbell", &self.name, true)?;
+        let c = self;
+        if !(c.rpm_min.is_finite() && c.rpm_min >= 0.0 && c.rpm_max.is_finite() && c.rpm_max > c.rpm_min) {
+            return Err(src.error(&at("rpm_min"), "need 0 ≤ rpm_min < rpm_max"));
+        }
+        rpm(src, &at("rpm_max"), c.rpm_max)?;
+        if c.points < 2 || c.points > MAX_POINTS {
+            return Err(src.error(&at("points"), format!("need 2 to {MAX_POINTS} points")));
+        }
+        if c.orders.len() > 64 {
+            return Err(src.error(&at("orders"), "at most 64 order lines"));
+        }
+        if let Some(z) = &c.modal_damping {
+            modal_ratios(src, &at("modal_damping"), z)?;
+        }
+        for (j, &n) in c.orders.iter().enumerate() {
+            order(src, &format!("analyses[{k}].orders[{j}]"), n)?;
+        }
+        Ok(())
+    }
+
+    fn files(&self, _locked: bool) -> Vec<String> {
+        let n = self.name.as_str();
+        let mut out = Vec::new();
+        let mut csv = |stem: String| out.push(format!("{stem}.csv"));
+        let _ = self;
+        csv(n.to_string());
+        csv(format!("{n}_crossings"));
+        out.push(format!("{n}.svg"));
+        out
+    }
+
+    fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
+        let (_spec, _fs, n, _locked) = crate::study::plan::basics(study);
+        let c = self;
+        let p = c.points as f64;
+        AnalysisPlan {
+            runs: 1,
+            samples_per_run: p,
+            memory_bytes: p * (4.0 * n + c.orders.len() as f64) * 8.0,
+            output_bytes: p * (2.0 * n + c.orders.len() as f64 + 1.0) * CSV_CELL_BYTES,
+            cpu_s: LINEAR_SETUP_S
+                + LINEAR_SETUP_PER_DOF3_S * n * n * n
+                + p * (CAMPBELL_POINT_S + CAMPBELL_PER_DOF3_S * n * n * n),
+            driver: "points",
+            ..base
+        }
+    }
+
+    fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
+        run_campbell(study, self, bench.dir)
+    }
+
+    fn json(&self, _study: &Study, report: &StudyReport, nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Findings {
+            modes: Vec<ModeFindings>,
+        }
+        // A Campbell diagram carries no name: the n-th completed one is the n-th result.
+        let c = report.campbell.get(nth)?;
+        Json::new(c, &Findings { modes: mode_findings(self, c) }, campbell_tables(self, c))
+    }
+}
+
+impl Kept for crate::linear::Campbell {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.campbell.push(*self);
+    }
+}
+
+/// The summary's reading of one tracked mode of a Campbell diagram.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModeFindings {
+    /// The mode's label (its dominant joint).
+    pub label: String,
+    /// Frequency at the lowest speed, Hz.
+    pub frequency_at_min_rpm_hz: f64,
+    /// Frequency at the highest speed, Hz.
+    pub frequency_at_max_rpm_hz: f64,
+    /// Frequency over the highest speed's rotation frequency: the mode's order there (NaN, so
+    /// `null`, at 0 rpm).
+    pub order_at_max_rpm: f64,
+    /// Whether the mode's order is the same (to 1e-6 relative) at every non-zero speed: an
+    /// order line.
+    pub order_line: bool,
+}
+
+/// The summary's reading of each tracked mode (the rule of the Campbell summary).
+fn mode_findings(spec: &CampbellSpec, c: &Campbell) -> Vec<ModeFindings> {
+    let order = |f: f64, rpm: f64| if rpm > 0.0 { f / (rpm / 60.0) } else { f64::NAN };
+    c.tracks
+        .iter()
+        .map(|t| {
+            let orders: Vec<f64> =
+                c.rpm.iter().zip(&t.frequency_hz).filter(|(r, _)| **r > 0.0).map(|(&r, &f)| order(f, r)).collect();
+            let last = t.frequency_hz.last().copied().unwrap_or(f64::NAN);
+            ModeFindings {
+                label: t.label.clone(),
+                frequency_at_min_rpm_hz: t.frequency_hz.first().copied().unwrap_or(f64::NAN),
+                frequency_at_max_rpm_hz: last,
+                order_at_max_rpm: order(last, spec.rpm_max),
+                order_line: orders.iter().all(|o| (o - orders[0]).abs() <= 1e-6 * orders[0].abs()),
+            }
+        })
+        .collect()
+}

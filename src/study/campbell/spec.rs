@@ -1,0 +1,40 @@
+//! The Campbell diagram as written in the study file.
+
+use serde::{Deserialize, Serialize};
+
+/// A Campbell diagram: damped natural frequencies over a speed range, modes tracked by shape.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampbellSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Lowest speed, rpm.
+    pub rpm_min: f64,
+    /// Highest speed, rpm.
+    pub rpm_max: f64,
+    /// Number of speeds (default 61).
+    #[serde(default = "default_campbell_points")]
+    pub points: usize,
+    /// Engine orders drawn as lines `f = n·rpm/60` (default 1.5, 3, 4.5, 6).
+    #[serde(default = "default_engine_orders")]
+    pub orders: Vec<f64>,
+    /// Hold the spin speed (prescribed) instead of leaving it free (default false).
+    #[serde(default)]
+    pub spin_held: bool,
+    /// Damped frequencies |Im λ|/2π instead of the undamped natural frequencies (default false:
+    /// a Campbell diagram shows the undamped ones, whose order lines are exact).
+    #[serde(default)]
+    pub damped: bool,
+    /// Modal damping in place of the mechanism's dampers (`All(ζ)` or `PerMode([…])`, modes
+    /// taken with the spin as `spin_held` says); the frequencies are then the damped ones.
+    #[serde(default)]
+    pub modal_damping: Option<crate::linear::ModalDamping>,
+}
+
+fn default_campbell_points() -> usize {
+    61
+}
+
+fn default_engine_orders() -> Vec<f64> {
+    vec![1.5, 3.0, 4.5, 6.0]
+}

@@ -1,0 +1,159 @@
+//! The design study as written in the study file: its varied quantities, their sampling and the analysis run per case.
+
+use crate::study::AnalysisSpec;
+use serde::{Deserialize, Serialize};
+
+/// A design study as written in the study file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignSpec {
+    /// Name (file prefix of `<name>.csv`).
+    pub name: String,
+    /// The varied quantities, 1 to [`MAX_PARAMETERS`](super::design::MAX_PARAMETERS).
+    pub parameters: Vec<DesignParameter>,
+    /// How the cases are drawn (default `Grid`).
+    #[serde(default)]
+    pub sampling: Sampling,
+    /// The analysis run per case: `HarmonicBalance(…)` or `LinearResponse(…)`, written as in
+    /// `analyses`; the parameters replace its fields and the mechanism's values case by case.
+    pub analysis: Box<AnalysisSpec>,
+}
+
+/// One varied quantity and its values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DesignParameter {
+    /// Column name (letters, digits, `_`, `-`, `.`); the CSV column is `<name>_<unit>`.
+    pub name: String,
+    /// What is varied.
+    pub quantity: Quantity,
+    /// Lower end of the range, in the quantity's unit.
+    #[serde(default)]
+    pub from: Option<f64>,
+    /// Upper end of the range.
+    #[serde(default)]
+    pub to: Option<f64>,
+    /// Number of grid values from `from` to `to`, both included (`Grid` only).
+    #[serde(default)]
+    pub points: Option<usize>,
+    /// The grid values themselves, in place of `from`/`to`/`points` (`Grid` only).
+    #[serde(default)]
+    pub values: Option<Vec<f64>>,
+    /// Space the values (or strata) evenly in the logarithm (needs `from > 0`; default false).
+    #[serde(default)]
+    pub log: bool,
+}
+
+/// A quantity a design study can vary, with its SI unit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Quantity {
+    /// A body's mass, kg (its centre of mass and centroidal inertia kept).
+    BodyMass(String),
+    /// A body's centroidal moment of inertia, kg·m².
+    BodyInertia(String),
+    /// The distance of a body's centre of mass from its inboard joint point (its frame's origin),
+    /// m, in the direction it has in the file (the CPVA pendulum's L).
+    BodyComRadius(String),
+    /// A joint spring's stiffness, N·m/rad (N/m for a slide); a joint without a spring gets one
+    /// relaxed at q = 0.
+    JointStiffness(String),
+    /// A joint's viscous damping, N·m·s/rad (N·s/m for a slide).
+    JointDamping(String),
+    /// The distance of a joint's point from its parent's origin, m, in the direction it has in
+    /// the file (the CPVA's pivot radius R).
+    JointRadius(String),
+    /// The analysis's mean speed, rpm.
+    Rpm,
+    /// The analysis's torque amplitude T_n, N·m (harmonic balance in order or speed).
+    TorqueAmplitude,
+    /// The analysis's fixed excitation order (harmonic balance in speed or torque).
+    Order,
+}
+
+impl Quantity {
+    /// The unit as the CSV column suffix: `kg`, `kg_m2`, `m`, `Nm_per_rad`, …; empty for an
+    /// order. `slide`: the joint is prismatic.
+    pub(super) fn suffix(&self, slide: bool) -> &'static str {
+        match self {
+            Quantity::BodyMass(_) => "kg",
+            Quantity::BodyInertia(_) => "kg_m2",
+            Quantity::BodyComRadius(_) | Quantity::JointRadius(_) => "m",
+            Quantity::JointStiffness(_) if slide => "N_per_m",
+            Quantity::JointStiffness(_) => "Nm_per_rad",
+            Quantity::JointDamping(_) if slide => "Ns_per_m",
+            Quantity::JointDamping(_) => "Nms_per_rad",
+            Quantity::Rpm => "rpm",
+            Quantity::TorqueAmplitude => "Nm",
+            Quantity::Order => "",
+        }
+    }
+
+    /// The SI unit (`"1"` for an order).
+    pub(super) fn unit(&self, slide: bool) -> &'static str {
+        match self {
+            Quantity::BodyMass(_) => "kg",
+            Quantity::BodyInertia(_) => "kg·m²",
+            Quantity::BodyComRadius(_) | Quantity::JointRadius(_) => "m",
+            Quantity::JointStiffness(_) if slide => "N/m",
+            Quantity::JointStiffness(_) => "N·m/rad",
+            Quantity::JointDamping(_) if slide => "N·s/m",
+            Quantity::JointDamping(_) => "N·m·s/rad",
+            Quantity::Rpm => "rpm",
+            Quantity::TorqueAmplitude => "N·m",
+            Quantity::Order => "1",
+        }
+    }
+
+    /// The joint it names, if any.
+    pub(super) fn joint(&self) -> Option<&str> {
+        match self {
+            Quantity::JointStiffness(j) | Quantity::JointDamping(j) | Quantity::JointRadius(j) => Some(j),
+            _ => None,
+        }
+    }
+
+    /// The body it names, if any.
+    pub(super) fn body(&self) -> Option<&str> {
+        match self {
+            Quantity::BodyMass(b) | Quantity::BodyInertia(b) | Quantity::BodyComRadius(b) => Some(b),
+            _ => None,
+        }
+    }
+
+    /// The quantity in words, for the summary and messages.
+    pub fn describe(&self) -> String {
+        match self {
+            Quantity::BodyMass(b) => format!("mass of `{b}`"),
+            Quantity::BodyInertia(b) => format!("centroidal inertia of `{b}`"),
+            Quantity::BodyComRadius(b) => format!("centre-of-mass radius of `{b}`"),
+            Quantity::JointStiffness(j) => format!("stiffness of `{j}`"),
+            Quantity::JointDamping(j) => format!("damping of `{j}`"),
+            Quantity::JointRadius(j) => format!("radius of joint `{j}`"),
+            Quantity::Rpm => "speed".into(),
+            Quantity::TorqueAmplitude => "torque amplitude T_n".into(),
+            Quantity::Order => "excitation order".into(),
+        }
+    }
+}
+
+/// How the cases of a design study are drawn (see the module docs for the exact algorithm).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum Sampling {
+    /// Every combination of the parameters' values.
+    #[default]
+    Grid,
+    /// `n` cases, each parameter's `n` strata hit once each.
+    LatinHypercube {
+        /// Number of cases.
+        n: usize,
+        /// Seed of the random stream.
+        seed: u64,
+    },
+    /// `n` independent uniform cases.
+    MonteCarlo {
+        /// Number of cases.
+        n: usize,
+        /// Seed of the random stream.
+        seed: u64,
+    },
+}

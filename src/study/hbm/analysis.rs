@@ -1,0 +1,204 @@
+//! HarmonicBalance through the analysis interface (`study/analysis.rs`): its checks, the files it may
+//! write, its plan, its run and its entry in `results.json`;
+//! the engine file it names, read when the study is loaded.
+
+use super::{HbmBranch, HbmParameter, HbmSpec, findings, overlay_of, run, tables};
+use crate::error::Result;
+use crate::io::Source;
+use crate::study::Study;
+use crate::study::StudyReport;
+use crate::study::StudySpec;
+use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::json::Json;
+use crate::study::plan::AnalysisPlan;
+use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s};
+use crate::study::validate::{
+    MAX_RPM, MAX_TORQUE_NM, check_excite, check_harmonics, check_max_step, order, order_range, pos,
+    require_steady_spin, rpm, torques,
+};
+use serde::Serialize;
+
+impl Analysis for HbmSpec {
+    fn rename_references(&mut self, rename: &dyn Fn(&str) -> String) {
+        if let Some(o) = &mut self.overlay {
+            *o = rename(o);
+        }
+    }
+
+    fn comparable(&self) -> bool {
+        true
+    }
+
+    fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
+        let (src, k) = (r.src, r.k);
+        let at = |f: &str| format!("analyses[{k}].{f}");
+        let h = self;
+        let Some(file) = &h.engine else { return Ok(()) };
+        let HbmParameter::Speed { order, .. } = h.parameter else {
+            return Err(src.error(
+                &at("engine"),
+                "an engine's amplitudes follow the speed: only a harmonic balance return Ok(())d in                          `parameter: Speed(…)` takes one",
+            ));
+        };
+        if !h.amplitudes.is_empty() {
+            return Err(src.error(&at("amplitudes"), "give either the amplitudes or the engine, not both"));
+        }
+        if !crate::study::validate::half_multiple(order) {
+            return Err(src.error(
+                &at("parameter"),
+                format!("with an engine the order must be a multiple of ½ (its orders are), got {order}"),
+            ));
+        }
+        // The balance keeps `harmonics` multiples of the order: more from the engine
+        // would be dropped, so they are refused rather than lost.
+        if !(1..=h.harmonics.clamp(1, 64)).contains(&h.engine_multiples) {
+            return Err(src.error(
+                &at("engine_multiples"),
+                format!("need 1 to harmonics = {} multiples", h.harmonics.clamp(1, 64)),
+            ));
+        }
+        let engine = r.engine(&at("engine"), file)?;
+        h.engine_series = engine.oscillating_series(order, order * h.engine_multiples as f64);
+        Ok(())
+    }
+
+    fn check(&self, c: &Checks<'_>) -> Result<()> {
+        let Checks { spec, mech, spin, src, k } = *c;
+        let at = |field: &str| c.at(field);
+        let h = self;
+        // A harmonic balance at a fixed order takes gravity and world-frame forces (its base
+        // period is then whole revolutions); a spring on the spin joint it cannot.
+        if !(h.parameter != HbmParameter::Order && mech.joints[spin].spring.is_none()) {
+            require_steady_spin(c, "HarmonicBalance", &h.name, false)?;
+        }
+        check_excite(src, spec, mech, &at("excite"), &h.excite)?;
+        check_hbm(src, spec, k, h)?;
+        Ok(())
+    }
+
+    fn files(&self, _locked: bool) -> Vec<String> {
+        let n = self.name.as_str();
+        let mut out = Vec::new();
+        let mut csv = |stem: String| out.push(format!("{stem}.csv"));
+        let h = self;
+        for tag in ["from_above", "from_below"] {
+            csv(format!("{n}_{tag}"));
+            for &amp in &h.amplitudes {
+                csv(format!("{n}_{}Nm_{tag}", crate::study::table::fmt_num(amp)));
+            }
+        }
+        out.extend([format!("{n}.svg"), format!("{n}_elements.svg")]);
+        out
+    }
+
+    fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
+        let (_spec, _fs, n, _locked) = crate::study::plan::basics(study);
+        let h = self;
+        let cases = if matches!(h.parameter, HbmParameter::Torque { .. }) || h.engine.is_some() {
+            1
+        } else {
+            h.amplitudes.len()
+        };
+        let runs = 2 * cases;
+        let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+        let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);
+        AnalysisPlan {
+            runs,
+            samples_per_run: points,
+            memory_bytes: runs as f64 * points * unknowns * 8.0 * 4.0,
+            output_bytes: runs as f64 * points * (4.0 + h.multiples.len() as f64) * CSV_CELL_BYTES,
+            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64),
+            driver: "harmonics",
+            ..base
+        }
+    }
+
+    fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
+        // The sweeps it draws over are its one input from the analyses before it.
+        let overlay = overlay_of(self, &bench.report.sweeps);
+        run(study, self, &overlay, bench.dir, bench.progress)
+    }
+
+    fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
+        #[derive(Serialize)]
+        struct Branches<T> {
+            branches: Vec<T>,
+        }
+        let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
+        let findings = findings(study, &branches, &overlay_of(self, &report.sweeps));
+        let tables = tables(&study.mechanism, self, &branches);
+        Json::new(&Branches { branches }, &Branches { branches: findings }, tables)
+    }
+}
+
+impl Kept for Vec<HbmBranch> {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.hbm.extend(*self);
+    }
+}
+
+pub(super) fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::HbmSpec) -> Result<()> {
+    let at = |field: &str| format!("analyses[{k}].{field}");
+    let order_range_given = !(h.order_min == 0.0 && h.order_max == 0.0);
+    let (needs_rpm, needs_orders, needs_amplitudes) = match h.parameter {
+        HbmParameter::Order => (true, true, true),
+        HbmParameter::Speed { order: n, rpm_min, rpm_max } => {
+            order(src, &at("parameter"), n)?;
+            if !(pos(rpm_min) && rpm_min < rpm_max && rpm_max <= MAX_RPM) {
+                return Err(src.error(&at("parameter"), format!("Speed needs 0 < rpm_min < rpm_max ≤ {MAX_RPM:e}")));
+            }
+            (false, false, true)
+        }
+        HbmParameter::Torque { order: n, min, max } => {
+            order(src, &at("parameter"), n)?;
+            if !(pos(min) && min < max && max <= MAX_TORQUE_NM) {
+                return Err(src.error(&at("parameter"), format!("Torque needs 0 < min < max ≤ {MAX_TORQUE_NM:e} N·m")));
+            }
+            (true, false, false)
+        }
+    };
+    let what = "a Speed or Torque continuation takes its range from `parameter`";
+    if needs_rpm {
+        rpm(src, &at("rpm"), h.rpm)?;
+    } else if h.rpm != 0.0 {
+        return Err(src.error(&at("rpm"), format!("{what}: leave `rpm` out")));
+    }
+    if needs_orders {
+        order_range(src, &at("order_min"), h.order_min, h.order_max)?;
+    } else if order_range_given {
+        return Err(src.error(&at("order_min"), format!("{what}: leave the order range out")));
+    }
+    if !needs_orders && h.overlay.is_some() {
+        return Err(src.error(&at("overlay"), "sweeps can only be overlaid on order branches"));
+    }
+    // An engine (resolved at load, where its fields are checked) gives the amplitudes.
+    if needs_amplitudes && h.engine.is_none() {
+        torques(src, &at("amplitudes"), &h.amplitudes, false)?;
+    } else if !h.amplitudes.is_empty() {
+        return Err(src.error(&at("amplitudes"), format!("{what}: leave `amplitudes` out")));
+    }
+    check_harmonics(h.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
+    if let Some(d) = h.max_step {
+        check_max_step(d).map_err(|m| src.error(&at("max_step"), m))?;
+    }
+    if h.multiples.is_empty() || h.multiples.len() > 64 {
+        return Err(src.error(&at("multiples"), "give 1 to 64 harmonic multiples"));
+    }
+    for (j, &m) in h.multiples.iter().enumerate() {
+        // A periodic solution holds the harmonics 1..=H of its base order only.
+        if !(m >= 1.0 && m.fract() == 0.0 && m <= h.harmonics as f64) {
+            return Err(src.error(
+                &format!("analyses[{k}].multiples[{j}]"),
+                format!("reported multiples must be whole numbers from 1 to harmonics = {}, got {m}", h.harmonics),
+            ));
+        }
+    }
+    if let Some(o) = &h.overlay {
+        let earlier =
+            spec.analyses[..k].iter().any(|a| matches!(a, crate::study::AnalysisSpec::OrderSweep(s) if &s.name == o));
+        if !earlier {
+            return Err(src.error(&at("overlay"), format!("no OrderSweep named `{o}` before this analysis")));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,108 @@
+//! Harmonic balance as written in the study file: the continued parameter, its range and the excitation.
+
+use crate::study::ExciteAt;
+use serde::{Deserialize, Serialize};
+
+/// Harmonic balance of a single-order excitation `T_n sin(nΩt)`, continued in the excitation
+/// order (the default), the mean speed or the torque amplitude, from each end of the range (so
+/// an S-shaped branch is traced whole).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HbmSpec {
+    /// Name (file prefix).
+    pub name: String,
+    /// Mean speed, rpm (not given for a `Speed` continuation).
+    #[serde(default)]
+    pub rpm: f64,
+    /// Lower end of the order range (an `Order` continuation only).
+    #[serde(default)]
+    pub order_min: f64,
+    /// Upper end of the order range (an `Order` continuation only).
+    #[serde(default)]
+    pub order_max: f64,
+    /// Torque amplitudes T_n, N·m, one pair of branches each (not given for a `Torque`
+    /// continuation).
+    #[serde(default)]
+    pub amplitudes: Vec<f64>,
+    /// Harmonics of nΩ kept (default 10).
+    #[serde(default = "default_harmonics")]
+    pub harmonics: usize,
+    /// Harmonic multiples reported (default 1 and 2).
+    #[serde(default = "crate::study::spec::default_multiples")]
+    pub multiples: Vec<f64>,
+    /// Name of an `OrderSweep` of the same study whose traces are drawn under the branches (an
+    /// `Order` continuation only).
+    #[serde(default)]
+    pub overlay: Option<String>,
+    /// The continued parameter (default `Order`).
+    #[serde(default)]
+    pub parameter: HbmParameter,
+    /// Largest arclength step of the continuation (default 0.1, in the norm of the Fourier
+    /// unknowns in rad and the scaled parameter). Folds and multiplier crossings are found at any
+    /// step (see `ContinuationOptions::ds_max`); it sets how densely the branch is drawn.
+    #[serde(default)]
+    pub max_step: Option<f64>,
+    /// The joints the oscillating torque acts at, each with its share and phase lead (default:
+    /// the spin joint alone). The mean torque stays on the spin joint.
+    #[serde(default)]
+    pub excite: Vec<ExciteAt>,
+    /// An engine file (RON `Engine(...)`, relative to the study file) whose torque replaces
+    /// `amplitudes` in a `Speed` continuation: its orders that are the multiples
+    /// 1..=`engine_multiples` of the parameter's `order`, with amplitudes and phases that follow
+    /// the speed along the branch (the gas part fixed, the reciprocating-inertia part ∝ Ω²).
+    /// The engine's mean torque is not applied (the solved mean torque holds the speed).
+    #[serde(default)]
+    pub engine: Option<String>,
+    /// Highest multiple of the order taken from the engine (default 4).
+    #[serde(default = "crate::study::spec::default_engine_multiples")]
+    pub engine_multiples: usize,
+    /// The engine's series, filled when the study is loaded (not part of the file).
+    #[serde(skip)]
+    pub engine_series: Option<crate::engine::OscillatingSeries>,
+}
+
+/// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
+/// study file's form of [`crate::hbm::Parameter`] (see [`HbmParameter::continued`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum HbmParameter {
+    /// The excitation order, over `order_min`..`order_max` at `rpm`, per amplitude.
+    #[default]
+    Order,
+    /// The mean speed over `rpm_min`..`rpm_max` (rpm) at the fixed excitation order `order`, per
+    /// amplitude.
+    Speed {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Lower end of the speed range, rpm.
+        rpm_min: f64,
+        /// Upper end of the speed range, rpm.
+        rpm_max: f64,
+    },
+    /// The torque amplitude T_n over `min`..`max` (N·m) at the fixed excitation order `order`
+    /// and `rpm`.
+    Torque {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Lower end of the amplitude range, N·m.
+        min: f64,
+        /// Upper end of the amplitude range, N·m.
+        max: f64,
+    },
+}
+
+impl HbmParameter {
+    /// The harmonic balance's continued parameter, with the order it holds fixed (the range
+    /// stays here): `Torque` continues the torque scale of a 1 N·m excitation, in N·m.
+    pub fn continued(self) -> crate::hbm::Parameter {
+        use crate::hbm::Parameter;
+        match self {
+            HbmParameter::Order => Parameter::Order,
+            HbmParameter::Speed { order, .. } => Parameter::Speed { order },
+            HbmParameter::Torque { order, .. } => Parameter::TorqueScale { order },
+        }
+    }
+}
+
+fn default_harmonics() -> usize {
+    10
+}
