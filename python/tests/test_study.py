@@ -233,6 +233,7 @@ def test_results_json_numbers_equal_the_summary(cli_run):
             ", ".join(f"{k} at {o:.5f}" for o, k in b["bifurcations"]) or "none",
             f"{'none' if up is None else f'{up:.4f}'}, {'none' if down is None else f'{down:.4f}'}",
             f"{1e3 * b['wall_s']:.1f}",
+            f"{1e3 * b['wall_s'] / max(f['points'], 1):.3f}",
             b["end"],
         ]
         assert f["points"] == len(b["order"]) == f["stable"] + f["unstable"]
