@@ -125,3 +125,24 @@ fn shooting_multipliers(kane: &mut Kane, x0: &[f64], period: f64) -> Vec<nalgebr
         .copied()
         .collect()
 }
+
+/// The tongue's edges do not depend on the continuation's step limit (issue 26, item 2): at the
+/// default limit (0.1), 0.02 and 0.001 the branch finds both period doublings at the same
+/// orders to 1e-8 (each is located on the multipliers to the corrector's tolerance). The tongue
+/// is 4.3e-4 wide: at every limit here both edges can fall inside one step.
+#[test]
+fn period_doublings_do_not_depend_on_the_step() {
+    let mut found: Vec<Vec<f64>> = Vec::new();
+    for ds_max in [0.1, 0.02, 0.001] {
+        let (_, b) = branch(2.8, 3.4, ds_max);
+        let pd = period_doublings(&b);
+        println!("ds_max {ds_max}: {} points, period doublings {pd:?}", b.points.len());
+        assert_eq!(pd.len(), 2, "ds_max {ds_max}: {:?}", b.bifurcations);
+        found.push(pd);
+    }
+    for pd in &found[1..] {
+        for (a, b) in pd.iter().zip(&found[0]) {
+            assert!((a - b).abs() <= 1e-8, "{a} vs {b}");
+        }
+    }
+}

@@ -482,18 +482,109 @@ impl Hbm {
                 ds *= 0.7;
             }
         };
-        let bifurcations = bifurcations(&points, &folds);
-        let mut branch = Branch { parameter, points, folds, bifurcations, end, newton_iterations: newton };
+        let mut branch = Branch { parameter, points, folds, bifurcations: Vec::new(), end, newton_iterations: newton };
+        if copts.refine_folds && copts.stability {
+            self.split_narrow_pairs(&su, &mut branch, &mut tests);
+        }
+        branch.bifurcations = bifurcations(&branch.points, &branch.folds);
         if copts.refine_folds {
             self.refine_crossings(&su, &mut branch);
         }
         Ok(branch)
     }
 
+    /// Pairs of crossings that one step stepped over whole: a multiplier that leaves the unit
+    /// circle and comes back inside a stretch shorter than the step (a narrow Mathieu tongue of
+    /// period doubling, a short loss of unison) leaves its test function with one sign at every
+    /// accepted point, but with a deep minimum of its magnitude at the point nearest the
+    /// stretch. Where a test function's magnitude at an accepted point is below a quarter of
+    /// both neighbours' (same sign at all three), its minimum over the two segments around the
+    /// point is searched (golden section in arclength, states from [`Branch::interpolate`]
+    /// solved at the fixed parameter, 16 evaluations at most); a state where the function has
+    /// the other sign is inserted as a point, so that the pair shows as two changes of sign
+    /// between accepted points and is located and classified like any other. Segments with a
+    /// fold are left alone (the parameter is not monotone there).
+    fn split_narrow_pairs(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Vec<(f64, Vec<(f64, f64)>)>) {
+        const DEPTH: f64 = std::f64::consts::LN_2 * 2.0;
+        let mut i = 1;
+        // `tests` holds every accepted point's test functions but the end point's, made by a
+        // solve at fixed parameter: the two agree index by index up to there.
+        while i + 1 < tests.len() && tests.len() <= branch.points.len() {
+            let (a, b, c) = (&tests[i - 1].1, &tests[i].1, &tests[i + 1].1);
+            let near_fold = branch.folds.iter().any(|f| f.after + 1 == i || f.after == i);
+            // The slope (index 0) is the folds' own test, kept by the tangents.
+            let suspect = (1..b.len()).find(|&j| {
+                a.len() == b.len()
+                    && c.len() == b.len()
+                    && b[j].0 != 0.0
+                    && a[j].0 == b[j].0
+                    && c[j].0 == b[j].0
+                    && b[j].1 + DEPTH < a[j].1.min(c[j].1)
+            });
+            let (Some(j), false) = (suspect, near_fold) else {
+                i += 1;
+                continue;
+            };
+            let sign = b[j].0;
+            // t in [0, 2]: segment i−1 for t < 1, segment i beyond; t = 1 is point i.
+            let eval = |hbm: &mut Hbm, t: f64| -> Option<(BranchPoint, (f64, f64))> {
+                let (seg, sigma) = if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
+                let guess = branch.interpolate(seg, sigma)?;
+                let lambda = su.param.value(&guess) / su.p_ref;
+                let sol = hbm.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+                let y = hbm.y_of(su, &sol);
+                let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
+                let point = hbm.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
+                let f = *test_functions(&point).get(j)?;
+                Some((point, f))
+            };
+            // Golden section on ln |f| over [0, 2], from the bracket (0, 1, 2).
+            let golden = 0.381_966_011_250_105_2;
+            let (mut lo, mut mid, mut hi, mut f_mid) = (0.0, 1.0, 2.0, b[j].1);
+            let mut found = None;
+            for _ in 0..16 {
+                let t = if mid - lo > hi - mid { mid - golden * (mid - lo) } else { mid + golden * (hi - mid) };
+                let Some((point, (sg, lg))) = eval(self, t) else { break };
+                if sg != sign && sg != 0.0 {
+                    found = Some((t, point, (sg, lg)));
+                    break;
+                }
+                if lg < f_mid {
+                    if t < mid {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                    (mid, f_mid) = (t, lg);
+                } else if t < mid {
+                    lo = t;
+                } else {
+                    hi = t;
+                }
+            }
+            let Some((t, point, _)) = found else {
+                i += 1;
+                continue;
+            };
+            let at = if t < 1.0 { i } else { i + 1 };
+            let values = test_functions(&point);
+            tests.insert(at, (point.arclength, values));
+            branch.points.insert(at, point);
+            for f in &mut branch.folds {
+                if f.after >= at {
+                    f.after += 1;
+                }
+            }
+            // Past the inserted point and its neighbours: they now straddle the changes.
+            i = at + 2;
+        }
+    }
+
     /// Locates each crossing that is not a fold by bisection along its segment: states from
     /// [`Branch::interpolate`] as guesses, solved at the fixed parameter (the segment holds no
     /// fold, so the parameter is monotone along it and the solve is regular), the count of
-    /// multipliers outside the unit circle deciding the side, 20 halvings (the segment to 1e-6).
+    /// multipliers outside the unit circle deciding the side, halved until 1e-11 of the
+    /// parameter.
     /// A branch point (+1) is then finished by a secant search (Illinois) on the determinant of
     /// ∂R̂/∂x, which vanishes where the periodic problem has a second solution direction: its
     /// location is then limited by the corrector's tolerance, not by the monodromy's accuracy
@@ -517,7 +608,14 @@ impl Hbm {
             }
             let (mut lo, mut hi) = (0.0, 1.0);
             let mut found = None;
-            for _ in 0..20 {
+            // Halved until the bracket is 1e-11 of the parameter wide (a crossing to ≤ 1e-8
+            // whatever the segment's length), 60 halvings at most.
+            let width = (branch.points[i + 1].parameter - branch.points[i].parameter).abs();
+            let target = 1e-11 * (1.0 + branch.points[i].parameter.abs());
+            for _ in 0..60 {
+                if (hi - lo) * width <= target {
+                    break;
+                }
                 let mid = 0.5 * (lo + hi);
                 let Some(guess) = branch.interpolate(i, mid) else { break };
                 let lambda = su.param.value(&guess) / su.p_ref;
