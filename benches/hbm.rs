@@ -1,7 +1,7 @@
 //! Harmonic balance: the full branch of the canonical CPVA at 40 N·m, 1000 rpm, continued from
 //! below (2.9 → 3.3) and from above (3.3 → 2.9), with Floquet stability at every point.
 
-#[path = "../tests/support/cpva_hbm.rs"]
+#[path = "../tests/it/support/cpva_hbm.rs"]
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, single};

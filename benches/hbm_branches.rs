@@ -8,7 +8,7 @@
 //! cargo bench --bench hbm_branches --no-run     # then: valgrind --tool=callgrind target/release/deps/hbm_branches-<hash>
 //! ```
 
-#[path = "../tests/support/cpva_hbm.rs"]
+#[path = "../tests/it/support/cpva_hbm.rs"]
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, single};

@@ -12,7 +12,7 @@
 //! cargo bench --bench hbm_cyclic
 //! ```
 
-#[path = "../tests/support/cpva_hbm.rs"]
+#[path = "../tests/it/support/cpva_hbm.rs"]
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, omega, single};

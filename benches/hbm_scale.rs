@@ -12,7 +12,7 @@
 //! HBM_SCALE_RUNS=1 cargo bench --bench hbm_scale      # fewer repetitions (default 3)
 //! ```
 
-#[path = "../tests/support/cpva_hbm.rs"]
+#[path = "../tests/it/support/cpva_hbm.rs"]
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, omega, single};

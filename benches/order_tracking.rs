@@ -1,13 +1,13 @@
 //! Timing of order tracking on the paper's sweep signal: 240 s at 2 kHz, n 2.9 → 3.3 at
 //! 1000 rpm, two multiples (n and 2n), by the STFT (953 windows) and in the angle domain (993
 //! blocks); the best of 20 runs of each, since the machine may be shared. The signal is the
-//! synthetic one of tests/order_tracking.rs (`tests/support/swept_signal.rs`).
+//! synthetic one of tests/it/order_tracking.rs (`tests/it/support/swept_signal.rs`).
 //!
 //! ```text
 //! cargo bench --bench order_tracking
 //! ```
 
-#[path = "../tests/support/swept_signal.rs"]
+#[path = "../tests/it/support/swept_signal.rs"]
 mod swept_signal;
 
 use kanedyn::signal::{AngleOptions, StftOptions, angle_domain_order_traces, stft_order_traces};

@@ -43,8 +43,8 @@ pub mod time;
 
 pub mod signal;
 
+pub mod combustion;
 pub mod cpva;
-pub mod engine;
 pub mod plot;
 pub mod study;
 

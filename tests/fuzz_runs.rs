@@ -14,7 +14,7 @@
 //! `KANEDYN_FUZZ_EXECUTIONS`). Replay one execution
 //! with `KANEDYN_FUZZ_SEED=<seed> KANEDYN_FUZZ_ONLY=<iteration>`.
 
-#[path = "support/examples.rs"]
+#[path = "it/support/examples.rs"]
 mod examples;
 
 use examples::copy_dir;

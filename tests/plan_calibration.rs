@@ -6,7 +6,7 @@
 //!
 //! One test in its own binary, so that no other test's threads add to the process's CPU time.
 
-#[path = "support/examples.rs"]
+#[path = "it/support/examples.rs"]
 mod examples;
 
 use examples::copy_dir;

@@ -189,7 +189,7 @@ def test_bad_arguments_raise_argument_error():
 
 
 def test_overflow_is_refused_with_the_cli_message(cli):
-    # `kanedyn eom` refuses to print a non-finite number (tests/input_hardening.rs).
+    # `kanedyn eom` refuses to print a non-finite number (tests/it/input_hardening.rs).
     path = EXAMPLES / "cpva.ron"
     want = cli.error("eom", path, "--q", "0,0", "--u", "1e200,0")
     with pytest.raises(kanedyn.EngineError) as e:
@@ -199,7 +199,7 @@ def test_overflow_is_refused_with_the_cli_message(cli):
 
 
 def test_the_cli_rejects_what_python_rejects(cli):
-    # The argument errors above have their CLI counterparts (tests/cli.rs, input_hardening.rs).
+    # The argument errors above have their CLI counterparts (tests/it/cli.rs, input_hardening.rs).
     path = EXAMPLES / "cpva.ron"
     for args in (
         ["--q", "0", "--u", "1,2"],

@@ -1,7 +1,7 @@
 """Every bad mechanism file of the Rust tests raises a kanedyn exception with the CLI's message.
 
-The cases are those of tests/ron_errors.rs, tests/input_hardening.rs, tests/joint_kinds.rs
-(bad joint kinds) and tests/cli.rs that concern a mechanism file. Each is written to a file and
+The cases are those of tests/it/ron_errors.rs, tests/it/input_hardening.rs, tests/it/joint_kinds.rs
+(bad joint kinds) and tests/it/cli.rs that concern a mechanism file. Each is written to a file and
 given to `kanedyn check` and `kanedyn eom`; the Python exception's text must equal what the CLI
 prints after `error: ` (file, line:column, field and reason), and the words the Rust test looks
 for must be in it, so that a case still fails for the reason it was written for.
@@ -16,7 +16,7 @@ import pytest
 import kanedyn
 from conftest import EXAMPLES, ROOT
 
-# The valid two-body file of tests/ron_errors.rs; most cases break one thing in it.
+# The valid two-body file of tests/it/ron_errors.rs; most cases break one thing in it.
 GOOD = """Mechanism(
     name: "m",
     bodies: [
@@ -38,7 +38,7 @@ def with_loads(loads):
 
 
 def with_part(part):
-    """A one-body mechanism whose body is the catalog part `part` (tests/input_hardening.rs)."""
+    """A one-body mechanism whose body is the catalog part `part` (tests/it/input_hardening.rs)."""
     return (
         'Mechanism(\n    name: "m",\n    bodies: [Body(name: "rotor", part: "%s")],\n'
         '    joints: [Joint(name: "spin", parent: "ground", child: "rotor")],\n)\n' % part
@@ -46,7 +46,7 @@ def with_part(part):
 
 
 def one_body(body):
-    """A one-body mechanism whose body is `body` (`body_error` of tests/input_hardening.rs)."""
+    """A one-body mechanism whose body is `body` (`body_error` of tests/it/input_hardening.rs)."""
     return (
         'Mechanism(\n  name: "m",\n  bodies: [\n    %s,\n  ],\n'
         '  joints: [Joint(name: "j", parent: "ground", child: "b")],\n)' % body
@@ -54,7 +54,7 @@ def one_body(body):
 
 
 def with_second_joint(joint, loads=""):
-    """The two-body file of the bad joint kinds (tests/joint_kinds.rs)."""
+    """The two-body file of the bad joint kinds (tests/it/joint_kinds.rs)."""
     bodies = (
         'bodies: [\n        Body(name: "rotor", mass: 1.0, inertia: 0.1),\n'
         '        Body(name: "arm", mass: 0.5, com: (0.1, 0.0), inertia: 0.01),\n    ],'
@@ -67,7 +67,7 @@ def with_second_joint(joint, loads=""):
 
 
 def chain(n):
-    """A chain of n bodies (the 10,001-body case of tests/input_hardening.rs)."""
+    """A chain of n bodies (the 10,001-body case of tests/it/input_hardening.rs)."""
     bodies = "".join(f'Body(name: "b{i}", mass: 1.0, com: (0.5, 0.0), inertia: 0.1),\n' for i in range(n))
     joints = "".join(
         f'Joint(name: "j{i}", parent: "{"ground" if i == 0 else f"b{i - 1}"}", child: "b{i}", at: (1.0, 0.0)),\n'
@@ -123,7 +123,7 @@ def case(source, *args, **kwargs):
 
 
 CASES = [
-    # tests/ron_errors.rs
+    # tests/it/ron_errors.rs
     case("ron_errors", "syntax", {"m.ron": GOOD.replace("inertia: 1.0)", "inertia: 1.0")}, ["m.ron:5:"]),
     case("ron_errors", "unknown-field", {"m.ron": GOOD.replace("mass: 10.0", "mas: 10.0")}, ["m.ron:4:", "bodies[0]", "mas"]),
     case(
@@ -239,7 +239,7 @@ CASES = [
         ["p.ron:1:", "negative mass"],
     ),
     case("ron_errors", "missing-file", {}, ["/nonexistent/kanedyn.ron", "cannot read"], kind=kanedyn.ReadError, target="/nonexistent/kanedyn.ron"),
-    # tests/input_hardening.rs
+    # tests/it/input_hardening.rs
     *[
         case(
             "input_hardening",
@@ -371,7 +371,7 @@ CASES = [
         flags=["--max-file-kb", "4096"],
         kwargs={"max_file_kb": 4096},
     ),
-    # tests/joint_kinds.rs, bad kinds
+    # tests/it/joint_kinds.rs, bad kinds
     case(
         "joint_kinds",
         "zero-axis",
@@ -467,7 +467,7 @@ def test_bad_text_raises_the_same_message(cli, tmp_path, case):
 
 
 def test_relative_paths_read_as_typed(cli, monkeypatch):
-    # tests/cli.rs and input_hardening.rs: a missing file, a folder; the OS reason said once.
+    # tests/it/cli.rs and input_hardening.rs: a missing file, a folder; the OS reason said once.
     monkeypatch.chdir(ROOT)
     for target, kind, words in [
         ("examples/does-not-exist.ron", kanedyn.ReadError, ["examples/does-not-exist.ron", "cannot read"]),
@@ -484,7 +484,7 @@ def test_relative_paths_read_as_typed(cli, monkeypatch):
 
 
 def test_policy_keywords_let_outside_parts_in_as_the_flags_do(cli, tmp_path):
-    # tests/input_hardening.rs: another root, or no restriction, lets the outside part in.
+    # tests/it/input_hardening.rs: another root, or no restriction, lets the outside part in.
     Case("", {"outside.ron": "Body(mass: 1.0, inertia: 1.0)", "mech/m.ron": with_part("../outside.ron")}, []).write(tmp_path)
     path = tmp_path / "mech" / "m.ron"
     for flags, kwargs in [
@@ -517,7 +517,7 @@ def test_every_prefix_of_a_file_loads_or_raises_a_kanedyn_error(cli, tmp_path):
 
 
 def test_the_bad_example_arguments_of_cli_rs_fail_in_python_too(cli):
-    # tests/cli.rs `bad_input_fails_cleanly`, mechanism part: the file is fine, the state is not.
+    # tests/it/cli.rs `bad_input_fails_cleanly`, mechanism part: the file is fine, the state is not.
     mech = kanedyn.Mechanism.from_file(EXAMPLES / "cpva.ron")
     with pytest.raises(kanedyn.ArgumentError, match=r"unknown joint `spn` \(joints: spin, pivot\)"):
         mech.eom([0.0, 0.0], [1.0, 2.0], joint_torques={"spn": 3.0})

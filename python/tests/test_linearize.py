@@ -32,7 +32,7 @@ def test_eigen_orders_are_the_closed_forms(cpva):
         held = lin.modes(spin="held", damped=False)
         free = lin.modes(spin="free", damped=False)
         assert held.labels == ["pivot"] and free.labels == ["pivot"]
-        # Richardson-extrapolated Jacobians: 1e-9 relative (tests/study.rs holds the study to it).
+        # Richardson-extrapolated Jacobians: 1e-9 relative (tests/it/study.rs holds the study to it).
         assert abs(held.orders[0] / nt - 1) < 1e-9, (rpm, held.orders[0], nt)
         assert abs(free.orders[0] / nr - 1) < 1e-9, (rpm, free.orders[0], nr)
         # Undamped: no damping; the frequency is the order times the speed.
@@ -79,7 +79,7 @@ def test_order_response_equals_the_cli_csv_bit_for_bit(cpva, cli_run):
     assert not np.isnan(csv["ratio"]).any() and same_bits(r.ratio, csv["ratio"])
     # NumPy's |z| and Rust's hypot may differ in the last bit.
     assert np.allclose(np.abs(r.response_complex), r.response, rtol=4e-16, atol=0)
-    # The asymptote of the normalised response, (Ĩ + 1 + 2n_t²)/(Ĩ − n_t⁴) (tests/study.rs).
+    # The asymptote of the normalised response, (Ĩ + 1 + 2n_t²)/(Ĩ − n_t⁴) (tests/it/study.rs).
     nt, it, _ = cpva_closed_forms(cpva)
     assert abs(r.asymptote / ((it + 1 + 2 * nt**2) / (it - nt**4)) - 1) < 1e-9
     # Without a lock: the same response, no twin.

@@ -67,7 +67,7 @@ pub struct ContinuationOptions {
     pub ds_min: f64,
     /// Largest step. Events do not depend on it: a pair of crossings inside one step (two
     /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
-    /// function, and the step is aimed at it (`tests/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
+    /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
     pub ds_max: f64,
     /// Largest number of points on a branch (a bound on the work, and the plan's: the paper's
     /// branches take 16–60 points at the default `ds_max`, up to ~1600 at 0.001; raise it with a

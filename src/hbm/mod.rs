@@ -342,7 +342,7 @@ impl Hbm {
     /// [`Hbm::with_inputs`] with a forcing that follows the mean speed, as an engine's does:
     /// `Σ T_k sin(m_k n Ω t + α_k) + Ω² Σ T'_k sin(m'_k n Ω t + α'_k)`, the terms T'_k of
     /// `per_omega2` in N·m·s²/rad² (an engine's reciprocating-inertia torque per Ω², its gas
-    /// torque in `harmonics`, see [`crate::engine::OscillatingSeries::split_harmonics`]). A
+    /// torque in `harmonics`, see [`crate::combustion::OscillatingSeries::split_harmonics`]). A
     /// continuation in [`Parameter::Speed`] then carries the forcing along, and its ∂R̂/∂Ω holds
     /// the forcing's derivative `2Ω Σ T'_k sin(…)`.
     pub fn with_speed_forcing(

@@ -14,7 +14,7 @@
 //! sixth-order error. Measured on the canonical CPVA's 40 N·m branch: N_s = 256 agrees with
 //! N_s = 2048 to 9e-8 (plain RK4 at 256 was off by 1.7e-5, too close to the margin below),
 //! and the multipliers agree with a monodromy matrix differenced from time integrations to
-//! 2e-6 (tests/hbm.rs).
+//! 2e-6 (tests/it/hbm.rs).
 //!
 //! Beyond six coordinates the whole mechanism is integrated by its tree instead (`tree_monodromy`):
 //! in the states `(δq, δu)`, `δu = W δq̇`, with A, B W⁻¹ and W⁻¹ kept sparse and the mass matrix

@@ -12,7 +12,7 @@ pub const PREFIX: &str = "catalog:";
 
 /// Every catalog part: its name (the path below the repository root) and its text.
 ///
-/// `tests/catalog.rs` holds this list against the folders, so a part added there and not here
+/// `tests/it/catalog.rs` holds this list against the folders, so a part added there and not here
 /// (or the reverse) fails the tests.
 pub const PARTS: &[(&str, &str)] = &[
     ("bodies/cpva_pendulum.ron", include_str!("../../bodies/cpva_pendulum.ron")),

@@ -105,7 +105,7 @@ impl Geared {
         // NOTE: an independent joint's nonlinear couplings (stages, friction, stops) are the
         // outer engine's, which adds them on the reduced coordinates (with their exact
         // Jacobians); the inner tree keeps only the driven joints'. Keeping both counted them
-        // twice (issue 15 regression, tests/gear_reactions.rs).
+        // twice (issue 15 regression, tests/it/gear_reactions.rs).
         let independent: Vec<usize> = full_mech
             .joints
             .iter()

@@ -35,7 +35,7 @@
 //! path's rotation-invariant quantities (|r|², r·t, r × t, r × κ; [`PolarPath`]), a pair form with
 //! s-dependent coefficients that needs neither the path's polar angle (the epicycloid's `asin`
 //! and `sin_cos`) nor the LDLᵀ's two serial divisions ([`Kane::rhs_path_pair`]). It equals this
-//! form to rounding (`tests/path_pair_form.rs`), hands every failure to it, and is chosen only
+//! form to rounding (`tests/it/path_pair_form.rs`), hands every failure to it, and is chosen only
 //! after reproducing it at probe states.
 
 use super::{GROUND_PARENT, Kane, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
@@ -407,7 +407,7 @@ impl Kane {
     /// rotation-invariant |r|², r·t, r × t and r × κ enter ([`PolarPath::at`]), so the path's
     /// polar angle θ(s), the `asin` and `sin_cos` of the epicycloid, is never needed; the 2 × 2
     /// system is solved by Cramer's rule (one division, the LDLᵀ's two are serial). The results
-    /// equal the composite-body form's to rounding (`tests/path_pair_form.rs`), not to the bit.
+    /// equal the composite-body form's to rounding (`tests/it/path_pair_form.rs`), not to the bit.
     /// Whenever the LDLᵀ's pivots (M₀₀ and det/M₀₀) would not both pass `factor_solve`'s test,
     /// or a result is not finite (beyond the end of the path), the call is handed to the
     /// composite-body form, which gives the error (or the result) it always gave.

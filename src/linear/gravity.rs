@@ -22,7 +22,7 @@
 //! product of two small quantities (the gravity ratio `g/(r Ω²)` and the deflection), second
 //! order, and is left out: the linear gravity response is exact to first order in gravity and in
 //! the torque together. Its size is measured against harmonic balance with gravity in
-//! `tests/gravity_linear.rs` (the difference falls about as g², as a second-order term should).
+//! `tests/it/gravity_linear.rs` (the difference falls about as g², as a second-order term should).
 //! The parametric term would also shift eigen-orders at second order; the modes and Campbell
 //! diagram are those of the steady rotation.
 //!

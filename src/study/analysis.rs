@@ -17,7 +17,7 @@ use super::json::Json;
 use super::plan::AnalysisPlan;
 use super::sim::Progress;
 use super::{Study, StudyReport, StudySpec};
-use crate::engine::Engine;
+use crate::combustion::Engine;
 use crate::error::{Error, Result};
 use crate::io::ReadPolicy;
 use crate::io::Source;

@@ -110,7 +110,7 @@ impl Study {
                 format!("joint `{}` does not connect to ground: the spin joint must", spec.spin_joint),
             ));
         }
-        if mechanism.joints[spin].kind != crate::model::joint::JointKind::Revolute {
+        if !mechanism.joints[spin].kind.rotates() {
             return Err(src.error(
                 "spin_joint",
                 format!("joint `{}` is not revolute: the spin joint turns the rotor", spec.spin_joint),

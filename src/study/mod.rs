@@ -140,10 +140,10 @@ analyses! {
     /// (driven by a torque or prescribed), with an order–rpm map of the response.
     Transient(TransientSpec),
     /// The free oscillation of one joint at held spin, undamped, against its release amplitude:
-    /// the absorber's backbone curve (see [`backbone`]).
+    /// the absorber's backbone curve (the study's `backbone` room).
     FreeOscillation(FreeOscillationSpec),
     /// The same analyses run on several mechanisms (e.g. absorber paths), their results overlaid
-    /// per analysis in one figure and compared in one table (see [`compare`]).
+    /// per analysis in one figure and compared in one table (the study's `compare` room).
     Compare(CompareSpec),
     /// A toy that the unit tests alone know (see `toy`): what adding a kind takes.
     #[cfg(test)]
@@ -173,7 +173,7 @@ pub struct Study {
     /// The study file's text, to name the line of an analysis that fails at run time.
     pub source: Source,
     /// The mechanisms of each `Compare` analysis, by the analysis's index: per mechanism its
-    /// label and the study that runs the comparison's analyses on it (see [`compare`]).
+    /// label and the study that runs the comparison's analyses on it (the study's `compare` room).
     pub comparisons: Vec<(usize, compare::Compared)>,
 }
 

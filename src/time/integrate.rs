@@ -26,10 +26,10 @@
 //! trait cannot report an error from the right-hand side, and it clones the state twice per step.
 //! The loop (private module `driver`) is the crate's `solve_ode` minus those three things.
 
-pub use crate::time::solver::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
+pub use crate::time::run::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
 
 use crate::error::EngineError;
-use crate::time::driver::{DynRhs, run};
+use crate::time::dop853::{DynRhs, run};
 
 /// Integrates `ẋ = rhs(t, x)` from `x(t0) = x0` to `t1 > t0` with DOP853 and calls `on_sample` at
 /// every sample time (see [`IntegrateOptions::sample_rate_hz`]), in increasing time.

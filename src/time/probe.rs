@@ -371,7 +371,7 @@ impl Recorder {
     /// Takes the joint torques of `kane` (an engine of the recorder's mechanism, as the run
     /// evaluates it) for the mesh-torque probes: a torque applied at a driven joint enters the
     /// constraint's balance there. [`simulate`] calls it with the engine it integrates; a run
-    /// through another right-hand side (a [`crate::time::drive::Drive`]) calls it with the
+    /// through another right-hand side (a [`crate::time::drive_laws::Drive`]) calls it with the
     /// engine's torques as that run applies them. No effect without a mesh-torque probe.
     pub fn use_torques_of(&mut self, kane: &Kane) {
         let Some(mesh) = self.mesh.as_deref_mut() else { return };
@@ -585,7 +585,7 @@ pub fn simulate(
 }
 
 /// [`simulate`] for any right-hand side of a mechanism with `n` degrees of freedom, such as a
-/// [`crate::time::drive::Drive`]'s.
+/// [`crate::time::drive_laws::Drive`]'s.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_rhs(
     mut rhs: impl FnMut(f64, &[f64], &mut [f64]) -> std::result::Result<(), crate::error::EngineError>,

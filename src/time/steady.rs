@@ -107,7 +107,7 @@ pub fn settle(
             // than ~1e-5, and at high speed the integrator's own drift of the rigid mode reaches
             // ~1e-7 of Ω per window, so a lower threshold corrected (and restarted the windows)
             // every window and never measured (NaN amplitudes; the locked rotor at 1400 rpm under
-            // a six-cylinder engine's orders 3 and 6, tests/engine_study.rs).
+            // a six-cylinder engine's orders 3 and 6, tests/it/engine_study.rs).
             if delta.abs() > 1e-6 * s.omega {
                 let mut dq = vec![0.0; n];
                 dq[spin_coordinate] = -delta;

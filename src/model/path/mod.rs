@@ -19,7 +19,7 @@
 //!   closed form, so it is tabulated once per distinct path ([`GeneralPath`]): a Chebyshev series
 //!   of θ in the variable u of `s = s_end sin u`, which takes the square-root end of the path
 //!   into an analytic function (accuracy ≈ 1e-15 relative, checked against the epicycloid's
-//!   closed form in `tests/path_general.rs`).
+//!   closed form in `tests/it/path_general.rs`).
 //!
 //! The vertex (s = 0) lies on the +x axis of the path's own frame; the joint turns that frame by
 //! its mounting angle.

@@ -1,7 +1,7 @@
 //! The free-oscillation analysis: the backbone curve of one joint (an absorber), its free
 //! oscillation order against amplitude at held spin with every damper removed.
 //!
-//! The spin joint's rate is prescribed constant (the partitioned equations of `time::drive`:
+//! The spin joint's rate is prescribed constant (the partitioned equations of `time::drive_laws`:
 //! `A_rr q̈_r = G_r − A_rs q̈_s` with q̈_s = 0), every joint damper and damper to ground is
 //! set to zero and the mechanism's own joint torques are removed, so the motion is the
 //! conservative free oscillation about the relative equilibrium. The joint is released from
@@ -27,7 +27,7 @@ use crate::kane::Kane;
 use crate::linear::{Damping, LinearModel, Spin};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::plot::{LineStyle, Panel, Series};
-use crate::time::drive::{Drive, Prescribed};
+use crate::time::drive_laws::{Drive, Prescribed};
 use crate::time::integrate::{IntegrateOptions, integrate};
 use serde::Serialize;
 use std::f64::consts::PI;

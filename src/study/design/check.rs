@@ -7,7 +7,6 @@ use super::{DesignParameter, DesignSpec, Quantity, Sampling};
 use super::{MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES};
 use crate::error::Result;
 use crate::io::Source;
-use crate::model::joint::JointKind;
 use crate::model::mechanism::Mechanism;
 use crate::study::validate::limits::{MAX_ORDER, MAX_RPM, MAX_TORQUE_NM, check_file_name};
 use crate::study::{AnalysisSpec, HbmParameter, StudySpec};
@@ -117,7 +116,7 @@ fn check_quantity(
             return Err(src.error(path, format!("unknown joint `{jn}` (joints: {})", names.join(", "))));
         };
         let joint = &mech.joints[j];
-        if joint.kind == JointKind::Fixed && !matches!(q, Quantity::JointRadius(_)) {
+        if joint.kind.dof() == 0 && !matches!(q, Quantity::JointRadius(_)) {
             return Err(src.error(path, format!("joint `{jn}` is Fixed: it has no spring or damper")));
         }
         if matches!(q, Quantity::JointStiffness(_)) && j == spin {

@@ -44,7 +44,7 @@ pub use sampling::{below, case_count, case_values, uniform};
 
 use crate::error::{Error, Result};
 use crate::kane::Kane;
-use crate::model::joint::{JointKind, Spring};
+use crate::model::joint::Spring;
 use crate::study::table::{Table, fmt_num};
 use crate::study::{AnalysisSpec, HbmParameter, Output, Study, StudySpec};
 use rayon::prelude::*;
@@ -180,7 +180,7 @@ pub fn parameter_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
                 .quantity
                 .joint()
                 .and_then(|j| study.mechanism.joint_index(j))
-                .is_some_and(|j| matches!(study.mechanism.joints[j].kind, JointKind::Prismatic { .. }));
+                .is_some_and(|j| study.mechanism.joints[j].kind.slide_axis().is_some());
             let suffix = p.quantity.suffix(slide);
             let name = if suffix.is_empty() { p.name.clone() } else { format!("{}_{suffix}", p.name) };
             ColumnInfo { name, unit: p.quantity.unit(slide) }

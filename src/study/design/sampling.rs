@@ -5,7 +5,7 @@ use super::{DesignParameter, DesignSpec, Sampling};
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{RngCore, SeedableRng};
 
-/// The number of cases, saturating (checked against [`MAX_CASES`] at load).
+/// The number of cases, saturating (checked against [`MAX_CASES`](super::MAX_CASES) at load).
 pub fn case_count(spec: &DesignSpec) -> usize {
     match spec.sampling {
         Sampling::Grid => spec.parameters.iter().map(grid_len).fold(1usize, usize::saturating_mul),

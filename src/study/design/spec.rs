@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 pub struct DesignSpec {
     /// Name (file prefix of `<name>.csv`).
     pub name: String,
-    /// The varied quantities, 1 to [`MAX_PARAMETERS`](super::design::MAX_PARAMETERS).
+    /// The varied quantities, 1 to [`MAX_PARAMETERS`](crate::study::design::MAX_PARAMETERS).
     pub parameters: Vec<DesignParameter>,
     /// How the cases are drawn (default `Grid`).
     #[serde(default)]

@@ -62,7 +62,7 @@ pub struct HbmBranch {
     pub end: String,
     /// The parameter value the continuation started from.
     pub from: f64,
-    /// The drawn curve: the branch points with [`CURVE_SUBDIVISION`] − 1 Hermite-interpolated
+    /// The drawn curve: the branch points with `CURVE_SUBDIVISION` − 1 Hermite-interpolated
     /// states ([`Branch::interpolate`]) between each two, in the parameter's units.
     pub curve_parameter: Vec<f64>,
     /// Acceleration amplitudes along the drawn curve, per reported multiple, rad/s².
@@ -106,7 +106,7 @@ fn coupling_warning(spec: &HbmSpec, br: &HbmBranch) -> Option<String> {
 /// vector, dominated by the pendulum coefficients, so across an antiresonance of the rotor the
 /// solved points lie far apart on the rotor's amplitude curve (in the 40 N·m case the straight
 /// line between two points misses the solved mid-state by 28 % of the amplitude, the Hermite
-/// mid-state by 1.2 %, `tests/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
+/// mid-state by 1.2 %, `tests/it/hbm.rs`); eight parts draw it smoothly at the cost of no solve.
 pub(crate) const CURVE_SUBDIVISION: usize = 8;
 
 pub(crate) fn hbm_error(study: &Study) -> impl Fn(HbmError) -> Error + '_ {

@@ -58,7 +58,7 @@ pub struct HbmSpec {
     pub engine_multiples: usize,
     /// The engine's series, filled when the study is loaded (not part of the file).
     #[serde(skip)]
-    pub engine_series: Option<crate::engine::OscillatingSeries>,
+    pub engine_series: Option<crate::combustion::OscillatingSeries>,
 }
 
 /// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the

@@ -49,7 +49,7 @@ pub struct MultiOrderSpec {
     /// Mean torque T_m, N·m; default: the losses at each operating speed.
     #[serde(default)]
     pub mean_torque: Option<f64>,
-    /// An engine file (RON `Engine(...)`, relative to the study file, see `kanedyn::engine`)
+    /// An engine file (RON `Engine(...)`, relative to the study file, see `kanedyn::combustion`)
     /// whose torque from cylinder pressure gives every speed's harmonics: its orders that are the
     /// multiples 1..=`engine_multiples` of `order`, with their phases, computed when the study is
     /// loaded (results.json's spec shows them). The engine's mean torque is not applied: the

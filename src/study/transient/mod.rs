@@ -1,10 +1,10 @@
 //! Transients and run-ups: the nonlinear equations integrated from a given initial state, the
 //! spin speed free, driven through a linear run-up (or run-down) by a feed-forward torque, or
-//! prescribed (`time::drive`), with torques at any joints whose orders are locked to the spin
+//! prescribed (`time::drive_laws`), with torques at any joints whose orders are locked to the spin
 //! joint's angle; the response and every element tracked into an order–rpm map
 //! (`signal::order_rpm_map`: angle-domain blocks of whole revolutions) and cut along orders.
 //! An `engine` adds its torque from cylinder pressure, crank-locked like the torques, its
-//! amplitudes and phases following the spin joint's rate at each instant (`time::drive::EngineTorque`).
+//! amplitudes and phases following the spin joint's rate at each instant (`time::drive_laws::EngineTorque`).
 //!
 //! The feed-forward torque of a `Torque` run-up is the rigid-rotation torque
 //! `T(t) = J·α + Σc·Ω_ref(t)`: J the polar inertia of everything the spin joint carries turning
@@ -26,7 +26,7 @@ use super::{Output, Study};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, rpm_to_rad_s};
 use crate::signal::{AngleOptions, OrderMap, order_rpm_map};
-use crate::time::drive::{Drive, EngineTorque, Governor, LockedTorque, Prescribed, rigid_inertia};
+use crate::time::drive_laws::{Drive, EngineTorque, Governor, LockedTorque, Prescribed, rigid_inertia};
 use crate::time::probe::{Outcome, Probe, Recorder, simulate_rhs};
 use report::render;
 pub(crate) use report::tables;

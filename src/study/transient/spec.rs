@@ -47,7 +47,7 @@ pub struct TransientSpec {
 }
 
 /// An engine's oscillating torque in a time run: at every instant the order series of
-/// [`crate::engine::Engine`] at the crank angle θ (the spin joint's angle, from cylinder 1's
+/// [`crate::combustion::Engine`] at the crank angle θ (the spin joint's angle, from cylinder 1's
 /// firing TDC) and the crank speed Ω (the spin joint's rate),
 /// `T̃(θ, Ω) = Σ_j A_j(Ω) sin(jθ/2 + α_j(Ω))` over the orders j/2 that are multiples of `order` up
 /// to `max_order`, with the gas part fixed and the reciprocating-inertia part ∝ Ω². The
@@ -73,7 +73,7 @@ pub struct EngineExcitation {
     pub excite: Vec<ExciteAt>,
     /// The engine's series, filled when the study is loaded (not part of the file).
     #[serde(skip)]
-    pub series: Option<crate::engine::OscillatingSeries>,
+    pub series: Option<crate::combustion::OscillatingSeries>,
 }
 
 fn default_half() -> f64 {

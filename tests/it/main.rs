@@ -1,0 +1,55 @@
+//! The integration tests, one module per story, in one test executable (fewer links and less
+//! disk than one executable per file). Four stay apart because they measure the process
+//! itself: `alloc` (a counting global allocator), `fuzz` (heap per input), `fuzz_runs` and
+//! `plan_calibration` (the process's CPU time). Run one story with
+//! `cargo test --release --test it <module>::`.
+
+mod support;
+
+mod campbell_crossings;
+mod catalog;
+mod cli;
+mod closed_form;
+mod couplings;
+mod cpva_paths;
+mod design_study;
+mod doc_snippets;
+mod elements;
+mod engine;
+mod engine_excitation;
+mod engine_study;
+mod excite_at;
+mod gear_reactions;
+mod gears;
+mod gravity;
+mod gravity_linear;
+mod hbm;
+mod hbm_cyclic;
+mod hbm_events;
+mod hbm_period_doubling;
+mod honest_summaries;
+mod input_hardening;
+mod integration;
+mod joint_kinds;
+mod linear;
+mod modal_damping;
+mod no_nan_outputs;
+mod order_tracking;
+mod paper_claims;
+mod path_general;
+mod path_joint;
+mod path_pair_form;
+mod random_trees;
+mod reactions;
+mod reliability_ii;
+mod report_html;
+mod reproducible_runs;
+mod results_json;
+mod rollers;
+mod ron_errors;
+mod shapes;
+mod study;
+mod study_reliability;
+mod transient;
+mod truck_driveline;
+mod welded_study;

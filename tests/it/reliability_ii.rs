@@ -1,0 +1,320 @@
+//! Regression tests of issue 25 ("Reliability II"): each test names what used to go wrong, on the
+//! smallest input that showed it.
+
+use crate::support::examples;
+
+use examples::copy_dir;
+use kanedyn::study::Study;
+use std::path::{Path, PathBuf};
+
+/// A scratch copy of `examples/`, so a study written into it finds the example mechanisms by
+/// relative path; removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Self {
+        let root = std::env::temp_dir().join(format!("kanedyn_rel2_{tag}_{}", std::process::id()));
+        std::fs::remove_dir_all(&root).ok();
+        copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"), &root);
+        Scratch(root)
+    }
+    /// Writes `bad.ron` (or another file) into the scratch folder and returns its path.
+    fn write(&self, file: &str, text: &str) -> PathBuf {
+        let p = self.0.join(file);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+    /// The load error of a study text, as printed.
+    fn load_error(&self, text: &str) -> String {
+        match Study::from_file(&self.write("bad.ron", text)) {
+            Ok(_) => panic!("expected an error for\n{text}"),
+            Err(e) => e.to_string(),
+        }
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        std::fs::remove_dir_all(&self.0).ok();
+    }
+}
+
+/// Asserts an error names `bad.ron` with a line:column and the field.
+fn assert_located(e: &str, field: &str) {
+    let after = e.split("bad.ron:").nth(1).unwrap_or_else(|| panic!("no file in: {e}"));
+    let lc: Vec<&str> = after.split([' ', '(']).next().unwrap_or("").split(':').collect();
+    assert!(lc.len() >= 2 && lc[0].parse::<usize>().is_ok() && lc[1].parse::<usize>().is_ok(), "no line:col in: {e}");
+    assert!(e.contains(&format!("(field `{field}`)")), "field `{field}` not named in: {e}");
+}
+
+/// A study of `analyses` on the circle-path absorber of examples/paths.
+fn circle_study(analyses: &str) -> String {
+    format!(
+        "Study(\n    name: \"s\",\n    mechanism: \"paths/circle.ron\",\n    analyses: [\n        {analyses}\n    ],\n)\n"
+    )
+}
+
+const FREE: &str = r#"FreeOscillation(name: "free", rpm: 1000.0, joint: "path", amplitudes: [0.005])"#;
+
+// ---- Item 4: output names unique ----
+
+/// Used to run and exit 0 while two analyses wrote `c_a_free.csv` (and `c_a_free.svg`): the
+/// comparison `c`'s analysis `free` on mechanism `a` runs as `c_a_free`, the name of the
+/// top-level analysis after it, and the later file replaced the earlier one, listed twice.
+#[test]
+fn a_comparison_and_an_analysis_writing_one_file_are_refused_naming_both() {
+    let s = Scratch::new("names");
+    let compare =
+        format!(r#"Compare(name: "c", mechanisms: [(label: "a", mechanism: "paths/circle.ron")], analyses: [{FREE}])"#);
+    let top = FREE.replace("\"free\"", "\"c_a_free\"");
+    let e = s.load_error(&circle_study(&format!("{compare},\n        {top}")));
+    assert_located(&e, "analyses[1].name");
+    for part in
+        ["`c_a_free.csv`", "FreeOscillation `c_a_free` (analyses[1])", "Compare `c` (analyses[0])", "mechanism `a`"]
+    {
+        assert!(e.contains(part), "{part:?} not in: {e}");
+    }
+    // The same two in the other order: the error is at the comparison's label.
+    let e = s.load_error(&circle_study(&format!("{top},\n        {compare}")));
+    assert_located(&e, "analyses[1].mechanisms[0].label");
+    assert!(e.contains("FreeOscillation `c_a_free` (analyses[0])"), "{e}");
+}
+
+/// A sweep's run files carry its amplitude and direction: a Campbell diagram named like one of
+/// them used to overwrite that run's traces. Names that only share a prefix still load.
+#[test]
+fn a_run_file_of_a_sweep_cannot_be_overwritten_by_another_analysis() {
+    let s = Scratch::new("sweepnames");
+    let sweep = r#"OrderSweep(name: "sw", rpm: 1000.0, order_min: 2.9, order_max: 3.3, duration_s: 20.0, amplitudes: [40.0, 1e-4])"#;
+    let campbell = |name: &str| format!(r#"Campbell(name: "{name}", rpm_min: 0.0, rpm_max: 2000.0, points: 5)"#);
+    let e = s.load_error(&circle_study(&format!("{sweep},\n        {}", campbell("sw_1e-4Nm_down"))));
+    assert_located(&e, "analyses[1].name");
+    assert!(e.contains("`sw_1e-4Nm_down.csv`") && e.contains("OrderSweep `sw` (analyses[0])"), "{e}");
+    for name in ["sw_fine", "sw_40Nm", "sw_40Nm_sideways"] {
+        let p = s.write("ok.ron", &circle_study(&format!("{sweep},\n        {}", campbell(name))));
+        Study::from_file(&p).unwrap_or_else(|e| panic!("`{name}` should load: {e}"));
+    }
+    // Two mechanisms of one comparison whose labels make the same run name.
+    let e = s.load_error(&circle_study(&format!(
+        r#"Compare(name: "c", mechanisms: [(label: "a_b", mechanism: "paths/circle.ron"), (label: "a", mechanism: "paths/circle.ron")],
+                   analyses: [{}, {}])"#,
+        FREE.replace("\"free\"", "\"x\""),
+        FREE.replace("\"free\"", "\"b_x\"")
+    )));
+    assert_located(&e, "analyses[0].mechanisms[1].label");
+    assert!(e.contains("`c_a_b_x.csv`"), "{e}");
+}
+
+// ---- Item 1: physical ranges ----
+
+/// A two-body mechanism: a rotor and, on joint `j` (kind and extras given), a second body; and
+/// `extra` at the end (gears).
+fn mechanism(joint: &str, extra: &str) -> String {
+    format!(
+        r#"Mechanism(
+    name: "m",
+    bodies: [
+        Body(name: "rotor", mass: 110.0, inertia: 3.4),
+        Body(name: "b", mass: 6.0, inertia: 0.0002),
+    ],
+    joints: [
+        Joint(name: "spin", parent: "ground", child: "rotor"),
+        Joint(name: "j", parent: "rotor", child: "b", {joint}),
+    ],
+    {extra}
+)
+"#
+    )
+}
+
+/// The error of loading mechanism text `text` as `bad.ron`.
+fn mechanism_error(s: &Scratch, text: &str) -> String {
+    match kanedyn::model::mechanism::Mechanism::from_file(&s.write("bad.ron", text)) {
+        Ok(_) => panic!("expected an error for\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// Each used to be accepted: "finite and positive" (or "non-zero") was the only rule, so a gear
+/// ratio of 1e-300 passed and a 31-point linear response on it never finished; an epicycloid
+/// order of 1e9, a bifilar length of 1e-300, a billion rollers and a friction smoothing of
+/// 1e-300 went through without a word. Now each is a located error stating the accepted range;
+/// the values just inside each range still load.
+#[test]
+fn extreme_mechanism_values_are_refused_with_the_range() {
+    let s = Scratch::new("ranges");
+    let epicycloid = |n: &str| format!("kind: Path(shape: Epicycloid(rho0: 0.185, n_tilde: {n}), mount: 0.0)");
+    let bifilar = |l: &str| format!("kind: Path(shape: Bifilar(radius: 0.17, length: {l}), mount: 0.0)");
+    let rollers = |n: &str| {
+        format!(
+            "kind: Path(shape: Epicycloid(rho0: 0.185, n_tilde: 3.1), mount: 0.0), rollers: Rollers(count: {n}, \
+             mass: 0.08, inertia: 1.44e-6, radius: 0.006, spread: 0.03)"
+        )
+    };
+    let friction = |e: &str| format!("friction: (torque: 6.0, smoothing: {e})");
+    let gear = |r: &str| {
+        mechanism("", &format!("gears: [Gear(joint: \"j\", follows: \"spin\", ratio: {r})],"))
+            .replace("child: \"b\", ", "child: \"b\"")
+            .replace("Joint(name: \"j\", parent: \"rotor\"", "Joint(name: \"j\", parent: \"ground\"")
+    };
+    let cases: Vec<(String, String, &str, &str)> = vec![
+        (gear("1e-300"), gear("1e-6"), "gears[0].ratio", "1e-6..=1e6"),
+        (gear("-2e6"), gear("-1e6"), "gears[0].ratio", "1e-6..=1e6"),
+        (mechanism(&epicycloid("1e9"), ""), mechanism(&epicycloid("1000.0"), ""), "n_tilde", "1e-3..=1e3"),
+        (mechanism(&bifilar("1e-300"), ""), mechanism(&bifilar("1e-6"), ""), "length", "1e-6..=1e3"),
+        (mechanism(&rollers("1000000000"), ""), mechanism(&rollers("100"), ""), "count", "1 to 100 rollers"),
+        (mechanism(&friction("1e-300"), ""), mechanism(&friction("1e-6"), ""), "smoothing", "1e-6..=1e3"),
+    ];
+    for (bad, good, field, range) in cases {
+        let e = mechanism_error(&s, &bad);
+        println!("{e}");
+        let after = e.split("bad.ron:").nth(1).unwrap_or_else(|| panic!("no file in: {e}"));
+        assert!(after.split(':').next().unwrap().parse::<usize>().is_ok(), "no line in: {e}");
+        assert!(e.contains("(field `") && e.contains(field), "field {field} not named in: {e}");
+        assert!(e.contains(range), "range {range} not stated in: {e}");
+        let p = s.write("good.ron", &good);
+        kanedyn::model::mechanism::Mechanism::from_file(&p).unwrap_or_else(|e| panic!("should load: {e}\n{good}"));
+    }
+}
+
+/// One cylinder's pressure table over 0..720° in steps of 10°: the example engine's pulse
+/// (1 bar base, 90 bar peak 12° after TDC, 30° wide), plus a drift that grows evenly to `seam`
+/// bar at the last point (a transducer's drift): the step across the seam is then `seam`.
+fn pressure_table(seam: f64) -> String {
+    let points: Vec<String> = (0..72)
+        .map(|i| {
+            let a = 10.0 * i as f64;
+            let d = if a > 360.0 { a - 720.0 } else { a };
+            let p = 1.0 + 89.0 * (-0.5 * ((d - 12.0) / 30.0f64).powi(2)).exp() + seam * a / 710.0;
+            format!("({a:.1}, {p:.6})")
+        })
+        .collect();
+    format!(
+        "Engine(name: \"e\", bore_m: 0.11, stroke_m: 0.12, rod_m: 0.2, reciprocating_mass_kg: 1.6, firing_order: [1],\n\
+         pressure: Table([\n{}\n]))\n",
+        points.join(",\n")
+    )
+}
+
+/// Used to pass silently: a table with an 80-bar step across the 720° → 0° seam, closed by the
+/// periodic spline with a swing nobody measured. Now the error names the table's last point and
+/// says the table is not periodic; the same table without the step loads.
+#[test]
+fn a_pressure_table_that_does_not_close_is_refused() {
+    let s = Scratch::new("seam");
+    std::fs::create_dir_all(s.0.join("engines")).unwrap();
+    let study = |engine: &str| {
+        format!(
+            "Study(name: \"s\", mechanism: \"cpva.ron\", analyses: [MultiOrder(name: \"m\", order: 3.0, \
+             engine: \"engines/{engine}\", speeds: [(rpm: 1000.0)], time_domain: false, linear: true)])\n"
+        )
+    };
+    s.write("engines/seam.ron", &pressure_table(80.0));
+    s.write("engines/closed.ron", &pressure_table(0.0));
+    let e = s.load_error(&study("seam.ron"));
+    println!("{e}");
+    assert!(e.contains("seam.ron:") && e.contains("(field `pressure[71]`)"), "{e}");
+    // At the last point's own line (the table has one point a line, from line 3).
+    assert!(e.contains("seam.ron:74:"), "{e}");
+    assert!(e.contains("not periodic across the 720° → 0° seam"), "{e}");
+    let p = s.write("ok.ron", &study("closed.ron"));
+    Study::from_file(&p).unwrap_or_else(|e| panic!("the closed table should load: {e}"));
+}
+
+// ---- Item 2: the watchdog ----
+
+/// An analysis that runs far past its plan used to run on as long as it liked (a stiff 2 s
+/// transient planned at 0.01 s ran past 11 s), holding up the whole study. Now each analysis
+/// gets `factor × plan + floor` of wall time: past that its time runs stop with a located
+/// Failures entry, and the analyses before and after it keep their results. Here the watchdog
+/// is set tight (no multiple of the plan, 0.3 s) so that a transient of 5000 s overruns it.
+#[test]
+fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
+    use kanedyn::study::{Limits, Watchdog};
+    use kanedyn::study::{LoadOptions, RunOptions, run};
+    let s = Scratch::new("watchdog");
+    let text = r#"Study(
+    name: "w",
+    mechanism: "cpva.ron",
+    lock: ["pivot"],
+    analyses: [
+        Campbell(name: "before", rpm_min: 0.0, rpm_max: 2000.0, points: 5),
+        Transient(name: "long", duration_s: 5000.0, speed: Free(rpm: 1000.0), angles: [("pivot", 0.3)],
+                  write_time_series: false),
+        LinearResponse(name: "after", rpm: 1000.0, from: 0.9, to: 1.1, points: 11),
+    ],
+)
+"#;
+    let path = s.write("w.ron", text);
+    let limits = Limits { watchdog: Watchdog { factor: 0.0, floor_s: 0.3 }, ..Limits::default() };
+    let study = Study::from_file_with(&path, &LoadOptions { limits, ..LoadOptions::default() }).unwrap();
+    let planned = study.plan().analyses[1].cpu_s;
+    let start = std::time::Instant::now();
+    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let took = start.elapsed().as_secs_f64();
+    println!("transient planned at {planned:.2} s CPU; study stopped after {took:.2} s; {:?}", report.failures);
+    // The transient alone is planned at several seconds; stopped at 0.3 s the study ends well
+    // before that even on a loaded machine.
+    assert!(planned > 3.0, "the transient should be planned long, got {planned} s");
+    assert!(took < planned, "the watchdog did not stop the transient: {took} s");
+    assert_eq!(report.failures.len(), 1, "{:?}", report.failures);
+    let f = &report.failures[0];
+    assert!(f.starts_with("Transient `long` (") && f.contains("w.ron:7:9"), "{f}");
+    assert!(f.contains("stopped by the watchdog") && f.contains("time budget of 0.3 s"), "{f}");
+    let dir = s.0.join("out").join("w");
+    for file in ["before.csv", "before.svg", "after_as_built.csv", "after.svg", "summary.md"] {
+        assert!(dir.join(file).exists(), "{file} missing");
+    }
+}
+
+// ---- Locations ----
+
+/// A second run into a folder another run holds used to be refused as "mechanism ``: output
+/// folder … is being written …", a mechanism error with an empty name. Now the message leads
+/// with the folder.
+#[test]
+fn a_busy_output_folder_is_named() {
+    use kanedyn::study::{RunOptions, run};
+    let s = Scratch::new("busy");
+    let path = s.write("b.ron", &circle_study(FREE).replace("name: \"s\"", "name: \"b\""));
+    let study = Study::from_file(&path).unwrap();
+    let out = s.0.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(out.join(".b.lock")).unwrap();
+    lock.lock().unwrap();
+    let e = match run(&study, &RunOptions { out: Some(out.clone()), progress: false }) {
+        Ok(_) => panic!("a run into a locked folder should be refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        e.starts_with(&format!(
+            "{}: output folder busy: it is being written by another kanedyn run",
+            out.join("b").display()
+        )),
+        "{e}"
+    );
+    assert!(!e.contains("mechanism ``"), "{e}");
+}
+
+/// A study whose mechanism or engine is a folder, a pipe or a file over the size cap used to be
+/// refused naming that file only, not the study field that named it. Now the error is located
+/// at the field and still names the file and why.
+#[test]
+fn a_refused_input_file_is_located_at_the_field_that_names_it() {
+    let s = Scratch::new("wholefile");
+    std::fs::create_dir_all(s.0.join("adir")).unwrap();
+    s.write("big.ron", &" ".repeat(2_000_000));
+    for (file, why) in [("adir", "not a regular file (a folder)"), ("big.ron", "more than the limit")] {
+        let e = s.load_error(&format!(
+            "Study(name: \"x\", mechanism: \"{file}\", analyses: [Campbell(name: \"c\", rpm_min: 0.0, rpm_max: 100.0, points: 3)])\n"
+        ));
+        assert_located(&e, "mechanism");
+        assert!(e.contains(&format!("{file}: ")) && e.contains(why), "{e}");
+        let e = s.load_error(&format!(
+            "Study(name: \"x\", mechanism: \"cpva.ron\", analyses: [MultiOrder(name: \"m\", order: 3.0, engine: \"{file}\", \
+             speeds: [(rpm: 1000.0)], time_domain: false, linear: true)])\n"
+        ));
+        assert_located(&e, "analyses[0].engine");
+        assert!(e.contains(why), "{e}");
+    }
+}

@@ -1,0 +1,10 @@
+//! Fixtures shared by the stories: the branched drivetrain with its closed form, the CLI runner,
+//! the paper's harmonic-balance problem, copies of the examples, a swept test signal.
+
+#![allow(dead_code)] // each story uses some of them
+
+pub mod branched;
+pub mod cli;
+pub mod cpva_hbm;
+pub mod examples;
+pub mod swept_signal;
