@@ -10,12 +10,12 @@
 
 use crate::support::cpva_hbm;
 
+use crate::support::shooting::shooting_multipliers;
 use cpva_hbm::{RPM, omega, single};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{BifurcationClass, Branch, ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Order};
-use kanedyn::time::integrate::{IntegrateOptions, integrate};
 use std::f64::consts::PI;
 
 /// Torque amplitude, N·m.
@@ -80,48 +80,6 @@ fn a_period_doubling_is_a_minus_one_multiplier_of_shooting() {
         }
         assert_eq!(outside, if inside_after { vec![0, 1] } else { vec![1, 0] }, "edge {edge}");
     }
-}
-
-/// The physical Floquet multipliers of the periodic orbit through (near) `x0` with period
-/// `period` under the mechanism's own excitation: Newton on `x(P) = x(0)` for every state but
-/// the spin angle (it advances by ΩP, and its value is a gauge), then the eigenvalues of the
-/// flow's Jacobian with the spin angle's row and column removed (its trivial +1).
-fn shooting_multipliers(kane: &mut Kane, x0: &[f64], period: f64) -> Vec<nalgebra::Complex<f64>> {
-    let opts = IntegrateOptions { rtol: 1e-12, atol: 1e-12, ..IntegrateOptions::default() };
-    let free: Vec<usize> = (1..x0.len()).collect();
-    let mut flow = |x: &[f64]| -> Vec<f64> {
-        integrate(|t, x, dx| kane.rhs(t, x, dx), x, 0.0, period, &opts, |_| {}).unwrap().x_end
-    };
-    let mut x = x0.to_vec();
-    let mut jac = nalgebra::DMatrix::zeros(free.len(), free.len());
-    for _ in 0..6 {
-        let end = flow(&x);
-        let r: Vec<f64> = free.iter().map(|&i| end[i] - x[i]).collect();
-        for (c, &i) in free.iter().enumerate() {
-            let h = 1e-6 * (1.0 + x[i].abs());
-            let (mut xp, mut xm) = (x.clone(), x.clone());
-            xp[i] += h;
-            xm[i] -= h;
-            let (ep, em) = (flow(&xp), flow(&xm));
-            for (row, &k) in free.iter().enumerate() {
-                jac[(row, c)] = (ep[k] - em[k]) / (2.0 * h);
-            }
-        }
-        if r.iter().fold(0.0f64, |m, v| m.max(v.abs())) < 1e-11 {
-            break;
-        }
-        let newton = &jac - nalgebra::DMatrix::identity(free.len(), free.len());
-        let dx = newton.lu().solve(&nalgebra::DVector::from_vec(r)).expect("a regular shooting Jacobian");
-        for (c, &i) in free.iter().enumerate() {
-            x[i] -= dx[c];
-        }
-    }
-    nalgebra::Schur::try_new(jac, f64::EPSILON, 10_000)
-        .expect("converged")
-        .complex_eigenvalues()
-        .iter()
-        .copied()
-        .collect()
 }
 
 /// The tongue's edges do not depend on the continuation's step limit (issue 26, item 2): at the

@@ -1,0 +1,50 @@
+//! An independent periodic-orbit solver for the harmonic-balance tests (tests/it/hbm_events.rs,
+//! tests/it/hbm_period_doubling.rs): shooting with DOP853 at 1e-12 and the monodromy by central
+//! differences of whole periods.
+
+use kanedyn::kane::Kane;
+use kanedyn::time::integrate::{IntegrateOptions, integrate};
+
+/// The physical Floquet multipliers of the periodic orbit through (near) `x0` with period
+/// `period` under the mechanism's own excitation: Newton on `x(P) = x(0)` for every state but
+/// the spin angle (it advances by ΩP, and its value is a gauge), then the eigenvalues of the flow's Jacobian with the spin
+/// angle's row and column removed (its trivial +1).
+pub fn shooting_multipliers(kane: &mut Kane, x0: &[f64], period: f64) -> Vec<nalgebra::Complex<f64>> {
+    let opts = IntegrateOptions { rtol: 1e-12, atol: 1e-12, ..IntegrateOptions::default() };
+    let dim = x0.len();
+    let free: Vec<usize> = (1..dim).collect();
+    let mut flow = |x: &[f64]| -> Vec<f64> {
+        integrate(|t, x, dx| kane.rhs(t, x, dx), x, 0.0, period, &opts, |_| {}).unwrap().x_end
+    };
+    let mut x = x0.to_vec();
+    let mut jac = nalgebra::DMatrix::zeros(free.len(), free.len());
+    for _ in 0..6 {
+        let end = flow(&x);
+        let r: Vec<f64> = free.iter().map(|&i| end[i] - x[i]).collect();
+        for (c, &i) in free.iter().enumerate() {
+            let h = 1e-6 * (1.0 + x[i].abs());
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[i] += h;
+            xm[i] -= h;
+            let (ep, em) = (flow(&xp), flow(&xm));
+            for (row, &k) in free.iter().enumerate() {
+                jac[(row, c)] = (ep[k] - em[k]) / (2.0 * h);
+            }
+        }
+        let norm = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if norm < 1e-11 {
+            break;
+        }
+        let newton = &jac - nalgebra::DMatrix::identity(free.len(), free.len());
+        let dx = newton.lu().solve(&nalgebra::DVector::from_vec(r)).expect("a regular shooting Jacobian");
+        for (c, &i) in free.iter().enumerate() {
+            x[i] -= dx[c];
+        }
+    }
+    nalgebra::Schur::try_new(jac, f64::EPSILON, 10_000)
+        .expect("converged")
+        .complex_eigenvalues()
+        .iter()
+        .copied()
+        .collect()
+}
