@@ -119,6 +119,11 @@ pub struct TransientResult {
     /// The response's order–rpm map (None when the run did not give one block).
     #[serde(skip)]
     pub map: Option<OrderMap>,
+    /// Why there is no map (or no map of some element), for the summary: a run too short or
+    /// turning the wrong way for the map's blocks is a note, not a failure, since the time
+    /// series, peaks and reactions stand without it.
+    #[serde(skip)]
+    pub map_note: Option<String>,
     /// Block speeds of the map, rpm.
     pub block_rpm: Vec<f64>,
     /// Block centre times of the map, s.
@@ -346,6 +351,7 @@ pub(crate) fn compute(
     let orders = cut_orders(spec);
     let mut cuts = Vec::new();
     let mut map = None;
+    let mut map_notes: Vec<String> = Vec::new();
     let body = &study.spec.response_body;
     match order_rpm_map(&response, &theta, fs, spec.map.max_order, &opts_map) {
         Ok(m) => {
@@ -353,17 +359,21 @@ pub(crate) fn compute(
             for (e, &j) in study.elements.iter().enumerate() {
                 let joint = &mech.joints[j];
                 match order_rpm_map(&element_series[e].0, &theta, fs, spec.map.max_order, &opts_map) {
-                    Ok(em) => cuts.extend(cuts_of(&em, &orders, &format!("{}_q", joint.name), joint.kind.coordinate_unit())),
-                    Err(err) => failures.push(format!("{}: order map of `{}`: {err}", spec.name, joint.name)),
+                    Ok(em) => {
+                        cuts.extend(cuts_of(&em, &orders, &format!("{}_q", joint.name), joint.kind.coordinate_unit()))
+                    }
+                    Err(err) => map_notes.push(format!("no order map of `{}` ({err})", joint.name)),
                 }
             }
             map = Some(m);
         }
-        Err(e) => failures.push(format!(
-            "{}: no order–rpm map ({e}); it needs the spin joint turning forwards through at least one block of {} revolutions",
-            spec.name, spec.map.revs_per_block
+        Err(e) => map_notes.push(format!(
+            "no order–rpm map ({e}): it needs the spin joint turning forwards through at least one block of {} \
+             revolutions (`map.revs_per_block`)",
+            spec.map.revs_per_block
         )),
     }
+    let map_note = (!map_notes.is_empty()).then(|| map_notes.join("; "));
     let elements = study
         .elements
         .iter()
@@ -406,6 +416,7 @@ pub(crate) fn compute(
         reaction_ranges,
         drive_torque,
         map,
+        map_note,
     };
     Ok((result, failures))
 }

@@ -224,6 +224,9 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
             fmt_num(target)
         );
     }
+    if let Some(note) = &r.map_note {
+        let _ = writeln!(md, "Note: {note}. The time series, peaks and reactions do not depend on it.\n");
+    }
     if r.map.is_some() {
         let _ = writeln!(
             md,
