@@ -270,6 +270,8 @@ impl Mechanism {
             return Err(src.error("gravity", "gravity must be finite (m/s²)"));
         }
         let mut loads = Loads { gravity: Vec2::new(gx, gy), ..Loads::default() };
+        // The file index (`loads[l]`) of each ground damper, for the time-scale check's messages.
+        let mut ground_damper_at = Vec::new();
         let body_of = |name: &str, path: &str| -> Result<usize> {
             body_index.get(name).and_then(|&b| new_index[b]).ok_or_else(|| {
                 src.error(
@@ -313,6 +315,7 @@ impl Mechanism {
                             .error(&format!("{path}.c"), format!("damping must be finite and non-negative, got {c}")));
                     }
                     loads.ground_dampers.push(GroundDamper { body: b, c: *c });
+                    ground_damper_at.push(l);
                 }
                 LoadSpec::PointForce { body, at, force, frame } => {
                     let b = body_of(body, &format!("{path}.body"))?;
@@ -379,8 +382,77 @@ impl Mechanism {
                 ),
             ));
         }
+        check_time_scales(&mech, m, src, &|j| order.get(j).map_or_else(String::new, |k| format!("joints[{k}]")), &ground_damper_at)?;
         Ok(mech)
     }
+}
+
+/// Refuses a stiffness or damping whose time scale on the inertia it moves lies outside
+/// [`crate::model::ranges::MAX_NATURAL_HZ`] / [`crate::model::ranges::MAX_DECAY_RATE`], naming the
+/// field, the rate it sets and the largest coefficient that inertia accepts. `joint_path` maps a
+/// tree joint to its `joints[k]`; `ground_damper_at` the ground dampers to their `loads[l]`.
+fn check_time_scales(
+    mech: &Mechanism,
+    m: &nalgebra::DMatrix<f64>,
+    src: &Source,
+    joint_path: &dyn Fn(usize) -> String,
+    ground_damper_at: &[usize],
+) -> Result<()> {
+    use crate::model::ranges::{Element, compliances, time_scales};
+    let Some(diag) = compliances(m) else { return Ok(()) };
+    for ts in time_scales(mech, &diag) {
+        // A friction's smoothing has its own range (`ranges::FRICTION_SMOOTHING`): a near-Coulomb
+        // law is stiff by choice, which the plan counts and the watchdog bounds.
+        if ts.rate() <= ts.limit() || matches!(ts.element, Element::Friction(_)) {
+            continue;
+        }
+        let joint = |j: usize| (joint_path(j), format!("joint `{}`", mech.joints[j].name));
+        let gear = |g: usize| {
+            let gr = &mech.gears[g];
+            (format!("gears[{g}]"), format!("the mesh of `{}` on `{}`", mech.joints[gr.joint].name, mech.joints[gr.follows].name))
+        };
+        let ((base, owner), field, what) = match ts.element {
+            Element::Spring(j) => (joint(j), "spring.stiffness".to_string(), "spring stiffness"),
+            Element::Stage(j, coast, i) => {
+                (joint(j), format!("stages.{}[{i}].stiffness", if coast { "coast" } else { "drive" }), "stage stiffness")
+            }
+            Element::StopStiffness(j) => (joint(j), "stops.stiffness".to_string(), "end-stop stiffness"),
+            Element::StopDamping(j) => (joint(j), "stops.damping".to_string(), "end-stop damping"),
+            Element::Friction(_) => continue,
+            Element::Damper(j) => (joint(j), "damper".to_string(), "damper"),
+            Element::MeshStiffness(g) => (gear(g), "mesh.stiffness".to_string(), "mesh stiffness"),
+            Element::MeshDamping(g) => (gear(g), "mesh.damping".to_string(), "mesh damping"),
+            Element::GroundDamper(i) => (
+                (ground_damper_at.get(i).map_or_else(String::new, |l| format!("loads[{l}]")), "a ground damper".to_string()),
+                "c".to_string(),
+                "ground damping",
+            ),
+        };
+        let scale = if ts.is_stiffness() {
+            format!(
+                "rings at {:.3e} Hz on the inertia it moves (√(k/J)/2π with 1/J = {:.3e} from M⁻¹ at q = 0); the accepted \
+                 range is up to {:.0e} Hz, here a stiffness up to {:.3e}",
+                ts.rate(),
+                ts.compliance,
+                ts.limit(),
+                ts.largest_coefficient()
+            )
+        } else {
+            format!(
+                "decays at {:.3e} 1/s on the inertia it moves (c/J with 1/J = {:.3e} from M⁻¹ at q = 0); the accepted \
+                 range is up to {:.0e} 1/s (a time constant of 10 ns or more), here a damping up to {:.3e}",
+                ts.rate(),
+                ts.compliance,
+                ts.limit(),
+                ts.largest_coefficient()
+            )
+        };
+        return Err(src.error(
+            &format!("{base}.{field}"),
+            format!("{owner}: {what} {:e} {scale}; a value in the wrong units?", ts.coefficient),
+        ));
+    }
+    Ok(())
 }
 
 fn check_name(src: &Source, path: &str, name: &str) -> Result<()> {

@@ -259,36 +259,26 @@ pub(crate) fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
     (12.0 * steps + duration_s * i.sample_hz) * rhs_s(n)
 }
 
-/// The mechanism's fastest time scales at q = 0: the highest `√(k/J)/2π` of its joint springs
-/// (the stiffest stage of a staged spring) and the highest decay rate `c/J` of its joint and
-/// ground dampers, Hz and 1/s, with `1/J` the diagonal of the inverse mass matrix at the joint's
-/// coordinate (the compliance a torque there meets; for a ground damper, of the body's first
-/// joint). A coarse bound, not an eigen-analysis: it is there to see a stiff model, which the
+/// The mechanism's fastest time scales at q = 0: the highest natural frequency of its springs,
+/// stages, stops and meshes (Hz) and the highest decay rate of its dampers (1/s), each on the
+/// inertia it acts on (`model::ranges::time_scales`, the same figures the loader checks against
+/// its ranges). A coarse bound, not an eigen-analysis: it is there to see a stiff model, which the
 /// excitation alone does not show. `(0, 0)` when the mass matrix cannot be formed or the
-/// mechanism is too large to factor here (over 200 coordinates).
+/// mechanism is too large to invert here.
 pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f64) {
+    use crate::model::ranges::{compliances, time_scales};
     let n = mech.ndof();
-    if n == 0 || n > 200 {
+    if n == 0 {
         return (0.0, 0.0);
     }
     let Ok(mut kane) = crate::kane::Kane::new(mech) else { return (0.0, 0.0) };
-    let m = kane.mass_matrix(&vec![0.0; n]).clone();
-    let Some(inv) = m.try_inverse() else { return (0.0, 0.0) };
-    let compliance = |k: usize| inv[(k, k)].max(0.0);
+    let Some(diag) = compliances(kane.mass_matrix(&vec![0.0; n])) else { return (0.0, 0.0) };
     let (mut f, mut decay) = (0.0_f64, 0.0_f64);
-    for j in &mech.joints {
-        let Some(k) = j.coordinate else { continue };
-        let stiffest =
-            j.couplings.stages.as_ref().map_or(0.0, |s| {
-                s.drive.iter().chain(s.coast.iter().flatten()).map(|st| st.stiffness).fold(0.0, f64::max)
-            });
-        let stiffness = j.spring.map_or(0.0, |s| s.stiffness).max(stiffest);
-        f = f.max((stiffness * compliance(k)).max(0.0).sqrt() / (2.0 * std::f64::consts::PI));
-        decay = decay.max(j.damper * compliance(k));
-    }
-    for g in &mech.loads.ground_dampers {
-        if let Some(k) = mech.joints.get(g.body).and_then(|j| j.coordinate) {
-            decay = decay.max(g.c * compliance(k));
+    for ts in time_scales(mech, &diag) {
+        if ts.is_stiffness() {
+            f = f.max(ts.rate());
+        } else {
+            decay = decay.max(ts.rate());
         }
     }
     (if f.is_finite() { f } else { 0.0 }, if decay.is_finite() { decay } else { 0.0 })

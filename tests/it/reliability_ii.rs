@@ -138,7 +138,9 @@ fn mechanism_error(s: &Scratch, text: &str) -> String {
 /// Each used to be accepted: "finite and positive" (or "non-zero") was the only rule, so a gear
 /// ratio of 1e-300 passed and a 31-point linear response on it never finished; an epicycloid
 /// order of 1e9, a bifilar length of 1e-300, a billion rollers and a friction smoothing of
-/// 1e-300 went through without a word. Now each is a located error stating the accepted range;
+/// 1e-300 went through without a word, and so did a shaft damper of 1e9 N·m·s/rad (a 2 s
+/// transient planned at 0.01 s then ran for minutes). Now each is a located error stating the
+/// accepted range (for a stiffness or a damping: the time scale it sets on the inertia it moves);
 /// the values just inside each range still load.
 #[test]
 fn extreme_mechanism_values_are_refused_with_the_range() {
@@ -164,6 +166,34 @@ fn extreme_mechanism_values_are_refused_with_the_range() {
         (mechanism(&bifilar("1e-300"), ""), mechanism(&bifilar("1e-6"), ""), "length", "1e-6..=1e3"),
         (mechanism(&rollers("1000000000"), ""), mechanism(&rollers("100"), ""), "count", "1 to 100 rollers"),
         (mechanism(&friction("1e-300"), ""), mechanism(&friction("1e-6"), ""), "smoothing", "1e-6..=1e3"),
+        // Joint `j` carries body `b` (0.0002 kg·m²) on the rotor: the compliance it meets is
+        // ≈ 1/0.0002 = 5000 1/(kg·m²), so a decay rate of 1e8 1/s allows c ≈ 2e4 N·m·s/rad
+        // and a natural frequency of 1 MHz allows k ≈ 7.9e9 N·m/rad.
+        (mechanism("damper: 1e9", ""), mechanism("damper: 1e3", ""), "joints[1].damper", "up to 1e8 1/s"),
+        (
+            mechanism("spring: (stiffness: 1e15)", ""),
+            mechanism("spring: (stiffness: 1e8)", ""),
+            "joints[1].spring.stiffness",
+            "up to 1e6 Hz",
+        ),
+        (
+            mechanism("stops: (lower: -1.0, upper: 1.0, stiffness: 1e5, damping: 1e12)", ""),
+            mechanism("stops: (lower: -1.0, upper: 1.0, stiffness: 1e5, damping: 1e2)", ""),
+            "joints[1].stops.damping",
+            "up to 1e8 1/s",
+        ),
+        (
+            gear("2.0, mesh: (stiffness: 1e18, damping: 0.0)"),
+            gear("2.0, mesh: (stiffness: 1e6, damping: 0.0)"),
+            "gears[0].mesh.stiffness",
+            "up to 1e6 Hz",
+        ),
+        (
+            mechanism("", "loads: [GroundDamper(body: \"b\", c: 1e10)],"),
+            mechanism("", "loads: [GroundDamper(body: \"b\", c: 1e2)],"),
+            "loads[0].c",
+            "up to 1e8 1/s",
+        ),
     ];
     for (bad, good, field, range) in cases {
         let e = mechanism_error(&s, &bad);
