@@ -15,7 +15,7 @@
 //! `F_u = −W⁻ᵀ (G + C_dampers + C) W⁻¹`, the modes and their ω_i still those of M and K.
 
 use super::{Damping, LinResult, LinearError, LinearModel, Spin};
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 /// Damping ratios per vibration mode, in order of undamped natural frequency.
@@ -94,7 +94,7 @@ impl LinearModel {
         let l_inv =
             l.clone().try_inverse().ok_or_else(|| LinearError::MassMatrix { mechanism: self.mech.name.clone() })?;
         let a = &l_inv * &k * l_inv.transpose();
-        let eig = SymmetricEigen::new((&a + a.transpose()) * 0.5);
+        let eig = super::bounded::symmetric_eigen((&a + a.transpose()) * 0.5)?;
         let mut order: Vec<usize> = (0..kept.len()).collect();
         order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
         let scale = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b.abs())).max(f64::MIN_POSITIVE);

@@ -66,6 +66,7 @@
 //! eq. 14) the spin coordinate and its speed are removed (`θ* = 0`, `u_s* = 0`; the dropped row
 //! is the reaction torque); the CPVA's pendulum then vibrates at n_t (eq. 15).
 
+mod bounded;
 mod campbell;
 mod damping;
 mod gravity;
@@ -492,7 +493,7 @@ impl LinearModel {
             jac.set_column(n - 1, &g_s);
             // The pseudo-inverse takes the minimum-norm step along neutral directions (a
             // pendulum at Ω = 0, a second free root) instead of failing.
-            let svd = jac.svd(true, true);
+            let svd = bounded::svd(jac, true, true)?;
             let eps = 1e-13 * svd.singular_values.max();
             let step = svd.solve(&(-&r), eps).map_err(|e| LinearError::Invalid(format!("internal: {e}")))?;
             for (c, &j) in others.iter().enumerate() {

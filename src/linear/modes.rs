@@ -322,7 +322,9 @@ fn eigenvalues(s: &DMatrix<f64>) -> LinResult<Vec<C64>> {
 fn null_vector(s: &DMatrix<f64>, lambda: C64, k: usize) -> Vec<C64> {
     let d = s.nrows();
     let a = DMatrix::from_fn(d, d, |i, j| C64::new(s[(i, j)], 0.0) - if i == j { lambda } else { C64::new(0.0, 0.0) });
-    let svd = a.svd(false, true);
+    let Ok(svd) = super::bounded::svd(a, false, true) else {
+        return vec![C64::new(0.0, 0.0); d];
+    };
     let Some(vt) = svd.v_t else {
         return vec![C64::new(0.0, 0.0); d];
     };
