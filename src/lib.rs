@@ -13,7 +13,8 @@
 //!                                                        └─► hbm    (periodic branches)   ─┘   (plot)
 //! ```
 //!
-//! - [`io`], [`error`]: reading text under a policy, and errors located at file:line:col.
+//! - [`io`], [`error`]: reading text under a policy, and errors located at file:line:col;
+//!   [`deadline`]: the watchdog's stop time that every long loop checks.
 //! - [`model`]: what the user describes (bodies, joints, loads, excitations, speeds), as data.
 //! - [`load`]: file → spec → [`model::mechanism::Mechanism`], with catalog parts and the
 //!   engine's positive-definiteness check, every error located at the offending field.
@@ -28,6 +29,7 @@
 #![warn(missing_docs)]
 #![allow(clippy::needless_range_loop)]
 
+pub mod deadline;
 pub mod error;
 pub mod io;
 

@@ -382,7 +382,13 @@ impl Mechanism {
                 ),
             ));
         }
-        check_time_scales(&mech, m, src, &|j| order.get(j).map_or_else(String::new, |k| format!("joints[{k}]")), &ground_damper_at)?;
+        check_time_scales(
+            &mech,
+            m,
+            src,
+            &|j| order.get(j).map_or_else(String::new, |k| format!("joints[{k}]")),
+            &ground_damper_at,
+        )?;
         Ok(mech)
     }
 }
@@ -409,13 +415,18 @@ fn check_time_scales(
         let joint = |j: usize| (joint_path(j), format!("joint `{}`", mech.joints[j].name));
         let gear = |g: usize| {
             let gr = &mech.gears[g];
-            (format!("gears[{g}]"), format!("the mesh of `{}` on `{}`", mech.joints[gr.joint].name, mech.joints[gr.follows].name))
+            (
+                format!("gears[{g}]"),
+                format!("the mesh of `{}` on `{}`", mech.joints[gr.joint].name, mech.joints[gr.follows].name),
+            )
         };
         let ((base, owner), field, what) = match ts.element {
             Element::Spring(j) => (joint(j), "spring.stiffness".to_string(), "spring stiffness"),
-            Element::Stage(j, coast, i) => {
-                (joint(j), format!("stages.{}[{i}].stiffness", if coast { "coast" } else { "drive" }), "stage stiffness")
-            }
+            Element::Stage(j, coast, i) => (
+                joint(j),
+                format!("stages.{}[{i}].stiffness", if coast { "coast" } else { "drive" }),
+                "stage stiffness",
+            ),
             Element::StopStiffness(j) => (joint(j), "stops.stiffness".to_string(), "end-stop stiffness"),
             Element::StopDamping(j) => (joint(j), "stops.damping".to_string(), "end-stop damping"),
             Element::Friction(_) => continue,
@@ -423,7 +434,10 @@ fn check_time_scales(
             Element::MeshStiffness(g) => (gear(g), "mesh.stiffness".to_string(), "mesh stiffness"),
             Element::MeshDamping(g) => (gear(g), "mesh.damping".to_string(), "mesh damping"),
             Element::GroundDamper(i) => (
-                (ground_damper_at.get(i).map_or_else(String::new, |l| format!("loads[{l}]")), "a ground damper".to_string()),
+                (
+                    ground_damper_at.get(i).map_or_else(String::new, |l| format!("loads[{l}]")),
+                    "a ground damper".to_string(),
+                ),
                 "c".to_string(),
                 "ground damping",
             ),

@@ -215,6 +215,7 @@ fn hbm_branch(
                 BranchEnd::LeftRange => "LeftRange",
                 BranchEnd::MaxPoints => "MaxPoints",
                 BranchEnd::StepTooSmall => "StepTooSmall",
+                BranchEnd::Watchdog => "Watchdog",
             }
             .to_string(),
             newton_iterations: branch.newton_iterations,

@@ -178,6 +178,9 @@ pub enum BranchEnd {
     /// The step fell below [`ContinuationOptions::ds_min`](super::ContinuationOptions::ds_min) (the
     /// last point is the last success).
     StepTooSmall,
+    /// Passed [`ContinuationOptions::deadline`](super::ContinuationOptions::deadline): the
+    /// analysis overran its time budget (the last point is the last success).
+    Watchdog,
 }
 
 /// A solution branch.

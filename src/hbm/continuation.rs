@@ -82,6 +82,9 @@ pub struct ContinuationOptions {
     /// Refine each fold to `|dλ/ds| < 1e-6` by a secant search, and locate each other multiplier
     /// crossing by bisection.
     pub refine_folds: bool,
+    /// The watchdog's stop time: past it the branch ends with [`BranchEnd::Watchdog`] and the
+    /// points it reached (checked before every step; `None`: no deadline).
+    pub deadline: Option<crate::deadline::Deadline>,
 }
 
 impl Default for ContinuationOptions {
@@ -95,6 +98,7 @@ impl Default for ContinuationOptions {
             min_cos: 0.98,
             stability: true,
             refine_folds: true,
+            deadline: None,
         }
     }
 }
@@ -309,6 +313,9 @@ impl Hbm {
             if points.len() >= copts.max_points {
                 break BranchEnd::MaxPoints;
             }
+            if crate::deadline::Deadline::passed_opt(copts.deadline) {
+                break BranchEnd::Watchdog;
+            }
             if ds < copts.ds_min {
                 // The corrector fails at every step close to the last point (a branch point of
                 // several coinciding branches, where the bordered matrix is singular in more than
@@ -483,11 +490,13 @@ impl Hbm {
             }
         };
         let mut branch = Branch { parameter, points, folds, bifurcations: Vec::new(), end, newton_iterations: newton };
-        if copts.refine_folds && copts.stability {
+        // Past the deadline the crossings stay where the accepted points bracket them.
+        let refine = copts.refine_folds && branch.end != BranchEnd::Watchdog;
+        if refine && copts.stability {
             self.split_narrow_pairs(&su, &mut branch, &mut tests);
         }
         branch.bifurcations = bifurcations(&branch.points, &branch.folds);
-        if copts.refine_folds {
+        if refine {
             self.refine_crossings(&su, &mut branch);
         }
         Ok(branch)

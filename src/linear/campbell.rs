@@ -309,6 +309,23 @@ pub fn campbell(
     modal: Option<&ModalDamping>,
     guess: Option<&[f64]>,
 ) -> LinResult<Campbell> {
+    campbell_until(mech, spin_joint, rpm, orders, spin, damping, modal, guess, None)
+}
+
+/// [`campbell`] that stops with [`LinearError::Watchdog`](super::LinearError::Watchdog) at the
+/// first speed reached past `deadline`.
+#[allow(clippy::too_many_arguments)]
+pub fn campbell_until(
+    mech: &Mechanism,
+    spin_joint: &str,
+    rpm: &[f64],
+    orders: &[f64],
+    spin: Spin,
+    damping: Damping,
+    modal: Option<&ModalDamping>,
+    guess: Option<&[f64]>,
+    deadline: Option<crate::deadline::Deadline>,
+) -> LinResult<Campbell> {
     let damping = if modal.is_some() { Damping::Damped } else { damping };
     let tracker = Tracker { mech, spin_joint, spin, damping, modal };
     let Some(&r0) = rpm.first() else {
@@ -344,7 +361,13 @@ pub fn campbell(
             }
         }
     }
-    for &r in &rpm[1..] {
+    for (i, &r) in rpm.iter().enumerate().skip(1) {
+        if let Some(d) = deadline.filter(|d| d.passed()) {
+            return Err(super::LinearError::Watchdog {
+                reached: format!("at {} rpm after {i} of {} speeds", rpm[i - 1], rpm.len()),
+                budget_s: d.budget_s,
+            });
+        }
         let mut on_step = |a: &Step, b: &Step| -> LinResult<()> {
             for t in 0..a.modes.len() {
                 tracker.crossings(orders, t, a, b, &mut crossings)?;

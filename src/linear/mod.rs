@@ -74,7 +74,7 @@ mod modes;
 mod multi_order;
 mod response;
 
-pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell};
+pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell, campbell_until};
 pub use damping::{ModalCombination, ModalDamping};
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{GravityLine, HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
@@ -192,6 +192,14 @@ pub enum LinearError {
     Eigen {
         /// State dimension.
         dim: usize,
+    },
+    /// The analysis passed the watchdog's deadline ([`crate::deadline::Deadline`]).
+    #[error("stopped by the watchdog {reached}: the analysis overran its time budget of {budget_s:.1} s")]
+    Watchdog {
+        /// Where it had got to (`at 1200 rpm after 40 of 1000 speeds`).
+        reached: String,
+        /// The budget, s of wall time.
+        budget_s: f64,
     },
     /// `iΩnM + A` is singular: an undamped resonance hit exactly, or order 0.
     #[error("iΩnM + A is singular at order {order} (an undamped resonance hit exactly, or a zero frequency)")]

@@ -178,10 +178,7 @@ impl Study {
     /// A copy whose time runs (its comparisons' too) stop `budget_s` of wall time from now.
     pub(crate) fn with_deadline(&self, budget_s: f64) -> Study {
         let mut s = self.clone();
-        let at = std::time::Instant::now()
-            .checked_add(std::time::Duration::from_secs_f64(budget_s.min(1e9)))
-            .unwrap_or_else(|| std::time::Instant::now() + std::time::Duration::from_secs(1 << 30));
-        let deadline = Some(Deadline { at, budget_s });
+        let deadline = Some(Deadline::after(budget_s));
         s.spec.integration.deadline = deadline;
         for (_, subs) in &mut s.comparisons {
             for (_, sub) in subs {

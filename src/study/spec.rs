@@ -68,22 +68,7 @@ pub struct IntegrationSpec {
     pub watchdog: super::plan::Watchdog,
 }
 
-/// When a running analysis must stop, and the time budget that gave that instant (for the
-/// message).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Deadline {
-    /// The instant past which every loop that checks it stops.
-    pub at: std::time::Instant,
-    /// The budget, s of wall time from the analysis's start.
-    pub budget_s: f64,
-}
-
-impl Deadline {
-    /// Whether the deadline has passed.
-    pub fn passed(&self) -> bool {
-        std::time::Instant::now() >= self.at
-    }
-}
+pub use crate::deadline::Deadline;
 
 impl Default for IntegrationSpec {
     fn default() -> Self {

@@ -297,6 +297,65 @@ fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
     }
 }
 
+/// The watchdog used to reach only time runs: a Campbell diagram of many speeds, a linear
+/// response of many orders and a harmonic-balance branch at a tiny step ran to the end
+/// whatever their budget. Now each stops at its next speed, chunk of orders or branch point
+/// past the deadline, with a Failures entry saying where it got to; the analysis after them
+/// still runs. The watchdog is set tight (no multiple of the plan, 0.3 s of wall time), and each
+/// of the three is planned at seconds.
+#[test]
+fn the_watchdog_stops_campbell_linear_response_and_harmonic_balance() {
+    use kanedyn::study::{Limits, Watchdog};
+    use kanedyn::study::{LoadOptions, RunOptions, run};
+    let s = Scratch::new("watchdog_lin");
+    let text = r#"Study(
+    name: "w",
+    mechanism: "cpva.ron",
+    lock: ["pivot"],
+    analyses: [
+        Campbell(name: "camp", rpm_min: 0.0, rpm_max: 2000.0, points: 400000),
+        LinearResponse(name: "lin", rpm: 1000.0, from: 0.5, to: 5.0, points: 1000000),
+        HarmonicBalance(name: "hbm", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [500.0],
+                        harmonics: 40, max_step: 0.0005),
+        LinearResponse(name: "after", rpm: 1000.0, from: 0.9, to: 1.1, points: 11),
+    ],
+)
+"#;
+    let path = s.write("w.ron", text);
+    let limits = Limits { watchdog: Watchdog { factor: 0.0, floor_s: 0.3 }, ..Limits::default() };
+    let study = Study::from_file_with(&path, &LoadOptions { limits, ..LoadOptions::default() }).unwrap();
+    let plan = study.plan();
+    let planned: Vec<f64> = plan.analyses.iter().map(|a| a.cpu_s).collect();
+    let start = std::time::Instant::now();
+    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let took = start.elapsed().as_secs_f64();
+    println!("planned {planned:?} s; study took {took:.2} s; {:#?}", report.failures);
+    // The linear response of 10⁶ orders takes about 1 s (plan 2.3 s); the others are planned
+    // far longer than they take (the harmonic balance bounds a branch by its point cap).
+    for k in 0..3 {
+        assert!(planned[k] > 1.0, "analysis {k} should be planned long, got {} s", planned[k]);
+    }
+    // Three stops at 0.3 s each, plus the setup of each and the last small analysis: far below
+    // the ~planned total even on a loaded machine.
+    assert!(took < 0.5 * planned[..3].iter().sum::<f64>(), "the watchdog did not stop them: {took} s");
+    let named = |kind: &str, name: &str, line: usize| {
+        report
+            .failures
+            .iter()
+            .find(|f| f.starts_with(&format!("{kind} `{name}` (")))
+            .filter(|f| f.contains(&format!("w.ron:{line}:9")) && f.contains("watchdog") && f.contains("0.3 s"))
+            .unwrap_or_else(|| panic!("no located watchdog failure for {name}: {:?}", report.failures))
+            .clone()
+    };
+    assert!(named("Campbell", "camp", 6).contains("rpm after"));
+    assert!(named("LinearResponse", "lin", 7).contains("order"));
+    assert!(named("HarmonicBalance", "hbm", 8).contains("stopped by the watchdog at order"));
+    let dir = s.0.join("out").join("w");
+    for file in ["after_as_built.csv", "after.svg", "summary.md"] {
+        assert!(dir.join(file).exists(), "{file} missing");
+    }
+}
+
 // ---- Locations ----
 
 /// A second run into a folder another run holds used to be refused as "mechanism ``: output

@@ -10,7 +10,7 @@ use super::linear::lin;
 use super::table::Table;
 use super::{Output, Study};
 use crate::error::Result;
-use crate::linear::{Campbell, Damping, Spin, campbell};
+use crate::linear::{Campbell, Damping, Spin, campbell_until};
 use crate::plot::{LineStyle, Panel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -72,8 +72,18 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
     let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
     let modal = spec.modal_damping.as_ref();
-    let c =
-        campbell(mech, &study.spec.spin_joint, &rpm, &spec.orders, spin, damping, modal, None).map_err(lin(mech))?;
+    let c = campbell_until(
+        mech,
+        &study.spec.spin_joint,
+        &rpm,
+        &spec.orders,
+        spin,
+        damping,
+        modal,
+        None,
+        study.spec.integration.deadline,
+    )
+    .map_err(lin(mech))?;
     let mut failures = Vec::new();
     for (k, t) in c.tracks.iter().enumerate() {
         if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {

@@ -204,6 +204,7 @@ fn branch_with(
         ds: defaults.ds.min(ds_max),
         stability: analysed,
         refine_folds: analysed,
+        deadline: study.spec.integration.deadline,
         ..defaults
     };
     let b = hbm.continue_in(parameter, from, to, None, &copts).map_err(hbm_error(study))?;
@@ -218,6 +219,13 @@ struct Axis {
     label: &'static str,
     column: &'static str,
     unit: &'static str,
+}
+
+impl Axis {
+    /// The unit after a value (` rpm`), nothing for the dimensionless order.
+    fn suffix(&self) -> String {
+        if self.unit == "1" { String::new() } else { format!(" {}", self.unit) }
+    }
 }
 
 fn axis(spec: &HbmSpec) -> Axis {
@@ -307,6 +315,14 @@ fn compute_with(
         let (lo, hi) = ax.range;
         for (from, to) in [(hi, lo), (lo, hi)] {
             let what = if amp.is_nan() { String::new() } else { format!(" {amp} N·m") };
+            if let Some(d) = study.spec.integration.deadline.filter(|d| d.passed()) {
+                failures.push(format!(
+                    "{}{what}, continued from {from}: not run: the analysis overran its time budget of {:.1} s \
+                     (stopped by the watchdog)",
+                    spec.name, d.budget_s
+                ));
+                continue;
+            }
             let bar = progress.map(|pr| pr.spinner(&format!("{}{what} from {from}", spec.name)));
             let hook = bar.clone().map(|bar| {
                 let (to_unit, unit) = (ax.to_unit, ax.unit);
@@ -345,14 +361,32 @@ fn compute_with(
             let stopped = match b.end {
                 BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
                 BranchEnd::MaxPoints => Some("it reached the largest number of points"),
+                BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
                 BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
             };
+            if b.end == BranchEnd::Watchdog {
+                let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
+                let at = p.last().map_or(String::new(), |last| {
+                    format!(
+                        " at {} = {:.7}{} after {} points",
+                        ax.column,
+                        last.parameter * ax.to_unit,
+                        ax.suffix(),
+                        p.len()
+                    )
+                });
+                failures.push(format!(
+                    "{}{what}, continued from {from}: stopped by the watchdog{at}: the analysis overran its time \
+                     budget of {budget:.1} s (the points reached are kept)",
+                    spec.name
+                ));
+            }
             let stopped_short = match (stopped, p.last()) {
                 (Some(reason), Some(last)) => Some(format!(
-                    "stopped because {reason}, at {} = {:.7} {} after {} points",
+                    "stopped because {reason}, at {} = {:.7}{} after {} points",
                     ax.column,
                     last.parameter * ax.to_unit,
-                    ax.unit,
+                    ax.suffix(),
                     p.len()
                 )),
                 _ => None,

@@ -181,7 +181,17 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     let variants = if spec.variants.is_empty() { &default_variant[..] } else { &spec.variants[..] };
     let mut results = Vec::new();
     let mut failures = Vec::new();
-    for v in variants {
+    // The watchdog: checked between variants and every `CHUNK` orders.
+    const CHUNK: usize = 4096;
+    let deadline = study.spec.integration.deadline;
+    let watch = |m: &crate::model::mechanism::Mechanism, reached: String| -> Result<()> {
+        match deadline.filter(|d| d.passed()) {
+            Some(d) => Err(lin(m)(LinearError::Watchdog { reached, budget_s: d.budget_s })),
+            None => Ok(()),
+        }
+    };
+    for (vi, v) in variants.iter().enumerate() {
+        watch(mech, format!("before variant `{}` ({} of {})", v.label, vi + 1, variants.len()))?;
         let m = with_dampers(mech, &v.dampers);
         let mut resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
         // Modal damping replaces the dampers of both the mechanism and its locked twin (spin free,
@@ -190,7 +200,11 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             resp.model = resp.model.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
             resp.locked = resp.locked.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
         }
-        let pts = resp.sweep(&orders).map_err(lin(&m))?;
+        let mut pts = Vec::with_capacity(orders.len());
+        for (c, chunk) in orders.chunks(CHUNK).enumerate() {
+            watch(&m, format!("in variant `{}` at order {} of {}", v.label, c * CHUNK, orders.len()))?;
+            pts.extend(resp.sweep(chunk).map_err(lin(&m))?);
+        }
         let locked_max = pts.iter().map(|p| p.locked.abs()).fold(0.0, f64::max);
         let ratio: Vec<f64> = pts.iter().map(|p| super::ratio(p.response, p.locked, locked_max)).collect();
         // Extremes refined by the linear module's golden-section search around the grid's.
@@ -225,8 +239,11 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             ));
         }
         // One solve per order for every element's coordinate.
-        let states: Vec<Option<DVector<crate::linear::C64>>> =
-            orders.iter().map(|&n| resp.coordinate_responses(n).ok()).collect();
+        let mut states: Vec<Option<DVector<crate::linear::C64>>> = Vec::with_capacity(orders.len());
+        for (c, chunk) in orders.chunks(CHUNK).enumerate() {
+            watch(&m, format!("in variant `{}` at element order {} of {}", v.label, c * CHUNK, orders.len()))?;
+            states.extend(chunk.iter().map(|&n| resp.coordinate_responses(n).ok()));
+        }
         let mut elements = Vec::with_capacity(study.elements.len());
         for &j in &study.elements {
             let joint = &m.joints[j];
