@@ -5,6 +5,7 @@
 //! shaft-spring rotor against the roots of its 2×2 characteristic polynomial, and the
 //! multi-order response of Table 1 against a hand-written 2-DOF model.
 
+use approx::assert_abs_diff_eq;
 use kanedyn::cpva::{CpvaParams, inertia_ratio, rotor_order, tuning_order};
 use kanedyn::linear::{
     C64, Damping, LinearError, LinearModel, ModeKind, OrderResponse, ResponseSpec, SpeedCase, Spin, campbell,
@@ -95,7 +96,9 @@ fn operating_point_and_jacobians_equal_eq13() {
     let so = lin.second_order(Damping::Undamped);
     let jl = k.a + k.c + 2.0 * k.b;
     assert!(rel(so.m[(0, 0)], jl) < 1e-12 && rel(so.m[(0, 1)], k.c + k.b) < 1e-12 && rel(so.m[(1, 1)], k.c) < 1e-12);
-    assert!(rel(so.k[(1, 1)], k.b * w * w) < 1e-12 && so.k[(0, 0)].abs() < 1e-9 && so.k[(0, 1)].abs() < 1e-9);
+    assert!(rel(so.k[(1, 1)], k.b * w * w) < 1e-12);
+    assert_abs_diff_eq!(so.k[(0, 0)], 0.0, epsilon = 1e-9);
+    assert_abs_diff_eq!(so.k[(0, 1)], 0.0, epsilon = 1e-9);
 }
 
 #[test]
@@ -148,7 +151,7 @@ fn eigen_orders_equal_n_t_held_and_n_r_free_for_1_and_4_pendulums() {
             worst = worst.max(rel(m.order, k.n_t));
             assert!(rel(m.order, k.n_t) < 1e-9, "N = {n} held: {} vs n_t {}", m.order, k.n_t);
             assert!(m.label.starts_with("pivot"), "held modes are pendulum modes: {}", m.label);
-            assert!(m.damping_ratio.abs() < 1e-9);
+            assert_abs_diff_eq!(m.damping_ratio, 0.0, epsilon = 1e-9);
         }
         let free = lin.modes(Spin::Free, Damping::Undamped).unwrap();
         assert_eq!(free.rigid.len(), 2);
@@ -238,7 +241,7 @@ fn relative_equilibrium_off_the_radial_line() {
         "φ₀ = {} (bisection {phi0}), {} Newton iterations, residual {:e}",
         lin.op.q[1], lin.op.iterations, lin.op.residual
     );
-    assert!((lin.op.q[1] - phi0).abs() < 1e-12);
+    assert_abs_diff_eq!(lin.op.q[1], phi0, epsilon = 1e-12);
     assert!(rel(lin.op.mean_spin_torque, p.c_r * w) < 1e-9);
     let held = lin.modes(Spin::Held, Damping::Undamped).unwrap();
     let wn = ((k.b * w * w * phi0.cos() + ks) / k.c).sqrt();
@@ -269,7 +272,7 @@ fn results_do_not_depend_on_the_speeds() {
             worst = worst.max(if a.eigenvalue.norm() == 0.0 { 0.0 } else { e });
             assert!(a.kind == b.kind && a.label == b.label);
             for (x, y) in a.coordinate_share.iter().zip(&b.coordinate_share) {
-                assert!((x - y).abs() < 1e-9);
+                assert_abs_diff_eq!(x, y, epsilon = 1e-9);
             }
         }
     }
