@@ -263,15 +263,16 @@ impl ClosedForm {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
 
     #[test]
     fn canonical_values_match_design_table() {
         let p = CpvaParams::canonical();
-        assert!((p.l() - 0.0152093650768).abs() < 1e-12);
-        assert!((p.i_b() - 2.16e-4).abs() < 1e-15);
-        assert!((p.i_a() - 3.44350435513).abs() < 1e-10);
-        assert!((p.j_b() - 1.60394871624e-3).abs() < 1e-14);
-        assert!((p.locked_inertia() - 3.6495354086).abs() < 1e-9);
-        assert!((p.n_r() - 3.19088605122).abs() < 1e-10);
+        assert_abs_diff_eq!(p.l(), 0.0152093650768, epsilon = 1e-12);
+        assert_abs_diff_eq!(p.i_b(), 2.16e-4, epsilon = 1e-15);
+        assert_abs_diff_eq!(p.i_a(), 3.44350435513, epsilon = 1e-10);
+        assert_abs_diff_eq!(p.j_b(), 1.60394871624e-3, epsilon = 1e-14);
+        assert_abs_diff_eq!(p.locked_inertia(), 3.6495354086, epsilon = 1e-9);
+        assert_abs_diff_eq!(p.n_r(), 3.19088605122, epsilon = 1e-10);
     }
 }

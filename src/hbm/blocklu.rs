@@ -263,6 +263,7 @@ impl BlockLu {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::abs_diff_eq;
 
     /// An arrow (a full first block row and column, the rest block diagonal) with a dense border:
     /// the block elimination solves it and gives its determinant as the dense LU does, to
@@ -290,7 +291,7 @@ mod tests {
         assert!((&xb - &xd).amax() < 1e-12 * xd.amax(), "{:e}", (&xb - &xd).amax());
         let (sb, lb) = Factor::Block(Box::new(block)).determinant();
         let (sd, ld) = Factor::Dense(full.lu()).determinant();
-        assert!(sb == sd && (lb - ld).abs() < 1e-12 * ld.abs().max(1.0), "{sb} {lb} vs {sd} {ld}");
+        assert!(sb == sd && abs_diff_eq!(lb, ld, epsilon = 1e-12 * ld.abs().max(1.0)), "{sb} {lb} vs {sd} {ld}");
         // A full pattern has nothing to eliminate.
         let dense = DMatrix::from_fn(m, m, |r, c| f(r, c) + if r == c { 4.0 } else { 0.0 });
         assert!(BlockLu::new(&dense, None, n, nb, 0).is_none());

@@ -335,6 +335,7 @@ pub(super) fn bifurcations(points: &[BranchPoint], folds: &[Fold]) -> Vec<Bifurc
 mod tests {
     use super::*;
     use crate::hbm::Stability;
+    use approx::abs_diff_eq;
     use nalgebra::Complex;
 
     /// A branch point at order n with the given multipliers (the rest of the solution is inert).
@@ -409,7 +410,7 @@ mod tests {
         );
         for (x, at) in b.iter().zip([3.005, 3.025, f64::NAN, 3.055, f64::NAN, 3.075]) {
             if at.is_finite() {
-                assert!((x.order - at).abs() < 1e-12, "{:?} at {} not {at}", x.kind, x.order);
+                assert!(abs_diff_eq!(x.order, at, epsilon = 1e-12), "{:?} at {} not {at}", x.kind, x.order);
             }
         }
         assert!(b[2].gains_stability && !b[0].gains_stability && !b[1].gains_stability);

@@ -873,6 +873,7 @@ pub fn continue_in_order(
 #[cfg(test)]
 mod tests {
     use super::dip;
+    use approx::abs_diff_eq;
 
     /// A test function as (sign, ln |value|).
     fn tf(v: f64) -> (f64, f64) {
@@ -888,7 +889,7 @@ mod tests {
         let p = |s: f64, g: &dyn Fn(f64) -> f64| (s, vec![tf(g(s))]);
         let found = dip(&p(-1.0, &f), &p(0.0, &f), &p(2.0, &f));
         assert_eq!(found.len(), 1);
-        assert!(found[0].0 == 0 && (found[0].1 - 1.0).abs() < 1e-12, "{found:?}");
+        assert!(found[0].0 == 0 && abs_diff_eq!(found[0].1, 1.0, epsilon = 1e-12), "{found:?}");
         let g = |s: f64| 1.0 + s;
         assert!(dip(&p(-0.5, &g), &p(0.0, &g), &p(2.0, &g)).is_empty());
         let h = |s: f64| (s - 1.0) * (s - 1.0) + 0.01;

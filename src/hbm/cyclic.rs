@@ -664,6 +664,7 @@ mod tests {
     use super::*;
     use crate::model::excitation::rpm_to_rad_s;
     use crate::model::speeds::Speeds;
+    use approx::assert_abs_diff_eq;
 
     /// The structure the non-unison block rests on (module docs, item 2), read from the general
     /// problem's per-sample A, B, C at a unison solution of three pendulums, for both speed
@@ -724,11 +725,11 @@ mod tests {
         assert_eq!(red.non_unison[0].multiplicity, 3);
         assert_eq!(red.mech.bodies.len(), 2);
         for (a, b) in red.mech.bodies.iter().zip(&one.bodies) {
-            assert!((a.inertia.mass - b.inertia.mass).abs() <= 1e-15 * b.inertia.mass);
-            assert!((a.inertia.i_com - b.inertia.i_com).abs() <= 1e-15 * b.inertia.i_com);
+            assert_abs_diff_eq!(a.inertia.mass, b.inertia.mass, epsilon = 1e-15 * b.inertia.mass);
+            assert_abs_diff_eq!(a.inertia.i_com, b.inertia.i_com, epsilon = 1e-15 * b.inertia.i_com);
             assert!((a.inertia.com - b.inertia.com).norm() <= 1e-15);
         }
-        assert!((red.mech.joints[1].damper - one.joints[1].damper).abs() <= 1e-18);
+        assert_abs_diff_eq!(red.mech.joints[1].damper, one.joints[1].damper, epsilon = 1e-18);
         assert_eq!(red.mech.joints[1].at, one.joints[1].at);
     }
 }

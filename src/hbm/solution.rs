@@ -303,6 +303,7 @@ impl HbmSolution {
 #[cfg(test)]
 mod tests {
     use super::super::test_problem;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
     use std::f64::consts::PI;
 
     /// The peak amplitude is the true maximum of the series: it equals a dense synthesis of the
@@ -326,7 +327,10 @@ mod tests {
                 let peak = sol.peak_amplitude(k);
                 let e = (peak - dense) / dense;
                 println!("{torque} N·m, n = {order}, coordinate {k}: peak {peak:.12e}, peak − dense {e:.1e} relative");
-                assert!(dense > 0.0 && e.abs() <= 1e-9, "coordinate {k}: {peak} vs dense {dense} ({e:e})");
+                assert!(
+                    dense > 0.0 && abs_diff_eq!(e, 0.0, epsilon = 1e-9),
+                    "coordinate {k}: {peak} vs dense {dense} ({e:e})"
+                );
                 assert!(peak >= dense * (1.0 - 1e-14), "the true maximum cannot lie below a sample");
             }
         }
@@ -350,7 +354,7 @@ mod tests {
             let sampled = sol.force_series(j, &|q, qd| k * q + c * qd);
             let scale = closed.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (a, b) in closed.iter().zip(&sampled) {
-                assert!((a - b).abs() <= 1e-12 * scale, "{a} vs {b}");
+                assert_abs_diff_eq!(a, b, epsilon = 1e-12 * scale);
             }
         }
         // A pure sine on coordinate 0 of an otherwise zero solution.
@@ -383,7 +387,7 @@ mod tests {
                 let w = h as f64 * sol.base_frequency;
                 let expect = k.hypot(c * w) * sol.amplitude(j, h);
                 let (amp, _) = sol.element_torque(j, k, c, m);
-                assert!((amp - expect).abs() <= 1e-12 * expect.max(1e-300), "{amp} vs {expect}");
+                assert_abs_diff_eq!(amp, expect, epsilon = 1e-12 * expect.max(1e-300));
             }
             let a0 = sol.coefficient(j, 0).0;
             let ns = 100_000;
@@ -396,7 +400,8 @@ mod tests {
             let (_, peak) = sol.element_torque(j, k, c, 1.0);
             let e = (peak - dense) / dense;
             println!("coordinate {j}: torque peak {peak:.9e} N·m, peak − dense {e:.1e}");
-            assert!(e.abs() <= 1e-9 && peak >= dense * (1.0 - 1e-14));
+            assert_abs_diff_eq!(e, 0.0, epsilon = 1e-9);
+            assert!(peak >= dense * (1.0 - 1e-14));
         }
     }
 }

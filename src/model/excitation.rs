@@ -194,6 +194,7 @@ impl Excitation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     #[test]
     fn sweep_phase_is_the_integral_of_the_order() {
@@ -201,9 +202,9 @@ mod tests {
         // Central difference of the integral gives back n(t) (exact for a quadratic).
         for &t in &[0.5, 100.0, 239.0, 300.0] {
             let d = (o.integral(t + 1e-3) - o.integral(t - 1e-3)) / 2e-3;
-            assert!((d - o.at(t)).abs() < 1e-9, "t = {t}: {d} vs {}", o.at(t));
+            assert!(abs_diff_eq!(d, o.at(t), epsilon = 1e-9), "t = {t}: {d} vs {}", o.at(t));
         }
-        assert!((o.integral(240.0) - 0.5 * (2.9 + 3.3) * 240.0).abs() < 1e-9);
+        assert_abs_diff_eq!(o.integral(240.0), 0.5 * (2.9 + 3.3) * 240.0, epsilon = 1e-9);
     }
 
     #[test]
@@ -212,7 +213,7 @@ mod tests {
         assert_eq!(e.ramp(0.0), 0.0);
         assert_eq!(e.ramp(1.0), 0.5);
         assert_eq!(e.ramp(2.0), 1.0);
-        assert!((e.ramp(0.5) - (3.0 * 0.0625 - 2.0 * 0.015625)).abs() < 1e-15);
+        assert_abs_diff_eq!(e.ramp(0.5), 3.0 * 0.0625 - 2.0 * 0.015625, epsilon = 1e-15);
     }
 
     #[test]
@@ -230,6 +231,6 @@ mod tests {
         let t = 0.0123;
         let w = 1000.0 * 2.0 * PI / 60.0;
         let expect = 10.0 + 40.0 * (3.0 * w * t).sin() + 5.0 * (6.0 * w * t - 0.32).sin();
-        assert!((e.torque(t) - expect).abs() < 1e-12);
+        assert_abs_diff_eq!(e.torque(t), expect, epsilon = 1e-12);
     }
 }

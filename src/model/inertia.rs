@@ -80,6 +80,7 @@ impl Sub for PlanarInertia {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
 
     #[test]
     fn add_is_commutative_and_sub_inverts_add() {
@@ -87,13 +88,13 @@ mod tests {
         let b = PlanarInertia::new(0.5, Vec2::new(-0.4, 0.0), 0.001);
         let ab = a + b;
         let ba = b + a;
-        assert!((ab.mass - ba.mass).abs() < 1e-15);
+        assert_abs_diff_eq!(ab.mass, ba.mass, epsilon = 1e-15);
         assert!((ab.com - ba.com).norm() < 1e-15);
-        assert!((ab.i_com - ba.i_com).abs() < 1e-15);
+        assert_abs_diff_eq!(ab.i_com, ba.i_com, epsilon = 1e-15);
         let back = ab - b;
-        assert!((back.mass - a.mass).abs() < 1e-14);
+        assert_abs_diff_eq!(back.mass, a.mass, epsilon = 1e-14);
         assert!((back.com - a.com).norm() < 1e-14);
-        assert!((back.i_com - a.i_com).abs() < 1e-14);
+        assert_abs_diff_eq!(back.i_com, a.i_com, epsilon = 1e-14);
     }
 
     #[test]
@@ -101,6 +102,6 @@ mod tests {
         // Two 1 kg points 2 m apart: i_com = 2 · 1 · 1² = 2 kg·m² about the midpoint.
         let s = PlanarInertia::point(1.0, Vec2::new(-1.0, 0.0)) + PlanarInertia::point(1.0, Vec2::new(1.0, 0.0));
         assert_eq!(s.com, Vec2::zeros());
-        assert!((s.i_com - 2.0).abs() < 1e-15);
+        assert_abs_diff_eq!(s.i_com, 2.0, epsilon = 1e-15);
     }
 }

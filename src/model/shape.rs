@@ -293,14 +293,15 @@ fn from_parry(mp: &MassProperties) -> PlanarInertia {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
     use std::f64::consts::PI;
 
     #[test]
     fn parry_disc_has_the_textbook_moment() {
         // Area πr², polar moment πr⁴/2 about the centre; 1e-14 covers parry storing 1/m.
         let u = ShapeSpec::Disc { radius: 0.3 }.unit_properties().unwrap();
-        assert!((u.mass - PI * 0.09).abs() < 1e-14);
-        assert!((u.i_com - PI * 0.3f64.powi(4) / 2.0).abs() < 1e-14);
+        assert_abs_diff_eq!(u.mass, PI * 0.09, epsilon = 1e-14);
+        assert_abs_diff_eq!(u.i_com, PI * 0.3f64.powi(4) / 2.0, epsilon = 1e-14);
     }
 
     #[test]

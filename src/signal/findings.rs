@@ -111,6 +111,7 @@ pub fn jump_order(t: &OrderTrace, lag: usize, skip_before_s: f64) -> Option<f64>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     /// A sweep trace over orders 3.0, 3.1, … (one window per second) with the given amplitudes.
     fn trace(amplitude: &[f64]) -> OrderTrace {
@@ -130,7 +131,8 @@ mod tests {
         let t = trace(&[0.1, 5.0, 4.0, 2.0, 3.0]);
         assert_eq!(skip_ramp(&t, 1.0).amplitude, [5.0, 4.0, 2.0, 3.0]);
         let (n, a) = trace_minimum(&t, 1.0).unwrap();
-        assert!((n - 3.3).abs() < 1e-12 && a == 2.0);
+        assert_abs_diff_eq!(n, 3.3, epsilon = 1e-12);
+        assert!(a == 2.0);
         assert_eq!(trace_minimum(&t, 10.0), None);
     }
 
@@ -140,8 +142,10 @@ mod tests {
         let second = trace(&[2.0, 0.5, 2.0, 2.0, 0.5, 2.0]);
         let iv = exceeds(&main, &second, 1.0);
         assert_eq!(iv.len(), 2);
-        assert!((iv[0].0 - 3.2).abs() < 1e-12 && (iv[0].1 - 3.3).abs() < 1e-12);
-        assert!((iv[1].0 - 3.5).abs() < 1e-12 && (iv[1].1 - 3.5).abs() < 1e-12);
+        assert_abs_diff_eq!(iv[0].0, 3.2, epsilon = 1e-12);
+        assert_abs_diff_eq!(iv[0].1, 3.3, epsilon = 1e-12);
+        assert_abs_diff_eq!(iv[1].0, 3.5, epsilon = 1e-12);
+        assert_abs_diff_eq!(iv[1].1, 3.5, epsilon = 1e-12);
     }
 
     #[test]
@@ -153,7 +157,10 @@ mod tests {
         let down = trace(&[1.0, 1.0, 3.0, 3.0, 1.0, 1.0]);
         let iv = branch_differences(&up, &down, 1.5);
         assert_eq!(iv.len(), 1);
-        assert!((iv[0].0 - 3.125).abs() <= 0.002 && (iv[0].1 - 3.375).abs() <= 0.002, "{iv:?}");
+        assert!(
+            abs_diff_eq!(iv[0].0, 3.125, epsilon = 0.002) && abs_diff_eq!(iv[0].1, 3.375, epsilon = 0.002),
+            "{iv:?}"
+        );
     }
 
     #[test]
@@ -162,7 +169,7 @@ mod tests {
         // smaller); changes below 2× never count.
         let t = trace(&[1.0, 1.5, 1.5, 1.5, 12.0, 13.0, 13.0]);
         let n = jump_order(&t, 2, 0.0).unwrap();
-        assert!((n - 3.4).abs() < 1e-12, "{n}");
+        assert_abs_diff_eq!(n, 3.4, epsilon = 1e-12);
         assert_eq!(jump_order(&trace(&[1.0, 1.5, 2.0, 2.5]), 1, 0.0), None);
     }
 }
@@ -223,6 +230,7 @@ pub fn refined_peak(y: &[f64], dy: Option<&[f64]>, dt: f64, mean: f64) -> f64 {
 #[cfg(test)]
 mod peak_tests {
     use super::refined_peak;
+    use approx::assert_abs_diff_eq;
 
     /// A 150 Hz sine sampled at 2 kHz with its crest between samples: the sample maximum misses
     /// it by up to 1 − cos(ωh/2) (2.7 %); the Hermite refinement with the exact slopes is within
@@ -243,8 +251,8 @@ mod peak_tests {
             (hermite - 2.0).abs() / 2.0,
             (catmull - 2.0).abs() / 2.0
         );
-        assert!((hermite - 2.0).abs() <= 2e-4 * 2.0);
-        assert!((catmull - 2.0).abs() <= 1e-2 * 2.0);
+        assert_abs_diff_eq!(hermite, 2.0, epsilon = 2e-4 * 2.0);
+        assert_abs_diff_eq!(catmull, 2.0, epsilon = 1e-2 * 2.0);
         assert!(hermite > sampled && catmull > sampled);
     }
 }

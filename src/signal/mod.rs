@@ -382,6 +382,7 @@ fn order_checked(order_at: &dyn Fn(f64) -> f64, time_s: f64) -> Result<f64, Sign
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     /// Parseval with the periodic Hann window: on a bin the 5-bin (indeed 3-bin) amplitude is the
     /// sinusoid's amplitude to rounding; half a bin off, the Hann kernel's leakage outside ±2 bins
@@ -392,7 +393,7 @@ mod tests {
         let n = 4000;
         let mut spec = HannSpectrum::new(n);
         let sum_w2: f64 = spec.window.iter().map(|w| w * w).sum();
-        assert!((sum_w2 - 3.0 * n as f64 / 8.0).abs() < 1e-9, "Σw² = {sum_w2}");
+        assert!(abs_diff_eq!(sum_w2, 3.0 * n as f64 / 8.0, epsilon = 1e-9), "Σw² = {sum_w2}");
         let amp = 7.3;
         let mut worst: f64 = 0.0;
         let mut block = vec![0.0; n];
@@ -406,7 +407,7 @@ mod tests {
             let centre = spec.band(k0, 2).unwrap();
             let rel = spec.band_amplitude(centre, 2) / amp - 1.0;
             if delta == 0.0 {
-                assert!(rel.abs() < 1e-12, "on-bin error {rel:e}");
+                assert!(abs_diff_eq!(rel, 0.0, epsilon = 1e-12), "on-bin error {rel:e}");
             }
             assert!(rel <= 1e-12 && rel > -3e-4, "delta = {delta}: relative error {rel:e}");
             worst = worst.max(rel.abs());
@@ -441,7 +442,7 @@ mod tests {
         };
         assert_eq!(t.min().unwrap().order, 3.1);
         assert_eq!(t.max().unwrap().time_s, 3.0);
-        assert!((t.amplitude_at_order(3.15).unwrap() - 1.5).abs() < 1e-12);
+        assert_abs_diff_eq!(t.amplitude_at_order(3.15).unwrap(), 1.5, epsilon = 1e-12);
         assert_eq!(t.amplitude_at_order(3.5), None);
         assert_eq!(OrderTrace::default().min(), None);
     }

@@ -126,6 +126,7 @@ pub fn order_rpm_map(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::abs_diff_eq;
     use std::f64::consts::PI;
 
     /// A run-up at constant angular acceleration with two order lines of known amplitude: each
@@ -142,8 +143,8 @@ mod tests {
         let cut6 = map.cut(6.0).unwrap();
         // Catmull–Rom resampling at ωΔt ≤ 0.35 costs < 2e-4 of amplitude (see resample's docs);
         // the Hann band holds the rest to rounding.
-        assert!(cut3.iter().all(|a| (a - 2.0).abs() < 2e-3 * 2.0), "{cut3:?}");
-        assert!(cut6.iter().all(|a| (a - 0.5).abs() < 2e-3 * 0.5));
+        assert!(cut3.iter().all(|&a| abs_diff_eq!(a, 2.0, epsilon = 2e-3 * 2.0)), "{cut3:?}");
+        assert!(cut6.iter().all(|&a| abs_diff_eq!(a, 0.5, epsilon = 2e-3 * 0.5)));
         // Away from the lines (order 4.5, more than h bins off either) only leakage is left.
         let cut45 = map.cut(4.5).unwrap();
         assert!(cut45.iter().all(|&a| a < 1e-3), "{cut45:?}");
@@ -151,7 +152,7 @@ mod tests {
             let exact = 60.0 * (w0 + alpha * map.time_s[k]) / (2.0 * PI);
             // The block's mean speed is that at its centre in angle, not in time: within its span.
             let (lo, hi) = map.rpm_span[k];
-            assert!(lo <= rpm && rpm <= hi && (rpm - exact).abs() <= hi - lo, "{rpm} vs {exact}");
+            assert!(lo <= rpm && rpm <= hi && abs_diff_eq!(rpm, exact, epsilon = hi - lo), "{rpm} vs {exact}");
         }
         assert!(map.speed_resolution_rpm() > 0.0);
         assert!(map.cut(100.0).is_none());

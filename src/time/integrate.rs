@@ -104,6 +104,7 @@ fn check_input(x0: &[f64], t0: f64, t1: f64, opts: &IntegrateOptions) -> Result<
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::assert_abs_diff_eq;
 
     /// Harmonic oscillator x'' = −ω² x: the samples must follow cos(ωt) to the tolerance, land
     /// on the grid t0 + k/fs and include both ends.
@@ -163,7 +164,7 @@ mod tests {
         )
         .unwrap();
         for i in 0..n {
-            assert!((out.x_end[i] - (-(i as f64)).exp()).abs() < 1e-10);
+            assert_abs_diff_eq!(out.x_end[i], (-(i as f64)).exp(), epsilon = 1e-10);
         }
         assert_eq!(out.stats.samples, 0);
     }

@@ -1,6 +1,7 @@
 //! Every catalog part and example mechanism loads, and the example files describe the same
 //! system as the CPVA builder.
 
+use approx::abs_diff_eq;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::io::Source;
 use kanedyn::kane::Kane;
@@ -68,7 +69,12 @@ fn example_files_equal_the_builder() {
         b.rhs(1.7, &x, &mut db).unwrap();
         for i in 0..2 * n {
             // The files round the pivot positions' 1e-17 m residues of cos(π/2) to 0.
-            assert!((da[i] - db[i]).abs() <= 1e-10 * db[i].abs().max(1.0), "{file}[{i}]: {} vs {}", da[i], db[i]);
+            assert!(
+                abs_diff_eq!(da[i], db[i], epsilon = 1e-10 * db[i].abs().max(1.0)),
+                "{file}[{i}]: {} vs {}",
+                da[i],
+                db[i]
+            );
         }
     }
 }

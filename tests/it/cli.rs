@@ -1,6 +1,7 @@
 //! The command-line tool: `check` and `eom` on the examples, and clean failures on bad input.
 
 use crate::support::cli;
+use approx::assert_abs_diff_eq;
 use cli::kanedyn;
 
 #[test]
@@ -26,15 +27,16 @@ fn eom_prints_round_tripping_json_equal_to_eq7() {
     let cf = kanedyn::cpva::CpvaParams::canonical().closed_form();
     let (mc, fc) = cf.mass_matrix_and_forcing(&[12.5, -0.4], &[104.7, -20.0], 250.0);
     for r in 0..2 {
-        assert!((f[r] - fc[r]).abs() <= 1e-12 * fc.amax());
+        assert_abs_diff_eq!(f[r], fc[r], epsilon = 1e-12 * fc.amax());
         for c in 0..2 {
-            assert!((m[r][c] - mc[(r, c)]).abs() <= 1e-12 * mc.amax());
+            assert_abs_diff_eq!(m[r][c], mc[(r, c)], epsilon = 1e-12 * mc.amax());
         }
     }
     assert_eq!(qdot, vec![104.7, -20.0 - 104.7]);
     let mut xd = [0.0; 4];
     cf.rhs1(250.0, &[12.5, -0.4, 104.7, -20.0], &mut xd);
-    assert!((udot[0] - xd[2]).abs() <= 1e-10 * xd[2].abs() && (udot[1] - xd[3]).abs() <= 1e-10 * xd[3].abs());
+    assert_abs_diff_eq!(udot[0], xd[2], epsilon = 1e-10 * xd[2].abs());
+    assert_abs_diff_eq!(udot[1], xd[3], epsilon = 1e-10 * xd[3].abs());
     // Printed numbers parse back to the very bits the library computes.
     let mech = kanedyn::model::mechanism::Mechanism::from_file(std::path::Path::new(concat!(
         env!("CARGO_MANIFEST_DIR"),

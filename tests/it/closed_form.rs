@@ -1,6 +1,7 @@
 //! The numeric Kane engine against the closed-form equations (7) of the paper, generalized to N
 //! synchronous pendulums, and the published formulas (15), (17), (18).
 
+use approx::{abs_diff_eq, assert_abs_diff_eq, assert_relative_eq, relative_eq};
 use kanedyn::cpva::{CpvaParams, inertia_ratio, rotor_order, tuning_order};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
@@ -49,9 +50,9 @@ fn numeric_m_and_f_equal_eq7_for_1_2_4_pendulums() {
             let (mr, fr) = kane.mass_matrix_and_forcing_rows(0.0, &q, &u);
             let k = n_pend + 1;
             for r in 0..k {
-                assert!((fr[r] - f_cf[r]).abs() <= 1e-12 * f_cf.amax());
+                assert_abs_diff_eq!(fr[r], f_cf[r], epsilon = 1e-12 * f_cf.amax());
                 for c in 0..k {
-                    assert!((mr[r * k + c] - m_cf[(r, c)]).abs() <= 1e-12 * max_abs(&m_cf));
+                    assert_abs_diff_eq!(mr[r * k + c], m_cf[(r, c)], epsilon = 1e-12 * max_abs(&m_cf));
                 }
             }
         }
@@ -109,10 +110,10 @@ fn canonical_parameters_give_back_table_2() {
     let (r, l) = (p.pivot_radius, p.l());
     let nt = tuning_order(p.pendulum_mass, r, l, p.i_b());
     let it = inertia_ratio(p.i_a(), p.pendulum_mass, r, p.i_b(), l);
-    assert!((nt - 3.11).abs() / 3.11 <= 1e-9, "n_t = {nt}");
-    assert!((it - 2255.0).abs() / 2255.0 <= 1e-9, "Ĩ = {it}");
+    assert_relative_eq!(nt, 3.11, max_relative = 1e-9);
+    assert_relative_eq!(it, 2255.0, max_relative = 1e-9);
     // n_r from eq. (17) with the recovered n_t and Ĩ equals docs/design.md's tabulated value.
-    assert!((rotor_order(nt, it) - 3.19088605122).abs() < 1e-10);
+    assert_abs_diff_eq!(rotor_order(nt, it), 3.19088605122, epsilon = 1e-10);
     // The same numbers from the generic mechanism's bodies, not from the parameter struct.
     let mech = p.with_pendulums(4).mechanism(None).unwrap();
     let pend: Vec<_> = mech.bodies[1..].iter().map(|b| b.inertia).collect();
@@ -122,7 +123,8 @@ fn canonical_parameters_give_back_table_2() {
     let r_mech = mech.joints[1].at.norm();
     let nt2 = tuning_order(m_p, r_mech, l_mech, i_b);
     let it2 = inertia_ratio(mech.bodies[0].inertia.i_com, m_p, r_mech, i_b, l_mech);
-    assert!((nt2 - 3.11).abs() / 3.11 <= 1e-9 && (it2 - 2255.0).abs() / 2255.0 <= 1e-9);
+    assert_relative_eq!(nt2, 3.11, max_relative = 1e-9);
+    assert_relative_eq!(it2, 2255.0, max_relative = 1e-9);
 }
 
 #[test]
@@ -149,9 +151,14 @@ fn synchronous_pendulums_equal_one() {
             let mut dn = vec![0.0; 2 * n];
             kn.rhs(0.0, &xn, &mut dn).unwrap();
             let scale = d1[2].abs().max(1.0);
-            assert!((dn[n] - d1[2]).abs() / scale <= 1e-12, "N = {n_pend}: rotor u̇ {} vs {}", dn[n], d1[2]);
+            assert!(
+                abs_diff_eq!(dn[n], d1[2], epsilon = 1e-12 * scale),
+                "N = {n_pend}: rotor u̇ {} vs {}",
+                dn[n],
+                d1[2]
+            );
             for i in 1..n {
-                assert!((dn[n + i] - d1[3]).abs() / d1[3].abs().max(1.0) <= 1e-11);
+                assert_abs_diff_eq!(dn[n + i], d1[3], epsilon = 1e-11 * d1[3].abs().max(1.0));
             }
         }
     }
@@ -171,7 +178,12 @@ fn closed_form_rhs_matches_engine_rhs() {
         k.rhs(0.0, &x, &mut a).unwrap();
         cf.rhs1(TORQUE, &x, &mut b);
         for i in 0..4 {
-            assert!((a[i] - b[i]).abs() <= 1e-11 * b[i].abs().max(1.0), "component {i}: {} vs {}", a[i], b[i]);
+            assert!(
+                abs_diff_eq!(a[i], b[i], epsilon = 1e-11 * b[i].abs().max(1.0)),
+                "component {i}: {} vs {}",
+                a[i],
+                b[i]
+            );
         }
     }
 }
@@ -189,11 +201,11 @@ fn locked_twin_is_one_rigid_rotor() {
         assert_eq!(mech.ndof(), 1);
         let mut k = Kane::new(&mech).unwrap();
         let m = k.mass_matrix(&[0.7])[(0, 0)];
-        assert!((m - p.locked_inertia()).abs() / p.locked_inertia() < 1e-13, "N = {n_pend}: {m}");
+        assert!(relative_eq!(m, p.locked_inertia(), max_relative = 1e-13), "N = {n_pend}: {m}");
         let mut xd = [0.0; 2];
         k.rhs(0.0, &[0.0, 100.0], &mut xd).unwrap();
         let expect = (TORQUE - p.c_r * 100.0) / p.locked_inertia();
-        assert!((xd[1] - expect).abs() < 1e-12 * expect.abs());
+        assert_abs_diff_eq!(xd[1], expect, epsilon = 1e-12 * expect.abs());
     }
     let mech = CpvaParams::canonical().mechanism(None).unwrap();
     assert!(mech.lock("spin", 0.0).is_err(), "locking to ground must be refused");

@@ -4,6 +4,7 @@
 //! their generalized forces, the linear model's local stiffness, and harmonic balance against
 //! steady time integration.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::hbm::{Hbm, HbmOptions, HbmSolution};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
@@ -206,7 +207,7 @@ fn friction_loop_dissipates_four_tf_a() {
             "ε/(Aω) = {ratio}: W = {work:.6} J vs 4 T_f A = {coulomb:.6} J, deficit {err:.3e} (predicted {predicted:.3e})"
         );
         assert!(err < last_err, "the loop converges to Coulomb's as ε → 0");
-        assert!((err / predicted - 1.0).abs() < 0.02, "deficit {err:e} vs {predicted:e}");
+        assert!(abs_diff_eq!(err / predicted, 1.0, epsilon = 0.02), "deficit {err:e} vs {predicted:e}");
         last_err = err;
     }
     // The acceptance bound: within 1 % of 4 T_f A once ε is small (here 0.3 % of Aω).
@@ -237,7 +238,7 @@ fn end_stop_rebound_matches_the_contact_closed_form() {
         let e = -run.x_end[1] / v0;
         let expect = restitution(zeta);
         println!("ζ = {zeta}: e = {e:.7} vs closed form {expect:.7}; {}", run.stats);
-        assert!((e - expect).abs() <= 1e-3, "ζ = {zeta}: e = {e} vs {expect}");
+        assert!(abs_diff_eq!(e, expect, epsilon = 1e-3), "ζ = {zeta}: e = {e} vs {expect}");
         // Plain linear contact (damping allowed to pull) would give exp(−ζπ/√(1−ζ²)): distinct.
         if zeta >= 0.1 {
             let linear = (-zeta * PI / (1.0 - zeta * zeta).sqrt()).exp();
@@ -258,12 +259,12 @@ fn linear_model_sees_the_local_stage_stiffness_and_the_viscous_friction_limit() 
         let lin = LinearModel::new(&mech, "spin", omega, None).unwrap();
         let second = lin.second_order(Damping::Damped);
         println!("{rpm} rpm: K[arc][arc] = {}, C[arc][arc] = {}", second.k[(arc, arc)], second.c[(arc, arc)]);
-        assert!((second.k[(arc, arc)] / k_expect - 1.0).abs() < 1e-9);
+        assert_abs_diff_eq!(second.k[(arc, arc)] / k_expect, 1.0, epsilon = 1e-9);
         // Friction at zero relative rate: T_f/ε = 6/0.2 = 30, plus the damper 0.3 N·m·s/rad and
         // the drag 0.23 N·m·s/rad on the secondary, whose speed is u_spin + q̇_arc.
-        assert!((second.c[(arc, arc)] / 30.53 - 1.0).abs() < 1e-9);
+        assert_abs_diff_eq!(second.c[(arc, arc)] / 30.53, 1.0, epsilon = 1e-9);
         if q_expect.is_finite() {
-            assert!((lin.op.q[arc] / q_expect - 1.0).abs() < 1e-9);
+            assert_abs_diff_eq!(lin.op.q[arc] / q_expect, 1.0, epsilon = 1e-9);
         }
     }
 }

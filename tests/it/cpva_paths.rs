@@ -3,6 +3,7 @@
 //! whole periods), and the free-oscillation analysis against closed forms (the circle's
 //! `π / (2K(sin(φ₀/2)))`, the epicycloid's constant ñ).
 
+use approx::abs_diff_eq;
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, HbmSolution};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
@@ -174,13 +175,13 @@ fn free_oscillation_orders_equal_the_closed_forms() {
         worst = worst.max((ratio - want).abs());
     }
     let epi = report.free.iter().find(|r| r.name == "e_epicycloid_free").unwrap();
-    assert!((epi.linear_order - 3.11).abs() <= 1e-9, "linear order {}", epi.linear_order);
+    assert!(abs_diff_eq!(epi.linear_order, 3.11, epsilon = 1e-9), "linear order {}", epi.linear_order);
     for (a, o) in epi.amplitudes.iter().zip(&epi.orders) {
         println!("epicycloid at {:.3} of s_max: order {o:.10}", a / s_max);
         worst = worst.max((o / 3.11 - 1.0).abs());
         // The far side is the amplitude: the path and the motion are symmetric in s.
         let far = epi.far_side[epi.amplitudes.iter().position(|v| v == a).unwrap()];
-        assert!((far / a - 1.0).abs() <= 1e-6, "far side {far} vs {a}");
+        assert!(abs_diff_eq!(far / a, 1.0, epsilon = 1e-6), "far side {far} vs {a}");
     }
     println!("free oscillation: largest deviation from the closed forms {worst:.2e}");
     assert!(worst <= 1e-6, "free-oscillation order off by {worst:e}");
@@ -267,7 +268,7 @@ fn the_path_comparison_example_shows_the_tautochrone_without_hysteresis() {
             "circle" => assert!(differ > 0.5, "the circle's sweeps should differ (hysteresis): {differ}"),
             _ => {
                 assert!(
-                    (mu.0 / n_t - 1.0).abs() <= 5e-3 && (md.0 / n_t - 1.0).abs() <= 5e-3,
+                    abs_diff_eq!(mu.0 / n_t, 1.0, epsilon = 5e-3) && abs_diff_eq!(md.0 / n_t, 1.0, epsilon = 5e-3),
                     "{label}: minimum off n_t"
                 );
                 assert!(differ <= 1e-2, "{label}: up and down differ by {differ:e}");

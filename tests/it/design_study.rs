@@ -3,6 +3,7 @@
 //! one failed case that costs the others nothing, one case run by index equal to the full run,
 //! the plan scaled by the cases, and bad input located at file, line:column and field.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::{inertia_ratio, rotor_order, tuning_order};
 use kanedyn::error::Error;
 use kanedyn::io::Source;
@@ -66,14 +67,24 @@ fn tuning_and_rotor_orders_follow_eqs_15_and_17_case_by_case() {
         let nt = tuning_order(m, rr, l, i_b);
         if i_b == 0.0 {
             // The paper's point-mass form, independent of the library's closed-form helper.
-            assert!((nt - (rr / l).sqrt()).abs() <= 1e-15 * nt);
+            assert_abs_diff_eq!(nt, (rr / l).sqrt(), epsilon = 1e-15 * nt);
             point_masses += 1;
         }
         // Eigen-orders from the linearisation, solved numerically (tests/it/linear.rs: 2e-14 on the
         // canonical CPVA); 1e-9 relative leaves room for the other geometries.
-        assert!((r.results[c_nt] - nt).abs() <= 1e-9 * nt, "case {}: n_t {} vs {nt}", r.index, r.results[c_nt]);
+        assert!(
+            abs_diff_eq!(r.results[c_nt], nt, epsilon = 1e-9 * nt),
+            "case {}: n_t {} vs {nt}",
+            r.index,
+            r.results[c_nt]
+        );
         let nr = rotor_order(nt, inertia_ratio(i_a, m, rr, i_b, l));
-        assert!((r.results[c_nr] - nr).abs() <= 1e-9 * nr, "case {}: n_r {} vs {nr}", r.index, r.results[c_nr]);
+        assert!(
+            abs_diff_eq!(r.results[c_nr], nr, epsilon = 1e-9 * nr),
+            "case {}: n_r {} vs {nr}",
+            r.index,
+            r.results[c_nr]
+        );
     }
     assert_eq!(point_masses, 18);
 }
@@ -93,7 +104,7 @@ fn a_grid_is_the_nested_loops_of_its_values_in_file_order() {
     );
     let study = load(&text).unwrap_or_else(|e| panic!("{e}"));
     let cases = case_values(design(&study));
-    let mut expected = Vec::new();
+    let mut expected: Vec<[f64; 3]> = Vec::new();
     for a in [1.0, 2.0] {
         for b in [1e-4, 1e-3, 1e-2] {
             for c in [500.0, 750.0, 1000.0, 1250.0, 1500.0] {
@@ -105,7 +116,7 @@ fn a_grid_is_the_nested_loops_of_its_values_in_file_order() {
     for (got, want) in cases.iter().zip(&expected) {
         for (g, w) in got.iter().zip(want) {
             // Log spacing by powf: within a few ulps of the decade values; ends exact.
-            assert!((g - w).abs() <= 4.0 * f64::EPSILON * w.abs(), "{got:?} vs {want:?}");
+            assert!(abs_diff_eq!(g, w, epsilon = 4.0 * f64::EPSILON * w.abs()), "{got:?} vs {want:?}");
         }
     }
     assert_eq!(cases.last().unwrap(), &vec![2.0, 1e-2, 1500.0]);
@@ -392,7 +403,8 @@ fn every_quantity_substitutes_as_if_written_in_the_files() {
     let max = |f: &dyn Fn(&kanedyn::study::HbmBranch) -> Vec<f64>| p.hbm.iter().flat_map(f).fold(f64::NAN, f64::max);
     // The substituted centre of mass and joint point are L·(l/L) and R·(r/R): a rounding or two
     // away from the written l and r, so the branches agree to ~1e-13, not bit for bit; 1e-9 relative.
-    let close = |a: f64, b: f64, what: &str| assert!((a - b).abs() <= 1e-9 * b.abs(), "{what}: {a} vs {b}");
+    let close =
+        |a: f64, b: f64, what: &str| assert!(abs_diff_eq!(a, b, epsilon = 1e-9 * b.abs()), "{what}: {a} vs {b}");
     close(get("peak_accel_1x_rad_s2"), max(&|b| b.accel[0].clone()), "main order");
     close(get("peak_accel_2x_rad_s2"), max(&|b| b.accel[1].clone()), "second order");
     close(get("max_relative_angle_rad"), max(&|b| b.relative_angle.clone()), "relative angle");

@@ -2,6 +2,7 @@
 //! the slider-crank's piston travel, the indicated work as ∮p dV, the order cancellation of an
 //! inline six and the classical first-order reciprocating-inertia amplitudes.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::combustion::{Engine, EngineSpec, Pressure};
 use std::f64::consts::PI;
 
@@ -61,7 +62,7 @@ fn the_mean_gas_torque_is_the_indicated_work_over_four_pi() {
     let expected = 6.0 * work / (4.0 * PI);
     let mean = e.orders(0.0, 24.0).mean_nm;
     println!("mean gas torque {mean:.9} N·m, indicated work / 4π {expected:.9} N·m");
-    assert!((mean - expected).abs() <= 1e-8 * expected.abs(), "{mean} vs {expected}");
+    assert_abs_diff_eq!(mean, expected, epsilon = 1e-8 * expected.abs());
 }
 
 /// An inline six firing 1-5-3-6-2-4 every 120°: the cylinders' torques sum to a function of
@@ -101,9 +102,9 @@ fn reciprocating_inertia_has_the_classical_orders() {
     for (order, expected) in [(1.0, 0.01 / 4.0), (2.0, 0.5), (3.0, 3.0 * 0.01 / 4.0)] {
         let got = series.amplitude(order) / unit;
         println!("order {order}: {got:.6e} vs {expected:.6e}");
-        assert!((got - expected).abs() <= 1e-3 * expected, "order {order}: {got} vs {expected}");
+        assert!(abs_diff_eq!(got, expected, epsilon = 1e-3 * expected), "order {order}: {got} vs {expected}");
     }
-    assert!(series.mean_nm.abs() <= 1e-12 * unit);
+    assert_abs_diff_eq!(series.mean_nm, 0.0, epsilon = 1e-12 * unit);
     let e = Engine::new(spec(vec![1], 2.0 * r, r / 0.3, m, zero)).unwrap();
     let series = e.orders(omega, 1000.0);
     let worst = (0..500)
@@ -144,8 +145,8 @@ fn a_pressure_table_follows_its_curve() {
     let tabled = Engine::new(spec(vec![1], 0.16, 0.26, 0.0, Pressure::Table(table))).unwrap();
     let (a, b) = (curve.orders(0.0, 50.0), tabled.orders(0.0, 50.0));
     println!("mean torque: curve {:.6} N·m, table {:.6} N·m", a.mean_nm, b.mean_nm);
-    assert!((a.mean_nm - b.mean_nm).abs() <= 1e-4 * a.mean_nm.abs());
-    assert!((a.amplitude(0.5) - b.amplitude(0.5)).abs() <= 1e-4 * a.amplitude(0.5));
+    assert_abs_diff_eq!(a.mean_nm, b.mean_nm, epsilon = 1e-4 * a.mean_nm.abs());
+    assert_abs_diff_eq!(a.amplitude(0.5), b.amplitude(0.5), epsilon = 1e-4 * a.amplitude(0.5));
 }
 
 /// Issue 29, item 6: for each pressure form (the Gaussian `Pulse`, and a measured-style `Table`
@@ -178,7 +179,11 @@ fn each_pressure_form_s_orders_equal_a_dft_of_its_torque() {
             .collect();
         let mean = samples.iter().map(|s| s.1).sum::<f64>() / n as f64;
         let largest = series.harmonics.iter().map(|h| h.amplitude).fold(0.0, f64::max);
-        assert!((series.mean_nm - mean).abs() <= 1e-10 * largest, "{form}: mean {} vs {mean}", series.mean_nm);
+        assert!(
+            abs_diff_eq!(series.mean_nm, mean, epsilon = 1e-10 * largest),
+            "{form}: mean {} vs {mean}",
+            series.mean_nm
+        );
         let mut worst: f64 = 0.0;
         for h in &series.harmonics {
             // Multiple j of order ½ (order j/2): the argument is j θ/2.

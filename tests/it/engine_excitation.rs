@@ -4,6 +4,7 @@
 //! amplitudes are a plain DFT of `Engine::torque` over one 720° cycle, written here, not the
 //! engine's own FFT series.
 
+use approx::assert_abs_diff_eq;
 use kanedyn::combustion::{Engine, EngineSpec};
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, Parameter};
 use kanedyn::io::{ReadPolicy, Source};
@@ -100,8 +101,8 @@ fn the_oscillating_series_is_the_engine_torque_at_any_speed() {
                     g.amplitude * (x + g.phase).sin() + omega * omega * w.amplitude * (x + w.phase).sin()
                 })
                 .sum();
-            assert!((few.torque(theta, omega, phase) - by_harmonics).abs() <= 1e-9 * peak.max(1.0));
-            assert!((few.torque(theta, omega, 0.0) - split).abs() <= 1e-9 * peak.max(1.0));
+            assert_abs_diff_eq!(few.torque(theta, omega, phase), by_harmonics, epsilon = 1e-9 * peak.max(1.0));
+            assert_abs_diff_eq!(few.torque(theta, omega, 0.0), split, epsilon = 1e-9 * peak.max(1.0));
         }
     }
     println!("full series vs direct torque: {:.2e} of the peak {peak:.1} N·m", worst / peak);

@@ -5,6 +5,7 @@
 //! driven side of a time run, a steady time run against harmonic balance, the gear relation on
 //! recorded driven-joint probes, and the hand-reduced loss torque.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::hbm::{Hbm, HbmOptions};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
@@ -69,22 +70,22 @@ fn rigid_pair_mesh_torque_is_the_hand_reduced_one() {
             let acc = (t1 + r * (t2 - c * r * x[1])) / (j1 + r * r * j2);
             let lambda = j2 * r * acc - t2 + c * r * x[1];
             let scale = t1.abs() + (r * t2).abs() + (c * r * r * x[1]).abs();
-            assert!((d[1] - acc).abs() <= 1e-12 * scale / j1, "θ̈ {} vs {acc}", d[1]);
+            assert!(abs_diff_eq!(d[1], acc, epsilon = 1e-12 * scale / j1), "θ̈ {} vs {acc}", d[1]);
             let mesh = kane.gear_torques(0.0, &x[..1], &x[1..], &d[1..]);
             assert_eq!(mesh.len(), 1);
-            assert!((mesh[0] - lambda).abs() <= 1e-12 * scale, "λ {} vs {lambda}", mesh[0]);
+            assert!(abs_diff_eq!(mesh[0], lambda, epsilon = 1e-12 * scale), "λ {} vs {lambda}", mesh[0]);
             if t2 == 0.0 && c == 0.0 {
                 // The brief's closed form: λ = r J₂ T/(J₁ + r² J₂).
                 let closed = r * j2 * t1 / (j1 + r * r * j2);
-                assert!((mesh[0] - closed).abs() <= 1e-12 * t1.abs(), "λ {} vs {closed}", mesh[0]);
+                assert!(abs_diff_eq!(mesh[0], closed, epsilon = 1e-12 * t1.abs()), "λ {} vs {closed}", mesh[0]);
             }
             // The reflected torque on the input, −r λ, closes the input shaft's balance.
-            assert!((j1 * acc - (t1 - r * mesh[0])).abs() <= 1e-12 * scale);
+            assert_abs_diff_eq!(j1 * acc, t1 - r * mesh[0], epsilon = 1e-12 * scale);
             let reactions = joint_reactions(&mech, &x[..1], &x[1..], &d[1..]);
-            assert!((reactions[1].moment - j2 * r * acc).abs() <= 1e-12 * scale, "output moment");
-            assert!((reactions[0].moment - j1 * acc).abs() <= 1e-12 * scale, "input moment");
+            assert!(abs_diff_eq!(reactions[1].moment, j2 * r * acc, epsilon = 1e-12 * scale), "output moment");
+            assert!(abs_diff_eq!(reactions[0].moment, j1 * acc, epsilon = 1e-12 * scale), "input moment");
             // The output moment is its own torques plus the mesh torque.
-            assert!((reactions[1].moment - (t2 - c * r * x[1] + mesh[0])).abs() <= 1e-12 * scale);
+            assert_abs_diff_eq!(reactions[1].moment, t2 - c * r * x[1] + mesh[0], epsilon = 1e-12 * scale);
         }
     }
 }
@@ -114,18 +115,18 @@ fn a_gear_chain_passes_its_reflected_torques_back() {
     let x = [0.3, 12.0];
     let d = xdot(&mut kane, 0.0, &x);
     let acc = t / (ja + r1 * r1 * jb + r1 * r1 * r2 * r2 * jc);
-    assert!((d[1] - acc).abs() <= 1e-12 * acc.abs());
+    assert_abs_diff_eq!(d[1], acc, epsilon = 1e-12 * acc.abs());
     let lc = jc * r1 * r2 * acc;
     let lb = jb * r1 * acc + r2 * lc;
     let mesh = kane.gear_torques(0.0, &x[..1], &x[1..], &d[1..]);
     // gears[0] drives jc, gears[1] drives jb (the file's order).
     println!("chain: λ_c {} vs {lc}, λ_b {} vs {lb}", mesh[0], mesh[1]);
-    assert!((mesh[0] - lc).abs() <= 1e-12 * t.abs());
-    assert!((mesh[1] - lb).abs() <= 1e-12 * t.abs());
+    assert_abs_diff_eq!(mesh[0], lc, epsilon = 1e-12 * t.abs());
+    assert_abs_diff_eq!(mesh[1], lb, epsilon = 1e-12 * t.abs());
     let re = joint_reactions(&mech, &x[..1], &x[1..], &d[1..]);
-    assert!((re[2].moment - lc).abs() <= 1e-12 * t.abs());
-    assert!((re[1].moment - (lb - r2 * lc)).abs() <= 1e-12 * t.abs());
-    assert!((re[0].moment - (t - r1 * lb)).abs() <= 1e-12 * t.abs());
+    assert_abs_diff_eq!(re[2].moment, lc, epsilon = 1e-12 * t.abs());
+    assert_abs_diff_eq!(re[1].moment, lb - r2 * lc, epsilon = 1e-12 * t.abs());
+    assert_abs_diff_eq!(re[0].moment, t - r1 * lb, epsilon = 1e-12 * t.abs());
 }
 
 /// A compliant mesh: at random states its torque on the driven joint is (k e + c ė)/r with the
@@ -149,10 +150,10 @@ fn a_compliant_mesh_carries_k_times_its_deflection() {
         let driver = k * e + c * edot;
         let mesh = kane.gear_torques(0.0, &x[..2], &x[2..], &d[2..]);
         // The driving joint receives −r τ = −(k e + c ė).
-        assert!((r * mesh[0] - driver).abs() <= 1e-12 * (k * e.abs() + c * edot.abs()), "{} vs {driver}", r * mesh[0]);
+        assert_abs_diff_eq!(r * mesh[0], driver, epsilon = 1e-12 * (k * e.abs() + c * edot.abs()));
         let re = joint_reactions(&mech, &x[..2], &x[2..], &d[2..]);
-        assert!((re[1].moment - j2 * d[3]).abs() <= 1e-12 * (driver / r).abs().max(1.0));
-        assert!((re[1].moment - mesh[0]).abs() <= 1e-12 * (driver / r).abs().max(1.0));
+        assert_abs_diff_eq!(re[1].moment, j2 * d[3], epsilon = 1e-12 * (driver / r).abs().max(1.0));
+        assert_abs_diff_eq!(re[1].moment, mesh[0], epsilon = 1e-12 * (driver / r).abs().max(1.0));
     }
 }
 
@@ -210,7 +211,7 @@ fn power_balances_across_the_mesh_in_a_time_run() {
         let scale = terms.iter().map(|t| t.abs()).fold(p_mesh.abs(), f64::max);
         worst = worst.max((p_mesh - terms.iter().sum::<f64>()).abs() / scale);
         // Reflected on the driving shaft: −r τ θ̇_in = −τ θ̇_out.
-        assert!((-r * tau * w_in + p_mesh).abs() <= 1e-15 * scale);
+        assert_abs_diff_eq!(r * tau * w_in, p_mesh, epsilon = 1e-15 * scale);
     }
     println!("power across the mesh: worst mismatch {worst:.2e} of the largest term over {} samples", rec.time.len());
     assert!(worst <= 1e-12, "{worst:e}");
@@ -315,7 +316,7 @@ fn harmonic_balance_mesh_torque_matches_a_time_run() {
         mh.mean
     );
     assert!(same <= 1e-9 * amp);
-    assert!(mh.mean.abs() <= 1e-12 * amp, "mean mesh torque {}", mh.mean);
+    assert!(abs_diff_eq!(mh.mean, 0.0, epsilon = 1e-12 * amp), "mean mesh torque {}", mh.mean);
 
     let mut k = Kane::new(&mech).unwrap();
     let exc =
@@ -391,7 +392,7 @@ fn loss_torque_counts_driven_shafts_reflected() {
     let expected = (cr + r * r * (co + cw + cv) + r * r * r2 * r2 * c3) * omega;
     let got = Study::loss_torque(&mech, 0, omega);
     println!("loss torque through gears {got} N·m vs hand-reduced {expected}");
-    assert!((got - expected).abs() <= 1e-14 * expected);
+    assert_abs_diff_eq!(got, expected, epsilon = 1e-14 * expected);
     // The initial state turns the compliant shaft with its train (no start-up mesh deflection rate).
     let x0 = Study::initial_state(&mech, 0, omega);
     assert_eq!(x0[2..], [omega, r * r2 * omega]);

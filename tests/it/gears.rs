@@ -4,6 +4,7 @@
 //! unconstrained tree on random trees (T built here from the file's couplings, the tree loaded
 //! without them), located input errors, and a study on a geared mechanism.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::kane::kinematics::kinetic_energy;
@@ -55,9 +56,9 @@ fn rigid_pair_is_the_reflected_inertia() {
         let (q, u) = (rng.random_range(-5.0..5.0), rng.random_range(-50.0..50.0));
         let (m, f) = kane.mass_matrix_and_forcing(0.0, &[q], &[u]);
         // The reduced M is J₁ + r² J₂, a sum of three products: 1e-12 relative is rounding.
-        assert!((m[(0, 0)] - expected).abs() <= 1e-12 * expected, "M {} vs {expected}", m[(0, 0)]);
+        assert!(abs_diff_eq!(m[(0, 0)], expected, epsilon = 1e-12 * expected), "M {} vs {expected}", m[(0, 0)]);
         let f_expected = t_in + r * t_out;
-        assert!((f[0] - f_expected).abs() <= 1e-12 * f_expected.abs(), "F {} vs {f_expected}", f[0]);
+        assert!(abs_diff_eq!(f[0], f_expected, epsilon = 1e-12 * f_expected.abs()), "F {} vs {f_expected}", f[0]);
         // The driven joint stays readable from the reduced state.
         assert_eq!(mech.joint_coordinate(1, &[q]), Some(r * q));
         assert_eq!(mech.joint_rate(1, &[u]), Some(r * u));
@@ -101,7 +102,7 @@ fn compliant_mesh_frequency_is_the_closed_form() {
     println!("mesh mode {} rad/s vs {expected}", f[0]);
     assert_eq!(f.len(), 1);
     // A 2×2 eigenproblem of exact (linear) forcing differences: rounding, bound 1e-12.
-    assert!((f[0] - expected).abs() <= 1e-12 * expected);
+    assert_abs_diff_eq!(f[0], expected, epsilon = 1e-12 * expected);
 }
 
 /// Generalized eigenfrequencies √λ of K x = λ M x (M symmetric positive definite), lowest first,
@@ -121,7 +122,7 @@ fn assert_same_frequencies(got: &[f64], want: &[f64], tol: f64) {
     println!("kanedyn {got:?}\nhand    {want:?}");
     assert_eq!(got.len(), want.len());
     for (g, w) in got.iter().zip(want) {
-        assert!((g - w).abs() <= tol * w, "{g} vs {w}: {:.2e}", (g - w).abs() / w);
+        assert!(abs_diff_eq!(g, w, epsilon = tol * w), "{g} vs {w}: {:.2e}", (g - w).abs() / w);
     }
 }
 
@@ -500,7 +501,7 @@ fn a_consistent_loop_is_reduced() {
     let mut kane = Kane::new(&mech).unwrap();
     let m = kane.mass_matrix(&[0.0])[(0, 0)];
     // a and d (welded) on ja, b at 2×, c at 6×: 2 + 4 + 36.
-    assert!((m - 42.0).abs() <= 1e-12 * 42.0, "{m}");
+    assert_abs_diff_eq!(m, 42.0, epsilon = 1e-12 * 42.0);
 }
 
 #[test]
@@ -529,7 +530,7 @@ fn locking_a_geared_joint_locks_its_train() {
         // Everything turns with the carrier: 2 + 0.1 + 0.05 + 0.5 · 0.3².
         let m = Kane::new(&locked).unwrap().mass_matrix(&[0.0])[(0, 0)];
         let expected = 2.0 + 0.1 + 0.05 + 0.5 * 0.09;
-        assert!((m - expected).abs() <= 1e-12 * expected, "{m} vs {expected}");
+        assert_abs_diff_eq!(m, expected, epsilon = 1e-12 * expected);
     }
 }
 
@@ -548,7 +549,7 @@ fn geared_driveline_study_runs() {
     let nt = lin.n_t.unwrap();
     let expected = kanedyn::cpva::CpvaParams::canonical().n_t;
     println!("n_t {nt} vs {expected}");
-    assert!((nt - expected).abs() <= 1e-9 * expected);
+    assert_abs_diff_eq!(nt, expected, epsilon = 1e-9 * expected);
 }
 
 /// A study reports driven joints through their gear (issue 15): with the wheel below the driven
@@ -595,12 +596,12 @@ fn a_study_reports_driven_joints_through_their_gear() {
     let omega = 1000.0 * std::f64::consts::PI / 30.0;
     for (i, &n) in wheel.order.iter().enumerate() {
         let (aw, ar) = (wheel.accel[0][i], rotor.accel[0][i]);
-        assert!((aw - ratio.abs() * ar).abs() <= 1e-12 * ar, "point {i}: {aw} vs |r| {ar}");
+        assert!(abs_diff_eq!(aw, ratio.abs() * ar, epsilon = 1e-12 * ar), "point {i}: {aw} vs |r| {ar}");
         let out = &wheel.elements[i][0];
         assert_eq!(out.joint, "output");
         let expected = ratio.abs() * ar / (n * omega).powi(2);
         assert!(
-            (out.amplitude[0] - expected).abs() <= 1e-12 * expected,
+            abs_diff_eq!(out.amplitude[0], expected, epsilon = 1e-12 * expected),
             "point {i}: {} vs {expected}",
             out.amplitude[0]
         );

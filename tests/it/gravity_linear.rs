@@ -12,6 +12,7 @@
 //! - a study with gravity: MultiOrder's linear part, LinearResponse and Campbell run, write no
 //!   NaN, and report the library's figures.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{Hbm, HbmOptions};
 use kanedyn::kane::Kane;
@@ -232,7 +233,7 @@ fn a_study_reports_the_gravity_forced_linear_response() {
     };
     // Same mechanism and speeds in the library: the rotor's order-1 gravity line, and the order-3
     // torque line (which gravity does not change at this order).
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs();
+    let close = |a: f64, b: f64| abs_diff_eq!(a, b, epsilon = 1e-9 * b.abs());
     let multi = &report.multi[0];
     for (s, (rpm, t3)) in multi.speeds.iter().zip([(600.0, 670.0), (1000.0, 1600.0)]) {
         let w = rpm_to_rad_s(rpm);
@@ -375,8 +376,8 @@ fn multi_order_superposes_gravity_with_the_engine_orders() {
         let r = &multi_order_response(&mech, &spec(1), base, &cases, None).unwrap()[0];
         let g = r.gravity.expect("a gravity line");
         let want = OrderResponse::new(&mech, &spec(1), rpm_to_rad_s(800.0), None).unwrap().gravity_response().unwrap();
-        assert!((g.amplitude - want.norm()).abs() <= 1e-12 * want.norm());
-        assert!((r.line(1.0).0 - g.amplitude).abs() <= 1e-12 * g.amplitude);
+        assert_abs_diff_eq!(g.amplitude, want.norm(), epsilon = 1e-12 * want.norm());
+        assert_abs_diff_eq!(r.line(1.0).0, g.amplitude, epsilon = 1e-12 * g.amplitude);
         let mut lines: Vec<(f64, f64, f64)> = r.harmonics.iter().map(|h| (h.order, h.amplitude, h.phase)).collect();
         lines.push((1.0, g.amplitude, g.phase));
         let total: f64 = lines.iter().map(|l| l.1).sum();
@@ -389,7 +390,7 @@ fn multi_order_superposes_gravity_with_the_engine_orders() {
             .fold(0.0, f64::max);
         let peak = r.peak.expect("a common period");
         println!("base order {base}: peak {peak:.9} rad/s², brute force {brute:.9}, sum of amplitudes {total:.6}");
-        assert!((peak - brute).abs() <= 1e-5 * total, "{peak} vs {brute}");
+        assert_abs_diff_eq!(peak, brute, epsilon = 1e-5 * total);
         assert!(r.locked_peak.is_some());
     }
 }

@@ -5,6 +5,7 @@
 //! matrix obtained by differencing time integrations, and the balance of angular momentum.
 
 use crate::support::cpva_hbm;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use cpva_hbm::{RPM, cpva_hbm, omega, single};
 use kanedyn::cpva::CpvaParams;
@@ -54,7 +55,11 @@ fn small_amplitude_limit_is_the_linear_frequency_response() {
         // Angular momentum over a period: mean torque = c_r Ω exactly (the pendulum damper is
         // internal); only rounding separates them.
         let tm = CpvaParams::canonical().c_r * omega();
-        assert!((sol.mean_torque - tm).abs() < 1e-9 * tm, "n = {n}: T_m = {} vs c_r Ω = {tm}", sol.mean_torque);
+        assert!(
+            abs_diff_eq!(sol.mean_torque, tm, epsilon = 1e-9 * tm),
+            "n = {n}: T_m = {} vs c_r Ω = {tm}",
+            sol.mean_torque
+        );
         guess = Some(sol);
     }
     println!("small-amplitude limit: largest relative difference to the linear FRF {worst:.3e}");
@@ -346,7 +351,7 @@ fn harmonic_count_is_checked() {
     let s16 = h16.solve(3.0, Some(&s10)).unwrap();
     for m in [1.0, 2.0] {
         let (a, b) = (s10.order_acceleration(0, m), s16.order_acceleration(0, m));
-        assert!((a / b - 1.0).abs() < 1e-6, "order {m}n: H = 10 {a} vs H = 16 {b}");
+        assert!(abs_diff_eq!(a / b, 1.0, epsilon = 1e-6), "order {m}n: H = 10 {a} vs H = 16 {b}");
     }
     assert!(!s10.needs_more_harmonics, "ratio {}", s10.top_harmonic_ratio);
     let mut h3 = cpva_hbm(&h, HbmOptions { harmonics: 3, ..HbmOptions::default() });
@@ -371,10 +376,10 @@ fn four_pendulums_and_two_orders() {
     let mut hbm1 = cpva_hbm(&h, opts);
     let s1 = hbm1.solve(3.0, None).unwrap();
     let s4 = hbm4.solve(3.0, None).unwrap();
-    assert!((s1.base_frequency - 3.0 * omega()).abs() < 1e-12);
+    assert_abs_diff_eq!(s1.base_frequency, 3.0 * omega(), epsilon = 1e-12);
     for m in [1.0, 2.0] {
         let (a, b) = (s1.order_acceleration(0, m), s4.order_acceleration(0, m));
-        assert!((a / b - 1.0).abs() < 1e-8, "order {m}n: N = 1 {a} vs N = 4 {b}");
+        assert!(abs_diff_eq!(a / b, 1.0, epsilon = 1e-8), "order {m}n: N = 1 {a} vs N = 4 {b}");
     }
     let tc = time_check(&hbm1, &h, &s1, 0.0, 40, 20);
     let e = (tc.main / s1.order_acceleration(0, 1.0) - 1.0)
@@ -394,7 +399,7 @@ fn four_pendulums_and_two_orders() {
         Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.0 },
     ];
     let s = cpva_hbm(&half, opts).solve(3.0, None).unwrap();
-    assert!((s.base_frequency - 1.5 * omega()).abs() < 1e-12);
+    assert_abs_diff_eq!(s.base_frequency, 1.5 * omega(), epsilon = 1e-12);
     assert_eq!(s.harmonic_of(1.0), Some(2));
 }
 
@@ -422,7 +427,7 @@ fn torque_and_speed_continuations_find_the_order_folds() {
     assert_eq!(bt.folds[0].kind, FoldKind::Maximum);
     assert!(bt.folds[1].parameter < 1.0);
     let t_fold = 40.0 * bt.folds[0].parameter;
-    assert!((t_fold / 40.0 - 1.0).abs() < 1e-7, "torque fold at n = {up}: {t_fold} N·m");
+    assert!(abs_diff_eq!(t_fold / 40.0, 1.0, epsilon = 1e-7), "torque fold at n = {up}: {t_fold} N·m");
     // Lower fold: the resonant sheet at n = n* exists above 40 N·m only; start on it at 60 N·m
     // (from the order branch continued down from 3.3, whose end sheet is the resonant one) and
     // continue the torque scale down.
@@ -438,7 +443,7 @@ fn torque_and_speed_continuations_find_the_order_folds() {
     let bd = h60.continue_in(Parameter::TorqueScale { order: down }, 1.5, 0.5, Some(&start), &copts).unwrap();
     let fd = bd.folds.first().unwrap_or_else(|| panic!("no torque fold at n = {down}: {:?}", bd.end));
     assert_eq!(fd.kind, FoldKind::Minimum);
-    assert!((fd.parameter - 1.0).abs() < 1e-7, "torque fold at n = {down}: {} N·m", 40.0 * fd.parameter);
+    assert!(abs_diff_eq!(fd.parameter, 1.0, epsilon = 1e-7), "torque fold at n = {down}: {} N·m", 40.0 * fd.parameter);
     // Speed at the upper fold order: the single-order CPVA depends on Ω through T/Ω² and the
     // damping ratios, so slowing down at 40 N·m acts like raising the torque: the non-resonant
     // sheet, continued down from 1600 rpm, ends at 1000 rpm and turns back (a speed minimum).
@@ -446,7 +451,11 @@ fn torque_and_speed_continuations_find_the_order_folds() {
     let bs = hbm.continue_in(Parameter::Speed { order: up }, w(1600.0), w(600.0), None, &copts).unwrap();
     let fs = bs.folds.first().unwrap_or_else(|| panic!("no speed fold at n = {up}: {:?}", bs.end));
     assert_eq!(fs.kind, FoldKind::Minimum);
-    assert!((fs.parameter / w(1000.0) - 1.0).abs() < 1e-7, "speed fold at n = {up}: {} rad/s", fs.parameter);
+    assert!(
+        abs_diff_eq!(fs.parameter / w(1000.0), 1.0, epsilon = 1e-7),
+        "speed fold at n = {up}: {} rad/s",
+        fs.parameter
+    );
     println!(
         "order folds {up:.7} / {down:.7}: torque folds {t_fold:.9} / {:.9} N·m; speed fold {:.7} rpm",
         40.0 * fd.parameter,
@@ -510,7 +519,11 @@ fn multi_order_600_rpm_has_only_the_upper_state() {
     // from small torque must turn at s = 1 (same argument and tolerance as for the 40 N·m folds).
     let mut at_fold = Hbm::new(&kane, 0, f_speed.parameter, &h, HbmOptions::default()).unwrap();
     let bf = at_fold.continue_in(Parameter::TorqueScale { order: 3.0 }, 0.01, 1.5, None, &copts).unwrap();
-    assert!((bf.folds[0].parameter - 1.0).abs() < 1e-7, "torque fold at {rpm_fold} rpm: s = {}", bf.folds[0].parameter);
+    assert!(
+        abs_diff_eq!(bf.folds[0].parameter, 1.0, epsilon = 1e-7),
+        "torque fold at {rpm_fold} rpm: s = {}",
+        bf.folds[0].parameter
+    );
     // Order at 600 rpm: the branch from low orders turns back below n = 3.
     let bo = hbm.continue_in(Parameter::Order, 2.6, 3.4, None, &copts).unwrap();
     let f_order = bo.folds.first().unwrap();
@@ -624,7 +637,7 @@ fn two_pendulums_keep_unison_between_the_folds() {
     let (_, b1) = branch(40.0, 2.9, 3.3);
     assert_eq!(b2.folds.len(), 2);
     for (f1, f2) in b1.folds.iter().zip(&b2.folds) {
-        assert!((f1.order - f2.order).abs() < 1e-8, "folds {} vs {}", f1.order, f2.order);
+        assert!(abs_diff_eq!(f1.order, f2.order, epsilon = 1e-8), "folds {} vs {}", f1.order, f2.order);
     }
     let kinds: Vec<_> = b2.bifurcations.iter().map(|b| (b.kind, b.unstable_after)).collect();
     assert_eq!(kinds, vec![(BifurcationKind::PlusOne, 1), (BifurcationKind::PlusOne, 0)]);
@@ -711,7 +724,7 @@ fn two_pendulums_break_unison_between_the_multiplier_crossings() {
         );
         if inside {
             assert!(mu > 1.0 && growth > 1.0, "inside: μ {mu}, growth {growth}");
-            assert!((growth / mu - 1.0).abs() < 1e-3, "growth {growth} vs μ {mu}");
+            assert!(abs_diff_eq!(growth / mu, 1.0, epsilon = 1e-3), "growth {growth} vs μ {mu}");
         } else {
             // Outside, the antisymmetric multipliers are a complex pair (|μ| ≈ 0.997): φ₁ − φ₂
             // decays while it oscillates from period to period, so its envelope is compared.

@@ -11,6 +11,7 @@
 //! - a mistuned set, gravity: the general route.
 
 use crate::support::cpva_hbm;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use cpva_hbm::{cpva_hbm, omega, single};
 use kanedyn::cpva::CpvaParams;
@@ -135,7 +136,7 @@ fn every_count_finishes_and_its_unison_branch_is_the_one_pendulum_branch() {
                     .collect();
                 assert_eq!(off.len(), 2, "N = {n}: {:?}", b.bifurcations);
                 for (x, quoted) in off.iter().zip([3.08137, 3.09461]) {
-                    assert!((x - quoted).abs() <= 1e-5, "N = {n}: {x} vs {quoted}");
+                    assert!(abs_diff_eq!(*x, quoted, epsilon = 1e-5), "N = {n}: {x} vs {quoted}");
                 }
             }
             assert!(worst_mu <= 1e-9, "N = {n}, {torque} N·m: {worst_mu:e}");
@@ -259,8 +260,8 @@ fn two_pendulums_lose_unison_on_the_cyclic_route() {
     assert_eq!(c.len(), 2, "{:?}", b.bifurcations);
     assert_eq!(r.len(), 2, "{:?}", g.bifurcations);
     for ((x, y), quoted) in c.iter().zip(&r).zip([3.08137, 3.09461]) {
-        assert!((x - y).abs() <= 1e-7, "{x} vs {y}");
-        assert!((x - quoted).abs() <= 1e-5, "{x} vs {quoted}");
+        assert_abs_diff_eq!(x, y, epsilon = 1e-7);
+        assert_abs_diff_eq!(*x, quoted, epsilon = 1e-5);
     }
     // Between them the growing multiplier is the non-unison block's; the unison block is stable.
     let mid = 0.5 * (c[0] + c[1]);
@@ -310,7 +311,7 @@ fn a_study_reports_its_route_per_branch() {
         assert!(b.route_detail.contains("4 × pivot_1…pivot_4 on rotor"), "{}", b.route_detail);
         assert_eq!(b.accel[0].len(), b1.accel[0].len());
         for (x, y) in b.accel[0].iter().zip(&b1.accel[0]) {
-            assert!((x - y).abs() <= 1e-9 * y.abs(), "{x} vs {y}");
+            assert_abs_diff_eq!(x, y, epsilon = 1e-9 * y.abs());
         }
         assert_eq!(b.elements.len(), b1.elements.len());
     }

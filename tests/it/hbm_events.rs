@@ -9,6 +9,7 @@
 //! the README's, confirmed below by shooting.
 
 use crate::support::cpva_hbm;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use crate::support::shooting::shooting_multipliers;
 use cpva_hbm::{RPM, omega, single};
@@ -57,15 +58,15 @@ fn branch_points_do_not_depend_on_the_step() {
         let bp = of_class(&b, BifurcationClass::BranchPoint);
         println!("ds_max {ds_max}: branch points {bp:?}, folds {:?}", of_class(&b, BifurcationClass::Fold));
         assert_eq!(bp.len(), 2, "ds_max {ds_max}: {:?}", b.bifurcations);
-        assert!((bp[0] - 3.08137).abs() <= 1e-5 && (bp[1] - 3.09461).abs() <= 1e-5, "{bp:?}");
+        assert!(abs_diff_eq!(bp[0], 3.08137, epsilon = 1e-5) && abs_diff_eq!(bp[1], 3.09461, epsilon = 1e-5), "{bp:?}");
         let folds = of_class(&b, BifurcationClass::Fold);
         assert_eq!(folds.len(), 1);
-        assert!((folds[0] - b.folds[0].order).abs() < 1e-12);
+        assert_abs_diff_eq!(folds[0], b.folds[0].order, epsilon = 1e-12);
         found.push(bp);
     }
     for bp in &found[1..] {
         for (a, b) in bp.iter().zip(&found[0]) {
-            assert!((a - b).abs() <= 1e-8, "{a} vs {b}");
+            assert_abs_diff_eq!(a, b, epsilon = 1e-8);
         }
     }
 }
@@ -83,7 +84,10 @@ fn folds_do_not_depend_on_the_step_or_the_direction() {
                 folds.sort_by(f64::total_cmp);
                 assert_eq!(folds.len(), 2, "{torque} N·m, ds_max {ds_max}, from {from}: {folds:?}");
                 for (f, e) in folds.iter().zip(expected) {
-                    assert!((f - e).abs() <= 1e-6, "{torque} N·m, ds_max {ds_max}, from {from}: fold {f} vs {e}");
+                    assert!(
+                        abs_diff_eq!(*f, e, epsilon = 1e-6),
+                        "{torque} N·m, ds_max {ds_max}, from {from}: fold {f} vs {e}"
+                    );
                 }
                 assert_eq!(of_class(&b, BifurcationClass::Fold), folds);
                 assert!(matches!(b.end, BranchEnd::ReachedTarget | BranchEnd::LeftRange), "{:?}", b.end);
@@ -104,7 +108,7 @@ fn identical_pendulums_never_stall() {
         assert!(matches!(b.end, BranchEnd::ReachedTarget | BranchEnd::LeftRange), "N = {n}: {:?}", b.end);
         assert_eq!(b.folds.len(), b1.folds.len(), "N = {n}");
         for (f, g) in b.folds.iter().zip(&b1.folds) {
-            assert!((f.order - g.order).abs() < 1e-8, "N = {n}: fold {} vs {}", f.order, g.order);
+            assert!(abs_diff_eq!(f.order, g.order, epsilon = 1e-8), "N = {n}: fold {} vs {}", f.order, g.order);
         }
         let st = b.points.last().unwrap().solution.stability.as_ref().unwrap();
         assert_eq!(st.multipliers.len(), 2 * (n + 1) - 1);

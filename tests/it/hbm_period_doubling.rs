@@ -9,6 +9,7 @@
 //! (≈ 4e-4 wide in n at this torque and pivot damping), and regains it at the tongue's far side.
 
 use crate::support::cpva_hbm;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use crate::support::shooting::shooting_multipliers;
 use cpva_hbm::{RPM, omega, single};
@@ -59,7 +60,7 @@ fn a_period_doubling_is_a_minus_one_multiplier_of_shooting() {
     let pd = period_doublings(&b);
     println!("period doublings {pd:?}");
     assert_eq!(pd.len(), 2, "{:?}", b.bifurcations);
-    assert!((pd[0] - 3.1).abs() < 0.01 && pd[1] - pd[0] > 0.0 && pd[1] - pd[0] < 1e-3, "{pd:?}");
+    assert!(abs_diff_eq!(pd[0], 3.1, epsilon = 0.01) && pd[1] - pd[0] > 0.0 && pd[1] - pd[0] < 1e-3, "{pd:?}");
     for (edge, inside_after) in [(pd[0], true), (pd[1], false)] {
         let mut outside = Vec::new();
         for n in [edge - 2e-6, edge + 2e-6] {
@@ -98,7 +99,7 @@ fn period_doublings_do_not_depend_on_the_step() {
     }
     for pd in &found[1..] {
         for (a, b) in pd.iter().zip(&found[0]) {
-            assert!((a - b).abs() <= 1e-8, "{a} vs {b}");
+            assert_abs_diff_eq!(a, b, epsilon = 1e-8);
         }
     }
 }

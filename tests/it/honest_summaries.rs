@@ -4,6 +4,7 @@
 //! a compound pendulum on a held rotor, `n_t² = m R L / (I_G + m L²)` (the paper's eq. 15 with
 //! the pendulum's own inertia), written out here; and the text of the outputs themselves.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::PathBuf;
 
@@ -73,7 +74,7 @@ fn each_absorber_gets_its_own_tuning_order() {
         let (got, want) = (held_order(&summary, label), nt(l));
         println!("{label}: {got} vs closed form {want}");
         // Printed to 10 decimals; the eigen-analysis is exact to ~1e-12 here.
-        assert!((got - want).abs() <= 2e-10 * want, "{label}: {got} vs {want}");
+        assert!(abs_diff_eq!(got, want, epsilon = 2e-10 * want), "{label}: {got} vs {want}");
     }
     assert!(!summary.contains("NaN") && !summary.contains("inf"), "{summary}");
 }
@@ -91,6 +92,6 @@ fn without_a_locked_twin_no_ratio_or_nt_is_printed() {
     assert!(!csv.1.contains("NaN"));
     // Both absorbers' tuning orders are still listed, from the held-spin modes.
     for (label, l) in [("pivot_3", L3), ("pivot_6", L6)] {
-        assert!((held_order(&summary, label) - nt(l)).abs() <= 2e-10 * nt(l));
+        assert_abs_diff_eq!(held_order(&summary, label), nt(l), epsilon = 2e-10 * nt(l));
     }
 }

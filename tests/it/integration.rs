@@ -1,6 +1,7 @@
 //! Time integration (DOP853 with the streaming sampler) and probes, checked against conservation
 //! laws, the closed form of eq. (7), the N-pendulum invariance and deliberate failures.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::error::EngineError;
 use kanedyn::kane::Kane;
@@ -71,8 +72,8 @@ fn undamped_cpva_conserves_energy_and_angular_momentum() {
     let mm = kane.mass_matrix(&x0[..2]).clone();
     let u = nalgebra::DVector::from_column_slice(&x0[2..]);
     let mu = &mm * &u;
-    assert!((0.5 * u.dot(&mu) - t0).abs() < 1e-13 * t0, "½uᵀMu {} vs {t0}", 0.5 * u.dot(&mu));
-    assert!((mu.sum() - h0).abs() < 1e-13 * h0, "Σ(Mu) {} vs {h0}", mu.sum());
+    assert!(abs_diff_eq!(0.5 * u.dot(&mu), t0, epsilon = 1e-13 * t0), "½uᵀMu {} vs {t0}", 0.5 * u.dot(&mu));
+    assert!(abs_diff_eq!(mu.sum(), h0, epsilon = 1e-13 * h0), "Σ(Mu) {} vs {h0}", mu.sum());
 
     let (mut de, mut dh) = (0.0f64, 0.0f64);
     let run = integrate(
@@ -364,8 +365,8 @@ fn probes_resolve_by_name_and_read_the_state() {
     let x0 = [0.1, 0.2, 0.3, 1.0, -2.0, 0.5];
     let (r, out) = run(&mut kane, &x0, 0.0, 1.0, &fine, &probes);
     assert!(out.error.is_none());
-    assert!((r.columns[0][0] - 0.6).abs() < 1e-15);
-    assert!((r.columns[1][0] + 0.5).abs() < 1e-15);
+    assert_abs_diff_eq!(r.columns[0][0], 0.6, epsilon = 1e-15);
+    assert_abs_diff_eq!(r.columns[1][0], -0.5, epsilon = 1e-15);
     let (v, a) = (&r.columns[1], &r.columns[2]);
     let peak = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     let worst = (2..v.len() - 2).fold(0.0f64, |m, k| {
@@ -416,7 +417,8 @@ fn joint_rate_and_excursion_probes_and_chunked_runs() {
         total.absorb(&chunk);
         x = chunk.x_end.expect("chunk completes");
     }
-    assert!(total.error.is_none() && (total.t_end - 2.0).abs() < 1e-12);
+    assert!(total.error.is_none());
+    assert_abs_diff_eq!(total.t_end, 2.0, epsilon = 1e-12);
     assert_eq!(rec.time.len(), one.time.len(), "boundary samples are recorded once");
     let dt = rec.time.iter().zip(&one.time).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
     assert!(dt < 1e-12, "sample times differ by {dt:e} s");

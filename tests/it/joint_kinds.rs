@@ -9,6 +9,7 @@
 //! Tolerances: the engine and the closed forms sum the same few terms in another order, so they
 //! agree to rounding, ≤ 1e-12 relative to the largest entry.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::io::ReadPolicy;
 use kanedyn::io::Source;
@@ -242,13 +243,14 @@ fn welded_body_equals_merged_inertia() {
             ka.rhs(0.0, &x, &mut xa).unwrap();
             kb.rhs(0.0, &x, &mut xb).unwrap();
             for (p, r) in xa.iter().zip(&xb) {
-                assert!((p - r).abs() <= 1e-11 * r.abs().max(1.0), "ẋ {xa:?} vs merged {xb:?}");
+                assert!(abs_diff_eq!(p, r, epsilon = 1e-11 * r.abs().max(1.0)), "ẋ {xa:?} vs merged {xb:?}");
             }
         }
         // The welded body's pose follows its parent's.
         let poses = kanedyn::kane::kinematics::world_poses(&a, &[0.7, 0.0]);
         let expect = rot2(0.7) * Vec2::new(at_w.0, at_w.1);
-        assert!((poses[1].origin - expect).norm() < 1e-15 && (poses[1].angle - 0.7).abs() < 1e-15);
+        assert!((poses[1].origin - expect).norm() < 1e-15);
+        assert_abs_diff_eq!(poses[1].angle, 0.7, epsilon = 1e-15);
     }
 }
 
@@ -403,14 +405,14 @@ fn every_kind_s_columns_and_bias_are_the_derivatives_of_its_transform() {
                 let bias_scale = col_scale / scale;
                 for i in 0..3 {
                     assert!(
-                        (col[i] - dp[i]).abs() <= 1e-9 * col_scale,
+                        abs_diff_eq!(col[i], dp[i], epsilon = 1e-9 * col_scale),
                         "{} at q = {q}: column {i} {} vs difference {}",
                         kind.name(),
                         col[i],
                         dp[i]
                     );
                     assert!(
-                        (bias[i] - dc[i]).abs() <= 1e-9 * bias_scale,
+                        abs_diff_eq!(bias[i], dc[i], epsilon = 1e-9 * bias_scale),
                         "{} at q = {q}: bias {i} {} vs difference {}",
                         kind.name(),
                         bias[i],

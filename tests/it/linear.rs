@@ -5,6 +5,7 @@
 //! shaft-spring rotor against the roots of its 2×2 characteristic polynomial, and the
 //! multi-order response of Table 1 against a hand-written 2-DOF model.
 
+use approx::{assert_abs_diff_eq, assert_relative_eq, relative_eq};
 use kanedyn::cpva::{CpvaParams, inertia_ratio, rotor_order, tuning_order};
 use kanedyn::linear::{
     C64, Damping, LinearError, LinearModel, ModeKind, OrderResponse, ResponseSpec, SpeedCase, Spin, campbell,
@@ -80,7 +81,7 @@ fn operating_point_and_jacobians_equal_eq13() {
     let eu = max_abs(&(&lin.f_u - &fu_cf)) / max_abs(&fu_cf);
     println!("eq. (13): M {em:e}, F_q {eq:e}, F_u {eu:e}; T_m = {} (c_r Ω = {})", lin.op.mean_spin_torque, p.c_r * w);
     assert!(em < 1e-12 && eq < 1e-12 && eu < 1e-12, "M {em:e}, F_q {eq:e}, F_u {eu:e}");
-    assert!(rel(lin.op.mean_spin_torque, p.c_r * w) < 1e-12);
+    assert_relative_eq!(lin.op.mean_spin_torque, p.c_r * w, max_relative = 1e-12);
     assert!(lin.op.residual < 1e-9);
     assert_eq!(lin.op.u, vec![w, w]);
     assert!(max_abs(&lin.f_u_undamped) < 1e-12 * max_abs(&fu_cf));
@@ -94,8 +95,12 @@ fn operating_point_and_jacobians_equal_eq13() {
     // Second order in (θ, φ): M_q = Wᵀ M W is the joint-rate mass matrix, K = diag(0, bΩ²).
     let so = lin.second_order(Damping::Undamped);
     let jl = k.a + k.c + 2.0 * k.b;
-    assert!(rel(so.m[(0, 0)], jl) < 1e-12 && rel(so.m[(0, 1)], k.c + k.b) < 1e-12 && rel(so.m[(1, 1)], k.c) < 1e-12);
-    assert!(rel(so.k[(1, 1)], k.b * w * w) < 1e-12 && so.k[(0, 0)].abs() < 1e-9 && so.k[(0, 1)].abs() < 1e-9);
+    assert_relative_eq!(so.m[(0, 0)], jl, max_relative = 1e-12);
+    assert_relative_eq!(so.m[(0, 1)], k.c + k.b, max_relative = 1e-12);
+    assert_relative_eq!(so.m[(1, 1)], k.c, max_relative = 1e-12);
+    assert_relative_eq!(so.k[(1, 1)], k.b * w * w, max_relative = 1e-12);
+    assert_abs_diff_eq!(so.k[(0, 0)], 0.0, epsilon = 1e-9);
+    assert_abs_diff_eq!(so.k[(0, 1)], 0.0, epsilon = 1e-9);
 }
 
 #[test]
@@ -146,9 +151,9 @@ fn eigen_orders_equal_n_t_held_and_n_r_free_for_1_and_4_pendulums() {
         assert_eq!(held.modes.len(), n);
         for m in &held.modes {
             worst = worst.max(rel(m.order, k.n_t));
-            assert!(rel(m.order, k.n_t) < 1e-9, "N = {n} held: {} vs n_t {}", m.order, k.n_t);
+            assert!(relative_eq!(m.order, k.n_t, max_relative = 1e-9), "N = {n} held: {} vs n_t {}", m.order, k.n_t);
             assert!(m.label.starts_with("pivot"), "held modes are pendulum modes: {}", m.label);
-            assert!(m.damping_ratio.abs() < 1e-9);
+            assert_abs_diff_eq!(m.damping_ratio, 0.0, epsilon = 1e-9);
         }
         let free = lin.modes(Spin::Free, Damping::Undamped).unwrap();
         assert_eq!(free.rigid.len(), 2);
@@ -163,7 +168,12 @@ fn eigen_orders_equal_n_t_held_and_n_r_free_for_1_and_4_pendulums() {
         for (i, m) in free.modes.iter().enumerate() {
             let expect = if i + 1 < n { k.n_t } else { k.n_r };
             worst = worst.max(rel(m.order, expect));
-            assert!(rel(m.order, expect) < 1e-9, "N = {n} free: orders {orders:?}, n_t {}, n_r {}", k.n_t, k.n_r);
+            assert!(
+                relative_eq!(m.order, expect, max_relative = 1e-9),
+                "N = {n} free: orders {orders:?}, n_t {}, n_r {}",
+                k.n_t,
+                k.n_r
+            );
         }
         // The rotor mode moves the rotor (its coordinate share is far larger than in a
         // non-unison mode, where it is 0) although the pendulum's swing dominates it: φ/θ =
@@ -198,14 +208,14 @@ fn damped_pendulum_mode_has_the_damping_of_eq16() {
     let m = &held.modes[0];
     let zeta = p.c_p / k.c / (2.0 * k.n_t * w);
     println!("held: ω_n {} vs {}, ζ {} vs {zeta}", m.natural_frequency_rad_s, k.n_t * w, m.damping_ratio);
-    assert!(rel(m.natural_frequency_rad_s, k.n_t * w) < 1e-9);
-    assert!(rel(m.damping_ratio, zeta) < 1e-9);
+    assert_relative_eq!(m.natural_frequency_rad_s, k.n_t * w, max_relative = 1e-9);
+    assert_relative_eq!(m.damping_ratio, zeta, max_relative = 1e-9);
     let free = LinearModel::new(&params(1, 0.0, 5e-3).mechanism(None).unwrap(), "spin", w, None)
         .unwrap()
         .modes(Spin::Free, Damping::Damped)
         .unwrap();
     let l = free.rigid[1].eigenvalue;
-    assert!(rel(l.re, -p.c_r / p.locked_inertia()) < 1e-9 && l.im == 0.0, "{l}");
+    assert!(relative_eq!(l.re, -p.c_r / p.locked_inertia(), max_relative = 1e-9) && l.im == 0.0, "{l}");
 }
 
 #[test]
@@ -238,14 +248,14 @@ fn relative_equilibrium_off_the_radial_line() {
         "φ₀ = {} (bisection {phi0}), {} Newton iterations, residual {:e}",
         lin.op.q[1], lin.op.iterations, lin.op.residual
     );
-    assert!((lin.op.q[1] - phi0).abs() < 1e-12);
-    assert!(rel(lin.op.mean_spin_torque, p.c_r * w) < 1e-9);
+    assert_abs_diff_eq!(lin.op.q[1], phi0, epsilon = 1e-12);
+    assert_relative_eq!(lin.op.mean_spin_torque, p.c_r * w, max_relative = 1e-9);
     let held = lin.modes(Spin::Held, Damping::Undamped).unwrap();
     let wn = ((k.b * w * w * phi0.cos() + ks) / k.c).sqrt();
-    assert!(rel(held.modes[0].natural_frequency_rad_s, wn) < 1e-9);
+    assert_relative_eq!(held.modes[0].natural_frequency_rad_s, wn, max_relative = 1e-9);
     let (s0, c_p) = (phi0.sin(), p.c_p);
-    assert!(rel(lin.f_u[(0, 1)], 2.0 * k.b * w * s0 + c_p) < 1e-10);
-    assert!(rel(lin.f_u[(1, 0)], -2.0 * k.b * w * s0 + c_p) < 1e-10);
+    assert_relative_eq!(lin.f_u[(0, 1)], 2.0 * k.b * w * s0 + c_p, max_relative = 1e-10);
+    assert_relative_eq!(lin.f_u[(1, 0)], -2.0 * k.b * w * s0 + c_p, max_relative = 1e-10);
 }
 
 #[test]
@@ -269,7 +279,7 @@ fn results_do_not_depend_on_the_speeds() {
             worst = worst.max(if a.eigenvalue.norm() == 0.0 { 0.0 } else { e });
             assert!(a.kind == b.kind && a.label == b.label);
             for (x, y) in a.coordinate_share.iter().zip(&b.coordinate_share) {
-                assert!((x - y).abs() < 1e-9);
+                assert_abs_diff_eq!(x, y, epsilon = 1e-9);
             }
         }
     }
@@ -319,7 +329,7 @@ fn normalised_response_matches_the_closed_forms() {
         }
         // Locked rotor: |α̂| = 1/J_L exactly without damping.
         let lk = r.point(3.0).unwrap().locked;
-        assert!(rel(lk, 1.0 / p.locked_inertia()) < 1e-12);
+        assert_relative_eq!(lk, 1.0 / p.locked_inertia(), max_relative = 1e-12);
         let zero = r.point(k.n_t).unwrap().ratio;
         let pole = r.point(k.n_r * (1.0 + 1e-8)).unwrap().ratio.min(r.point(k.n_r * (1.0 - 1e-8)).unwrap().ratio);
         println!(
@@ -328,9 +338,9 @@ fn normalised_response_matches_the_closed_forms() {
             rel(cross, cross_cf),
             rel(asym, asym_cf)
         );
-        assert!(rel(cross, cross_cf) < 1e-10);
-        assert!(rel(asym, asym_cf) < 1e-12);
-        assert!(rel(far, asym_cf) < 1e-6, "n = 1e4 approaches the asymptote as 1/n²");
+        assert_relative_eq!(cross, cross_cf, max_relative = 1e-10);
+        assert_relative_eq!(asym, asym_cf, max_relative = 1e-12);
+        assert!(relative_eq!(far, asym_cf, max_relative = 1e-6), "n = 1e4 approaches the asymptote as 1/n²");
         assert!(worst_sweep < 1e-10, "{worst_sweep:e}");
         assert!(zero < 1e-10, "{zero:e}");
         assert!(pole > 1e6, "{pole:e}");
@@ -366,9 +376,10 @@ fn figure2_extremes_for_three_pendulum_dampings() {
             cross / k.n_t,
             r.asymptote().unwrap()
         );
-        assert!(rel(cross, cross_cf) < 1e-6, "crossing {cross} vs {cross_cf}");
+        assert!(relative_eq!(cross, cross_cf, max_relative = 1e-6), "crossing {cross} vs {cross_cf}");
         if c_p == 5e-4 {
-            assert!(rel(e.min_order, k.n_t) < 1e-3 && rel(e.max_order, k.n_r) < 1e-3);
+            assert_relative_eq!(e.min_order, k.n_t, max_relative = 1e-3);
+            assert_relative_eq!(e.max_order, k.n_r, max_relative = 1e-3);
         }
         if let Some((mn, mx)) = prev {
             assert!(e.min_ratio > mn && e.max_ratio < mx);
@@ -413,7 +424,7 @@ fn campbell_of_cpva_is_straight_order_lines_and_of_shaft_rotor_is_not() {
         let c = campbell(&mech, "spin", &rpm, &[1.5, 3.0], spin, Damping::Undamped, None, None).unwrap();
         assert_eq!(c.tracks.len(), 1);
         for (f, r) in c.tracks[0].frequency_hz.iter().zip(&rpm) {
-            assert!(rel(*f, order * r / 60.0) < 1e-9, "{f} Hz at {r} rpm");
+            assert!(relative_eq!(*f, order * r / 60.0, max_relative = 1e-9), "{f} Hz at {r} rpm");
         }
         assert_eq!(c.order_lines[1].frequency_hz[2], 3.0 * 1000.0 / 60.0);
     }
@@ -463,7 +474,7 @@ fn campbell_of_cpva_is_straight_order_lines_and_of_shaft_rotor_is_not() {
     let at_rest = (k_shaft / (k.a - k.b * k.b / k.c)).sqrt() / (2.0 * PI);
     // The branch that is the shaft mode at rest (the upper one).
     let shaft_track = c.tracks.iter().find(|t| t.labels[0] == "shaft").expect("a track labelled by the shaft joint");
-    assert!(rel(shaft_track.frequency_hz[0], at_rest) < 1e-9);
+    assert_relative_eq!(shaft_track.frequency_hz[0], at_rest, max_relative = 1e-9);
     let pend = c.tracks.iter().find(|t| t.labels[0] == "pivot").expect("a track labelled by the pivot");
     // Not order lines: frequency per rpm changes with speed for both tracks.
     let per_rpm = |t: &kanedyn::linear::CampbellTrack, i: usize| t.frequency_hz[i] / rpm[i];
@@ -472,7 +483,7 @@ fn campbell_of_cpva_is_straight_order_lines_and_of_shaft_rotor_is_not() {
     // Locked pendulum at rest: sqrt(k / J_L).
     let locked = shaft.lock("pivot", 0.0).unwrap();
     let m = LinearModel::new(&locked, "spin", 0.0, None).unwrap().modes(Spin::Held, Damping::Undamped).unwrap();
-    assert!(rel(m.modes[0].natural_frequency_rad_s, (k_shaft / jl).sqrt()) < 1e-9);
+    assert_relative_eq!(m.modes[0].natural_frequency_rad_s, (k_shaft / jl).sqrt(), max_relative = 1e-9);
 }
 
 /// The paper's Table 1 (n = 3, α_n = 0, α_2n = −0.32 rad).
@@ -503,7 +514,7 @@ fn multi_order_response_of_table1_matches_a_hand_written_2dof_model() {
     let mut worst: f64 = 0.0;
     for sr in &res {
         let w0 = sr.omega;
-        assert!(rel(sr.mean_torque, p.c_r * w0) < 1e-12);
+        assert_relative_eq!(sr.mean_torque, p.c_r * w0, max_relative = 1e-12);
         for h in &sr.harmonics {
             let w = h.order * w0;
             let iw = C64::new(0.0, w);

@@ -5,6 +5,7 @@
 //! `J_a J_c ω⁴ − (J_a k_c + J_c (k_a + k_c)) ω² + k_a k_c = 0`.
 
 use crate::support::branched;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use branched::{closed_form_rad_s, drivetrain};
 use kanedyn::linear::{Damping, LinearModel, ModalDamping, Spin, campbell};
@@ -30,10 +31,10 @@ fn every_mode_gets_the_ratio_asked_for() {
                 m.label, m.natural_frequency_rad_s, w[i], m.damping_ratio
             );
             // Classical damping on an uncoupled drivetrain: exact up to the eigen-solver (1e-9).
-            assert!((m.damping_ratio - want).abs() <= 1e-9, "mode {i}: ζ {} vs {want}", m.damping_ratio);
-            assert!((m.natural_frequency_rad_s - w[i]).abs() <= 1e-9 * w[i]);
+            assert!(abs_diff_eq!(m.damping_ratio, want, epsilon = 1e-9), "mode {i}: ζ {} vs {want}", m.damping_ratio);
+            assert_abs_diff_eq!(m.natural_frequency_rad_s, w[i], epsilon = 1e-9 * w[i]);
             // The damped frequency is ω_n √(1 − ζ²).
-            assert!((m.damped_frequency_rad_s - w[i] * (1.0 - want * want).sqrt()).abs() <= 1e-9 * w[i]);
+            assert_abs_diff_eq!(m.damped_frequency_rad_s, w[i] * (1.0 - want * want).sqrt(), epsilon = 1e-9 * w[i]);
         }
     }
     // The mechanism's own dampers are replaced, not added to: with all ratios 0 the damped model
@@ -57,8 +58,8 @@ fn a_campbell_diagram_takes_modal_damping() {
     for (t, (tr, z)) in c.tracks.iter().zip([0.02, 0.04, 0.06]).enumerate() {
         for (i, (&f, &d)) in tr.frequency_hz.iter().zip(&tr.damping_ratio).enumerate() {
             let want = w[t] * (1.0f64 - z * z).sqrt() / (2.0 * std::f64::consts::PI);
-            assert!((d - z).abs() <= 1e-9, "mode {t} at {} rpm: ζ {d}", rpm[i]);
-            assert!((f - want).abs() <= 1e-9 * want, "mode {t} at {} rpm: {f} Hz vs {want}", rpm[i]);
+            assert!(abs_diff_eq!(d, z, epsilon = 1e-9), "mode {t} at {} rpm: ζ {d}", rpm[i]);
+            assert!(abs_diff_eq!(f, want, epsilon = 1e-9 * want), "mode {t} at {} rpm: {f} Hz vs {want}", rpm[i]);
         }
     }
 }
@@ -154,7 +155,10 @@ fn modal_damping_adds_to_the_dampers_when_asked() {
     for (g, w) in got.iter().zip(&want) {
         println!("λ = {:.9} ± {:.9}i vs {:.9} ± {:.9}i", g.0, g.1, w.0, w.1);
         let size = w.0.hypot(w.1);
-        assert!((g.0 - w.0).abs() <= 1e-9 * size && (g.1 - w.1).abs() <= 1e-9 * size, "{g:?} vs {w:?}");
+        assert!(
+            abs_diff_eq!(g.0, w.0, epsilon = 1e-9 * size) && abs_diff_eq!(g.1, w.1, epsilon = 1e-9 * size),
+            "{g:?} vs {w:?}"
+        );
     }
     // Ratios 0: the mechanism's damped model, unchanged.
     let zero = model.with_modal_damping_combined(Spin::Held, &ModalDamping::All(0.0), ModalCombination::Add).unwrap();

@@ -7,6 +7,7 @@
 //! a fifth of a bin; cubic resampling lowers order 6.6 by ~1.8e-4 (rms gain of the interpolant). Each test prints its worst error.
 
 use crate::support::swept_signal;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use kanedyn::model::excitation::{Order, rpm_to_rad_s};
 use kanedyn::signal::{
@@ -51,10 +52,11 @@ fn fixed_order_both_methods() {
         if n == 3.0 {
             assert!(es < 1e-9, "{es:e}");
         }
-        assert!((stft[0].freq_hz[0] - n * omega / (2.0 * PI)).abs() < 1e-12);
-        assert!((angle[0].freq_hz[0] / (n * omega / (2.0 * PI)) - 1.0).abs() < 1e-9);
+        assert_abs_diff_eq!(stft[0].freq_hz[0], n * omega / (2.0 * PI), epsilon = 1e-12);
+        assert_abs_diff_eq!(angle[0].freq_hz[0] / (n * omega / (2.0 * PI)), 1.0, epsilon = 1e-9);
         // Window centre times: t_c = (start + N/2)/fs.
-        assert!((stft[0].time_s[0] - 1.0).abs() < 1e-12 && (stft[0].time_s[1] - 1.25).abs() < 1e-12);
+        assert_abs_diff_eq!(stft[0].time_s[0], 1.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(stft[0].time_s[1], 1.25, epsilon = 1e-12);
     }
 }
 
@@ -74,8 +76,8 @@ fn swept_order_both_methods() {
         assert!(e < TOL, "{e:e}");
     }
     // The traces span the sweep: first window centred at 1 s (n = 2.9017), last at 239 s.
-    assert!((stft[0].order[0] - order.at(1.0)).abs() < 1e-12);
-    assert!((stft[1].freq_hz[952] - 2.0 * order.at(239.0) * omega / (2.0 * PI)).abs() < 1e-9);
+    assert_abs_diff_eq!(stft[0].order[0], order.at(1.0), epsilon = 1e-12);
+    assert_abs_diff_eq!(stft[1].freq_hz[952], 2.0 * order.at(239.0) * omega / (2.0 * PI), epsilon = 1e-9);
 }
 
 /// (c) A rotor whose speed fluctuates at 3Ω (θ = Ωt + 0.01 sin 3Ωt, 3 % speed ripple) and a
@@ -142,8 +144,8 @@ fn methods_agree_on_a_swept_notch() {
     assert!(worst_agree < TOL, "{worst_agree:e}");
     // The minimum window sits within one hop of the notch (hops are 4.2e-4 and ~4e-4 in order).
     for p in [ms, ma] {
-        assert!((p.order - 3.11).abs() < 5e-4, "{p:?}");
-        assert!((p.amplitude / 0.5 - 1.0).abs() < TOL, "{p:?}");
+        assert!(abs_diff_eq!(p.order, 3.11, epsilon = 5e-4), "{p:?}");
+        assert!(abs_diff_eq!(p.amplitude / 0.5, 1.0, epsilon = TOL), "{p:?}");
     }
 }
 

@@ -6,6 +6,7 @@
 //! physics is wrong (e.g. a sign error in the pendulum's centrifugal term removes the absorber
 //! notch, a wrong mean torque drifts the speed and moves every order).
 
+use approx::abs_diff_eq;
 use kanedyn::signal::OrderTrace;
 use kanedyn::study::{Direction, RunOptions, Study, StudyReport, SweepRun, run};
 use std::path::Path;
@@ -111,7 +112,7 @@ fn multi_order_jump_at_600_rpm_and_absorption_above() {
             // cross-checked against the speed continuation to 1e-7); 1e-5 covers the rounding.
             assert_eq!(s.hbm.len(), 1, "600 rpm: {} HBM states", s.hbm.len());
             let f = s.hbm_lower_fold.expect("600 rpm: no fold of the low-amplitude branch");
-            assert!((f - 0.92908).abs() < 1e-5, "600 rpm: low branch fold at s = {f}");
+            assert!(abs_diff_eq!(f, 0.92908, epsilon = 1e-5), "600 rpm: low branch fold at s = {f}");
         } else {
             assert_eq!(s.hbm_lower_fold, None, "{} rpm: the low-amplitude branch should reach the torques", s.rpm);
             assert!(main < lmain, "{} rpm: main {main} not below locked {lmain}", s.rpm);
@@ -143,7 +144,7 @@ fn harmonic_balance_folds_sit_at_the_sweep_jumps() {
     let (up, down) = jump_orders(&sweeps, 40.0, lag).unwrap();
     let (up, down) = (up.unwrap(), down.unwrap());
     assert!(up >= f40[1] - 1e-3 && up - f40[1] < 0.01, "up jump {up} vs fold {}", f40[1]);
-    assert!((down - f40[0]).abs() < 0.01, "down jump {down} vs fold {}", f40[0]);
+    assert!(abs_diff_eq!(down, f40[0], epsilon = 0.01), "down jump {down} vs fold {}", f40[0]);
     let f500 = folds(500.0);
     assert_eq!(f500.len(), 1, "folds at 500 N·m: {f500:?}");
     let (up, down) = jump_orders(&sweeps, 500.0, lag).unwrap();

@@ -6,6 +6,7 @@
 //! at held spin, the compound pendulum's exact frequency (elliptic integral) for the nonlinear
 //! coefficient, and located errors for bad input.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::error::EngineError;
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
@@ -61,7 +62,11 @@ fn general_with_rho0_and_n_tilde_is_the_epicycloid() {
         let epi = PathShape::Epicycloid { rho0, n_tilde: n, alpha1: 0.0 };
         let general = PathShape::general(rho0, n, &[], &[]);
         let s_max = epi.travel();
-        assert!((general.travel() - s_max).abs() <= 1e-13 * s_max, "end {} vs cusp {s_max}", general.travel());
+        assert!(
+            abs_diff_eq!(general.travel(), s_max, epsilon = 1e-13 * s_max),
+            "end {} vs cusp {s_max}",
+            general.travel()
+        );
         let PathShape::General(g) = general else { unreachable!() };
         for k in -20..=20 {
             let f = 0.999 * k as f64 / 20.0;
@@ -99,7 +104,7 @@ fn general_curve_is_the_declared_polynomial_path() {
     };
     // |dρ/ds| = 1 at the end: the polynomial's own condition, checked there.
     let dr_end = drho2(s_end) / (2.0 * rho2(s_end).sqrt());
-    assert!((dr_end.abs() - 1.0).abs() <= 1e-6, "|dρ/ds| at the end: {dr_end}");
+    assert!(abs_diff_eq!(dr_end.abs(), 1.0, epsilon = 1e-6), "|dρ/ds| at the end: {dr_end}");
     let (nodes, weights) = gauss_legendre(20);
     let mut worst = 0.0f64;
     for f in [0.1, 0.3, 0.6, 0.9] {
@@ -116,16 +121,16 @@ fn general_curve_is_the_declared_polynomial_path() {
         let pt = shape.at(s);
         let got = pt.position.y.atan2(pt.position.x);
         worst = worst.max((got - theta).abs() / theta);
-        assert!((pt.position.norm_squared() - rho2(s)).abs() <= 1e-15, "ρ² at {s}");
-        assert!((pt.tangent.norm() - 1.0).abs() <= 1e-14);
+        assert!(abs_diff_eq!(pt.position.norm_squared(), rho2(s), epsilon = 1e-15), "ρ² at {s}");
+        assert_abs_diff_eq!(pt.tangent.norm(), 1.0, epsilon = 1e-14);
         let hh = 1e-6;
         let (a, b) = (shape.at(s + hh), shape.at(s - hh));
         assert!(((a.position - b.position) / (2.0 * hh) - pt.tangent).norm() <= 1e-8, "tangent at {s}");
         assert!(((a.tangent - b.tangent) / (2.0 * hh) - pt.curvature).norm() <= 1e-7 * pt.curvature.norm(), "κ at {s}");
         let al = |s: f64| alpha[0] * s + alpha[1] * s.powi(3);
-        assert!((pt.alpha - al(s)).abs() <= 1e-15);
-        assert!(((a.alpha - b.alpha) / (2.0 * hh) - pt.dalpha).abs() <= 1e-8);
-        assert!(((a.dalpha - b.dalpha) / (2.0 * hh) - pt.ddalpha).abs() <= 1e-6);
+        assert_abs_diff_eq!(pt.alpha, al(s), epsilon = 1e-15);
+        assert_abs_diff_eq!((a.alpha - b.alpha) / (2.0 * hh), pt.dalpha, epsilon = 1e-8);
+        assert_abs_diff_eq!((a.dalpha - b.dalpha) / (2.0 * hh), pt.ddalpha, epsilon = 1e-6);
     }
     println!("θ: table vs Gauss–Legendre, worst relative {worst:.1e}");
     assert!(worst <= 1e-13, "θ differs from the quadrature by {worst:e}");
@@ -189,7 +194,7 @@ fn tuning_orders_equal_closed_forms_and_the_linear_analysis() {
     }
     // The bifilar's order does not depend on the inertia; the properties say so too.
     let heavy = rotor_with(path(PathShape::Bifilar { radius: r, length: l }), m, Some(100.0 * i_b));
-    assert!((absorbers(&heavy)[0].tuning_order_squared - r / l).abs() <= 1e-14 * r / l);
+    assert_abs_diff_eq!(absorbers(&heavy)[0].tuning_order_squared, r / l, epsilon = 1e-14 * r / l);
     println!("n_t²: {}", report.join("; "));
 }
 
@@ -214,15 +219,19 @@ fn nonlinear_coefficient_matches_the_free_oscillation() {
     let kappa = absorbers(&circle)[0].nonlinear;
     let phi0: f64 = 0.01;
     let slope = (PI / (2.0 * elliptic_k((0.5 * phi0).sin())) - 1.0) / (phi0 * phi0);
-    assert!((kappa * l * l - slope).abs() <= 1e-4 / 16.0, "κL² = {} vs the elliptic slope {slope}", kappa * l * l);
-    assert!((kappa * l * l + 1.0 / 16.0).abs() <= 1e-15);
+    assert!(
+        abs_diff_eq!(kappa * l * l, slope, epsilon = 1e-4 / 16.0),
+        "κL² = {} vs the elliptic slope {slope}",
+        kappa * l * l
+    );
+    assert_abs_diff_eq!(kappa * l * l, -1.0 / 16.0, epsilon = 1e-15);
     // The general path: measure the order after 10 periods (phase of (s, −ṡ/ω)).
     let (m, i_b, omega) = (6.0, 2.0e-3, 150.0);
     let shape = PathShape::general(0.185, 2.0, &[-3000.0], &[20.0, 4000.0]);
     let mech = rotor_with(path(shape), m, Some(i_b));
     let props = &absorbers(&mech)[0];
     let want_kappa = -0.75 * -3000.0 / 4.0 - 1.5 * i_b * 20.0 * 4000.0 / (m + i_b * 400.0);
-    assert!((props.nonlinear - want_kappa).abs() <= 1e-12 * want_kappa.abs(), "{} vs {want_kappa}", props.nonlinear);
+    assert_abs_diff_eq!(props.nonlinear, want_kappa, epsilon = 1e-12 * want_kappa.abs());
     assert_eq!(props.tautochronic, Tautochronism::No);
     let w0 = props.tuning_order() * omega;
     let a = 1e-3;
@@ -236,7 +245,10 @@ fn nonlinear_coefficient_matches_the_free_oscillation() {
     let ratio = 1.0 + angle / (2.0 * PI * periods);
     let measured = (ratio - 1.0) / (a * a);
     println!("κ: closed form {want_kappa:.6}, free oscillation {measured:.6} (1/m²)");
-    assert!((measured - want_kappa).abs() <= 0.02 * want_kappa.abs(), "κ measured {measured} vs {want_kappa}");
+    assert!(
+        abs_diff_eq!(measured, want_kappa, epsilon = 0.02 * want_kappa.abs()),
+        "κ measured {measured} vs {want_kappa}"
+    );
 }
 
 /// Tautochronism: the epicycloid (named or general, translating or with a linear rotation law)
@@ -265,7 +277,7 @@ fn tautochronism_is_reported() {
     let (m, l, i) = (b.mass, b.com.norm(), b.i_com);
     let want = m * r * l / (i + m * l * l);
     let got = absorbers(&paper)[0].tuning_order_squared;
-    assert!((got - want).abs() <= 1e-14 * want, "revolute pendulum n_t² {got} vs eq. (15) {want}");
+    assert!(abs_diff_eq!(got, want, epsilon = 1e-14 * want), "revolute pendulum n_t² {got} vs eq. (15) {want}");
 }
 
 /// `kanedyn check` prints the absorbers' table (here for the epicycloid example: n_t = ñ = 3.11,
@@ -363,7 +375,7 @@ fn catalog_general_part_loads() {
     let props = &absorbers(&mech)[0];
     let (n, a1) = (g.n_tilde, g.alpha[0]);
     let want = 6.0 * n * n / (6.0 + 2.16e-4 * a1 * a1);
-    assert!((props.tuning_order_squared - want).abs() <= 1e-14 * want);
+    assert_abs_diff_eq!(props.tuning_order_squared, want, epsilon = 1e-14 * want);
     println!("{}", markdown(&mech));
 }
 
@@ -398,7 +410,7 @@ fn roller_tuning_order_equals_the_rolling_kinematics() {
         let (_, n2, _, _) = shape.taylor();
         let got = roller_tuning_order_squared(m, n2, count, m_r, i_r, r_r);
         println!("{shape:?}: rollers n_t² {got:.9} (without {n2:.9}), kinematics {want:.9}");
-        assert!((got - want).abs() <= 1e-8 * want, "{shape:?}: {got} vs {want}");
+        assert!(abs_diff_eq!(got, want, epsilon = 1e-8 * want), "{shape:?}: {got} vs {want}");
         assert!(got > n2, "uniform-disc rollers raise the order");
     }
 }

@@ -7,6 +7,7 @@
 //! conservation of a free run, the end of travel as a named engine error, and located errors for
 //! bad input.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::{CpvaParams, tuning_order};
 use kanedyn::error::EngineError;
 use kanedyn::io::{ReadPolicy, Source};
@@ -169,7 +170,7 @@ fn held_spin_frequency_ratio(mech: &Mechanism, omega: f64, s0: f64, omega_ref: f
     let opts = IntegrateOptions { rtol: 1e-13, atol: 1e-13 * s0, sample_rate_hz: None, ..IntegrateOptions::default() };
     let run = integrate(|t, x, dx| drive.rhs(t, x, dx), &x0, 0.0, t1, &opts, |_| {}).unwrap();
     let (s, sd) = (run.x_end[1], run.x_end[3]);
-    assert!((run.x_end[2] - omega).abs() <= 1e-9 * omega, "spin not held: {}", run.x_end[2]);
+    assert!(abs_diff_eq!(run.x_end[2], omega, epsilon = 1e-9 * omega), "spin not held: {}", run.x_end[2]);
     let angle = (-sd / omega_ref).atan2(s);
     1.0 + angle / (2.0 * PI * periods)
 }
@@ -190,7 +191,7 @@ fn epicycloid_frequency_is_n_tilde_omega_at_every_amplitude() {
         for f in [0.01, 0.25, 0.5, 0.75, 0.95] {
             let ratio = held_spin_frequency_ratio(&mech, omega, f * s_max, n_tilde * omega, 20.0);
             report.push(format!("{label} {f}: {:.3e}", ratio - 1.0));
-            assert!((ratio - 1.0).abs() <= 1e-9, "{label} at {f} s_max: ω/(ñΩ) − 1 = {:e}", ratio - 1.0);
+            assert!(abs_diff_eq!(ratio, 1.0, epsilon = 1e-9), "{label} at {f} s_max: ω/(ñΩ) − 1 = {:e}", ratio - 1.0);
             ratios.push(ratio);
         }
         let spread = ratios.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b))
@@ -337,7 +338,7 @@ fn example_file_loads_and_is_tuned_to_its_n_tilde() {
     };
     let lin = LinearModel::new(&mech, "spin", 100.0, None).unwrap();
     let held = lin.modes(Spin::Held, Damping::Undamped).unwrap();
-    assert!((held.modes[0].order - n_tilde).abs() <= 1e-9 * n_tilde, "{} vs {n_tilde}", held.modes[0].order);
+    assert_abs_diff_eq!(held.modes[0].order, n_tilde, epsilon = 1e-9 * n_tilde);
 }
 
 /// Harmonic balance on the epicycloid absorber (examples/cpva_epicycloid.ron, 1000 rpm, the
@@ -399,7 +400,7 @@ fn circle_frequency_ratio_follows_the_elliptic_integral() {
     for (deg, printed) in [(30.0f64, 0.982889), (60.0, 0.931808), (90.0, 0.847213), (120.0, 0.728396)] {
         let phi0 = deg.to_radians();
         let want = PI / (2.0 * elliptic_k((0.5 * phi0).sin()));
-        assert!((want - printed).abs() < 6e-7, "closed form {want} vs the issue's {printed}");
+        assert!(abs_diff_eq!(want, printed, epsilon = 6e-7), "closed form {want} vs the issue's {printed}");
         let kane = Kane::new(&mech).unwrap();
         let mut drive = Drive::new(kane, 0, vec![], Some(Prescribed { joint: 0, accel: 0.0, until_s: 0.0 })).unwrap();
         let t_pred = 2.0 * PI / (w_lin * want);

@@ -5,6 +5,7 @@
 //! numeric differentiation of the kinetic and potential energy, and Kane's sums body by body
 //! (`kane::reference`) for the fast forms.
 
+use approx::assert_abs_diff_eq;
 use kanedyn::error::EngineError;
 use kanedyn::kane::Kane;
 use kanedyn::kane::kinematics::{kinetic_energy, potential_energy, world_poses, world_velocities};
@@ -196,7 +197,7 @@ fn partial_velocities_equal_finite_differences_of_body_velocities() {
             let v_fd = (pp[j].com - pm[j].com) / (2.0 * h);
             let w_fd = (pp[j].angle - pm[j].angle) / (2.0 * h);
             assert!((v_fd - vel[j].1).norm() < 1e-6 * (1.0 + vel[j].1.norm()), "tree {seed} body {j}: velocity");
-            assert!((w_fd - vel[j].0).abs() < 1e-6 * (1.0 + vel[j].0.abs()));
+            assert_abs_diff_eq!(w_fd, vel[j].0, epsilon = 1e-6 * (1.0 + vel[j].0.abs()));
         }
         // ∂v_j/∂u_r by central differences in u (exact up to rounding: v is linear in u).
         for j in 0..nb {
@@ -515,7 +516,7 @@ fn residual_jacobian_equals_central_differences() {
                 worst = worst.max(eq).max(eu);
                 assert!(eq < 1e-7 && eu < 1e-7, "tree {seed}: ∂r_{i}/∂q_{l} off by {eq:e}, ∂r_{i}/∂u_{l} by {eu:e}");
             }
-            assert!((r[l] - r0[l]).abs() <= 1e-12 * scale);
+            assert_abs_diff_eq!(r[l], r0[l], epsilon = 1e-12 * scale);
         }
         let (mm, _) = kane.mass_matrix_and_forcing_rows(0.3, &q, &u);
         assert_eq!(&m[..], mm);

@@ -3,6 +3,7 @@
 //! its spring, damper and applied torque), and the rattle threshold of a pendulum absorber under
 //! gravity in a study run-up.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::kane::reactions::joint_reactions;
@@ -43,8 +44,13 @@ fn a_hanging_pendulum_carries_its_weight() {
     let r = reactions_at(&m, &[-PI / 2.0], &[0.0])[0];
     let weight = 2.5 * G;
     println!("hanging pendulum: pivot force {:?}, moment {:e}", r.force_world, r.moment);
-    assert!((r.force_world.y - weight).abs() <= 1e-12 * weight, "vertical {} vs {weight}", r.force_world.y);
-    assert!(r.force_world.x.abs() <= 1e-12 * weight && r.moment.abs() <= 1e-12 * weight);
+    assert!(
+        abs_diff_eq!(r.force_world.y, weight, epsilon = 1e-12 * weight),
+        "vertical {} vs {weight}",
+        r.force_world.y
+    );
+    assert_abs_diff_eq!(r.force_world.x, 0.0, epsilon = 1e-12 * weight);
+    assert_abs_diff_eq!(r.moment, 0.0, epsilon = 1e-12 * weight);
 }
 
 /// The paper's pendulum at φ = 0 on its rotor turning at Ω = 1000 rpm: the rotor's acceleration
@@ -70,9 +76,10 @@ fn a_pendulum_on_a_spinning_rotor_carries_its_centripetal_force() {
         pivot.tangential,
         bearing.force_world.norm()
     );
-    assert!((pivot.radial + want).abs() <= 1e-12 * want, "radial {} vs −{want}", pivot.radial);
-    assert!(pivot.tangential.abs() <= 1e-12 * want && pivot.moment.abs() <= 1e-12 * want);
-    assert!((bearing.force_world.norm() - want).abs() <= 1e-12 * want);
+    assert!(abs_diff_eq!(pivot.radial, -want, epsilon = 1e-12 * want), "radial {} vs −{want}", pivot.radial);
+    assert_abs_diff_eq!(pivot.tangential, 0.0, epsilon = 1e-12 * want);
+    assert_abs_diff_eq!(pivot.moment, 0.0, epsilon = 1e-12 * want);
+    assert_abs_diff_eq!(bearing.force_world.norm(), want, epsilon = 1e-12 * want);
 }
 
 /// A revolute joint's constraint carries no moment, so at any state the Newton–Euler moment at
@@ -196,7 +203,7 @@ fn the_swinging_pendulum_crosses_near_the_threshold() {
         "free absorber: sign change between {before:.2} and {after:.2} rpm; √(g/r_c) = {want:.2} rpm; swing {swing:.2} rad"
     );
     assert!(swing > 2.0 * PI, "the free pendulum should turn over below the threshold, {swing} rad");
-    assert!((after / want - 1.0).abs() < 0.05, "crossing at {after} rpm vs {want}");
+    assert!(abs_diff_eq!(after / want, 1.0, epsilon = 0.05), "crossing at {after} rpm vs {want}");
 }
 
 /// Harmonic balance's reaction harmonics (Newton–Euler on the Fourier series' q, q̇, q̈) against

@@ -9,6 +9,7 @@
 //! F against Lagrange's equations of a kinetic energy built here from the rolling kinematics; the
 //! energy and the locked rotor from the same expressions.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
 use kanedyn::kane::kinematics::kinetic_energy;
@@ -265,8 +266,11 @@ fn held_spin_tuning_order_with_rollers_equals_the_closed_form() {
             ));
             assert!(rel <= 1e-12, "{label} {set:?}: n_t {got} vs closed form {want} ({rel:e})");
             let props = &absorbers(&mech)[0];
-            assert!((props.tuning_order_squared - want2).abs() <= 1e-14 * want2, "{label}: reported {props:?}");
-            assert!((props.plain_tuning_order_squared - n2).abs() <= 1e-14 * n2);
+            assert!(
+                abs_diff_eq!(props.tuning_order_squared, want2, epsilon = 1e-14 * want2),
+                "{label}: reported {props:?}"
+            );
+            assert_abs_diff_eq!(props.plain_tuning_order_squared, n2, epsilon = 1e-14 * n2);
             assert!(props.rollers.is_some());
         }
     }
@@ -390,8 +394,8 @@ fn locking_welds_the_rollers() {
         let Set { n, m_r, i_r, spread, .. } = DISCS;
         let c0 = 0.5 * (centre.x + rho0);
         let want = I_A + I_ABS + M_ABS * rho0 * rho0 + n * m_r * c0 * c0 + n * i_r + n * m_r * spread * spread;
-        assert!((m - want).abs() <= 1e-13 * want, "{label}: locked {m} vs {want}");
-        assert!((mech.total_mass() - (110.0 + M_ABS + n * m_r)).abs() <= 1e-12);
+        assert!(abs_diff_eq!(m, want, epsilon = 1e-13 * want), "{label}: locked {m} vs {want}");
+        assert_abs_diff_eq!(mech.total_mass(), 110.0 + M_ABS + n * m_r, epsilon = 1e-12);
     }
 }
 
@@ -464,10 +468,10 @@ fn catalog_rollers_part_loads() {
     let (n, m_r, i_r, r_r) = (f64::from(r.count), r.mass, r.inertia, r.radius);
     let want = n2 * (6.0 + 0.5 * n * m_r) / (6.0 + 0.25 * n * (m_r + i_r / (r_r * r_r)));
     let props = &absorbers(&mech)[0];
-    assert!((props.tuning_order_squared - want).abs() <= 1e-14 * want);
+    assert_abs_diff_eq!(props.tuning_order_squared, want, epsilon = 1e-14 * want);
     let lin = LinearModel::new(&mech, "spin", 100.0, None).unwrap();
     let got = lin.modes(Spin::Held, Damping::Undamped).unwrap().modes[0].order;
-    assert!((got * got - want).abs() <= 1e-11 * want, "{got} vs {}", want.sqrt());
+    assert!(abs_diff_eq!(got * got, want, epsilon = 1e-11 * want), "{got} vs {}", want.sqrt());
     println!("{}", markdown(&mech));
 }
 
@@ -550,5 +554,5 @@ fn geared_mechanism_keeps_the_rollers() {
     let want = (n2 * (M_ABS + 0.5 * n * m_r) / (M_ABS + 0.25 * n * (m_r + i_r / (r_r * r_r)))).sqrt();
     let lin = LinearModel::new(&mech, "spin", 100.0, None).unwrap();
     let got = lin.modes(Spin::Held, Damping::Undamped).unwrap().modes[0].order;
-    assert!((got - want).abs() <= 1e-12 * want, "{label}: {got} vs {want}");
+    assert!(abs_diff_eq!(got, want, epsilon = 1e-12 * want), "{label}: {got} vs {want}");
 }

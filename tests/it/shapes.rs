@@ -6,6 +6,7 @@
 //! a wrong formula (a factor 2, a missing parallel-axis term) is off by O(1). The largest error
 //! met is printed (`--nocapture`).
 
+use approx::{assert_abs_diff_eq, assert_relative_eq};
 use kanedyn::io::Source;
 use kanedyn::model::body::BodySpec;
 use kanedyn::model::inertia::PlanarInertia;
@@ -148,7 +149,7 @@ fn placing_a_shape_moves_the_centre_of_mass() {
         body("Body(shape: Compound(parts: [Placed(shape: Disc(radius: 0.05), at: (0.1, 0.0))]), areal_density: 40.0)")
             .unwrap();
     assert_props("placed disc", p, m, (d, 0.0), m * r * r / 2.0, d);
-    assert!(rel(p.about(Vec2::zeros()), m * r * r / 2.0 + m * d * d) <= TOL);
+    assert_relative_eq!(p.about(Vec2::zeros()), m * r * r / 2.0 + m * d * d, max_relative = TOL);
     // A turned placement rotates the part's own offsets: a triangle's centroid (a/3, b/3) turned
     // by +90° lands at (−b/3, a/3) from `at`.
     let p = body(
@@ -401,5 +402,6 @@ fn mechanism_errors_carry_the_body_path() {
     // The good version loads, with the arm's com at the rectangle's centre.
     std::fs::write(dir.join("m.ron"), text.replace("-0.02", "0.02")).unwrap();
     let m = Mechanism::from_file(&dir.join("m.ron")).unwrap();
-    assert!(rel(m.bodies[1].inertia.com.x, 0.1) <= TOL && m.bodies[1].inertia.com.y.abs() <= TOL * 0.1);
+    assert_relative_eq!(m.bodies[1].inertia.com.x, 0.1, max_relative = TOL);
+    assert_abs_diff_eq!(m.bodies[1].inertia.com.y, 0.0, epsilon = TOL * 0.1);
 }

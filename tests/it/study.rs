@@ -1,6 +1,7 @@
 //! Study files: the examples load and run, the linear study reproduces the closed forms of the
 //! paper, and bad study input gives errors naming the file, line:column and field.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::{CpvaParams, rotor_order};
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::{Path, PathBuf};
@@ -36,21 +37,22 @@ fn linear_study_gives_the_closed_forms() {
     let p = CpvaParams::canonical();
     let (it, nt) = (p.i_tilde, p.n_t);
     // Eigenvalues from Richardson-extrapolated central differences: 1e-9 relative (measured 2e-14).
-    assert!((lin.n_t.unwrap() - nt).abs() <= 1e-9 * nt);
+    assert_abs_diff_eq!(lin.n_t.unwrap(), nt, epsilon = 1e-9 * nt);
     let nr = rotor_order(nt, it);
-    assert!(lin.free_orders.iter().any(|(o, _)| (o - nr).abs() <= 1e-9 * nr));
+    assert!(lin.free_orders.iter().any(|(o, _)| abs_diff_eq!(*o, nr, epsilon = 1e-9 * nr)));
     let nt2 = nt * nt;
     let asym = (it + 1.0 + 2.0 * nt2) / (it - nt2 * nt2);
     let cross = nt * (2.0 * (it + 1.0 + 2.0 * nt2) / (2.0 * it + 1.0 + 2.0 * nt2 - nt2 * nt2)).sqrt();
     for v in &lin.variants {
         // The asymptote does not depend on damping (M alone at high order): 1e-9.
-        assert!((v.asymptote - asym).abs() <= 1e-9 * asym, "{}: {}", v.label, v.asymptote);
+        assert!(abs_diff_eq!(v.asymptote, asym, epsilon = 1e-9 * asym), "{}: {}", v.label, v.asymptote);
         // All damped curves pass near the undamped crossing (the locked rotor is the c_p → ∞
         // limit, a fixed point of the family); with c_r = 5e-3 they miss it by < 2e-7 in order.
         let c = v.crossing.unwrap();
-        assert!((c - cross).abs() <= 1e-6 * cross, "{}: crossing {c} vs {cross}", v.label);
+        assert!(abs_diff_eq!(c, cross, epsilon = 1e-6 * cross), "{}: crossing {c} vs {cross}", v.label);
         // The minimum sits at n_t within the damping-broadened notch; the maximum near n_r.
-        assert!((v.min.0 / nt - 1.0).abs() < 0.04 && v.min.1 < 1.0);
+        assert_abs_diff_eq!(v.min.0 / nt, 1.0, epsilon = 0.04);
+        assert!(v.min.1 < 1.0);
         assert!(v.max.0 > nt && v.max.1 > 1.0);
     }
     // Lighter damping, deeper notch and higher peak (Figure 2).
@@ -155,7 +157,7 @@ fn harmonic_balance_in_speed_and_torque() {
         assert!(f.exists(), "{} not written", f.display());
     }
     std::fs::remove_dir_all(&dir).ok();
-    let near = |folds: Vec<f64>, target: f64| folds.into_iter().any(|f| (f / target - 1.0).abs() < 1e-3);
+    let near = |folds: Vec<f64>, target: f64| folds.into_iter().any(|f| abs_diff_eq!(f / target, 1.0, epsilon = 1e-3));
     let torque: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude.is_nan()).flat_map(|b| b.folds.clone()).collect();
     assert!(near(torque.clone(), 40.0), "torque folds {torque:?}");
     let speed: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude == 40.0).flat_map(|b| b.folds.clone()).collect();
@@ -166,7 +168,7 @@ fn harmonic_balance_in_speed_and_torque() {
     assert!(!fine.is_empty() && !coarse.is_empty(), "{:?}", r.hbm.iter().map(|b| b.order.len()).collect::<Vec<_>>());
     assert_eq!((fine[0].folds.len(), coarse[0].folds.len()), (2, 2));
     for (f, c) in fine[0].folds.iter().zip(&coarse[0].folds) {
-        assert!((f - c).abs() < 1e-6, "folds {f} vs {c}");
+        assert!(abs_diff_eq!(f, c, epsilon = 1e-6), "folds {f} vs {c}");
     }
     // Wrong combinations name the field.
     let bad = [

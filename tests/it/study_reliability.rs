@@ -2,6 +2,7 @@
 //! of defect found by feeding hostile study files to `kanedyn run`. Each test names what used to
 //! happen; the inputs are the minimal ones that showed it.
 
+use approx::abs_diff_eq;
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -386,7 +387,7 @@ fn ratios_to_a_reference_without_response_are_undefined() {
         assert_eq!(c[r2], "", "2n ratio to the locked twin's noise: {line}");
         if !c[l1].is_empty() {
             let (a, l, r): (f64, f64, f64) = (c[a1].parse().unwrap(), c[l1].parse().unwrap(), c[r1].parse().unwrap());
-            assert!((r - a / l).abs() <= 1e-12 * r.abs(), "{line}");
+            assert!(abs_diff_eq!(r, a / l, epsilon = 1e-12 * r.abs()), "{line}");
             rows += 1;
         }
         assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");

@@ -8,6 +8,7 @@
 //!   where the Campbell diagram of the same study says the order lines cross the shaft mode;
 //! - bad transient input is refused with its file, line:column and field.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
 use kanedyn::study::{RunOptions, Study, StudyReport, run};
@@ -198,10 +199,13 @@ fn a_run_up_map_peaks_where_the_campbell_table_crosses_the_shaft_mode() {
         println!(
             "{signal} order {order}: map peak at {peak_rpm:.1} rpm, Campbell crossing {at:.1} rpm, resolution {res:.1} rpm"
         );
-        assert!((peak_rpm - at).abs() <= res, "{signal} order {order}: {peak_rpm} vs {at} (resolution {res})");
+        assert!(
+            abs_diff_eq!(peak_rpm, at, epsilon = res),
+            "{signal} order {order}: {peak_rpm} vs {at} (resolution {res})"
+        );
     }
     // The ramp was followed (the governor holds the mean speed on it): it ends within 2 %.
-    assert!((r.rpm_end - 1200.0).abs() < 24.0, "{}", r.rpm_end);
+    assert_abs_diff_eq!(r.rpm_end, 1200.0, epsilon = 24.0);
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -4,6 +4,7 @@
 //! the steady response (harmonic balance, time integration, and for the elements' torques the
 //! sampled coupling law against the time-domain torque) agree at every speed.
 
+use approx::abs_diff_eq;
 use kanedyn::linear::LinearModel;
 use kanedyn::model::mechanism::Mechanism;
 use kanedyn::study::{RunOptions, Study, run};
@@ -37,11 +38,11 @@ fn the_mean_torque_winds_the_driveline_as_a_loaded_chain() {
         for (name, expect) in cases {
             let got = q(name);
             println!("{rpm} rpm: {name} {got:.12e} rad vs {expect:.12e}");
-            assert!((got - expect).abs() <= 1e-9 * expect.abs().max(1e-3), "{name}: {got} vs {expect}");
+            assert!(abs_diff_eq!(got, expect, epsilon = 1e-9 * expect.abs().max(1e-3)), "{name}: {got} vs {expect}");
         }
         let t_m = lin.op.mean_spin_torque;
         let expect = T_ENGINE + 0.01 * omega;
-        assert!((t_m - expect).abs() <= 1e-9 * T_ENGINE, "mean spin torque {t_m} vs {expect}");
+        assert!(abs_diff_eq!(t_m, expect, epsilon = 1e-9 * T_ENGINE), "mean spin torque {t_m} vs {expect}");
     }
 }
 

@@ -4,6 +4,7 @@
 //! into the rotor (a welded body is its merged inertia, tests/it/joint_kinds.rs): every analysis
 //! must give the same numbers.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::study::{RunOptions, Study, StudyReport, run};
 use std::path::{Path, PathBuf};
 
@@ -97,7 +98,7 @@ fn welded_bodies_change_no_study_result() {
     let (lw, lp) = (&w.linear[0], &p.linear[0]);
     let (ntw, ntp) = (lw.n_t.unwrap(), lp.n_t.unwrap());
     println!("n_t {ntw} vs {ntp}");
-    assert!((ntw - ntp).abs() <= 1e-10 * ntp);
+    assert_abs_diff_eq!(ntw, ntp, epsilon = 1e-10 * ntp);
     let e = rel(&lw.variants[0].ratio, &lp.variants[0].ratio);
     println!("linear ratio curve: {e:.1e}");
     assert!(e <= 1e-10);
@@ -120,7 +121,11 @@ fn welded_bodies_change_no_study_result() {
             println!("sweep locked={} multiple {}: {e:.1e}", sw.locked, tw.multiple);
             assert!(e <= 1e-7, "{e:e}");
         }
-        assert!((sw.max_relative_angle - sp.max_relative_angle).abs() <= 1e-6 * sp.max_relative_angle.max(1e-3));
+        assert_abs_diff_eq!(
+            sw.max_relative_angle,
+            sp.max_relative_angle,
+            epsilon = 1e-6 * sp.max_relative_angle.max(1e-3)
+        );
     }
 
     // Harmonic balance: the branch folds and the amplitudes at its start agree to the Newton
@@ -128,11 +133,11 @@ fn welded_bodies_change_no_study_result() {
     for (bw, bp) in w.hbm.iter().zip(&p.hbm) {
         assert_eq!(bw.folds.len(), bp.folds.len());
         for (fw, fp) in bw.folds.iter().zip(&bp.folds) {
-            assert!((fw - fp).abs() <= 1e-7, "fold {fw} vs {fp}");
+            assert!(abs_diff_eq!(fw, fp, epsilon = 1e-7), "fold {fw} vs {fp}");
         }
         let (aw, ap) = (bw.accel[0][0], bp.accel[0][0]);
-        assert!((aw - ap).abs() <= 1e-7 * ap, "{aw} vs {ap}");
-        assert!((bw.relative_angle[0] - bp.relative_angle[0]).abs() <= 1e-7 * bp.relative_angle[0]);
+        assert_abs_diff_eq!(aw, ap, epsilon = 1e-7 * ap);
+        assert_abs_diff_eq!(bw.relative_angle[0], bp.relative_angle[0], epsilon = 1e-7 * bp.relative_angle[0]);
     }
 
     // Multi-order steady state: time domain to 1e-6 (as the sweep), linear to 1e-10, and the
@@ -142,7 +147,7 @@ fn welded_bodies_change_no_study_result() {
     let (rw, rp) = (mw.response.as_ref().unwrap(), mp.response.as_ref().unwrap());
     println!("multi: {:?} vs {:?}", rw.amplitudes, rp.amplitudes);
     assert!(rel(&rw.amplitudes, &rp.amplitudes) <= 1e-6);
-    assert!((rw.speed_correction - rp.speed_correction).abs() <= 1e-6 * rp.speed_correction.abs().max(1e-3));
+    assert_abs_diff_eq!(rw.speed_correction, rp.speed_correction, epsilon = 1e-6 * rp.speed_correction.abs().max(1e-3));
     assert!(rel(mw.linear.as_ref().unwrap(), mp.linear.as_ref().unwrap()) <= 1e-10);
     assert_eq!(mw.hbm.len(), mp.hbm.len());
 }

@@ -404,6 +404,7 @@ impl PathShape {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use approx::{abs_diff_eq, assert_abs_diff_eq};
 
     /// Position, tangent and curvature are consistent (central differences of r, step 1e-6 m:
     /// truncation ~h²|r'''| ≈ 1e-10, rounding ~1e-16/1e-6): the tangent is a unit vector (the
@@ -425,7 +426,11 @@ mod tests {
                 let (a, b) = (shape.at(s + h), shape.at(s - h));
                 let t_fd = (a.position - b.position) / (2.0 * h);
                 let k_fd = (a.tangent - b.tangent) / (2.0 * h);
-                assert!((p.tangent.norm() - 1.0).abs() < 1e-14, "{shape:?} at {s}: |t| = {}", p.tangent.norm());
+                assert!(
+                    abs_diff_eq!(p.tangent.norm(), 1.0, epsilon = 1e-14),
+                    "{shape:?} at {s}: |t| = {}",
+                    p.tangent.norm()
+                );
                 assert!((t_fd - p.tangent).norm() < 1e-8, "{shape:?} at {s}: t {:?} vs {:?}", p.tangent, t_fd);
                 assert!(
                     (k_fd - p.curvature).norm() < 1e-7 * p.curvature.norm().max(1.0),
@@ -465,7 +470,7 @@ mod tests {
                 ];
                 for (i, (polar, vectors, size)) in pairs.into_iter().enumerate() {
                     assert!(
-                        (polar - vectors).abs() <= 1e-13 * size,
+                        abs_diff_eq!(polar, vectors, epsilon = 1e-13 * size),
                         "{shape:?} at {s}: quantity {i}: {polar} vs {vectors}"
                     );
                 }
@@ -488,11 +493,11 @@ mod tests {
         let (rho0, n) = (0.185, 3.11);
         let shape = PathShape::Epicycloid { rho0, n_tilde: n, alpha1: 0.0 };
         let s_max = shape.travel();
-        assert!((s_max - rho0 / (n * (1.0 + n * n).sqrt())).abs() < 1e-18);
+        assert_abs_diff_eq!(s_max, rho0 / (n * (1.0 + n * n).sqrt()), epsilon = 1e-18);
         for f in [0.0, 0.2, -0.5, 0.99] {
             let s = f * s_max;
             let r2 = shape.at(s).position.norm_squared();
-            assert!((r2 - (rho0 * rho0 - n * n * s * s)).abs() < 1e-15, "ρ² at {s}");
+            assert!(abs_diff_eq!(r2, rho0 * rho0 - n * n * s * s, epsilon = 1e-15), "ρ² at {s}");
         }
         assert!(shape.at(1.0001 * s_max).position.x.is_nan());
         assert!(shape.at(f64::NAN).tangent.x.is_nan());

@@ -325,6 +325,7 @@ fn hermite_root(t0: f64, q0: f64, qd0: f64, t1: f64, q1: f64, qd1: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::hermite_root;
+    use approx::assert_abs_diff_eq;
 
     /// The crossing of a cubic is exact when the data are a cubic's: q(t) = (t − 0.3)³ + (t − 0.3).
     #[test]
@@ -332,6 +333,6 @@ mod tests {
         let q = |t: f64| (t - 0.3).powi(3) + (t - 0.3);
         let qd = |t: f64| 3.0 * (t - 0.3).powi(2) + 1.0;
         let r = hermite_root(0.1, q(0.1), qd(0.1), 0.5, q(0.5), qd(0.5));
-        assert!((r - 0.3).abs() <= 1e-15, "{r}");
+        assert_abs_diff_eq!(r, 0.3, epsilon = 1e-15);
     }
 }
