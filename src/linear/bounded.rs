@@ -1,7 +1,9 @@
 //! The dense decompositions of the linear analyses with a bound on their work: the singular
 //! value decomposition (Golub–Kahan–Reinsch, as nalgebra implements it) and the symmetric
 //! eigen-decomposition (implicit QL), each capped at `6·n² + 100` sweeps — the cap LAPACK's
-//! `dbdsqr` uses — and refused outright on a matrix with an entry that is not finite.
+//! `dbdsqr` uses — and refused outright on a matrix with an entry that is not finite. The
+//! convergence tolerances are nalgebra's defaults (5ε for the SVD, ε for the eigen-solver), so a
+//! decomposition that converges is the one `svd()` and `SymmetricEigen::new` give, bit for bit.
 //!
 //! nalgebra's plain `svd` and `SymmetricEigen::new` iterate until convergence with no bound, and a
 //! matrix holding an infinity never converges (the shift becomes NaN): the call would never
@@ -31,7 +33,7 @@ pub(crate) fn svd<T: ComplexField<RealField = f64>>(
     if !finite(&m) {
         return Err(LinearError::Eigen { dim });
     }
-    SVD::try_new(m, compute_u, compute_v, f64::EPSILON, max_sweeps(dim)).ok_or(LinearError::Eigen { dim })
+    SVD::try_new(m, compute_u, compute_v, 5.0 * f64::EPSILON, max_sweeps(dim)).ok_or(LinearError::Eigen { dim })
 }
 
 /// The eigen-decomposition of the symmetric `m`, or [`LinearError::Eigen`] when `m` is not

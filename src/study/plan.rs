@@ -9,7 +9,8 @@
 //!   method), plus one right-hand side per sample;
 //! - a right-hand side costs about `RHS_BASE_S + RHS_PER_DOF2_S·DOF²`;
 //! - a multi-order speed runs at most `max_time_s`;
-//! - a harmonic-balance branch has at most `ContinuationOptions::max_points` points, each a few
+//! - a harmonic-balance branch has `100 + (4 + Δλ)/ds_max` points (at most
+//!   `ContinuationOptions::max_points`; `study::hbm::planned_points`), each a few
 //!   Newton steps on `DOF·(2H + 1)` unknowns with `4(H + 1)` time samples, and a Floquet
 //!   monodromy;
 //! - a linear point solves one complex `DOF`-system, a Campbell point one eigenproblem;
@@ -313,11 +314,10 @@ impl Study {
     }
 }
 
-/// Upper bound of one harmonic-balance branch's CPU time: `max_points` points of about 5 Newton
+/// Upper bound of one harmonic-balance branch's CPU time: `points` points of about 5 Newton
 /// steps, each a dense factorisation of `DOF·(2H+1)` unknowns and `4(H+1)` Jacobian samples,
 /// plus a Floquet monodromy of 256 RK4 steps on `2·DOF` states.
-pub(crate) fn hbm_branch_s(n: f64, h: f64) -> f64 {
-    let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+pub(crate) fn hbm_branch_s(n: f64, h: f64, points: f64) -> f64 {
     let u = n * (2.0 * h + 1.0);
     let newton = u * u * u / 3.0 * 1e-9 + 4.0 * (h + 1.0) * rhs_s(n) * 2.0 * n;
     let floquet = 256.0 * 4.0 * 2.0 * n * rhs_s(n) * 2.0 * n;

@@ -332,8 +332,8 @@ fn the_watchdog_stops_campbell_linear_response_and_harmonic_balance() {
     println!("planned {planned:?} s; study took {took:.2} s; {:#?}", report.failures);
     // The linear response of 10⁶ orders takes about 1 s (plan 2.3 s); the others are planned
     // far longer than they take (the harmonic balance bounds a branch by its point cap).
-    for k in 0..3 {
-        assert!(planned[k] > 1.0, "analysis {k} should be planned long, got {} s", planned[k]);
+    for (k, p) in planned.iter().enumerate().take(3) {
+        assert!(*p > 1.0, "analysis {k} should be planned long, got {p} s");
     }
     // Three stops at 0.3 s each, plus the setup of each and the last small analysis: far below
     // the ~planned total even on a loaded machine.

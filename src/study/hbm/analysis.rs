@@ -100,14 +100,14 @@ impl Analysis for HbmSpec {
             h.amplitudes.len()
         };
         let runs = 2 * cases;
-        let points = crate::hbm::ContinuationOptions::default().max_points as f64;
+        let points = super::planned_points(h);
         let unknowns = n * (2.0 * h.harmonics as f64 + 1.0);
         AnalysisPlan {
             runs,
             samples_per_run: points,
             memory_bytes: runs as f64 * points * unknowns * 8.0 * 4.0,
             output_bytes: runs as f64 * points * (4.0 + h.multiples.len() as f64) * CSV_CELL_BYTES,
-            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64),
+            cpu_s: runs as f64 * hbm_branch_s(n, h.harmonics as f64, points),
             driver: "harmonics",
             ..base
         }

@@ -160,7 +160,13 @@ impl Analysis for MultiOrderSpec {
         let samples = 2.0 * m.window_s * fs + 1.0;
         let top = m.speeds.iter().flat_map(|p| p.harmonics.iter().map(move |h| h.multiple * p.rpm)).fold(0.0, f64::max);
         let f = m.order * top / 60.0;
-        let hbm_s = if m.hbm { m.speeds.len() as f64 * 3.0 * hbm_branch_s(n, 10.0) } else { 0.0 };
+        let hbm_s = if m.hbm {
+            m.speeds.len() as f64
+                * 3.0
+                * hbm_branch_s(n, 10.0, crate::hbm::ContinuationOptions::default().max_points as f64)
+        } else {
+            0.0
+        };
         AnalysisPlan {
             runs,
             samples_per_run: samples,
