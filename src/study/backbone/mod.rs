@@ -204,10 +204,28 @@ pub(crate) fn compute(study: &Study, spec: &FreeOscillationSpec) -> Result<FreeO
         .ok_or_else(|| model_err(format!("joint `{}` has no oscillating mode at held spin", spec.joint)))?;
     let mut orders = Vec::with_capacity(spec.amplitudes.len());
     let mut far_side = Vec::with_capacity(spec.amplitudes.len());
-    for &a in &spec.amplitudes {
-        let (o, f) = one_amplitude(&mech, study.spin, coord, omega, linear_order, a, spec.periods);
+    let deadline = study.spec.integration.deadline;
+    let watchdog = |done: usize| {
+        deadline.filter(|d| d.passed()).map(|d| {
+            model_err(format!(
+                "stopped by the watchdog after {done} of {} amplitudes: the analysis overran its time budget of \
+                 {:.1} s",
+                spec.amplitudes.len(),
+                d.budget_s
+            ))
+        })
+    };
+    for (k, &a) in spec.amplitudes.iter().enumerate() {
+        if let Some(e) = watchdog(k) {
+            return Err(e);
+        }
+        let (o, f) = one_amplitude(&mech, study.spin, coord, omega, linear_order, a, spec.periods, deadline);
         orders.push(o);
         far_side.push(f);
+    }
+    // The last run may have been the one the watchdog stopped.
+    if let Some(e) = watchdog(spec.amplitudes.len() - 1) {
+        return Err(e);
     }
     Ok(FreeOscillationResult {
         name: spec.name.clone(),
@@ -232,6 +250,7 @@ fn one_amplitude(
     linear_order: f64,
     a: f64,
     periods: usize,
+    deadline: Option<crate::deadline::Deadline>,
 ) -> (f64, f64) {
     let fail = (f64::NAN, f64::NAN);
     let Ok(kane) = Kane::new(mech) else { return fail };
@@ -249,6 +268,7 @@ fn one_amplitude(
         atol: RTOL * a.abs().max(f64::MIN_POSITIVE),
         sample_rate_hz: Some(1.0 / dt),
         sample_derivatives: true,
+        deadline: deadline.map(|d| (d.at, d.budget_s)),
         ..IntegrateOptions::default()
     };
     // The state (q, q̇) of the joint at the previous sample, and the crossings found.

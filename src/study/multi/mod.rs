@@ -446,7 +446,16 @@ fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: boo
     let err = super::hbm::hbm_error(study);
     let mut hbm = RoutedHbm::new(&kane, spin, omega, (&p.harmonics, &[]), &inputs, opts).map_err(&err)?;
     let param = Parameter::TorqueScale { order: spec.order };
-    let up = hbm.continue_in(param, 0.01, 1.0, None, &ContinuationOptions::default()).map_err(&err)?;
+    let copts = ContinuationOptions { deadline: study.spec.integration.deadline, ..ContinuationOptions::default() };
+    let up = hbm.continue_in(param, 0.01, 1.0, None, &copts).map_err(&err)?;
+    if up.end == crate::hbm::BranchEnd::Watchdog {
+        let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
+        return Err(err(crate::hbm::HbmError::Invalid(format!(
+            "the torque ramp at {} rpm was stopped by the watchdog: the analysis overran its time budget of \
+             {budget:.1} s",
+            p.rpm
+        ))));
+    }
     let fold = up.folds.first().filter(|f| f.kind == FoldKind::Maximum).map(|f| f.parameter);
     if fold.is_some() {
         return Ok((None, fold));
