@@ -5,9 +5,9 @@
 //! B = W⁻¹). This is where a rotor carrying path-joint absorbers goes; a rotor carrying exactly
 //! one, with absolute speeds or joint rates, takes the pair form at the end of this module.
 //!
-//! The method is `Kane::evaluate_rates`'s, term for term and in the same order (a forward pass of
+//! The method is `Model::evaluate_rates`'s, term for term and in the same order (a forward pass of
 //! poses, rates, bias accelerations and motion columns; a backward pass of composite sums about
-//! the joint points giving M_kl and F_k), then `Kane::map_rates_to_speeds` and `Kane::factor_solve`,
+//! the joint points giving M_kl and F_k), then `Model::map_rates_to_speeds` and `Model::factor_solve`,
 //! so the results are those of the general path to the bit (up to the sign of a zero) whenever
 //! the joint torques are listed in joint order (as for [`super::small`]). What differs is where
 //! the data live, when the joints are asked for their motion, and which exact no-ops are skipped:
@@ -34,11 +34,11 @@
 //! ([`PathPair`]): there the equations of motion are written directly in the rotor frame from the
 //! path's rotation-invariant quantities (|r|², r·t, r × t, r × κ; [`PolarPath`]), a pair form with
 //! s-dependent coefficients that needs neither the path's polar angle (the epicycloid's `asin`
-//! and `sin_cos`) nor the LDLᵀ's two serial divisions ([`Kane::rhs_path_pair`]). It equals this
+//! and `sin_cos`) nor the LDLᵀ's two serial divisions ([`Model::rhs_path_pair`]). It equals this
 //! form to rounding (`tests/it/path_pair_form.rs`), hands every failure to it, and is chosen only
 //! after reproducing it at probe states.
 
-use super::{GROUND_PARENT, Kane, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
+use super::{GROUND_PARENT, Model, NONE, Node, PIVOT_TOL, SMALL, SmallRhs, Workspace};
 use crate::error::EngineError;
 use crate::model::joint::{JointMotion, PathJoint};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
@@ -46,7 +46,7 @@ use crate::model::path::PolarPath;
 
 /// Sets an engine's fixed-size instance to the composite-body one given with its data; passed
 /// in by `small.rs`, which owns that instance's type (so this module does not import it back).
-pub(super) type Install = dyn Fn(&mut Kane, SmallRhs, Packed);
+pub(super) type Install = dyn Fn(&mut Model, SmallRhs, Packed);
 
 /// The constant data of the fixed-size composite-body path, packed once at construction.
 #[derive(Debug, Clone, Default)]
@@ -69,16 +69,16 @@ pub(super) struct Packed {
     /// the parent are the identity and the parent's acceleration terms vanish, up to the sign of
     /// a zero (the general form's `0 + 0·x − y` is `−y`).
     basis_parent: [bool; SMALL],
-    /// Per speed: the speed subtracted in `q̇ = W⁻¹u` (`Kane::speed_parent`), `NONE` without.
+    /// Per speed: the speed subtracted in `q̇ = W⁻¹u` (`Model::speed_parent`), `NONE` without.
     speed_parent: [usize; SMALL],
-    /// Per speed: the index of its joint's applied torque in `Kane::torques`, or `NONE`.
+    /// Per speed: the index of its joint's applied torque in `Model::torques`, or `NONE`.
     torque: [usize; SMALL],
     /// The constants of the rotor-and-absorber pair form, when the tree is one
-    /// ([`Kane::rhs_path_pair`]).
+    /// ([`Model::rhs_path_pair`]).
     pair: Option<PathPair>,
 }
 
-/// The constants of the pair form of a rotor carrying one path absorber ([`Kane::rhs_path_pair`]):
+/// The constants of the pair form of a rotor carrying one path absorber ([`Model::rhs_path_pair`]):
 /// body 0 a revolute root in its own frame, body 1 on a path joint drawn about the rotor axis
 /// (`at` = the rotor's joint point, (0, 0) in its frame) with its centre of mass at its frame
 /// origin.
@@ -105,15 +105,15 @@ struct PathPair {
 /// `Form::Rates`; at most `SMALL` speeds, one body per speed, no point forces: checked by the
 /// caller) when every joint's torques allow it. With `pair_only`, only the pair form of a rotor
 /// carrying one path absorber is offered (its speeds are the joint rates: W = I).
-pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
+pub(super) fn small(kane: &Model, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
     let n = kane.n;
     let rhs: SmallRhs = match n {
-        1 => Kane::rhs_small_rates::<1>,
-        2 => Kane::rhs_small_rates::<2>,
-        3 => Kane::rhs_small_rates::<3>,
-        4 => Kane::rhs_small_rates::<4>,
-        5 => Kane::rhs_small_rates::<5>,
-        6 => Kane::rhs_small_rates::<6>,
+        1 => Model::rhs_small_rates::<1>,
+        2 => Model::rhs_small_rates::<2>,
+        3 => Model::rhs_small_rates::<3>,
+        4 => Model::rhs_small_rates::<4>,
+        5 => Model::rhs_small_rates::<5>,
+        6 => Model::rhs_small_rates::<6>,
         _ => return None,
     };
     let mut p = Packed {
@@ -157,14 +157,14 @@ pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(
         // general engine gains (and this form does not know) keeps the general form.
         let with_pair = Packed { pair: Some(pair), ..p.clone() };
         if pair_agrees(kane, &with_pair, rhs, install) {
-            return Some((Kane::rhs_path_pair, with_pair));
+            return Some((Model::rhs_path_pair, with_pair));
         }
     }
     (!pair_only).then_some((rhs, p))
 }
 
 /// The pair form's constants when `kane` is a rotor carrying one path absorber (see [`PathPair`]).
-fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
+fn path_pair(kane: &Model, p: &Packed) -> Option<PathPair> {
     let nodes = &kane.nodes;
     // No speed is mapped (`speed_parent`), so the same equations serve absolute speeds and joint
     // rates.
@@ -196,17 +196,18 @@ fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
 /// 1e-10 of the absorber's largest acceleration term (ω²ρ + 2|ωṡ| + ṡ²|κ|, or u̇ itself), far
 /// above both forms' rounding (the general form's F₁ sums terms of that size, so a state whose
 /// u̇ is nearly zero carries its rounding) and far below any physical term either could lack.
-fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs, install: &Install) -> bool {
+fn pair_agrees(kane: &Model, packed: &Packed, rates: SmallRhs, install: &Install) -> bool {
     let Some(pair) = &packed.pair else { return false };
     let Some(PathJoint { shape, .. }) = kane.nodes[1].kind.path() else { return false };
     let reach = shape.length_scale().min(0.5 * shape.travel()).min(0.5 * pair.limit);
     let mut probe = kane.clone();
     install(&mut probe, rates, packed.clone());
+    let mut ws = Workspace::new(&probe);
     [(0.0, 0.37), (0.6, -0.9), (-0.95, 0.5)].iter().all(|&(f, g)| {
         let x = [0.3, f * reach, 20.0 + 40.0 * f, 20.0 * g * reach];
         let (mut general, mut fast) = ([0.0; 4], [0.0; 4]);
         let t = 0.123 + f;
-        let ok = probe.rhs(t, &x, &mut general).is_ok() && probe.rhs_path_pair(t, &x, &mut fast).is_ok();
+        let ok = probe.rhs(&mut ws, t, &x, &mut general).is_ok() && probe.rhs_path_pair(t, &x, &mut fast).is_ok();
         let at = shape.at(x[1]);
         let (rho, kappa) = (at.position.norm(), at.curvature.norm());
         let accel = x[2] * x[2] * rho + 2.0 * (x[2] * x[3]).abs() + x[3] * x[3] * kappa;
@@ -223,8 +224,8 @@ fn motion(nd: &Node, mount: Option<(f64, f64)>, q: f64) -> JointMotion {
     nd.kind.motion_mounted(nd.at, q, mount)
 }
 
-impl Kane {
-    /// [`Kane::rhs`] by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
+impl Model {
+    /// [`Model::rhs`] by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
     /// `self.small` set by [`small`]; the caller has checked the lengths of `x` and `xdot`).
     ///
     /// NOTE: the structure of [`super::small`]'s `rhs_small` (local arrays of the literal length
@@ -389,7 +390,7 @@ impl Kane {
         solved.map_err(|e| self.out_of_travel(e, q))
     }
 
-    /// [`Kane::rhs`] for a rotor carrying one path absorber ([`PathPair`]): the equations of
+    /// [`Model::rhs`] for a rotor carrying one path absorber ([`PathPair`]): the equations of
     /// motion written directly in the rotor's frame, a pair form with s-dependent coefficients.
     ///
     /// With ω the rotor's speed, ṡ the absorber's, r the absorber's centre from the axis, t the
