@@ -106,6 +106,7 @@ pub mod couplings;
 pub mod kinematics;
 pub mod ldlt;
 pub mod mapped;
+mod path_pair;
 pub mod rates;
 pub mod reactions;
 pub mod reduce;
