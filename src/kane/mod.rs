@@ -501,19 +501,22 @@ impl Kane {
 
     /// The state derivative `ẋ = [W⁻¹u; M⁻¹F]` for `x = [q; u]`. No heap allocation.
     pub fn rhs(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
-        // NOTE: `Model::rhs` spelled out rather than called: the general path's extra argument
-        // (the workspace) stays out of this function, whose fixed-size path then passes its
-        // arguments on untouched (measured, BENCHMARKS.md).
         let model = &*self.model;
         model.check_lengths(x, xdot)?;
+        // NOTE: the fixed-size path's instance for this n was chosen at build: one indirect call
+        // instead of a dispatch on n per call (measured, BENCHMARKS.md).
         if let Some(s) = &model.small {
             return (s.rhs)(model, t, x, xdot);
         }
         self.rhs_general(t, x, xdot)
     }
 
-    /// [`Kane::rhs`] by the general forms (`Model::rhs_general`), out of line with the same
-    /// arguments as `rhs` itself.
+    /// [`Kane::rhs`] by the general forms (`Model::rhs_general`).
+    ///
+    /// NOTE: out of line, so that its large frame (every form, for every literal n) is not set
+    /// up and torn down around the fixed-size path, and with `rhs`'s own arguments (the handle,
+    /// not the model and the workspace apart): with one more argument `rhs` shuffled its
+    /// registers on the fixed-size path too (measured, BENCHMARKS.md).
     #[inline(never)]
     fn rhs_general(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
         self.model.rhs_general(&mut self.work, t, x, xdot)
@@ -581,19 +584,6 @@ impl Model {
         self.form == Form::Pairs && !gravity && self.point_forces.is_empty()
     }
 
-    /// The state derivative `ẋ = [W⁻¹u; M⁻¹F]` for `x = [q; u]` with the buffers of `ws` (made
-    /// for this model). No heap allocation.
-    #[inline(always)]
-    pub fn rhs(&self, ws: &mut Workspace, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
-        self.check_lengths(x, xdot)?;
-        // NOTE: the fixed-size path's instance for this n was chosen at build: one indirect call
-        // instead of a dispatch on n per call (measured, BENCHMARKS.md).
-        if let Some(s) = &self.small {
-            return (s.rhs)(self, t, x, xdot);
-        }
-        self.rhs_general(ws, t, x, xdot)
-    }
-
     #[inline(always)]
     fn check_lengths(&self, x: &[f64], xdot: &[f64]) -> Result<(), EngineError> {
         let n = self.n;
@@ -604,11 +594,8 @@ impl Model {
         Ok(())
     }
 
-    /// [`Model::rhs`] by the general forms.
-    ///
-    /// NOTE: out of line, so that its large frame (every form, for every literal n) is not set
-    /// up and torn down around the fixed-size path (measured, BENCHMARKS.md).
-    #[inline(never)]
+    /// [`Kane::rhs`] by the general forms, inlined into `Kane::rhs_general` (its one caller).
+    #[inline(always)]
     fn rhs_general(&self, ws: &mut Workspace, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
         // Checked again here so the compiler knows x has 2N entries in the literal instances
         // and drops the slices' range checks.
@@ -626,7 +613,7 @@ impl Model {
         })
     }
 
-    /// The body of [`Model::rhs`] for `N` degrees of freedom (`N = 0`: any).
+    /// The body of [`Kane::rhs`] for `N` degrees of freedom (`N = 0`: any).
     ///
     /// NOTE: one dispatch on n for the whole evaluation, assembly, factorisation and solve, so
     /// the copies into ẋ have a literal length too (with a run-time length each was a `memcpy`

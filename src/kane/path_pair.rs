@@ -10,11 +10,12 @@
 //! reproducing it at probe states ([`pair_agrees`]).
 
 use super::small_rates::{Install, Packed};
-use super::{Model, NONE, PIVOT_TOL, SmallRhs, Workspace};
+use super::{Kane, Model, NONE, PIVOT_TOL, SmallRhs};
 use crate::error::EngineError;
 use crate::model::joint::PathJoint;
 use crate::model::math::Vec2;
 use crate::model::path::PolarPath;
+use std::sync::Arc;
 
 /// The constants of the pair form of a rotor carrying one path absorber ([`Model::rhs_path_pair`]):
 /// body 0 a revolute root in its own frame, body 1 on a path joint drawn about the rotor axis
@@ -76,14 +77,14 @@ pub(super) fn pair_agrees(kane: &Model, packed: &Packed, rates: SmallRhs, instal
     let Some(pair) = &packed.pair else { return false };
     let Some(PathJoint { shape, .. }) = kane.nodes[1].kind.path() else { return false };
     let reach = shape.length_scale().min(0.5 * shape.travel()).min(0.5 * pair.limit);
-    let mut probe = kane.clone();
-    install(&mut probe, rates, packed.clone());
-    let mut ws = Workspace::new(&probe);
+    let mut model = kane.clone();
+    install(&mut model, rates, packed.clone());
+    let mut probe = Kane::with_model(Arc::new(model));
     [(0.0, 0.37), (0.6, -0.9), (-0.95, 0.5)].iter().all(|&(f, g)| {
         let x = [0.3, f * reach, 20.0 + 40.0 * f, 20.0 * g * reach];
         let (mut general, mut fast) = ([0.0; 4], [0.0; 4]);
         let t = 0.123 + f;
-        let ok = probe.rhs(&mut ws, t, &x, &mut general).is_ok() && probe.rhs_path_pair(t, &x, &mut fast).is_ok();
+        let ok = probe.rhs(t, &x, &mut general).is_ok() && probe.model.rhs_path_pair(t, &x, &mut fast).is_ok();
         let at = shape.at(x[1]);
         let (rho, kappa) = (at.position.norm(), at.curvature.norm());
         let accel = x[2] * x[2] * rho + 2.0 * (x[2] * x[3]).abs() + x[3] * x[3] * kappa;
@@ -94,7 +95,7 @@ pub(super) fn pair_agrees(kane: &Model, packed: &Packed, rates: SmallRhs, instal
 }
 
 impl Model {
-    /// [`Model::rhs`] for a rotor carrying one path absorber ([`PathPair`]): the equations of
+    /// [`Kane::rhs`](super::Kane::rhs) for a rotor carrying one path absorber ([`PathPair`]): the equations of
     /// motion written directly in the rotor's frame, a pair form with s-dependent coefficients.
     ///
     /// With ω the rotor's speed, ṡ the absorber's, r the absorber's centre from the axis, t the

@@ -198,7 +198,7 @@ impl Model {
     /// [`crate::kane::reactions`]), so `λ_d = R_d + Σ_e r_e λ_e` over the couplings e driven by
     /// d. A compliant mesh's is its spring and damper, `(k e + c ė) / ratio` with the deflection
     /// `e` at the driving joint. `udot` must be the engine's own accelerations at this state (from
-    /// [`Model::rhs`]) for λ to be the constraint's; the joint torques are this model's, so a
+    /// [`Kane::rhs`](super::Kane::rhs)) for λ to be the constraint's; the joint torques are this model's, so a
     /// torque applied at a driven joint must be set here as in the run. `ws` must be made for
     /// this model.
     pub fn gear_torques(&self, ws: &mut Workspace, t: f64, q: &[f64], u: &[f64], udot: &[f64]) -> Vec<f64> {

@@ -182,7 +182,7 @@ impl Small {
 }
 
 impl Model {
-    /// [`Model::rhs`] by the fixed-size path for `N` speeds (`N = self.n ≤ SMALL`, `self.small`
+    /// [`Kane::rhs`](super::Kane::rhs) by the fixed-size path for `N` speeds (`N = self.n ≤ SMALL`, `self.small`
     /// set; the caller has checked the lengths of `x` and `xdot`).
     ///
     /// NOTE: every local array has the literal length N (not `SMALL`: initialising the larger

@@ -143,7 +143,7 @@ fn motion(nd: &Node, mount: Option<(f64, f64)>, q: f64) -> JointMotion {
 }
 
 impl Model {
-    /// [`Model::rhs`] by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
+    /// [`Kane::rhs`](super::Kane::rhs) by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
     /// `self.small` set by [`small`]; the caller has checked the lengths of `x` and `xdot`).
     ///
     /// NOTE: the structure of [`super::small`]'s `rhs_small` (local arrays of the literal length
