@@ -18,7 +18,8 @@
 //!
 //! For `rhs` on small trees (at most six speeds, no fixed joint, no point forces) the pair form
 //! and the mapped composite-body form also have fixed-size instances (`small`, `small_rates`,
-//! chosen when the model is built) with the same results.
+//! chosen when the model is built) with the same results, and a rotor carrying one path absorber
+//! a pair form of its own (`path_pair`, equal to rounding).
 //!
 //! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches; [`mapped`]
 //! takes the composite-body form to absolute speeds, [`couplings`] adds the joints' nonlinear
@@ -39,9 +40,10 @@
 //! geared reduction, the tree order and the loads. What one evaluation writes is a [`Workspace`]:
 //! every buffer, sized from the model when it is made, so evaluating allocates nothing. Every
 //! form is a function of `(&Model, &mut Workspace, state)` (methods of [`Model`] taking the
-//! workspace), one form per file. A [`Kane`] is the handle most callers want: an `Arc<Model>`
-//! and its own workspace. Cloning a `Kane` shares the model and makes fresh buffers; parallel
-//! callers build the model once and give each task a [`Kane::with_model`].
+//! workspace; the fixed-size forms keep their storage on the stack and read the model only), one
+//! form per file. A [`Kane`] is the handle most callers want: an `Arc<Model>` and its own
+//! workspace. Cloning a `Kane` shares the model and makes fresh buffers; parallel callers build
+//! the model once and give each task a [`Kane::with_model`].
 //!
 //! Three things change after a build, and each is kept where it preserves both the semantics and
 //! the right-hand side's instruction count:
