@@ -696,3 +696,63 @@ impl Model {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{Kane, Model};
+    use crate::model::excitation::Excitation;
+    use std::sync::Arc;
+
+    fn cpva() -> crate::model::mechanism::Mechanism {
+        crate::cpva::CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap()
+    }
+
+    /// Handles on one model, on other threads, give the handle's own ẋ to the bit; a clone
+    /// shares the model, and a joint torque set on one handle copies the model for it alone.
+    #[test]
+    fn handles_share_the_model_and_copy_it_on_write() {
+        let mut kane = Kane::new(&cpva()).unwrap();
+        let x = [0.1, 0.3, -0.2, 100.0, 101.0, 99.5];
+        let mut own = [0.0; 6];
+        kane.rhs(0.25, &x, &mut own).unwrap();
+        let model: Arc<Model> = Arc::clone(kane.model());
+        let from_threads: Vec<[f64; 6]> = std::thread::scope(|s| {
+            let tasks: Vec<_> = (0..2)
+                .map(|_| {
+                    let model = Arc::clone(&model);
+                    s.spawn(move || {
+                        let mut k = Kane::with_model(model);
+                        let mut xdot = [0.0; 6];
+                        k.rhs(0.25, &x, &mut xdot).unwrap();
+                        xdot
+                    })
+                })
+                .collect();
+            tasks.into_iter().map(|t| t.join().unwrap()).collect()
+        });
+        assert!(from_threads.iter().all(|xd| *xd == own));
+        let mut driven = kane.clone();
+        assert!(Arc::ptr_eq(kane.model(), driven.model()));
+        driven.set_joint_torque(0, Excitation::constant(50.0));
+        assert!(!Arc::ptr_eq(kane.model(), driven.model()));
+        let (mut after, mut other) = ([0.0; 6], [0.0; 6]);
+        kane.rhs(0.25, &x, &mut after).unwrap();
+        driven.rhs(0.25, &x, &mut other).unwrap();
+        assert_eq!(after, own);
+        assert_ne!(other, own);
+    }
+
+    /// Suspending the couplings belongs to the handle: the model and other handles keep them.
+    #[test]
+    fn suspended_couplings_are_the_handles_own() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/dmf.ron");
+        let mech = crate::model::mechanism::Mechanism::from_file(&file).unwrap();
+        let mut kane = Kane::new(&mech).unwrap();
+        assert!(kane.has_couplings());
+        let other = kane.clone();
+        let s = kane.suspend_couplings();
+        assert!(!kane.has_couplings() && other.has_couplings() && kane.model().has_couplings());
+        kane.restore_couplings(s);
+        assert!(kane.has_couplings());
+    }
+}
