@@ -1,7 +1,7 @@
 //! Building the [`Model`] of a mechanism: the per-body records, the rollers, the pair
 //! coefficients of the absolute-speed form, the couplings, the geared reduction, the choice of
-//! form and factorisation, and the fixed-size form's packed data; and the one change a model
-//! takes after it is built, a joint's applied torque (see the module doc of [`crate::kane`]).
+//! form and factorisation, and the fixed-size form's packed data; and a joint's applied torque
+//! changed after the build, which repacks that data (see the module doc of [`crate::kane`]).
 
 use super::{Coupled, Form, GROUND_PARENT, Model, NO_COORD, Node, Satellite, Workspace, reduce, small};
 use crate::error::{Error, Result};
