@@ -13,8 +13,9 @@
 //!
 //! `RHS_MODE` is `generic` (Kane on examples/cpva.ron), `closed` (eq. (7) with the same
 //! excitation), `path` (Kane on examples/cpva_epicycloid.ron), `path_circle` (Kane on its circle
-//! twin, the paper's pendulum in s = Lφ; both from `support/path_cpva_rhs.rs`), `none` (the loop
-//! alone, to subtract: instructions per call = (Ir − Ir_none) / calls) or `time` (all four, timed
+//! twin, the paper's pendulum in s = Lφ; both from `support/path_cpva_rhs.rs`), `pendulums8` and
+//! `couplings` (the general path: the paper's rotor with 8 pendulums, and examples/dmf.ron),
+//! `none` (the loop alone, to subtract: instructions per call = (Ir − Ir_none) / calls) or `time` (all four, timed
 //! in alternating chunks of 10⁴ calls, best chunk of each; the default, run without valgrind). `RHS_CALLS` sets the number of calls (default 10⁶). See
 //! BENCHMARKS.md.
 
@@ -37,6 +38,17 @@ fn main() {
     let mut xdot = [0.0; 4];
     let xp = path_cpva_rhs::path_state();
     let (mut epicycloid, mut circle) = (path_cpva_rhs::epicycloid_cpva(), path_cpva_rhs::circle_cpva());
+    // The general path: the rotor with 8 pendulums (n = 9, the tree's factorisation) and the
+    // dual-mass flywheel (couplings: the general forms at a literal n). Built for every mode, so
+    // that `none` subtracts their set-up too.
+    let general = |mech: kanedyn::model::mechanism::Mechanism| {
+        let n = mech.ndof();
+        let x: Vec<f64> = (0..2 * n).map(|i| 0.1 + 0.05 * i as f64).collect();
+        (kanedyn::kane::Kane::new(&mech).unwrap(), x, vec![0.0; 2 * n])
+    };
+    let mut pendulums8 = general(kanedyn::cpva::CpvaParams::canonical().with_pendulums(8).mechanism(None).unwrap());
+    let dmf = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/dmf.ron");
+    let mut couplings = general(kanedyn::model::mechanism::Mechanism::from_file(&dmf).unwrap());
     let mut acc = 0.0;
     match mode.as_str() {
         "generic" => {
@@ -50,6 +62,14 @@ fn main() {
             for _ in 0..calls {
                 k.rhs(black_box(t), black_box(&xp), &mut xdot).unwrap();
                 acc += black_box(xdot[2]);
+            }
+        }
+        "pendulums8" | "couplings" => {
+            let (k, xg, xd) = if mode == "pendulums8" { &mut pendulums8 } else { &mut couplings };
+            let n = k.ndof();
+            for _ in 0..calls {
+                k.rhs(black_box(0.5), black_box(xg), xd).unwrap();
+                acc += black_box(xd[n]);
             }
         }
         "closed" => {
@@ -108,7 +128,9 @@ fn main() {
                 acc += black_box(xdot[2]);
             }
         }
-        other => panic!("unknown RHS_MODE `{other}` (generic, closed, path, path_circle, none or time)"),
+        other => panic!(
+            "unknown RHS_MODE `{other}` (generic, closed, path, path_circle, pendulums8, couplings, none or time)"
+        ),
     }
     black_box(acc);
     if mode != "time" {

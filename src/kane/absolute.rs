@@ -6,7 +6,7 @@
 //! body j (c the child of k on the path to j, Δ = θ_j − θ_k the sum of the joint angles between),
 //! `M_kj = α cos Δ − β sin Δ` with `α = at_c·S'_j` and `β = at_c × S'_j` computed once, and the
 //! centripetal inertia forces of that pair are `F_k += u_j² D`, `F_j −= u_k² D` with
-//! `D = α sin Δ + β cos Δ` (see `Kane::evaluate_absolute`).
+//! `D = α sin Δ + β cos Δ` (see `Model::evaluate_absolute`).
 //!
 //! **The CPVA of the paper, eq. (7).** The rotor is body k = 0 (coordinate θ), pendulum i is body
 //! j = i (coordinate φ_i) pivoted at `at_c = (R, 0)` on the rotor, with its first moment
@@ -23,12 +23,12 @@
 //! angles of partial velocities are relative joint angles. Any other kind falls back to the
 //! joint-rate recursion of [`super::rates`] with its result mapped to these speeds.
 
-use super::{GROUND_PARENT, Kane};
+use super::{GROUND_PARENT, Model, Workspace};
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, rotate_cs};
 
-impl Kane {
-    /// `Kane::evaluate` for absolute angular velocities, in pair-coefficient form.
+impl Model {
+    /// `Model::evaluate` for absolute angular velocities, in pair-coefficient form.
     ///
     /// Kane's sums regrouped by pairs of speeds: with u_k = ω_k, a body i below k has
     /// `ω_{i,k} = δ_ik` and `v_{i,k} = ẑ × R_k r_ik` with r_ik constant in body k's frame (the
@@ -54,16 +54,23 @@ impl Kane {
     /// instructions (BENCHMARKS.md), because the accelerations, forces and moments about joint
     /// points are never formed.
     #[inline(always)]
-    pub(super) fn evaluate_absolute<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    pub(super) fn evaluate_absolute<const N: usize>(
+        &self,
+        ws: &mut Workspace,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        forcing: bool,
+    ) {
         let n = if N == 0 { self.n } else { N };
         let (q, u) = (&q[..n], &u[..n]);
         let (world, g) = (self.world, self.gravity);
         let gravity = world && g != Vec2::zeros();
         let oriented = gravity || !self.point_forces.is_empty();
         let nodes = &self.nodes[..n];
-        let st = &mut self.state[..n];
-        let m = &mut self.m[..n * n];
-        let f = &mut self.f[..n];
+        let st = &mut ws.state[..n];
+        let m = &mut ws.m[..n * n];
+        let f = &mut ws.f[..n];
         let (pairs, mut pair) = (&self.pairs[..], 0);
         for j in 0..n {
             let nd = &nodes[j];
@@ -145,15 +152,17 @@ impl Kane {
     /// The residual `r = M(q) u̇ − F(q, u, t)` with its exact derivatives `∂r/∂q` and `∂r/∂u`
     /// (row-major n × n), and M (row-major) into `m_out`, for absolute angular velocities
     /// without gravity or point forces: there every q-dependence is a pair term of
-    /// `Kane::evaluate_absolute`, `M_kj = α cos Δ − β sin Δ` and `D = α sin Δ + β cos Δ`, with
+    /// `Model::evaluate_absolute`, `M_kj = α cos Δ − β sin Δ` and `D = α sin Δ + β cos Δ`, with
     /// `∂M_kj/∂Δ = −D`, `∂D/∂Δ = M_kj`, and Δ = θ_j − θ_k the sum of the joint angles on the path
     /// from k (exclusive) to j, so the derivatives cost one extra walk over the pairs instead of
     /// 2n (q) + 2n (u) central differences. Returns false, writing nothing, for the other
     /// cases (joint-rate speeds, gravity, point forces): difference
-    /// [`Kane::mass_matrix_and_forcing_rows`] there. Excitation torques depend on t only.
+    /// [`super::Kane::mass_matrix_and_forcing_rows`] there. Excitation torques depend on t only.
+    /// The couplings' exact derivatives are added unless suspended in `ws`.
     #[allow(clippy::too_many_arguments)]
     pub fn residual_jacobian(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         t: f64,
         q: &[f64],
         u: &[f64],
@@ -167,8 +176,8 @@ impl Kane {
             return false;
         }
         let n = self.n;
-        self.evaluate(t, q, u, true);
-        let (m, f) = (&self.m[..n * n], &self.f[..n]);
+        self.evaluate(ws, t, q, u, true);
+        let (m, f) = (&ws.m[..n * n], &ws.f[..n]);
         m_out[..n * n].copy_from_slice(m);
         for i in 0..n {
             let mut acc = -f[i];
@@ -181,8 +190,8 @@ impl Kane {
         dq.fill(0.0);
         du.fill(0.0);
         // The walk's joints between k and j (j first).
-        let path = &mut self.walk;
-        let (nodes, st, pairs) = (&self.nodes[..n], &self.state[..n], &self.pairs[..]);
+        let path = &mut ws.walk;
+        let (nodes, st, pairs) = (&self.nodes[..n], &ws.state[..n], &self.pairs[..]);
         let mut pair = 0;
         for j in 0..n {
             let nd = &nodes[j];
@@ -225,7 +234,7 @@ impl Kane {
                 k = next;
             }
         }
-        if self.has_couplings() {
+        if self.has_couplings() && !ws.couplings_suspended {
             self.coupling_jacobians(q, u, dr_dq, dr_du, -1.0);
         }
         true

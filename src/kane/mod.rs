@@ -18,10 +18,14 @@
 //!
 //! For `rhs` on small trees (at most six speeds, no fixed joint, no point forces) the pair form
 //! and the mapped composite-body form also have fixed-size instances (`small`, `small_rates`,
-//! chosen in [`Kane::new`]) with the same results.
+//! chosen when the model is built) with the same results, and a rotor carrying one path absorber
+//! a pair form of its own (`path_pair`, equal to rounding).
 //!
-//! [`ldlt`] factors M and solves for u̇; [`kinematics`] gives world-frame poses, velocities and
-//! energies for outputs and tests.
+//! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches; [`mapped`]
+//! takes the composite-body form to absolute speeds, [`couplings`] adds the joints' nonlinear
+//! couplings, [`reduce`](mod@reduce) reduces a geared tree to its independent speeds, [`reactions`]
+//! gives the joint reactions and [`kinematics`] world-frame poses, velocities and energies for
+//! outputs and tests.
 //!
 //! Every vector is expressed in one basis per subtree. When no load needs the world orientation
 //! (no gravity, no world-frame force), that basis is a revolute root body's own frame: its angle
@@ -29,17 +33,47 @@
 //! rotor, and no loss of precision when the spin angle grows to 10⁴ rad in a long sweep). Dot
 //! products, hence M and F, do not depend on the basis.
 //!
-//! All work buffers are sized in [`Kane::new`]; evaluating does no heap allocation.
+//! # Model and workspace
+//!
+//! What is fixed once the mechanism is known is the [`Model`]: the mechanism, its dimensions, the
+//! per-body records, the rollers, the pair coefficients, the fixed-size form's packed data, the
+//! geared reduction, the tree order and the loads. What one evaluation writes is a [`Workspace`]:
+//! every buffer, sized from the model when it is made, so evaluating allocates nothing. Every
+//! form is a function of `(&Model, &mut Workspace, state)` (methods of [`Model`] taking the
+//! workspace; the fixed-size forms keep their storage on the stack and read the model only), one
+//! form per file. A [`Kane`] is the handle most callers want: an `Arc<Model>` and its own
+//! workspace. Cloning a `Kane` shares the model and makes fresh buffers; parallel callers build
+//! the model once and give each task a [`Kane::with_model`].
+//!
+//! Three things change after a build, and each is kept where it preserves both the semantics and
+//! the right-hand side's instruction count:
+//!
+//! - the applied joint torques ([`Kane::set_joint_torque`]) and the choice of the dense
+//!   factorisation ([`Kane::use_dense_factorisation`]) are part of the model, changed by copy on
+//!   write (`Arc::make_mut`): the fixed-size forms pack each speed's torque index with the rest
+//!   of their constants, and whether such a form applies at all (and, for a rotor carrying one
+//!   path absorber, whether its pair form reproduces the general one) depends on the torque list,
+//!   so moving the torques into the workspace would move a choice of form there too and make
+//!   the right-hand side read its constants from two places. Both are set-up steps, made before
+//!   a run; a handle whose model is shared gets its own copy on the first change, the others
+//!   keep theirs;
+//! - the suspension of the couplings ([`Kane::suspend_couplings`]) is a flag of the workspace:
+//!   it is toggled around every difference Jacobian of the linear analysis, where a copy of the
+//!   model per toggle would allocate, and the flag is only read on the general forms' path of a
+//!   mechanism that has couplings (which never takes the fixed-size forms).
 
-use crate::error::{EngineError, Error, Result};
+use crate::error::{EngineError, Result};
 use crate::model::coupling::Couplings;
 use crate::model::excitation::Excitation;
 use crate::model::joint::JointKind;
 use crate::model::loads::{JointTorque, PointForce};
-use crate::model::math::{Vec2, cross2};
+use crate::model::math::Vec2;
 use crate::model::mechanism::Mechanism;
 use crate::model::speeds::Speeds;
 use nalgebra::{DMatrix, DVector};
+use std::sync::Arc;
+
+pub use couplings::CouplingsSuspended;
 
 /// Relative size (to the largest diagonal entry of M) below which a pivot of the LDLᵀ
 /// factorisation counts as zero.
@@ -69,14 +103,19 @@ macro_rules! with_literal_n {
 
 // The forms live in their own files; declared after the macro above so they can use it.
 pub mod absolute;
+mod build;
+pub mod couplings;
 pub mod kinematics;
 pub mod ldlt;
+pub mod mapped;
+mod path_pair;
 pub mod rates;
 pub mod reactions;
-mod reduce;
+pub mod reduce;
 pub mod reference;
 mod small;
 mod small_rates;
+pub mod tree;
 
 /// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).
 const SMALL: usize = 6;
@@ -86,7 +125,7 @@ const SMALL: usize = 6;
 const NONE: usize = usize::MAX;
 
 /// An instance of a fixed-size right-hand side for one literal n.
-type SmallRhs = fn(&Kane, f64, &[f64], &mut [f64]) -> Result<(), EngineError>;
+type SmallRhs = fn(&Model, f64, &[f64], &mut [f64]) -> Result<(), EngineError>;
 
 /// `Σ a_k b_k` over the shorter of the two slices.
 #[inline(always)]
@@ -94,16 +133,12 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).fold(0.0, |s, (x, y)| s + x * y)
 }
 
-/// Couplings taken out of a [`Kane`] by [`Kane::suspend_couplings`].
-#[derive(Debug)]
-pub struct CouplingsSuspended(Vec<Coupled>);
-
 /// Which regrouping of Kane's sums evaluates this mechanism (see the module doc).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Form {
-    /// Absolute angular velocities on a purely revolute tree: `Kane::evaluate_absolute`.
+    /// Absolute angular velocities on a purely revolute tree: `Model::evaluate_absolute`.
     Pairs,
-    /// Joint rates: `Kane::evaluate_rates`.
+    /// Joint rates: `Model::evaluate_rates`.
     Rates,
     /// Absolute angular velocities with other joint kinds: the rates form, mapped to the speeds.
     MappedRates,
@@ -141,7 +176,7 @@ struct Node {
 
 /// A path joint's rollers as the engine carries them (docs/design.md, "Rollers"): one rigid
 /// body hanging from the path's parent and moved by the path's coordinate
-/// ([`JointKind`]'s `roller_motion`); its terms are added by `Kane::add_rollers` (`rates.rs`).
+/// ([`JointKind`]'s `roller_motion`); its terms are added by `Model::add_rollers` (`rates.rs`).
 #[derive(Debug, Clone, Copy)]
 struct Satellite {
     /// The path's parent body (`GROUND_PARENT` for ground).
@@ -206,9 +241,11 @@ struct Coupled {
     law: Couplings,
 }
 
-/// The equation-of-motion evaluator of one mechanism, with its work buffers.
+/// The built, read-only part of the engine for one mechanism (see the module doc): everything
+/// the forms read and never write. Shared between threads in an `Arc` ([`Kane::model`],
+/// [`Kane::with_model`]); each thread evaluates it with a [`Workspace`] of its own.
 #[derive(Debug, Clone)]
-pub struct Kane {
+pub struct Model {
     mech: Mechanism,
     /// Number of coordinates (= speeds).
     n: usize,
@@ -227,22 +264,27 @@ pub struct Kane {
     rollers: Vec<Satellite>,
     point_forces: Vec<PointForce>,
     torques: Vec<JointTorque>,
-    /// The coordinates with nonlinear couplings (added by [`Kane::add_couplings`]).
+    /// The coordinates with nonlinear couplings ([`couplings`]).
     couplings: Vec<Coupled>,
     /// Absolute speeds: the constant coefficients `(α, β)` of every ancestor pair (k, j), in the
     /// order the forward pass walks them (j ascending, then k from j's parent up to the root); see
-    /// `Kane::evaluate_absolute`.
+    /// `Model::evaluate_absolute`.
     pairs: Vec<(f64, f64)>,
     /// The data of the fixed-size right-hand side, when it applies ([`small`]).
     small: Option<small::Small>,
     /// The unconstrained tree of a mechanism with couplings ([`Form::Geared`]).
     geared: Option<Box<reduce::Geared>>,
     /// Per speed, the nearest speed above it in the tree (`NONE` for a root's), when the
-    /// right-hand side solves `M u̇ = F` by the tree's own factorisation
-    /// ([`Kane::factor_solve_tree`]); `None`: the dense LDLᵀ.
+    /// right-hand side solves `M u̇ = F` by the tree's own factorisation ([`tree`]); `None`: the
+    /// dense LDLᵀ.
     tree: Option<Vec<usize>>,
-    // Work buffers.
-    /// The joints of one ancestor walk, for [`Kane::residual_jacobian`] (capacity n).
+}
+
+/// The buffers one evaluation of a [`Model`] writes, sized from it once ([`Workspace::new`]):
+/// one per thread. Evaluating with it does no heap allocation.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    /// The joints of one ancestor walk, for `Model::residual_jacobian` (capacity n).
     walk: Vec<usize>,
     state: Vec<BodyState>,
     /// q̇ (and, in the mapped form, the joint rates handed to the rates form).
@@ -254,156 +296,17 @@ pub struct Kane {
     row: Vec<f64>,
     m_out: DMatrix<f64>,
     f_out: DVector<f64>,
+    /// The unconstrained tree's buffers of a geared mechanism.
+    geared: Option<Box<reduce::GearedWork>>,
+    /// F without the couplings' forces ([`Kane::suspend_couplings`]).
+    couplings_suspended: bool,
 }
 
-impl Kane {
-    /// Builds the evaluator and checks that M is positive definite at q = 0.
-    pub fn new(mech: &Mechanism) -> Result<Self> {
-        Self::build(mech, mech.loads.needs_world_orientation())
-    }
-
-    /// Like [`Kane::new`], but always expresses vectors in the world frame (every angle's
-    /// trigonometry is evaluated). Results are identical up to rounding; for tests and for
-    /// world-frame outputs.
-    pub fn new_world_frame(mech: &Mechanism) -> Result<Self> {
-        Self::build(mech, true)
-    }
-
-    fn build(mech: &Mechanism, world: bool) -> Result<Self> {
-        let (n, nb) = (mech.ndof(), mech.bodies.len());
-        let parent = mech.parents();
-        let internal = |message: String| Error::Model { mechanism: mech.name.clone(), message };
-        for (j, p) in parent.iter().enumerate() {
-            if p.is_some_and(|p| p >= j) {
-                return Err(internal(format!("internal: joint `{}` is listed before its parent", mech.joints[j].name)));
-            }
-        }
-        let joint_of: Vec<usize> = (0..n).map(|k| mech.joint_of(k)).collect();
-        if joint_of.iter().any(|&j| j >= nb) || mech.joints.len() != nb {
-            return Err(internal("internal: coordinates are not numbered 0..n over the joints".into()));
-        }
-        let mut c_ground = vec![0.0; nb];
-        for g in &mech.loads.ground_dampers {
-            c_ground[g.body] += g.c;
-        }
-        // Point forces grouped by body so each body's iteration finds its own.
-        let mut point_forces = mech.loads.point_forces.clone();
-        point_forces.sort_by_key(|p| p.body);
-        let mut subtree_mass: Vec<f64> = mech.bodies.iter().map(|b| b.inertia.mass).collect();
-        // The rollers belong to the subtree of their path joint's parent (not of the absorber).
-        let rollers = mech.roller_sets();
-        for set in &rollers {
-            if let Some(p) = set.parent {
-                subtree_mass[p] += set.rollers.total_mass();
-            }
-        }
-        for j in (0..nb).rev() {
-            if let Some(p) = parent[j] {
-                subtree_mass[p] += subtree_mass[j];
-            }
-        }
-        let mut nodes = Vec::with_capacity(nb);
-        for j in 0..nb {
-            let f0 = point_forces.iter().position(|p| p.body == j).unwrap_or(0);
-            let f1 = f0 + point_forces.iter().filter(|p| p.body == j).count();
-            let (b, jt) = (&mech.bodies[j], &mech.joints[j]);
-            nodes.push(Node {
-                parent: jt.parent.unwrap_or(GROUND_PARENT),
-                coord: jt.coordinate.unwrap_or(NO_COORD),
-                kind: jt.kind,
-                mass: b.inertia.mass,
-                i_com: b.inertia.i_com,
-                com_local: b.inertia.com,
-                at: jt.at,
-                k_spring: jt.spring.map_or(0.0, |s| s.stiffness),
-                q_free: jt.spring.map_or(0.0, |s| s.free_angle),
-                c_joint: jt.damper,
-                c_ground: c_ground[j],
-                forces: (f0, f1),
-                subtree_mass: subtree_mass[j],
-                j_own: b.inertia.i_com + b.inertia.mass * b.inertia.com.norm_squared(),
-                diag_abs: 0.0,
-                first_abs: b.inertia.mass * b.inertia.com,
-            });
-        }
-        // Each path joint's rollers, and their spread as a constant inertia of the path's parent.
-        let mut satellites = Vec::with_capacity(rollers.len());
-        for set in &rollers {
-            let r = set.rollers;
-            if let Some(p) = set.parent {
-                nodes[p].i_com += r.spread_inertia();
-                nodes[p].j_own += r.spread_inertia();
-            }
-            satellites.push(Satellite {
-                parent: set.parent.unwrap_or(GROUND_PARENT),
-                coord: set.coordinate,
-                kind: set.kind,
-                at: set.at,
-                centre: set.centre,
-                turn_rate: r.turn_rate(),
-                mass: r.total_mass(),
-                i_com: r.total_inertia(),
-            });
-        }
-        let revolute = mech.joints.iter().all(|j| j.kind.rotates());
-        let form = match mech.speeds {
-            Speeds::JointRates => Form::Rates,
-            Speeds::AbsoluteAngularVelocities if revolute => Form::Pairs,
-            Speeds::AbsoluteAngularVelocities => Form::MappedRates,
-        };
-        let form = if mech.is_geared() { Form::Geared } else { form };
-        let mut pairs = Vec::new();
-        if form == Form::Pairs {
-            for j in 0..nb {
-                nodes[j].diag_abs += nodes[j].j_own;
-                if let Some(p) = parent[j] {
-                    let (mass, at) = (nodes[j].subtree_mass, nodes[j].at);
-                    nodes[p].diag_abs += mass * at.norm_squared();
-                    nodes[p].first_abs += mass * at;
-                }
-            }
-            // For an ancestor k of body j (c: k's child on the path), every body of j's subtree
-            // moves with u_k like a point at c's joint, so `M_kj = (R_k at_c)·(R_j S'_j)` with
-            // both vectors constant in their own frames: with Δ = θ_j − θ_k,
-            // `M_kj = α cos Δ − β sin Δ`, α = at_c·S'_j, β = at_c × S'_j.
-            for j in 0..nb {
-                let (mut c, mut k) = (j, parent[j]);
-                while let Some(kk) = k {
-                    let (at, first) = (nodes[c].at, nodes[j].first_abs);
-                    pairs.push((at.dot(&first), cross2(at, first)));
-                    (c, k) = (kk, parent[kk]);
-                }
-            }
-        }
-        let speed_parent = mech.speed_parents();
-        let couplings = (0..nb)
-            .filter_map(|j| {
-                let jt = &mech.joints[j];
-                let coord = jt.coordinate?;
-                let absolute = mech.speeds == Speeds::AbsoluteAngularVelocities;
-                let parent_speed = if absolute { speed_parent[coord] } else { None };
-                (!jt.couplings.is_empty()).then(|| Coupled { coord, parent_speed, law: jt.couplings.clone() })
-            })
-            .collect();
-        let mut k = Kane {
-            couplings,
-            mech: mech.clone(),
-            pairs,
-            small: None,
-            geared: None,
-            tree: None,
-            n,
-            nb,
-            speed_parent,
-            joint_of,
-            speeds: mech.speeds,
-            form,
-            world,
-            gravity: mech.loads.gravity,
-            nodes,
-            rollers: satellites,
-            point_forces,
-            torques: mech.loads.joint_torques.clone(),
+impl Workspace {
+    /// Buffers sized for `model`.
+    pub fn new(model: &Model) -> Self {
+        let (n, nb) = (model.n, model.nb);
+        Workspace {
             state: vec![BodyState::default(); nb],
             qdot: vec![0.0; n],
             walk: Vec::with_capacity(nb),
@@ -414,119 +317,88 @@ impl Kane {
             row: vec![0.0; n],
             m_out: DMatrix::zeros(n, n),
             f_out: DVector::zeros(n),
-        };
-        if form == Form::Geared {
-            k.geared = Some(Box::new(reduce::Geared::new(mech, world)?));
+            geared: model.geared.as_deref().map(|g| Box::new(g.workspace())),
+            couplings_suspended: false,
         }
-        let mut zeros = vec![0.0; n];
-        k.evaluate(0.0, &zeros, &zeros, false);
-        k.factor_solve(&mut zeros)?;
-        k.small = k.small_form();
-        k.tree = k.tree_order();
-        Ok(k)
+    }
+}
+
+/// The equation-of-motion evaluator of one mechanism: a shared, read-only [`Model`] and this
+/// handle's own [`Workspace`]. `Clone` shares the model and makes fresh buffers (keeping the
+/// couplings' suspension).
+#[derive(Debug)]
+pub struct Kane {
+    model: Arc<Model>,
+    work: Workspace,
+}
+
+impl Clone for Kane {
+    fn clone(&self) -> Self {
+        let mut work = Workspace::new(&self.model);
+        work.couplings_suspended = self.work.couplings_suspended;
+        Kane { model: Arc::clone(&self.model), work }
+    }
+}
+
+impl Kane {
+    /// Builds the evaluator and checks that M is positive definite at q = 0.
+    pub fn new(mech: &Mechanism) -> Result<Self> {
+        let (model, work) = Model::build(mech, mech.loads.needs_world_orientation())?;
+        Ok(Kane { model: Arc::new(model), work })
     }
 
-    /// The speeds' tree (each speed's nearest speed above it) when the right-hand side should
-    /// factorise M along it: M of a tree is nonzero only between a speed and its ancestors, so
-    /// the leaves-first factorisation costs Σ_k (depth_k + 1)² instead of the dense n³/6, and
-    /// is chosen beyond the fixed-size instances (n > 6) where it halves the work at least (a
-    /// rotor with 8 pendulums on: measured in BENCHMARKS.md). A geared mechanism's reduced M couples across branches: dense.
-    fn tree_order(&self) -> Option<Vec<usize>> {
-        let n = self.n;
-        if n <= 6 || self.form == Form::Geared {
-            return None;
-        }
-        let mut above = vec![NONE; n];
-        let mut cost = 0.0;
-        for (k, up) in above.iter_mut().enumerate() {
-            let mut b = self.nodes[self.joint_of[k]].parent;
-            while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
-                b = self.nodes[b].parent;
-            }
-            if b != GROUND_PARENT {
-                *up = self.nodes[b].coord;
-                if *up >= k {
-                    return None;
-                }
-            }
-        }
-        for k in 0..n {
-            let (mut depth, mut a) = (1.0, above[k]);
-            while a != NONE {
-                depth += 1.0;
-                a = above[a];
-            }
-            cost += depth * depth;
-        }
-        let dense = (n * n * n) as f64 / 6.0;
-        (2.0 * cost < dense).then_some(above)
+    /// Like [`Kane::new`], but always expresses vectors in the world frame (every angle's
+    /// trigonometry is evaluated). Results are identical up to rounding; for tests and for
+    /// world-frame outputs.
+    pub fn new_world_frame(mech: &Mechanism) -> Result<Self> {
+        let (model, work) = Model::build(mech, true)?;
+        Ok(Kane { model: Arc::new(model), work })
     }
 
-    /// The fixed-size right-hand side when it applies; never with couplings, whose forces only
-    /// the general forms add ([`Kane::add_couplings`]).
-    fn small_form(&self) -> Option<small::Small> {
-        // Rollers take the general forms too (`Kane::add_rollers`).
-        if self.couplings.is_empty() && self.rollers.is_empty() { small::Small::new(self) } else { None }
+    /// An evaluator of an already built (shared) model, with buffers of its own: how parallel
+    /// tasks share one build.
+    pub fn with_model(model: Arc<Model>) -> Self {
+        let work = Workspace::new(&model);
+        Kane { model, work }
+    }
+
+    /// The built model this evaluator reads, to share with other threads ([`Kane::with_model`]).
+    pub fn model(&self) -> &Arc<Model> {
+        &self.model
+    }
+
+    /// The model for a change after build: this handle's own copy once it is shared (the
+    /// handles that share it keep theirs; see the module doc).
+    fn model_mut(&mut self) -> &mut Model {
+        Arc::make_mut(&mut self.model)
     }
 
     /// True when the right-hand side solves `M u̇ = F` along the tree (the leaves-first
-    /// factorisation of [`crate::kane::ldlt`]), false when by the dense LDLᵀ; chosen at build.
+    /// factorisation of [`crate::kane::tree`]), false when by the dense LDLᵀ; chosen at build.
     pub fn factorises_along_tree(&self) -> bool {
-        self.tree.is_some()
+        self.model.factorises_along_tree()
     }
 
     /// Makes the right-hand side use the dense LDLᵀ whatever the tree (for checks and benchmarks
     /// of the two routes against each other).
     pub fn use_dense_factorisation(&mut self) {
-        self.tree = None;
+        self.model_mut().tree = None;
     }
 
-    /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
+    /// True when some joint has nonlinear couplings ([`crate::model::coupling`]) and they are not
+    /// suspended ([`Kane::suspend_couplings`]).
     pub fn has_couplings(&self) -> bool {
-        !self.couplings.is_empty()
-    }
-
-    /// The couplings' generalized forces added to F (in the speeds), in the one place every form
-    /// goes through: τ(q_k, q̇_k) acts +τ on the child and −τ on the parent, so its generalized
-    /// force is τ for the joint rate q̇_k, and with absolute angular velocities (q̇_k = u_k − u_p)
-    /// +τ in row k and −τ in row p (Bᵀ applied to the joint-rate force, as for a spring).
-    #[inline(never)]
-    fn add_couplings(&mut self, q: &[f64], u: &[f64]) {
-        for c in &self.couplings {
-            let qd = u[c.coord] - c.parent_speed.map_or(0.0, |p| u[p]);
-            let tau = c.law.torque(q[c.coord], qd);
-            self.f[c.coord] += tau;
-            if let Some(p) = c.parent_speed {
-                self.f[p] -= tau;
-            }
-        }
+        self.model.has_couplings() && !self.work.couplings_suspended
     }
 
     /// Adds the couplings' exact local derivatives to the Jacobians of F (row-major n × n, in
     /// the speeds): `∂F/∂q` gets ∂τ/∂q (the local stiffness, with sign), `∂F/∂u` gets ∂τ/∂q̇
     /// mapped by `q̇_k = u_k − u_p`. At a stage breakpoint the stiffness of the stage beginning
-    /// there; friction at q̇ = 0 gives the viscous slope −T_f/ε.
+    /// there; friction at q̇ = 0 gives the viscous slope −T_f/ε. Nothing while the couplings are
+    /// suspended.
     pub fn add_coupling_jacobians(&self, q: &[f64], u: &[f64], f_q: &mut [f64], f_u: &mut [f64]) {
-        self.coupling_jacobians(q, u, f_q, f_u, 1.0);
-    }
-
-    /// `sign` times the couplings' derivatives of F added to `f_q`, `f_u` (−1: of the residual
-    /// `M u̇ − F`).
-    fn coupling_jacobians(&self, q: &[f64], u: &[f64], f_q: &mut [f64], f_u: &mut [f64], sign: f64) {
-        let n = self.n;
-        for c in &self.couplings {
-            let k = c.coord;
-            let qd = u[k] - c.parent_speed.map_or(0.0, |p| u[p]);
-            let (_, dq, dv) = c.law.torque_and_slopes(q[k], qd);
-            let (dq, dv) = (sign * dq, sign * dv);
-            f_q[k * n + k] += dq;
-            f_u[k * n + k] += dv;
-            if let Some(p) = c.parent_speed {
-                f_q[p * n + k] -= dq;
-                f_u[k * n + p] -= dv;
-                f_u[p * n + k] -= dv;
-                f_u[p * n + p] += dv;
-            }
+        if !self.work.couplings_suspended {
+            self.model.coupling_jacobians(q, u, f_q, f_u, 1.0);
         }
     }
 
@@ -534,15 +406,154 @@ impl Kane {
     /// [`Kane::restore_couplings`]: for derivatives taken by differences of the smooth part
     /// while the couplings' own derivatives are added exactly ([`Kane::add_coupling_jacobians`]).
     pub fn suspend_couplings(&mut self) -> CouplingsSuspended {
-        CouplingsSuspended(std::mem::take(&mut self.couplings))
+        let was = std::mem::replace(&mut self.work.couplings_suspended, true);
+        CouplingsSuspended { was_suspended: was }
     }
 
     /// Puts back couplings taken out by [`Kane::suspend_couplings`].
     pub fn restore_couplings(&mut self, s: CouplingsSuspended) {
-        self.couplings = s.0;
+        self.work.couplings_suspended = s.was_suspended;
     }
 
     /// The mechanism this evaluator was built from.
+    pub fn mechanism(&self) -> &Mechanism {
+        &self.model.mech
+    }
+
+    /// Number of degrees of freedom n (the state has 2n entries, `[q; u]`).
+    pub fn ndof(&self) -> usize {
+        self.model.n
+    }
+
+    /// Replaces the applied torque of joint `joint` (index) by `excitation` (adds one if the joint
+    /// had none). Springs and dampers are not affected. A joint without coordinate (`Fixed`) has
+    /// nothing for a torque to drive, so the call is ignored there. A shared model is copied
+    /// first (see the module doc).
+    pub fn set_joint_torque(&mut self, joint: usize, excitation: Excitation) {
+        self.model_mut().set_joint_torque(joint, excitation);
+    }
+
+    /// The applied joint torques currently in effect.
+    pub fn joint_torques(&self) -> &[JointTorque] {
+        self.model.joint_torques()
+    }
+
+    /// The mass matrix M(q) (kg·m² for rotational speeds), symmetric positive definite.
+    pub fn mass_matrix(&mut self, q: &[f64]) -> &DMatrix<f64> {
+        // Without forcing, `u` and `t` are not read.
+        self.model.evaluate(&mut self.work, 0.0, q, q, false);
+        self.model.copy_out(&mut self.work);
+        &self.work.m_out
+    }
+
+    /// The forcing vector F(q, u, t) of `M u̇ = F` (N·m for rotational speeds): applied forces
+    /// minus the inertia forces at `u̇ = 0`.
+    pub fn forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> &DVector<f64> {
+        self.model.evaluate(&mut self.work, t, q, u, true);
+        self.model.copy_out(&mut self.work);
+        &self.work.f_out
+    }
+
+    /// Both M and F at one state.
+    pub fn mass_matrix_and_forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&DMatrix<f64>, &DVector<f64>) {
+        self.model.evaluate(&mut self.work, t, q, u, true);
+        self.model.copy_out(&mut self.work);
+        (&self.work.m_out, &self.work.f_out)
+    }
+
+    /// Like [`Kane::mass_matrix_and_forcing`], as slices into the engine's buffers: M row-major
+    /// (`m[r·n + c]`) and F. It skips the copy into nalgebra types, a measurable share of a
+    /// harmonic-balance branch (one copy per engine call; BENCHMARKS.md).
+    pub fn mass_matrix_and_forcing_rows(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&[f64], &[f64]) {
+        self.model.evaluate(&mut self.work, t, q, u, true);
+        (&self.work.m, &self.work.f)
+    }
+
+    /// True when [`Kane::residual_jacobian`] applies: absolute angular velocities on a tree of
+    /// revolute joints (the pair form), no gravity, no point forces.
+    pub fn has_residual_jacobian(&self) -> bool {
+        self.model.has_residual_jacobian()
+    }
+
+    /// The residual `r = M(q) u̇ − F(q, u, t)` with its exact derivatives `∂r/∂q` and `∂r/∂u`
+    /// (row-major n × n), and M (row-major) into `m_out`, for absolute angular velocities
+    /// without gravity or point forces (`Model::residual_jacobian`, [`absolute`]). Returns false,
+    /// writing nothing, for the other cases (joint-rate speeds, gravity, point forces):
+    /// difference [`Kane::mass_matrix_and_forcing_rows`] there.
+    #[allow(clippy::too_many_arguments)]
+    pub fn residual_jacobian(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        udot: &[f64],
+        r: &mut [f64],
+        dr_dq: &mut [f64],
+        dr_du: &mut [f64],
+        m_out: &mut [f64],
+    ) -> bool {
+        self.model.residual_jacobian(&mut self.work, t, q, u, udot, r, dr_dq, dr_du, m_out)
+    }
+
+    /// `q̇ = W⁻¹ u` (rad/s for angles, m/s for slides).
+    pub fn qdot(&mut self, u: &[f64]) -> &[f64] {
+        self.model.speeds.qdot(&self.model.speed_parent, u, &mut self.work.qdot);
+        &self.work.qdot
+    }
+
+    /// The state derivative `ẋ = [W⁻¹u; M⁻¹F]` for `x = [q; u]`. No heap allocation.
+    pub fn rhs(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+        let model = &*self.model;
+        model.check_lengths(x, xdot)?;
+        // NOTE: the fixed-size path's instance for this n was chosen at build: one indirect call
+        // instead of a dispatch on n per call (measured, BENCHMARKS.md).
+        if let Some(s) = &model.small {
+            return (s.rhs)(model, t, x, xdot);
+        }
+        self.rhs_general(t, x, xdot)
+    }
+
+    /// [`Kane::rhs`] by the general forms (`Model::rhs_general`).
+    ///
+    /// NOTE: out of line, so that its large frame (every form, for every literal n) is not set
+    /// up and torn down around the fixed-size path, and with `rhs`'s own arguments (the handle,
+    /// not the model and the workspace apart): with one more argument `rhs` shuffled its
+    /// registers on the fixed-size path too (measured, BENCHMARKS.md).
+    #[inline(never)]
+    fn rhs_general(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+        self.model.rhs_general(&mut self.work, t, x, xdot)
+    }
+
+    /// The torque (N·m; N on a prismatic joint) each coupling's mesh exerts on its driven joint,
+    /// in the mechanism's `gears` order (`Model::gear_torques`, [`reduce`](mod@reduce)): `udot`
+    /// must be this engine's own accelerations at the state (from [`Kane::rhs`]). Empty without
+    /// couplings.
+    pub fn gear_torques(&mut self, t: f64, q: &[f64], u: &[f64], udot: &[f64]) -> Vec<f64> {
+        self.model.gear_torques(&mut self.work, t, q, u, udot)
+    }
+
+    /// The unconstrained tree's model of a geared mechanism (`None` without couplings), for
+    /// tests of the reduction and for its joint torques.
+    pub fn unconstrained(&self) -> Option<&Model> {
+        self.model.unconstrained()
+    }
+
+    /// Kane's partial velocities of body `j` at `q`, in the world frame, by the textbook route
+    /// ([`reference::body_kinematics`]): `(v_{j,r}, ω_{j,r})` for r = 0..n. Allocates; for tests
+    /// and reports.
+    pub fn partial_velocities(&self, q: &[f64], j: usize) -> (Vec<Vec2>, Vec<f64>) {
+        self.model.partial_velocities(q, j)
+    }
+}
+
+impl Model {
+    /// Builds the model of `mech` and checks that M is positive definite at q = 0; alone, for
+    /// callers that share it before any handle evaluates it ([`Kane::with_model`]).
+    pub fn new(mech: &Mechanism) -> Result<Self> {
+        Ok(Self::build(mech, mech.loads.needs_world_orientation())?.0)
+    }
+
+    /// The mechanism this model was built from.
     pub fn mechanism(&self) -> &Mechanism {
         &self.mech
     }
@@ -552,82 +563,27 @@ impl Kane {
         self.n
     }
 
-    /// Replaces the applied torque of joint `joint` (index) by `excitation` (adds one if the joint
-    /// had none). Springs and dampers are not affected. A joint without coordinate (`Fixed`) has
-    /// nothing for a torque to drive, so the call is ignored there.
-    pub fn set_joint_torque(&mut self, joint: usize, excitation: Excitation) {
-        self.set_geared_torque(joint, &excitation);
-        if self.nodes.get(joint).is_none_or(|nd| nd.coord == NO_COORD) {
-            return;
-        }
-        match self.torques.iter_mut().find(|t| t.joint == joint) {
-            Some(t) => t.excitation = excitation,
-            None => self.torques.push(JointTorque { joint, excitation }),
-        }
-        // The fixed-size path maps each speed to its torque's place in the list.
-        if self.small.is_some() {
-            self.small = self.small_form();
-        }
-    }
-
-    /// The applied joint torques currently in effect.
+    /// The applied joint torques in effect.
     pub fn joint_torques(&self) -> &[JointTorque] {
         &self.torques
     }
 
-    /// The mass matrix M(q) (kg·m² for rotational speeds), symmetric positive definite.
-    pub fn mass_matrix(&mut self, q: &[f64]) -> &DMatrix<f64> {
-        // Without forcing, `u` and `t` are not read.
-        self.evaluate(0.0, q, q, false);
-        self.copy_out();
-        &self.m_out
+    /// True when the right-hand side solves `M u̇ = F` along the tree ([`tree`]), false when by
+    /// the dense LDLᵀ ([`ldlt`]).
+    pub fn factorises_along_tree(&self) -> bool {
+        self.tree.is_some()
     }
 
-    /// The forcing vector F(q, u, t) of `M u̇ = F` (N·m for rotational speeds): applied forces
-    /// minus the inertia forces at `u̇ = 0`.
-    pub fn forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> &DVector<f64> {
-        self.evaluate(t, q, u, true);
-        self.copy_out();
-        &self.f_out
+    /// True when some joint has nonlinear couplings ([`crate::model::coupling`]).
+    pub fn has_couplings(&self) -> bool {
+        !self.couplings.is_empty()
     }
 
-    /// Both M and F at one state.
-    pub fn mass_matrix_and_forcing(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&DMatrix<f64>, &DVector<f64>) {
-        self.evaluate(t, q, u, true);
-        self.copy_out();
-        (&self.m_out, &self.f_out)
-    }
-
-    /// Like [`Kane::mass_matrix_and_forcing`], as slices into the engine's buffers: M row-major
-    /// (`m[r·n + c]`) and F. It skips the copy into nalgebra types, a measurable share of a
-    /// harmonic-balance branch (one copy per engine call; BENCHMARKS.md).
-    pub fn mass_matrix_and_forcing_rows(&mut self, t: f64, q: &[f64], u: &[f64]) -> (&[f64], &[f64]) {
-        self.evaluate(t, q, u, true);
-        (&self.m, &self.f)
-    }
-
-    /// True when [`Kane::residual_jacobian`] applies: absolute angular velocities on a tree of
+    /// True when `Model::residual_jacobian` applies: absolute angular velocities on a tree of
     /// revolute joints (the pair form), no gravity, no point forces.
     pub fn has_residual_jacobian(&self) -> bool {
         let gravity = self.world && self.gravity != Vec2::zeros();
         self.form == Form::Pairs && !gravity && self.point_forces.is_empty()
-    }
-
-    /// `q̇ = W⁻¹ u` (rad/s for angles, m/s for slides).
-    pub fn qdot(&mut self, u: &[f64]) -> &[f64] {
-        self.speeds.qdot(&self.speed_parent, u, &mut self.qdot);
-        &self.qdot
-    }
-
-    /// The state derivative `ẋ = [W⁻¹u; M⁻¹F]` for `x = [q; u]`. No heap allocation.
-    pub fn rhs(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
-        self.check_lengths(x, xdot)?;
-        // NOTE: the fixed-size path's instance for this n was chosen at build: one indirect call
-        // instead of a dispatch on n per call (measured, BENCHMARKS.md).
-        if let Some(s) = &self.small {
-            return (s.rhs)(self, t, x, xdot);
-        }
-        self.rhs_general(t, x, xdot)
     }
 
     #[inline(always)]
@@ -640,18 +596,16 @@ impl Kane {
         Ok(())
     }
 
-    /// [`Kane::rhs`] by the general forms.
-    ///
-    /// NOTE: out of line, so that its large frame (every form, for every literal n) is not set
-    /// up and torn down around the fixed-size path (measured, BENCHMARKS.md).
-    #[inline(never)]
-    fn rhs_general(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+    /// [`Kane::rhs`] by the general forms, inlined into `Kane::rhs_general` (its one caller).
+    #[inline(always)]
+    fn rhs_general(&self, ws: &mut Workspace, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
         // Checked again here so the compiler knows x has 2N entries in the literal instances
         // and drops the slices' range checks.
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        let out = if self.nb == n { with_literal_n!(n, self.rhs_n(t, x, xdot)) } else { self.rhs_n::<0>(t, x, xdot) };
+        let out =
+            if self.nb == n { with_literal_n!(n, self.rhs_n(ws, t, x, xdot)) } else { self.rhs_n::<0>(ws, t, x, xdot) };
         // NOTE: a path evaluated beyond its end gives NaN (`PathShape::at`); only on that failure
         // is the state searched for the joint to name, so a successful call pays nothing. The
         // fixed-size composite-body path (`small_rates`) maps its failures the same way.
@@ -667,25 +621,31 @@ impl Kane {
     /// the copies into ẋ have a literal length too (with a run-time length each was a `memcpy`
     /// call; BENCHMARKS.md).
     #[inline(always)]
-    fn rhs_n<const N: usize>(&mut self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+    fn rhs_n<const N: usize>(
+        &self,
+        ws: &mut Workspace,
+        t: f64,
+        x: &[f64],
+        xdot: &mut [f64],
+    ) -> Result<(), EngineError> {
         let n = if N == 0 { self.n } else { N };
         let (q, u) = x.split_at(n);
-        self.evaluate_n::<N>(t, q, u, true);
+        self.evaluate_n::<N>(ws, t, q, u, true);
         let (qd, ud) = xdot.split_at_mut(n);
         // Each body's record holds its joint's rate; with fixed joints, bodies and coordinates differ.
         if N != 0 || self.nb == n {
-            for (qd, st) in qd.iter_mut().zip(&self.state[..n]) {
+            for (qd, st) in qd.iter_mut().zip(&ws.state[..n]) {
                 *qd = st.qdot;
             }
         } else {
             for (qd, &j) in qd.iter_mut().zip(&self.joint_of) {
-                *qd = self.state[j].qdot;
+                *qd = ws.state[j].qdot;
             }
         }
         if N == 0 && self.tree.is_some() {
-            self.factor_solve_tree(ud)?;
+            self.factor_solve_tree(ws, ud)?;
         } else {
-            self.factor_solve_n::<N>(ud)?;
+            self.factor_solve_n::<N>(ws, ud)?;
         }
         Ok(())
     }
@@ -693,95 +653,106 @@ impl Kane {
     /// Evaluates M (and F, q̇ when `forcing`; only then are `u` and `t` read) into the buffers,
     /// by the form chosen at build (see the module doc). Only entries (k, l) with one an ancestor
     /// of the other are written: the others are zero for a tree and stay as allocated.
-    fn evaluate(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    fn evaluate(&self, ws: &mut Workspace, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         if self.nb == self.n {
-            with_literal_n!(self.n, self.evaluate_n(t, q, u, forcing))
+            with_literal_n!(self.n, self.evaluate_n(ws, t, q, u, forcing))
         } else {
-            self.evaluate_n::<0>(t, q, u, forcing)
+            self.evaluate_n::<0>(ws, t, q, u, forcing)
         }
     }
 
-    /// The body of `Kane::evaluate` for `N` degrees of freedom (`N = 0`: any, read at run time).
+    /// The body of `Model::evaluate` for `N` degrees of freedom (`N = 0`: any, read at run time).
     ///
     /// NOTE: a literal n lets the compiler unroll the loops and drop most bounds checks for the
     /// small mechanisms that dominate torsional work.
     #[inline(always)]
-    fn evaluate_n<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    fn evaluate_n<const N: usize>(&self, ws: &mut Workspace, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         // NOTE: one test of the form per call, outside the loops (measured against testing the
         // speed choice inside them; BENCHMARKS.md).
         match self.form {
-            Form::Pairs => self.evaluate_absolute::<N>(t, q, u, forcing),
+            Form::Pairs => self.evaluate_absolute::<N>(ws, t, q, u, forcing),
             Form::Rates => {
-                self.evaluate_rates::<N>(t, q, u, forcing);
+                self.evaluate_rates::<N>(ws, t, q, u, forcing);
                 if !self.rollers.is_empty() {
-                    self.add_rollers(q, u, forcing);
+                    self.add_rollers(ws, q, u, forcing);
                 }
             }
-            Form::MappedRates => self.evaluate_mapped(t, q, u, forcing),
-            Form::Geared => self.evaluate_geared(t, q, u, forcing),
+            Form::MappedRates => self.evaluate_mapped(ws, t, q, u, forcing),
+            Form::Geared => self.evaluate_geared(ws, t, q, u, forcing),
         }
-        if forcing && !self.couplings.is_empty() {
-            self.add_couplings(q, u);
+        if forcing && !self.couplings.is_empty() && !ws.couplings_suspended {
+            self.add_couplings(ws, q, u);
         }
     }
 
-    /// [`Form::MappedRates`]: the joint-rate form at `q̇ = W⁻¹u`, mapped to the speeds.
-    ///
-    /// NOTE: kept out of line so the code of this rarer form does not crowd the pair form's
-    /// registers in the hot, literal-n evaluation (measured, BENCHMARKS.md).
-    #[inline(never)]
-    fn evaluate_mapped(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
-        let mut rates = std::mem::take(&mut self.qdot);
-        if forcing {
-            self.speeds.qdot(&self.speed_parent, &u[..self.n], &mut rates);
-        }
-        self.evaluate_rates::<0>(t, q, &rates, forcing);
-        if !self.rollers.is_empty() {
-            self.add_rollers(q, &rates, forcing);
-        }
-        self.qdot = rates;
-        self.map_rates_to_speeds(forcing);
-    }
-
-    /// Maps M and F from joint rates to absolute angular velocities: with `q̇ = B u`,
-    /// `M ← Bᵀ M B` and `F ← Bᵀ F`. B has ones on the diagonal and `B[k][p] = −1` for each
-    /// coordinate k with speed parent p < k, so column (then row) p takes away column (row) k,
-    /// in increasing k so that every column subtracted is still the original one.
-    fn map_rates_to_speeds(&mut self, forcing: bool) {
-        let n = self.n;
-        let (m, f) = (&mut self.m[..n * n], &mut self.f[..n]);
-        for k in 0..n {
-            if let Some(p) = self.speed_parent[k] {
-                for r in 0..n {
-                    m[r * n + p] -= m[r * n + k];
-                }
-            }
-        }
-        for k in 0..n {
-            if let Some(p) = self.speed_parent[k] {
-                for c in 0..n {
-                    m[p * n + c] -= m[k * n + c];
-                }
-                if forcing {
-                    f[p] -= f[k];
-                }
-            }
-        }
-        // Bᵀ M B is symmetric, but the two passes round its halves differently: mirror the lower.
-        for r in 0..n {
-            for c in 0..r {
-                m[c * n + r] = m[r * n + c];
-            }
-        }
-    }
-
-    fn copy_out(&mut self) {
+    /// Copies M and F from the row-major buffers into the nalgebra ones.
+    fn copy_out(&self, ws: &mut Workspace) {
         let n = self.n;
         for r in 0..n {
             for c in 0..n {
-                self.m_out[(r, c)] = self.m[r * n + c];
+                ws.m_out[(r, c)] = ws.m[r * n + c];
             }
-            self.f_out[r] = self.f[r];
+            ws.f_out[r] = ws.f[r];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Kane, Model};
+    use crate::model::excitation::Excitation;
+    use std::sync::Arc;
+
+    fn cpva() -> crate::model::mechanism::Mechanism {
+        crate::cpva::CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap()
+    }
+
+    /// Handles on one model, on other threads, give the handle's own ẋ to the bit; a clone
+    /// shares the model, and a joint torque set on one handle copies the model for it alone.
+    #[test]
+    fn handles_share_the_model_and_copy_it_on_write() {
+        let mut kane = Kane::new(&cpva()).unwrap();
+        let x = [0.1, 0.3, -0.2, 100.0, 101.0, 99.5];
+        let mut own = [0.0; 6];
+        kane.rhs(0.25, &x, &mut own).unwrap();
+        let model: Arc<Model> = Arc::clone(kane.model());
+        let from_threads: Vec<[f64; 6]> = std::thread::scope(|s| {
+            let tasks: Vec<_> = (0..2)
+                .map(|_| {
+                    let model = Arc::clone(&model);
+                    s.spawn(move || {
+                        let mut k = Kane::with_model(model);
+                        let mut xdot = [0.0; 6];
+                        k.rhs(0.25, &x, &mut xdot).unwrap();
+                        xdot
+                    })
+                })
+                .collect();
+            tasks.into_iter().map(|t| t.join().unwrap()).collect()
+        });
+        assert!(from_threads.iter().all(|xd| *xd == own));
+        let mut driven = kane.clone();
+        assert!(Arc::ptr_eq(kane.model(), driven.model()));
+        driven.set_joint_torque(0, Excitation::constant(50.0));
+        assert!(!Arc::ptr_eq(kane.model(), driven.model()));
+        let (mut after, mut other) = ([0.0; 6], [0.0; 6]);
+        kane.rhs(0.25, &x, &mut after).unwrap();
+        driven.rhs(0.25, &x, &mut other).unwrap();
+        assert_eq!(after, own);
+        assert_ne!(other, own);
+    }
+
+    /// Suspending the couplings belongs to the handle: the model and other handles keep them.
+    #[test]
+    fn suspended_couplings_are_the_handles_own() {
+        let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/dmf.ron");
+        let mech = crate::model::mechanism::Mechanism::from_file(&file).unwrap();
+        let mut kane = Kane::new(&mech).unwrap();
+        assert!(kane.has_couplings());
+        let other = kane.clone();
+        let s = kane.suspend_couplings();
+        assert!(!kane.has_couplings() && other.has_couplings() && kane.model().has_couplings());
+        kane.restore_couplings(s);
+        assert!(kane.has_couplings());
     }
 }

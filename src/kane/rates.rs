@@ -18,28 +18,35 @@
 //! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
 //! path's parent and moved by the path's coordinate through the kind's `roller_motion`. Kane's
 //! sums have no term between two bodies, so their terms are simply added after the composite
-//! pass (`Kane::add_rollers`), body by body as the textbook writes them: for every pair of
+//! pass (`Model::add_rollers`), body by body as the textbook writes them: for every pair of
 //! columns acting on them (their own, the path's coordinate, and each ancestor's),
 //! `M_ab += m v_a·v_b + I ω_a ω_b` and `F_a += (f − m a⁰)·v_a + (T − I α⁰) ω_a`. The bodies' passes
 //! stay the code they were.
 
-use super::{GROUND_PARENT, Kane, NO_COORD};
+use super::{GROUND_PARENT, Model, NO_COORD, Workspace};
 use crate::model::joint::JointMotion;
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 
-impl Kane {
-    /// `Kane::evaluate` for joint rates (u = q̇; in the mapped form, u holds q̇ already), by
+impl Model {
+    /// `Model::evaluate` for joint rates (u = q̇; in the mapped form, u holds q̇ already), by
     /// composite bodies (see the module doc).
     #[inline(always)]
-    pub(super) fn evaluate_rates<const N: usize>(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    pub(super) fn evaluate_rates<const N: usize>(
+        &self,
+        ws: &mut Workspace,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        forcing: bool,
+    ) {
         let n = if N == 0 { self.n } else { N };
         let nb = if N == 0 { self.nb } else { N };
         let (world, g) = (self.world, self.gravity);
         let nodes = &self.nodes[..nb];
-        let st = &mut self.state[..nb];
-        let m = &mut self.m[..n * n];
-        let f = &mut self.f[..n];
+        let st = &mut ws.state[..nb];
+        let m = &mut ws.m[..n * n];
+        let f = &mut ws.f[..n];
         // Forward pass, parents first: poses, rates, bias accelerations (q̈ = 0 at u̇ = 0), the
         // joints' columns, and each body's own contribution to its composite sums about o_j.
         for j in 0..nb {
@@ -163,8 +170,8 @@ impl Kane {
     }
 }
 
-impl Kane {
-    /// Adds the rollers' terms to M and F in joint rates, after [`Kane::evaluate_rates`] has
+impl Model {
+    /// Adds the rollers' terms to M and F in joint rates, after [`Model::evaluate_rates`] has
     /// left every body's pose, rates, columns and bias accelerations in its record (see the
     /// module doc). The rollers' centroid r and the columns acting on it: their own
     /// (`ω = dψ/ds`, `v = ½ t` turned into the basis) for the path's coordinate, and for each
@@ -173,10 +180,11 @@ impl Kane {
     /// NOTE: out of line and after the composite pass, so that a tree without rollers runs the
     /// bodies' loops alone, compiled as they were.
     #[inline(never)]
-    pub(super) fn add_rollers(&mut self, q: &[f64], u: &[f64], forcing: bool) {
+    pub(super) fn add_rollers(&self, ws: &mut Workspace, q: &[f64], u: &[f64], forcing: bool) {
         let n = self.n;
         let g = self.gravity;
-        let Kane { rollers, nodes, state, m, f, walk, .. } = self;
+        let (rollers, nodes) = (&self.rollers, &self.nodes);
+        let Workspace { state, m, f, walk, .. } = ws;
         let (m, f) = (&mut m[..n * n], &mut f[..n]);
         for sat in rollers.iter() {
             let k = sat.coord;

@@ -12,13 +12,13 @@
 //! with M and F the unconstrained tree's at the expanded state `q_full = T q + offset`,
 //! `u_full = T u`. Since `Ṫ = 0` no velocity term `Tᵀ M Ṫ u` appears.
 //!
-//! The engine keeps the unconstrained tree ([`crate::model::mechanism::Mechanism::expanded`],
-//! joint rates as speeds) as an inner evaluator of its own numbering; every evaluation of the
-//! geared mechanism expands q and u, runs the inner forms, adds the compliant meshes' forces and
-//! reduces M and F into the outer buffers. T has one non-zero per row, so the reduction is one
+//! The model keeps the unconstrained tree ([`crate::model::mechanism::Mechanism::expanded`],
+//! joint rates as speeds) as an inner [`Model`] of its own numbering, and the workspace its
+//! buffers; every evaluation of the geared mechanism expands q and u, runs the inner forms, adds
+//! the compliant meshes' forces and reduces M and F into the outer buffers. T has one non-zero per row, so the reduction is one
 //! pass over M. A mechanism without couplings never reaches this module.
 
-use super::Kane;
+use super::{Model, Workspace};
 use crate::error::Result;
 use crate::model::mechanism::Mechanism;
 
@@ -35,7 +35,7 @@ struct MeshLoad {
     damping: f64,
 }
 
-/// One coupling as [`Kane::gear_torques`] reads it.
+/// One coupling as [`Model::gear_torques`] reads it.
 #[derive(Debug, Clone, Copy)]
 enum Link {
     /// A rigid coupling: expanded coordinates of the driven and the driving joint, the ratio.
@@ -47,15 +47,21 @@ enum Link {
 /// The unconstrained tree of a geared mechanism and the constant map to its reduced state.
 #[derive(Debug, Clone)]
 pub(super) struct Geared {
-    /// The evaluator of the unconstrained tree (joint rates).
-    full: Kane,
+    /// The model of the unconstrained tree (joint rates).
+    full: Model,
     /// Per expanded coordinate: (reduced coordinate, factor, offset), `q_f = factor q_r + offset`.
     map: Vec<(usize, f64, f64)>,
     meshes: Vec<MeshLoad>,
     /// Per coupling of the mechanism (its `gears` order): a rigid one's expanded driven and
     /// driving coordinates and ratio, or a compliant one's index in `meshes`.
     links: Vec<Link>,
-    /// The expanded state of one evaluation.
+}
+
+/// The buffers of a geared mechanism's evaluation: the unconstrained tree's, and the expanded
+/// state.
+#[derive(Debug, Clone)]
+pub(super) struct GearedWork {
+    full: Workspace,
     q: Vec<f64>,
     u: Vec<f64>,
 }
@@ -101,7 +107,7 @@ impl Geared {
                 })
             })
             .collect();
-        let mut full = Kane::build(&full_mech, world)?;
+        let (mut full, _) = Model::build(&full_mech, world)?;
         // NOTE: an independent joint's nonlinear couplings (stages, friction, stops) are the
         // outer engine's, which adds them on the reduced coordinates (with their exact
         // Jacobians); the inner tree keeps only the driven joints'. Keeping both counted them
@@ -114,42 +120,47 @@ impl Geared {
             .filter_map(|(inner, _)| inner.coordinate)
             .collect();
         full.couplings.retain(|c| !independent.contains(&c.coord));
-        let nf = map.len();
-        Ok(Geared { full, map, meshes, links, q: vec![0.0; nf], u: vec![0.0; nf] })
+        Ok(Geared { full, map, meshes, links })
+    }
+
+    /// Buffers sized for this reduction.
+    pub(super) fn workspace(&self) -> GearedWork {
+        let nf = self.map.len();
+        GearedWork { full: Workspace::new(&self.full), q: vec![0.0; nf], u: vec![0.0; nf] }
     }
 }
 
-impl Kane {
+impl Model {
     /// [`super::Form::Geared`]: the unconstrained tree at the expanded state, its meshes' forces
     /// added, reduced to `Tᵀ M T` and `Tᵀ F` in the engine's buffers.
     ///
     /// NOTE: out of line, so the plain forms' hot code does not carry it.
     #[inline(never)]
-    pub(super) fn evaluate_geared(&mut self, t: f64, q: &[f64], u: &[f64], forcing: bool) {
+    pub(super) fn evaluate_geared(&self, ws: &mut Workspace, t: f64, q: &[f64], u: &[f64], forcing: bool) {
         let n = self.n;
-        let Some(g) = self.geared.as_deref_mut() else {
+        let (Some(g), Some(gw)) = (self.geared.as_deref(), ws.geared.as_deref_mut()) else {
             debug_assert!(false, "internal: a geared form without its unconstrained tree");
             return;
         };
         for (f, &(k, a, o)) in g.map.iter().enumerate() {
-            g.q[f] = a * q[k] + o;
-            g.u[f] = if forcing { a * u[k] } else { 0.0 };
+            gw.q[f] = a * q[k] + o;
+            gw.u[f] = if forcing { a * u[k] } else { 0.0 };
         }
-        g.full.evaluate(t, &g.q, &g.u, forcing);
+        g.full.evaluate(&mut gw.full, t, &gw.q, &gw.u, forcing);
         let nf = g.map.len();
-        let (mf, ff) = (&g.full.m[..nf * nf], &mut g.full.f[..nf]);
+        let (mf, ff) = (&gw.full.m[..nf * nf], &mut gw.full.f[..nf]);
         if forcing {
             // The mesh spring and damper on the deflection at the driver,
             // e = q_follows − (q_joint − offset) / r: potential ½ k e².
             for mesh in &g.meshes {
-                let e = g.q[mesh.follows] - (g.q[mesh.joint] - mesh.offset) / mesh.ratio;
-                let edot = g.u[mesh.follows] - g.u[mesh.joint] / mesh.ratio;
+                let e = gw.q[mesh.follows] - (gw.q[mesh.joint] - mesh.offset) / mesh.ratio;
+                let edot = gw.u[mesh.follows] - gw.u[mesh.joint] / mesh.ratio;
                 let force = mesh.stiffness * e + mesh.damping * edot;
                 ff[mesh.follows] -= force;
                 ff[mesh.joint] += force / mesh.ratio;
             }
         }
-        let (m, f) = (&mut self.m[..n * n], &mut self.f[..n]);
+        let (m, f) = (&mut ws.m[..n * n], &mut ws.f[..n]);
         m.fill(0.0);
         if forcing {
             f.fill(0.0);
@@ -171,7 +182,7 @@ impl Kane {
         if forcing {
             // With joint rates as speeds (required with couplings) q̇ = u.
             for (k, &j) in self.joint_of.iter().enumerate() {
-                self.state[j].qdot = u[k];
+                ws.state[j].qdot = u[k];
             }
         }
     }
@@ -187,16 +198,17 @@ impl Kane {
     /// [`crate::kane::reactions`]), so `λ_d = R_d + Σ_e r_e λ_e` over the couplings e driven by
     /// d. A compliant mesh's is its spring and damper, `(k e + c ė) / ratio` with the deflection
     /// `e` at the driving joint. `udot` must be the engine's own accelerations at this state (from
-    /// [`Kane::rhs`]) for λ to be the constraint's; the joint torques are this engine's, so a
-    /// torque applied at a driven joint must be set here as in the run.
-    pub fn gear_torques(&mut self, t: f64, q: &[f64], u: &[f64], udot: &[f64]) -> Vec<f64> {
+    /// [`Kane::rhs`](super::Kane::rhs)) for λ to be the constraint's; the joint torques are this model's, so a
+    /// torque applied at a driven joint must be set here as in the run. `ws` must be made for
+    /// this model.
+    pub fn gear_torques(&self, ws: &mut Workspace, t: f64, q: &[f64], u: &[f64], udot: &[f64]) -> Vec<f64> {
         if self.geared.is_none() {
             return Vec::new();
         }
-        self.evaluate(t, q, u, true);
-        let Some(g) = self.geared.as_deref() else { return Vec::new() };
+        self.evaluate(ws, t, q, u, true);
+        let (Some(g), Some(gw)) = (self.geared.as_deref(), ws.geared.as_deref()) else { return Vec::new() };
         let nf = g.map.len();
-        let (mf, ff) = (&g.full.m[..nf * nf], &g.full.f[..nf]);
+        let (mf, ff) = (&gw.full.m[..nf * nf], &gw.full.f[..nf]);
         let udot_full: Vec<f64> = g.map.iter().map(|&(k, a, _)| a * udot[k]).collect();
         let residual = |f: usize| -> f64 {
             let row = &mf[f * nf..(f + 1) * nf];
@@ -214,8 +226,8 @@ impl Kane {
                 match *link {
                     Link::Mesh(m) => {
                         let mesh = &g.meshes[m];
-                        let e = g.q[mesh.follows] - (g.q[mesh.joint] - mesh.offset) / mesh.ratio;
-                        let edot = g.u[mesh.follows] - g.u[mesh.joint] / mesh.ratio;
+                        let e = gw.q[mesh.follows] - (gw.q[mesh.joint] - mesh.offset) / mesh.ratio;
+                        let edot = gw.u[mesh.follows] - gw.u[mesh.joint] / mesh.ratio;
                         out[i] = (mesh.stiffness * e + mesh.damping * edot) / mesh.ratio;
                     }
                     Link::Rigid { joint, .. } => {
@@ -244,9 +256,9 @@ impl Kane {
         out
     }
 
-    /// The unconstrained tree's evaluator of a geared mechanism (`None` without couplings), for
-    /// tests of the reduction.
-    pub fn unconstrained(&self) -> Option<&Kane> {
+    /// The unconstrained tree's model of a geared mechanism (`None` without couplings), for
+    /// tests of the reduction and for its joint torques.
+    pub fn unconstrained(&self) -> Option<&Model> {
         self.geared.as_deref().map(|g| &g.full)
     }
 

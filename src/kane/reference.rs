@@ -19,7 +19,7 @@
 //!
 //! Clarity first: every quantity is formed and stored; allocation is fine here.
 
-use super::Kane;
+use super::Model;
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
 use crate::model::mechanism::Mechanism;
@@ -167,7 +167,7 @@ fn kinematics(
 
 /// M and F of `M u̇ = F` at time `t` (s), coordinates `q` and speeds `u`, by Kane's sums body by
 /// body (steps 4–5 of the module doc). `torques` are the applied joint torques in effect
-/// ([`Kane::joint_torques`], or the mechanism's own).
+/// ([`super::Kane::joint_torques`], or the mechanism's own).
 pub fn mass_matrix_and_forcing(
     mech: &Mechanism,
     torques: &[crate::model::loads::JointTorque],
@@ -234,7 +234,7 @@ pub fn mass_matrix_and_forcing(
     (m, f)
 }
 
-impl Kane {
+impl Model {
     /// Kane's partial velocities of body `j` at `q`, in the world frame, by the textbook route
     /// ([`body_kinematics`]): `(v_{j,r}, ω_{j,r})` for r = 0..n. Allocates; for tests and reports.
     pub fn partial_velocities(&self, q: &[f64], j: usize) -> (Vec<Vec2>, Vec<f64>) {

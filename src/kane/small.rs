@@ -2,8 +2,8 @@
 //! storage: absolute angular velocities on a revolute tree of at most [`SMALL`] speeds without
 //! point forces (any topology, springs, dampers, ground dampers, joint torques and gravity).
 //!
-//! The terms are those of `Kane::evaluate_absolute`, summed in the same order, and the solve
-//! is `Kane::factor_solve`'s LDLᵀ in the same order, so the results are identical to the general
+//! The terms are those of `Model::evaluate_absolute`, summed in the same order, and the solve
+//! is `Model::factor_solve`'s LDLᵀ in the same order, so the results are identical to the general
 //! path's whenever the joint torques are listed in joint order (every example; otherwise their
 //! sum is ordered by joint, a difference of rounding). What differs is where the data live.
 //! Everything the evaluation reads is packed at construction into arrays indexed by speed
@@ -18,7 +18,7 @@
 //! solves with a loop-based LDLᵀ; for the small trees of torsional work those costs were most of
 //! the engine's own instructions (measured, BENCHMARKS.md).
 
-use super::{Kane, PIVOT_TOL};
+use super::{Model, PIVOT_TOL};
 use crate::error::EngineError;
 use crate::model::math::{Vec2, cross2, rotate_cs};
 
@@ -39,7 +39,7 @@ fn compose((ac, as_): (f64, f64), (bc, bs): (f64, f64)) -> (f64, f64) {
 /// The constant data of the fixed-size path, packed once at construction.
 #[derive(Debug, Clone)]
 pub(super) struct Small {
-    /// The instance of [`Kane::rhs_small`] for this n.
+    /// The instance of [`Model::rhs_small`] for this n.
     pub(super) rhs: SmallRhs,
     /// Per speed: its parent speed, [`GROUND`] for a root.
     parent: [usize; SMALL],
@@ -55,13 +55,13 @@ pub(super) struct Small {
     /// For k < j: the child of k on the path to j (j itself when k is j's parent), so that
     /// `Δ_kj = q_c + Δ_cj`; `NOT_ANCESTOR` when k is not an ancestor of j.
     via: [[usize; SMALL]; SMALL],
-    /// The pair coefficients `(α, β)` of (k, j), as `Kane::build` derives them.
+    /// The pair coefficients `(α, β)` of (k, j), as `Model::build` derives them.
     pair: [[(f64, f64); SMALL]; SMALL],
     k_spring: [f64; SMALL],
     q_free: [f64; SMALL],
     c_joint: [f64; SMALL],
     c_ground: [f64; SMALL],
-    /// Per speed: the index of its joint's applied torque in `Kane::torques`, or `NONE`.
+    /// Per speed: the index of its joint's applied torque in `Model::torques`, or `NONE`.
     torque: [usize; SMALL],
     /// First moments in the body frames (`Node::first_abs`), for gravity.
     first: [Vec2; SMALL],
@@ -74,7 +74,7 @@ pub(super) struct Small {
 impl Small {
     /// Packs the data of `kane` (already built) when a fixed-size path applies: this module's
     /// for the pair form, [`super::small_rates`]'s for the mapped composite-body form.
-    pub(super) fn new(kane: &Kane) -> Option<Small> {
+    pub(super) fn new(kane: &Model) -> Option<Small> {
         let n = kane.n;
         if n > SMALL || kane.nb != n || !kane.point_forces.is_empty() {
             return None;
@@ -96,7 +96,7 @@ impl Small {
 
     /// Gives `kane` the composite-body instance `rhs` with its data (the pair form's selection
     /// compares against it on a copy of the engine).
-    fn install(kane: &mut Kane, rhs: SmallRhs, rates: super::small_rates::Packed) {
+    fn install(kane: &mut Model, rhs: SmallRhs, rates: super::small_rates::Packed) {
         kane.small = Some(Self::with_rates(rhs, rates));
     }
 
@@ -123,16 +123,16 @@ impl Small {
     }
 
     /// The pair form's data (absolute speeds on a revolute tree).
-    fn pairs(kane: &Kane) -> Option<Small> {
+    fn pairs(kane: &Model) -> Option<Small> {
         let n = kane.n;
         let nodes = &kane.nodes[..n];
         let rhs: SmallRhs = match n {
-            1 => Kane::rhs_small::<1>,
-            2 => Kane::rhs_small::<2>,
-            3 => Kane::rhs_small::<3>,
-            4 => Kane::rhs_small::<4>,
-            5 => Kane::rhs_small::<5>,
-            6 => Kane::rhs_small::<6>,
+            1 => Model::rhs_small::<1>,
+            2 => Model::rhs_small::<2>,
+            3 => Model::rhs_small::<3>,
+            4 => Model::rhs_small::<4>,
+            5 => Model::rhs_small::<5>,
+            6 => Model::rhs_small::<6>,
             _ => return None,
         };
         let mut s = Small {
@@ -162,7 +162,7 @@ impl Small {
             (s.k_spring[j], s.q_free[j], s.c_joint[j], s.c_ground[j]) =
                 (nd.k_spring, nd.q_free, nd.c_joint, nd.c_ground);
             s.first[j] = nd.first_abs;
-            // `Kane::build` pushed the pairs of j walking up from its parent: take them in that order.
+            // `Model::build` pushed the pairs of j walking up from its parent: take them in that order.
             let (mut c, mut k) = (j, nd.parent);
             while k != super::GROUND_PARENT {
                 s.via[k][j] = c;
@@ -181,8 +181,8 @@ impl Small {
     }
 }
 
-impl Kane {
-    /// [`Kane::rhs`] by the fixed-size path for `N` speeds (`N = self.n ≤ SMALL`, `self.small`
+impl Model {
+    /// [`Kane::rhs`](super::Kane::rhs) by the fixed-size path for `N` speeds (`N = self.n ≤ SMALL`, `self.small`
     /// set; the caller has checked the lengths of `x` and `xdot`).
     ///
     /// NOTE: every local array has the literal length N (not `SMALL`: initialising the larger
@@ -280,13 +280,13 @@ impl Kane {
         self.ldlt_small::<N>(&m, &f, s.diag0_inv, s.pivot_min, ud)
     }
 
-    /// `M x = F` by LDLᵀ on the local arrays of [`Kane::rhs_small`]: `Kane::factor_solve` with
+    /// `M x = F` by LDLᵀ on the local arrays of [`Model::rhs_small`]: `Model::factor_solve` with
     /// every sum in the same order (the same results), unrolled. The first pivot is given as
     /// `d0_inv = 1 / M_00` (a constant in the pair form), and checked by the caller; pivots at or
     /// below `pivot_min` stop the solve.
     ///
     /// NOTE: by hand rather than nalgebra's fixed-size Cholesky, for the reasons of
-    /// `Kane::factor_solve` (no square roots, a failure names the joint) and to keep the general
+    /// `Model::factor_solve` (no square roots, a failure names the joint) and to keep the general
     /// path's results; Cramer's rule for n = 2 measured no faster (BENCHMARKS.md).
     #[inline(always)]
     pub(super) fn ldlt_small<const N: usize>(

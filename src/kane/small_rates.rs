@@ -3,11 +3,11 @@
 //! (revolute, prismatic, path; no fixed joint) and no point forces, with absolute angular
 //! velocities mapped from the joint rates (`Form::MappedRates`: `M ← Bᵀ M B`, `F ← Bᵀ F`,
 //! B = W⁻¹). This is where a rotor carrying path-joint absorbers goes; a rotor carrying exactly
-//! one, with absolute speeds or joint rates, takes the pair form at the end of this module.
+//! one, with absolute speeds or joint rates, takes the pair form of [`super::path_pair`].
 //!
-//! The method is `Kane::evaluate_rates`'s, term for term and in the same order (a forward pass of
+//! The method is `Model::evaluate_rates`'s, term for term and in the same order (a forward pass of
 //! poses, rates, bias accelerations and motion columns; a backward pass of composite sums about
-//! the joint points giving M_kl and F_k), then `Kane::map_rates_to_speeds` and `Kane::factor_solve`,
+//! the joint points giving M_kl and F_k), then `Model::map_rates_to_speeds` and `Model::factor_solve`,
 //! so the results are those of the general path to the bit (up to the sign of a zero) whenever
 //! the joint torques are listed in joint order (as for [`super::small`]). What differs is where
 //! the data live, when the joints are asked for their motion, and which exact no-ops are skipped:
@@ -30,34 +30,29 @@
 //! (docs/design.md, "Fast path for path joints"), and equality with the general path is by
 //! construction, not by a second derivation.
 //!
-//! The exception is the commonest tree, a rotor carrying one path absorber about its axis
-//! ([`PathPair`]): there the equations of motion are written directly in the rotor frame from the
-//! path's rotation-invariant quantities (|r|², r·t, r × t, r × κ; [`PolarPath`]), a pair form with
-//! s-dependent coefficients that needs neither the path's polar angle (the epicycloid's `asin`
-//! and `sin_cos`) nor the LDLᵀ's two serial divisions ([`Kane::rhs_path_pair`]). It equals this
-//! form to rounding (`tests/it/path_pair_form.rs`), hands every failure to it, and is chosen only
-//! after reproducing it at probe states.
+//! The exception is the commonest tree, a rotor carrying one path absorber about its axis: it
+//! takes the pair form of [`super::path_pair`], which hands every failure back to this form.
 
-use super::{GROUND_PARENT, Kane, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
+use super::path_pair::{PathPair, pair_agrees, path_pair};
+use super::{GROUND_PARENT, Model, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
 use crate::error::EngineError;
 use crate::model::joint::{JointMotion, PathJoint};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
-use crate::model::path::PolarPath;
 
 /// Sets an engine's fixed-size instance to the composite-body one given with its data; passed
 /// in by `small.rs`, which owns that instance's type (so this module does not import it back).
-pub(super) type Install = dyn Fn(&mut Kane, SmallRhs, Packed);
+pub(super) type Install = dyn Fn(&mut Model, SmallRhs, Packed);
 
 /// The constant data of the fixed-size composite-body path, packed once at construction.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Packed {
     /// Per body: its parent body, `NONE` for a root.
-    parent: [usize; SMALL],
+    pub(super) parent: [usize; SMALL],
     /// `ancestor[l][j]`: l is a proper ancestor of j.
     ancestor: [[bool; SMALL]; SMALL],
     /// Per body: a revolute root expressed in its own frame (the basis), whose motion is the
     /// identity and needs no trigonometry.
-    basis: [bool; SMALL],
+    pub(super) basis: [bool; SMALL],
     /// Per body: a revolute joint (its M and F terms take the revolute shortcuts of the general
     /// form).
     revolute: [bool; SMALL],
@@ -69,51 +64,28 @@ pub(super) struct Packed {
     /// the parent are the identity and the parent's acceleration terms vanish, up to the sign of
     /// a zero (the general form's `0 + 0·x − y` is `−y`).
     basis_parent: [bool; SMALL],
-    /// Per speed: the speed subtracted in `q̇ = W⁻¹u` (`Kane::speed_parent`), `NONE` without.
-    speed_parent: [usize; SMALL],
-    /// Per speed: the index of its joint's applied torque in `Kane::torques`, or `NONE`.
-    torque: [usize; SMALL],
+    /// Per speed: the speed subtracted in `q̇ = W⁻¹u` (`Model::speed_parent`), `NONE` without.
+    pub(super) speed_parent: [usize; SMALL],
+    /// Per speed: the index of its joint's applied torque in `Model::torques`, or `NONE`.
+    pub(super) torque: [usize; SMALL],
     /// The constants of the rotor-and-absorber pair form, when the tree is one
-    /// ([`Kane::rhs_path_pair`]).
-    pair: Option<PathPair>,
-}
-
-/// The constants of the pair form of a rotor carrying one path absorber ([`Kane::rhs_path_pair`]):
-/// body 0 a revolute root in its own frame, body 1 on a path joint drawn about the rotor axis
-/// (`at` = the rotor's joint point, (0, 0) in its frame) with its centre of mass at its frame
-/// origin.
-#[derive(Debug, Clone, Copy)]
-struct PathPair {
-    /// The absorber's path, its constants prepared once.
-    path: PolarPath,
-    /// The joint's travel limit, m (infinite without one): the joint kind's `limited` test.
-    limit: f64,
-    /// `J₀ + I`: the rotor's inertia about its axis plus the absorber's centroidal inertia, kg·m².
-    j_sum: f64,
-    /// The absorber's mass m, kg, and centroidal inertia I, kg·m².
-    mass: f64,
-    i_com: f64,
-    /// Per body: joint spring k (N·m/rad, N/m) and its free coordinate, joint damper, ground
-    /// damper (the rotor's and the absorber's absolute rotation).
-    k_spring: [f64; 2],
-    q_free: [f64; 2],
-    c_joint: [f64; 2],
-    c_ground: [f64; 2],
+    /// ([`super::path_pair`]).
+    pub(super) pair: Option<PathPair>,
 }
 
 /// Packs the data of `kane` (already built, `Form::MappedRates` or, with `pair_only`,
 /// `Form::Rates`; at most `SMALL` speeds, one body per speed, no point forces: checked by the
 /// caller) when every joint's torques allow it. With `pair_only`, only the pair form of a rotor
 /// carrying one path absorber is offered (its speeds are the joint rates: W = I).
-pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
+pub(super) fn small(kane: &Model, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
     let n = kane.n;
     let rhs: SmallRhs = match n {
-        1 => Kane::rhs_small_rates::<1>,
-        2 => Kane::rhs_small_rates::<2>,
-        3 => Kane::rhs_small_rates::<3>,
-        4 => Kane::rhs_small_rates::<4>,
-        5 => Kane::rhs_small_rates::<5>,
-        6 => Kane::rhs_small_rates::<6>,
+        1 => Model::rhs_small_rates::<1>,
+        2 => Model::rhs_small_rates::<2>,
+        3 => Model::rhs_small_rates::<3>,
+        4 => Model::rhs_small_rates::<4>,
+        5 => Model::rhs_small_rates::<5>,
+        6 => Model::rhs_small_rates::<6>,
         _ => return None,
     };
     let mut p = Packed {
@@ -157,63 +129,10 @@ pub(super) fn small(kane: &Kane, pair_only: bool, install: &Install) -> Option<(
         // general engine gains (and this form does not know) keeps the general form.
         let with_pair = Packed { pair: Some(pair), ..p.clone() };
         if pair_agrees(kane, &with_pair, rhs, install) {
-            return Some((Kane::rhs_path_pair, with_pair));
+            return Some((Model::rhs_path_pair, with_pair));
         }
     }
     (!pair_only).then_some((rhs, p))
-}
-
-/// The pair form's constants when `kane` is a rotor carrying one path absorber (see [`PathPair`]).
-fn path_pair(kane: &Kane, p: &Packed) -> Option<PathPair> {
-    let nodes = &kane.nodes;
-    // No speed is mapped (`speed_parent`), so the same equations serve absolute speeds and joint
-    // rates.
-    if kane.n != 2 || nodes.len() != 2 || !p.basis[0] || p.parent[1] != 0 || kane.gravity != Vec2::zeros() {
-        return None;
-    }
-    let (r, a) = (&nodes[0], &nodes[1]);
-    let PathJoint { shape, travel, .. } = a.kind.path()?;
-    // The path must be drawn about the rotor axis and carry the centre of mass: then every
-    // quantity is rotation-invariant (the mount angle drops out with θ(s)).
-    if a.at != Vec2::zeros() || a.com_local != Vec2::zeros() || p.speed_parent[..2] != [NONE, NONE] {
-        return None;
-    }
-    Some(PathPair {
-        path: shape.polar_path(),
-        limit: travel.unwrap_or(f64::INFINITY),
-        j_sum: r.j_own + a.i_com,
-        mass: a.mass,
-        i_com: a.i_com,
-        k_spring: [r.k_spring, a.k_spring],
-        q_free: [r.q_free, a.q_free],
-        c_joint: [r.c_joint, a.c_joint],
-        c_ground: [r.c_ground, a.c_ground],
-    })
-}
-
-/// True when the pair form and the composite-body instance `rates` give the same ẋ at three
-/// probe states spread over the path, with both speeds and the time non-zero: u̇₁ and ρ u̇₀ to
-/// 1e-10 of the absorber's largest acceleration term (ω²ρ + 2|ωṡ| + ṡ²|κ|, or u̇ itself), far
-/// above both forms' rounding (the general form's F₁ sums terms of that size, so a state whose
-/// u̇ is nearly zero carries its rounding) and far below any physical term either could lack.
-fn pair_agrees(kane: &Kane, packed: &Packed, rates: SmallRhs, install: &Install) -> bool {
-    let Some(pair) = &packed.pair else { return false };
-    let Some(PathJoint { shape, .. }) = kane.nodes[1].kind.path() else { return false };
-    let reach = shape.length_scale().min(0.5 * shape.travel()).min(0.5 * pair.limit);
-    let mut probe = kane.clone();
-    install(&mut probe, rates, packed.clone());
-    [(0.0, 0.37), (0.6, -0.9), (-0.95, 0.5)].iter().all(|&(f, g)| {
-        let x = [0.3, f * reach, 20.0 + 40.0 * f, 20.0 * g * reach];
-        let (mut general, mut fast) = ([0.0; 4], [0.0; 4]);
-        let t = 0.123 + f;
-        let ok = probe.rhs(t, &x, &mut general).is_ok() && probe.rhs_path_pair(t, &x, &mut fast).is_ok();
-        let at = shape.at(x[1]);
-        let (rho, kappa) = (at.position.norm(), at.curvature.norm());
-        let accel = x[2] * x[2] * rho + 2.0 * (x[2] * x[3]).abs() + x[3] * x[3] * kappa;
-        let scale = accel.max((rho * general[2]).abs()).max(general[3].abs());
-        let off = (rho * (general[2] - fast[2])).abs().max((general[3] - fast[3]).abs());
-        ok && general[..2] == fast[..2] && off <= 1e-10 * scale && fast[2].is_finite() && fast[3].is_finite()
-    })
 }
 
 /// The motion of body `nd`'s joint at `q`, with a path's mounting rotation prepared once
@@ -223,8 +142,8 @@ fn motion(nd: &Node, mount: Option<(f64, f64)>, q: f64) -> JointMotion {
     nd.kind.motion_mounted(nd.at, q, mount)
 }
 
-impl Kane {
-    /// [`Kane::rhs`] by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
+impl Model {
+    /// [`Kane::rhs`](super::Kane::rhs) by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
     /// `self.small` set by [`small`]; the caller has checked the lengths of `x` and `xdot`).
     ///
     /// NOTE: the structure of [`super::small`]'s `rhs_small` (local arrays of the literal length
@@ -232,7 +151,12 @@ impl Kane {
     /// called through `Small::rhs`) applied to `evaluate_rates`; its figures are in
     /// BENCHMARKS.md.
     #[inline(never)]
-    fn rhs_small_rates<const N: usize>(&self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
+    pub(super) fn rhs_small_rates<const N: usize>(
+        &self,
+        t: f64,
+        x: &[f64],
+        xdot: &mut [f64],
+    ) -> Result<(), EngineError> {
         let s = &self.small.as_ref().expect("the fixed-size path is chosen with its data").rates;
         let nodes = &self.nodes[..N];
         let (q, u) = (&x[..N], &x[N..2 * N]);
@@ -387,65 +311,6 @@ impl Kane {
             self.ldlt_small::<N>(&m, &f, 1.0 / d0, pivot_min, ud)
         };
         solved.map_err(|e| self.out_of_travel(e, q))
-    }
-
-    /// [`Kane::rhs`] for a rotor carrying one path absorber ([`PathPair`]): the equations of
-    /// motion written directly in the rotor's frame, a pair form with s-dependent coefficients.
-    ///
-    /// With ω the rotor's speed, ṡ the absorber's, r the absorber's centre from the axis, t the
-    /// unit tangent, κ the curvature vector and α(s) the rotation law, the partial velocities are
-    /// (1, ẑ × r) for ω and (α', t) for ṡ, and the velocity-product acceleration of the centre is
-    /// `−ω² r + 2ωṡ ẑ × t + ṡ² κ`. Dotting (t ⊥ κ, t ⊥ ẑ × t, r ⊥ ẑ × r):
-    ///
-    /// ```text
-    /// M₀₀ = J₀ + I + m ρ²     M₀₁ = I α' + m (r × t)     M₁₁ = I α'² + m
-    /// F₀ = τ₀ − c₀ ω − c₁ Ω − I α'' ṡ² − m (2ωṡ (r·t) + ṡ² (r × κ))
-    /// F₁ = τ₁ − α' (c₁ Ω + I α'' ṡ²) + m ω² (r·t),     Ω = ω + α' ṡ
-    /// ```
-    ///
-    /// (c₀, c₁ the ground dampers, τ the joints' springs, dampers and torques.) Only the
-    /// rotation-invariant |r|², r·t, r × t and r × κ enter ([`PolarPath::at`]), so the path's
-    /// polar angle θ(s), the `asin` and `sin_cos` of the epicycloid, is never needed; the 2 × 2
-    /// system is solved by Cramer's rule (one division, the LDLᵀ's two are serial). The results
-    /// equal the composite-body form's to rounding (`tests/it/path_pair_form.rs`), not to the bit.
-    /// Whenever the LDLᵀ's pivots (M₀₀ and det/M₀₀) would not both pass `factor_solve`'s test,
-    /// or a result is not finite (beyond the end of the path), the call is handed to the
-    /// composite-body form, which gives the error (or the result) it always gave.
-    #[inline(never)]
-    fn rhs_path_pair(&self, t: f64, x: &[f64], xdot: &mut [f64]) -> Result<(), EngineError> {
-        let packed = &self.small.as_ref().expect("the fixed-size path is chosen with its data").rates;
-        let c = packed.pair.as_ref().expect("the pair form is chosen with its constants");
-        let (theta, s, w, sd) = (x[0], x[1], x[2], x[3]);
-        // The excitation's `sin` first: its chain (phase, `sin`, F, solve) is the longest here.
-        let mut exc = [0.0; 2];
-        for (j, exc) in exc.iter_mut().enumerate() {
-            if packed.torque[j] != NONE {
-                *exc = self.torques[packed.torque[j]].excitation.torque(t);
-            }
-        }
-        let p = c.path.at(if s.abs() < c.limit { s } else { f64::NAN });
-        let (m, i) = (c.mass, c.i_com);
-        let (da, dda) = (p.dalpha, p.ddalpha);
-        let spin = w + da * sd;
-        let tau0 = -c.k_spring[0] * (theta - c.q_free[0]) - c.c_joint[0] * w + exc[0];
-        let tau1 = -c.k_spring[1] * (s - c.q_free[1]) - c.c_joint[1] * sd + exc[1];
-        let turn = i * dda * (sd * sd) + c.c_ground[1] * spin;
-        let f0 = tau0 - c.c_ground[0] * w - turn - m * (2.0 * w * sd * p.r_dot_t + sd * sd * p.r_cross_k);
-        let f1 = tau1 - da * turn + m * (w * w) * p.r_dot_t;
-        let m00 = c.j_sum + m * p.rho_sq;
-        let m01 = i * da + m * p.r_cross_t;
-        let m11 = i * (da * da) + m;
-        let det = m00 * m11 - m01 * m01;
-        let inv = 1.0 / det;
-        let ud0 = (m11 * f0 - m01 * f1) * inv;
-        let ud1 = (m00 * f1 - m01 * f0) * inv;
-        // `factor_solve`'s pivots are M₀₀ and det/M₀₀, against 1e-12 of the largest diagonal entry.
-        let pivot_min = PIVOT_TOL * m00.abs().max(m11.abs());
-        if !(m00 > pivot_min && det > pivot_min * m00 && ud0.is_finite() && ud1.is_finite()) {
-            return self.rhs_small_rates::<2>(t, x, xdot);
-        }
-        xdot[..4].copy_from_slice(&[w, sd, ud0, ud1]);
-        Ok(())
     }
 
     /// A non-finite evaluation is a path joint beyond its end when one is (see `rhs_general`).

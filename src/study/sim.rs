@@ -3,13 +3,14 @@
 
 use super::{Deadline, ExciteAt, IntegrationSpec, Study, TrackingSpec};
 use crate::error::{Error, Result};
-use crate::kane::Kane;
+use crate::kane::{Kane, Model};
 use crate::model::mechanism::Mechanism;
 use crate::signal::{OrderTrace, StftOptions, stft_order_traces};
 use crate::time::integrate::IntegrateOptions;
 use crate::time::probe::{Probe, Recorder};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
+use std::sync::Arc;
 
 /// Progress bars on stderr, one per running simulation; drawn only when asked for and stderr is
 /// a terminal (so logs and CI output stay clean).
@@ -286,6 +287,35 @@ impl Study {
             _ => Kane::new(&self.mechanism),
         }
     }
+
+    /// The built models of the mechanism and of the locked twin (when `locked_too`), once, for
+    /// parallel jobs to share ([`Study::kane_from`]).
+    pub(crate) fn shared_models(&self, locked_too: bool) -> SharedModels {
+        let locked = if locked_too { self.locked.as_ref() } else { None };
+        SharedModels {
+            plain: Model::new(&self.mechanism).ok().map(Arc::new),
+            locked: locked.and_then(|m| Model::new(m).ok()).map(Arc::new),
+        }
+    }
+
+    /// The evaluator of [`Study::kane`] on a model from `shared`; built here when that one is
+    /// missing, so a failed build reports its own error in every job, as [`Study::kane`] does.
+    pub(crate) fn kane_from(&self, shared: &SharedModels, locked: bool) -> Result<Kane> {
+        let model = if locked && self.locked.is_some() { &shared.locked } else { &shared.plain };
+        match model {
+            Some(m) => Ok(Kane::with_model(Arc::clone(m))),
+            None => self.kane(locked),
+        }
+    }
+}
+
+/// A study's built models ([`Study::shared_models`]): parallel jobs take a handle each
+/// ([`Kane::with_model`]) instead of building the mechanism again; a job that changes its
+/// excitation gets its own copy of the model then (copy on write, see [`crate::kane`]).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct SharedModels {
+    plain: Option<Arc<Model>>,
+    locked: Option<Arc<Model>>,
 }
 
 /// The mean of the torque the mechanism file applies at joint `j` (0 when none).

@@ -1,5 +1,5 @@
-//! The pair form of a rotor carrying one path absorber (`Kane::rhs_path_pair` in
-//! `src/kane/small_rates.rs`, issue 14's speed criterion) against the general composite-body
+//! The pair form of a rotor carrying one path absorber (`Model::rhs_path_pair` in
+//! `src/kane/path_pair.rs`, issue 14's speed criterion) against the general composite-body
 //! form: on seeded random rotors with every path kind, rotation laws, mounting angles, springs,
 //! dampers, ground dampers and excitation torques on either joint, ẋ agrees to rounding, and
 //! beyond the end of the path (or a travel limit, or at a NaN) both fail with the same error.

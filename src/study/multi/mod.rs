@@ -184,8 +184,10 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
     if study.locked.is_some() && spec.time_domain {
         jobs.extend((0..spec.speeds.len()).map(|i| (i, true)));
     }
+    // One build of each mechanism for every parallel job below.
+    let shared = study.shared_models(study.locked.is_some());
     let done: Vec<Result<Steady>> =
-        jobs.par_iter().map(|&(i, locked)| steady(study, spec, i, locked, progress)).collect();
+        jobs.par_iter().map(|&(i, locked)| steady(study, &shared, spec, i, locked, progress)).collect();
     let mut failures = Vec::new();
     let mut response: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
     let mut locked: Vec<Option<Steady>> = vec![None; spec.speeds.len()];
@@ -232,7 +234,7 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
     let mut speeds = speeds;
     if spec.hbm {
         let states: Vec<Result<(Vec<HbmState>, Ramp)>> =
-            spec.speeds.par_iter().map(|p| hbm_states(study, spec, p)).collect();
+            spec.speeds.par_iter().map(|p| hbm_states(study, &shared, spec, p)).collect();
         for (s, st) in speeds.iter_mut().zip(states) {
             match st {
                 Ok((states, ramp)) => {
@@ -243,7 +245,8 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             }
         }
         if study.locked.is_some() {
-            let locked: Vec<Result<Ramp>> = spec.speeds.par_iter().map(|p| ramp(study, spec, p, true)).collect();
+            let locked: Vec<Result<Ramp>> =
+                spec.speeds.par_iter().map(|p| ramp(study, &shared, spec, p, true)).collect();
             for (s, r) in speeds.iter_mut().zip(locked) {
                 match r {
                     Ok(r) => (s.hbm_locked, s.hbm_locked_fold) = r,
@@ -403,7 +406,12 @@ pub(crate) fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
 /// `order + 0.4` down to `order − 0.4` and back up (a branch crosses the operating order once per
 /// sheet of an S-shaped response, and each direction reaches the sheets connected to its start),
 /// and each crossing is solved exactly at the order; with the torque ramp's state ([`ramp`]).
-fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Result<(Vec<HbmState>, Ramp)> {
+fn hbm_states(
+    study: &Study,
+    shared: &sim::SharedModels,
+    spec: &MultiOrderSpec,
+    p: &super::SpeedPoint,
+) -> Result<(Vec<HbmState>, Ramp)> {
     let omega = rpm_to_rad_s(p.rpm);
     let path = study.mechanism.rotation_rates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
@@ -422,7 +430,7 @@ fn hbm_states(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint) -> Re
         }
     }
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
-    Ok((out, ramp(study, spec, p, false)?))
+    Ok((out, ramp(study, shared, spec, p, false)?))
 }
 
 /// The torque ramp's state and, when its branch folds first, the torque scale of the fold.
@@ -434,13 +442,19 @@ type Ramp = (Option<HbmState>, Option<f64>);
 /// of maximum kind before s = 1 means that state stops existing on the way (the run jumps): the
 /// fold's s is returned instead of a state. The locked twin reports the study's elements that
 /// it keeps.
-fn ramp(study: &Study, spec: &MultiOrderSpec, p: &super::SpeedPoint, locked: bool) -> Result<Ramp> {
+fn ramp(
+    study: &Study,
+    shared: &sim::SharedModels,
+    spec: &MultiOrderSpec,
+    p: &super::SpeedPoint,
+    locked: bool,
+) -> Result<Ramp> {
     use crate::hbm::{ContinuationOptions, FoldKind, HbmOptions, Parameter, RoutedHbm};
     let omega = rpm_to_rad_s(p.rpm);
     let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
     let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
     let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
-    let kane = study.kane(locked)?;
+    let kane = study.kane_from(shared, locked)?;
     let inputs = study.excited_joints(mech, &spec.excite);
     let opts = HbmOptions { harmonics: 10, ..HbmOptions::default() };
     let err = super::hbm::hbm_error(study);
@@ -515,7 +529,14 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
 
 /// Integrates in windows of `window_s` until the amplitudes of the last two windows agree to
 /// `steady_tol` (relative) or `max_time_s` is reached.
-fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress: &Progress) -> Result<Steady> {
+fn steady(
+    study: &Study,
+    shared: &sim::SharedModels,
+    spec: &MultiOrderSpec,
+    i: usize,
+    locked: bool,
+    progress: &Progress,
+) -> Result<Steady> {
     let point = &spec.speeds[i];
     let omega = rpm_to_rad_s(point.rpm);
     let mech = if locked { study.locked.as_ref().unwrap_or(&study.mechanism) } else { &study.mechanism };
@@ -535,7 +556,7 @@ fn steady(study: &Study, spec: &MultiOrderSpec, i: usize, locked: bool, progress
         harmonics: point.harmonics.clone(),
         ramp_s: spec.ramp_s,
     };
-    let mut kane = study.kane(locked)?;
+    let mut kane = study.kane_from(shared, locked)?;
     study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
     let fs = study.spec.integration.sample_hz;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });

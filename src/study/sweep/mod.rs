@@ -94,8 +94,9 @@ pub(crate) fn compute(study: &Study, spec: &SweepSpec, progress: &Progress) -> (
             jobs.push(Job { amplitude, direction: Direction::Up, locked: true });
         }
     }
+    let shared = study.shared_models(study.locked.is_some());
     let results: Vec<Result<SweepRun>> =
-        jobs.par_iter().map(|job| run_one(study, spec, omega, job, progress)).collect();
+        jobs.par_iter().map(|job| run_one(study, &shared, spec, omega, job, progress)).collect();
     let mut runs = Vec::with_capacity(results.len());
     let mut failures = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -279,7 +280,14 @@ pub(crate) fn order_name(m: f64) -> String {
     }
 }
 
-fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Progress) -> Result<SweepRun> {
+fn run_one(
+    study: &Study,
+    shared: &sim::SharedModels,
+    spec: &SweepSpec,
+    omega: f64,
+    job: &Job,
+    progress: &Progress,
+) -> Result<SweepRun> {
     let (from, to) = match job.direction {
         Direction::Up => (spec.order_min, spec.order_max),
         Direction::Down => (spec.order_max, spec.order_min),
@@ -294,7 +302,7 @@ fn run_one(study: &Study, spec: &SweepSpec, omega: f64, job: &Job, progress: &Pr
         harmonics: vec![Harmonic { multiple: 1.0, amplitude: job.amplitude, phase: 0.0 }],
         ramp_s: spec.ramp_s,
     };
-    let mut kane = study.kane(job.locked)?;
+    let mut kane = study.kane_from(shared, job.locked)?;
     study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
     let x0 = Study::initial_state(mech, spin, omega);
     let label = format!(
