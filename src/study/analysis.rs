@@ -32,8 +32,12 @@ pub(crate) trait Analysis {
     /// the registry); most analyses name none.
     fn rename_references(&mut self, _rename: &dyn Fn(&str) -> String) {}
 
-    /// Whether a comparison may run it on several mechanisms.
-    fn comparable(&self) -> bool {
+    /// Whether a comparison may run this kind on several mechanisms (a property of the kind,
+    /// so that the registry can list the kinds that may).
+    fn comparable() -> bool
+    where
+        Self: Sized,
+    {
         false
     }
 

@@ -110,6 +110,26 @@ macro_rules! analyses {
                 self.analysis_mut().rename_references(rename);
             }
 
+            /// Whether a comparison may run this entry ([`Analysis::comparable`]).
+            #[allow(unused_doc_comments)]
+            pub(crate) fn comparable(&self) -> bool {
+                match self {
+                    $($(#[$attr])* AnalysisSpec::$kind(_) => <$spec as Analysis>::comparable(),)*
+                }
+            }
+
+            /// The kinds a comparison may run, in registry order (for messages).
+            #[allow(unused_doc_comments)]
+            pub(crate) fn comparable_kinds() -> Vec<&'static str> {
+                let mut kinds = Vec::new();
+                $($(#[$attr])* {
+                    if <$spec as Analysis>::comparable() {
+                        kinds.push(stringify!($kind));
+                    }
+                })*
+                kinds
+            }
+
             /// The analysis behind the entry, to prepare when the study is loaded.
             #[allow(unused_doc_comments)]
             pub(crate) fn analysis_mut(&mut self) -> &mut dyn Analysis {

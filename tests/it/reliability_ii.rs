@@ -80,6 +80,23 @@ fn a_comparison_and_an_analysis_writing_one_file_are_refused_naming_both() {
     assert!(e.contains("FreeOscillation `c_a_free` (analyses[0])"), "{e}");
 }
 
+/// A comparison runs the kinds that take one mechanism at a time; the refusal of another kind
+/// lists them from the registry (each kind says whether it is comparable), so a new comparable
+/// analysis appears in the message without editing the comparison.
+#[test]
+fn a_comparison_refuses_a_campbell_and_lists_the_kinds_it_runs() {
+    let s = Scratch::new("compare_kinds");
+    let campbell = r#"Campbell(name: "k", rpm_min: 0.0, rpm_max: 100.0)"#;
+    let compare = format!(
+        r#"Compare(name: "c", mechanisms: [(label: "a", mechanism: "paths/circle.ron")], analyses: [{campbell}])"#
+    );
+    let e = s.load_error(&circle_study(&compare));
+    assert_located(&e, "analyses[0].analyses[0]");
+    let expected = "a comparison runs OrderSweep, MultiOrder, LinearResponse, HarmonicBalance, Transient, \
+                    FreeOscillation analyses, not Campbell";
+    assert!(e.contains(expected), "{e}");
+}
+
 /// A sweep's run files carry its amplitude and direction: a Campbell diagram named like one of
 /// them used to overwrite that run's traces. Names that only share a prefix still load.
 #[test]

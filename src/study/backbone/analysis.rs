@@ -15,7 +15,7 @@ use crate::study::validate::{MAX_LIST, g, require_steady_spin, rpm};
 use serde::Serialize;
 
 impl Analysis for FreeOscillationSpec {
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 

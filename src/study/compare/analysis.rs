@@ -4,13 +4,13 @@
 use super::{CompareResult, CompareSpec, run};
 use crate::error::Result;
 use crate::io::Source;
-use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
 use crate::study::json::{AnalysisEntry, Json, entries};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::JSON_PER_CSV_BYTE;
 use crate::study::validate::{MAX_ANALYSES, check_file_name};
+use crate::study::{AnalysisSpec, Study};
 use serde::Serialize;
 
 impl Analysis for CompareSpec {
@@ -113,14 +113,10 @@ pub(super) fn check_compare(src: &Source, k: usize, c: &super::CompareSpec) -> R
         return Err(src.error(&at("analyses"), format!("need 1 to {MAX_ANALYSES} analyses")));
     }
     for (i, a) in c.analyses.iter().enumerate() {
-        if !a.analysis().comparable() {
+        if !a.comparable() {
             return Err(src.error(
                 &format!("analyses[{k}].analyses[{i}]"),
-                format!(
-                    "a comparison runs OrderSweep, HarmonicBalance, FreeOscillation, LinearResponse, MultiOrder or \
-                     Transient analyses, not {}",
-                    a.kind()
-                ),
+                format!("a comparison runs {} analyses, not {}", AnalysisSpec::comparable_kinds().join(", "), a.kind()),
             ));
         }
     }

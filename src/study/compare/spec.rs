@@ -30,7 +30,8 @@ pub struct CompareSpec {
     pub name: String,
     /// The mechanisms compared, 1 to 8.
     pub mechanisms: Vec<CompareMechanism>,
-    /// The analyses run on each: `OrderSweep`, `HarmonicBalance`, `FreeOscillation`,
-    /// `LinearResponse`, `MultiOrder` or `Transient`, written as in the study's `analyses`.
+    /// The analyses run on each, written as in the study's `analyses`: the kinds that run on
+    /// one mechanism at a time (those whose `Analysis::comparable` says so; a design study, a
+    /// Campbell diagram or another comparison is refused, and the error lists the kinds).
     pub analyses: Vec<AnalysisSpec>,
 }

@@ -25,7 +25,7 @@ impl Analysis for HbmSpec {
         }
     }
 
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 

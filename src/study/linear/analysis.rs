@@ -15,7 +15,7 @@ use crate::study::validate::{
 use serde::Serialize;
 
 impl Analysis for LinearResponseSpec {
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 

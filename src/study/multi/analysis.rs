@@ -15,7 +15,7 @@ use crate::study::validate::{MAX_LIST, check_excite, common, order, pos, require
 use serde::Serialize;
 
 impl Analysis for MultiOrderSpec {
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 

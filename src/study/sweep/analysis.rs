@@ -14,7 +14,7 @@ use crate::study::validate::{check_excite, common, g, order_range, pos, rpm, tor
 use serde::Serialize;
 
 impl Analysis for SweepSpec {
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 

@@ -17,7 +17,7 @@ use crate::study::validate::{MAX_LIST, MAX_RPM, MAX_TRANSIENT_S, check_excite, g
 use serde::Serialize;
 
 impl Analysis for TransientSpec {
-    fn comparable(&self) -> bool {
+    fn comparable() -> bool {
         true
     }
 
