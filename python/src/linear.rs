@@ -44,6 +44,7 @@ pub fn linear_error(py: Python<'_>, mech: &Mech, e: &LinearError) -> PyErr {
         LinearError::NoEquilibrium { .. }
         | LinearError::MassMatrix { .. }
         | LinearError::Eigen { .. }
+        | LinearError::Watchdog { .. }
         | LinearError::Singular { .. } => EngineError::new_err(message),
     }
 }
