@@ -459,6 +459,16 @@ pub struct RoutedHbm {
     reduction: Option<Reduction>,
 }
 
+/// The route [`RoutedHbm::new`] takes for `kane`'s mechanism with its torques, excited at the
+/// joints `inputs`: [`detect`], or the general one for a geared mechanism.
+pub fn route_for(kane: &Kane, spin_joint: usize, inputs: &[usize]) -> Route {
+    if kane.unconstrained().is_some() {
+        Route::General { reason: "gears".into() }
+    } else {
+        detect(kane.mechanism(), kane.joint_torques(), spin_joint, inputs)
+    }
+}
+
 impl RoutedHbm {
     /// [`Hbm::with_speed_forcing`] on the route [`detect`] chooses for `kane`'s mechanism: the
     /// same arguments, in the full mechanism's joint numbering.
@@ -472,11 +482,7 @@ impl RoutedHbm {
     ) -> Result<Self, HbmError> {
         let mech = kane.mechanism();
         let input_joints: Vec<usize> = inputs.iter().map(|i| i.0).collect();
-        let route = if kane.unconstrained().is_some() {
-            Route::General { reason: "gears".into() }
-        } else {
-            detect(mech, kane.joint_torques(), spin_joint, &input_joints)
-        };
+        let route = route_for(kane, spin_joint, &input_joints);
         let Route::Cyclic { sets } = &route else {
             return Self::general(kane, spin_joint, omega, forcing, inputs, options, route);
         };

@@ -112,7 +112,7 @@ pub use branch::{
     Bifurcation, BifurcationClass, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter,
 };
 pub use continuation::{ContinuationOptions, continue_in_order};
-pub use cyclic::{CyclicSet, Route, RoutedHbm, detect};
+pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};

@@ -50,7 +50,7 @@ pub use backbone::FreeOscillationSpec;
 pub use campbell::CampbellSpec;
 pub use compare::{CompareMechanism, CompareSpec};
 pub use design::{DesignParameter, DesignSpec, Quantity, Sampling};
-pub use hbm::{HbmParameter, HbmSpec};
+pub use hbm::{HbmParameter, HbmRoute, HbmSpec};
 pub use linear::{LinearResponseSpec, Variant};
 pub use load::LoadOptions;
 pub use multi::{MultiOrderSpec, SpeedPoint};

@@ -389,3 +389,63 @@ fn identical_path_absorbers_take_the_cyclic_route() {
     assert!(diff <= 1e-10, "{diff:e}");
     assert!(worst_mu <= 1e-7, "{worst_mu:e}");
 }
+
+/// `route` in the study file: `Cyclic` declares the absorbers identical, and a set that is not
+/// (one pendulum 1e-6 heavier) is refused at load, at the field, naming the difference; on the
+/// identical set it runs the cyclic route. `General` forces the reference route on the identical
+/// set, and the folds it finds equal the cyclic route's (both refined to |dλ/ds| < 1e-6; the
+/// fold orders then agree to ~1e-9, asserted at 1e-7; the two routes take different points, as
+/// their arclengths are weighted differently).
+#[test]
+fn a_declared_route_is_checked_and_taken() {
+    use kanedyn::io::Source;
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = |mech: &str, route: &str| {
+        format!(
+            r#"Study(
+    name: "declared_route",
+    mechanism: "{mech}",
+    spin_joint: "spin",
+    response_body: "rotor",
+    analyses: [
+        HarmonicBalance(name: "hbm", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [40.0], harmonics: 10,
+                        route: {route}),
+    ],
+)"#
+        )
+    };
+    let dir = std::env::temp_dir().join(format!("kanedyn_declared_route_{}", std::process::id()));
+    crate::support::examples::copy_dir(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"), &dir);
+    let four = std::fs::read_to_string(dir.join("cpva4.ron")).unwrap();
+    let mistuned = four.replacen("mass: 1.5,", "mass: 1.500001,", 1);
+    assert_ne!(four, mistuned);
+    std::fs::write(dir.join("cpva4_mistuned.ron"), mistuned).unwrap();
+    let load = |mech: &str, route: &str| {
+        let src = Source::from_text(&dir.join("s.ron").to_string_lossy(), &text(mech, route));
+        Study::from_source(src, &LoadOptions::default())
+    };
+    let e = load("cpva4_mistuned.ron", "Cyclic").map(|_| ()).unwrap_err().to_string();
+    println!("{e}");
+    assert!(e.contains("(field `analyses[0].route`)") && e.contains("s.ron:8:"), "{e}");
+    assert!(e.contains("not identical") || e.contains("mistuned"), "{e}");
+    assert!(e.contains("pendulum_2") || e.contains("pivot_2") || e.contains("mass"), "{e}");
+    let mut routes = Vec::new();
+    for route in ["Cyclic", "General"] {
+        let study = load("cpva4.ron", route).unwrap();
+        let out = dir.join(format!("out_{route}"));
+        let r = run(&study, &RunOptions { out: Some(out), progress: false }).unwrap();
+        assert!(r.failures.is_empty(), "{:?}", r.failures);
+        routes.push(r);
+    }
+    let (cyclic, general) = (&routes[0], &routes[1]);
+    for (c, g) in cyclic.hbm.iter().zip(&general.hbm) {
+        assert_eq!((c.route.as_str(), g.route.as_str()), ("cyclic", "general"));
+        println!("folds: cyclic {:?}, general {:?}", c.folds, g.folds);
+        assert_eq!(c.folds.len(), 2);
+        assert_eq!(c.folds.len(), g.folds.len());
+        for (x, y) in c.folds.iter().zip(&g.folds) {
+            assert_abs_diff_eq!(x, y, epsilon = 1e-7);
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -373,6 +373,42 @@ fn the_watchdog_stops_campbell_linear_response_and_harmonic_balance() {
     }
 }
 
+/// A harmonic-balance branch that stops short of its range (here at its 2000-point cap, with a
+/// step of 1e-5 over an order range of 0.4) used to be only a note under the summary's table:
+/// the run exited 0 although the fold the user asked about may lie beyond. Now it is also a
+/// Failures entry naming the analysis, its place in the file, the reason and the order reached;
+/// its points are kept. (A branch that stalls at the end of an absorber's path stays a note:
+/// that is the mechanism's limit, `cpva_paths::the_path_comparison_example…`.)
+#[test]
+fn a_branch_stopped_short_of_its_range_is_a_located_failure() {
+    use kanedyn::study::{RunOptions, run};
+    let s = Scratch::new("stalled");
+    let text = r#"Study(
+    name: "st",
+    mechanism: "cpva.ron",
+    lock: ["pivot"],
+    analyses: [
+        HarmonicBalance(name: "hbm", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [40.0],
+                        harmonics: 4, max_step: 0.00001),
+    ],
+)
+"#;
+    let study = Study::from_file(&s.write("st.ron", text)).unwrap();
+    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    println!("{:#?}", report.failures);
+    assert_eq!(report.failures.len(), 2, "{:?}", report.failures);
+    for (f, from) in report.failures.iter().zip(["3.3", "2.9"]) {
+        assert!(f.starts_with("HarmonicBalance `hbm` (") && f.contains("st.ron:6:9"), "{f}");
+        assert!(
+            f.contains(&format!("continued from {from}: stopped because it reached the largest number of points")),
+            "{f}"
+        );
+        assert!(f.contains("at order = ") && f.contains("after 2000 points"), "{f}");
+    }
+    assert_eq!(report.hbm.len(), 2);
+    assert!(report.hbm.iter().all(|b| b.order.len() == 2000));
+}
+
 // ---- Locations ----
 
 /// A second run into a folder another run holds used to be refused as "mechanism ``: output

@@ -73,6 +73,9 @@ impl Analysis for HbmSpec {
         }
         check_excite(src, spec, mech, &at("excite"), &h.excite)?;
         check_hbm(src, spec, k, h)?;
+        if h.route == super::HbmRoute::Cyclic {
+            check_route(c, h)?;
+        }
         Ok(())
     }
 
@@ -201,4 +204,28 @@ pub(super) fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::Hbm
         }
     }
     Ok(())
+}
+
+/// A declared cyclic route (`route: Cyclic`): the absorbers must form identical sets on this
+/// mechanism with this excitation, else a located error with the reason `hbm::cyclic::detect`
+/// gives (which member differs, and in what).
+fn check_route(c: &Checks<'_>, h: &super::HbmSpec) -> Result<()> {
+    let Checks { spec, mech, spin, src, .. } = *c;
+    let inputs: Vec<usize> = if h.excite.is_empty() {
+        vec![spin]
+    } else {
+        h.excite.iter().filter_map(|e| mech.joint_index(&e.joint)).collect()
+    };
+    let kane = crate::kane::Kane::new(mech)?;
+    match crate::hbm::route_for(&kane, spin, &inputs) {
+        crate::hbm::Route::Cyclic { .. } => Ok(()),
+        crate::hbm::Route::General { reason } => Err(src.error(
+            &c.at("route"),
+            format!(
+                "`route: Cyclic` declares the absorbers of mechanism `{}` identical, but they are not ({reason}); \
+                 make them identical, or drop `route` to let the solver choose (spin joint `{}`)",
+                mech.name, spec.spin_joint
+            ),
+        )),
+    }
 }

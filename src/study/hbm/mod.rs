@@ -140,7 +140,18 @@ pub(crate) fn branch(
     // Its points serve as guesses only (the multi-order analysis solves each state at its order
     // and analyses that one): no Floquet analysis per point and no localisation of the events,
     // which were most of the harmonic balance's cost in the truck study.
-    branch_with(study, omega, (harmonics, &[]), excite, h, Parameter::Order, (from, to), None, None, false)
+    branch_with(
+        study,
+        omega,
+        (harmonics, &[]),
+        excite,
+        h,
+        Parameter::Order,
+        (from, to),
+        None,
+        None,
+        (false, HbmRoute::Auto),
+    )
 }
 
 /// Continues the periodic solution in `parameter` from `from` to `to` (its units: order, rad/s,
@@ -161,8 +172,9 @@ pub(crate) fn branch_in(
     to: f64,
     max_step: Option<f64>,
     on_point: Option<PointHook>,
+    route: HbmRoute,
 ) -> Result<(RoutedHbm, Branch, f64)> {
-    branch_with(study, omega, forcing, excite, h, parameter, (from, to), max_step, on_point, true)
+    branch_with(study, omega, forcing, excite, h, parameter, (from, to), max_step, on_point, (true, route))
 }
 
 /// [`branch_in`], with the stability of every point and the events located when `analysed`.
@@ -177,7 +189,7 @@ fn branch_with(
     (from, to): (f64, f64),
     max_step: Option<f64>,
     on_point: Option<PointHook>,
-    analysed: bool,
+    (analysed, route): (bool, HbmRoute),
 ) -> Result<(RoutedHbm, Branch, f64)> {
     let kane = study.kane(false)?;
     let opts = HbmOptions { harmonics: h, ..HbmOptions::default() };
@@ -193,8 +205,13 @@ fn branch_with(
     {
         harmonics.push(Harmonic { multiple: 1.0 / order, amplitude: 0.0, phase: 0.0 });
     }
-    let mut hbm =
-        RoutedHbm::new(&kane, study.spin, omega, (&harmonics, per_omega2), &inputs, opts).map_err(hbm_error(study))?;
+    let forcing = (&harmonics[..], per_omega2);
+    let mut hbm = match route {
+        HbmRoute::General => RoutedHbm::new_general(&kane, study.spin, omega, forcing, &inputs, opts),
+        // A declared cyclic route was checked at load (`check_route`).
+        HbmRoute::Auto | HbmRoute::Cyclic => RoutedHbm::new(&kane, study.spin, omega, forcing, &inputs, opts),
+    }
+    .map_err(hbm_error(study))?;
     hbm.set_on_point(on_point);
     let start = std::time::Instant::now();
     let defaults = ContinuationOptions::default();
@@ -219,6 +236,31 @@ struct Axis {
     label: &'static str,
     column: &'static str,
     unit: &'static str,
+}
+
+/// Share of a path's travel at which a stalled branch counts as having reached the end of the
+/// path: the corrector fails there because the periodic state approaches the path's end, where
+/// the motion stiffens without bound (the path examples' 500 N·m branches stall at 90–91 % of
+/// their travel; 0.8 leaves room for coarser harmonics).
+const AT_TRAVEL_END: f64 = 0.8;
+
+/// Why a branch ending at `sol` stalled, when it is the end of an absorber's path: the joint and
+/// the share of its travel its peak reaches (at least [`AT_TRAVEL_END`]).
+fn travel_end(mech: &Mechanism, sol: &HbmSolution) -> Option<String> {
+    (0..mech.ndof())
+        .filter_map(|k| {
+            let joint = &mech.joints[mech.joint_of(k)];
+            let travel = joint.kind.travel();
+            let share = sol.peak_amplitude(k) / travel;
+            (travel.is_finite() && share >= AT_TRAVEL_END).then_some((share, joint.name.clone(), travel))
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(share, name, travel)| {
+            format!(
+                "absorber `{name}` reaches {:.0} % of its travel ({travel:.4e} m): the steady state leaves its path",
+                100.0 * share
+            )
+        })
 }
 
 /// Points planned per branch: a base of 100 (folds, refined crossings, the steps cut short near
@@ -360,6 +402,7 @@ fn compute_with(
                 to * scale,
                 spec.max_step,
                 hook,
+                spec.route,
             );
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
@@ -374,9 +417,12 @@ fn compute_with(
             };
             let p = &b.points;
             // A branch that could not go on says why and where in the summary (its points are
-            // kept). It is not listed as a failure: the usual cause is the mechanism's own limit
-            // (an absorber driven to the end of its travel, the monodromy growing without bound).
+            // kept). Where the last state takes an absorber to the end of its path (within
+            // `AT_TRAVEL_END`), the stall is the mechanism's own limit and stays a note; any other
+            // stall is also a failure (below).
+            let at_travel_end = p.last().and_then(|last| travel_end(&study.mechanism, &last.solution));
             let stopped = match b.end {
+                BranchEnd::StepTooSmall if at_travel_end.is_some() => at_travel_end.as_deref(),
                 BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
                 BranchEnd::MaxPoints => Some("it reached the largest number of points"),
                 BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
@@ -409,6 +455,16 @@ fn compute_with(
                 )),
                 _ => None,
             };
+            // A branch that stalled (or hit its point cap) short of its range is a failure of
+            // the analysis: the jump or fold the user asked about may lie beyond it. (The
+            // watchdog's stop is listed above.)
+            if matches!(b.end, BranchEnd::StepTooSmall | BranchEnd::MaxPoints)
+                && at_travel_end.is_none()
+                && let Some(why) = &stopped_short
+            {
+                failures
+                    .push(format!("{}{what}, continued from {from}: {why} (the points reached are kept)", spec.name));
+            }
             let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
             let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
             let mut add = |sol: &HbmSolution, stable: Option<bool>| {

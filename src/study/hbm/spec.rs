@@ -56,9 +56,27 @@ pub struct HbmSpec {
     /// Highest multiple of the order taken from the engine (default 4).
     #[serde(default = "crate::study::spec::default_engine_multiples")]
     pub engine_multiples: usize,
+    /// The route (default `Auto`: the cyclic one where the absorbers are identical, see
+    /// `hbm::cyclic`). `Cyclic` declares the absorbers identical: a set that is not is refused
+    /// at load with the difference found. `General` solves every coordinate (the reference).
+    #[serde(default)]
+    pub route: HbmRoute,
     /// The engine's series, filled when the study is loaded (not part of the file).
     #[serde(skip)]
     pub engine_series: Option<crate::combustion::OscillatingSeries>,
+}
+
+/// How a `HarmonicBalance` analysis is solved (see `hbm::cyclic`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum HbmRoute {
+    /// The cyclic route where the mechanism's absorbers form identical sets, else the general.
+    #[default]
+    Auto,
+    /// The cyclic route, declared: the absorbers must form identical sets (a located error
+    /// otherwise, naming the difference).
+    Cyclic,
+    /// The general route whatever the mechanism (every coordinate an unknown).
+    General,
 }
 
 /// What a `HarmonicBalance` analysis continues, and over which range in the spec's units: the
