@@ -404,7 +404,7 @@ fn check_time_scales(
     joint_path: &dyn Fn(usize) -> String,
     ground_damper_at: &[usize],
 ) -> Result<()> {
-    use crate::model::ranges::{Element, compliances, time_scales};
+    use crate::model::time_scales::{Element, compliances, time_scales};
     let Some(diag) = compliances(m) else { return Ok(()) };
     for ts in time_scales(mech, &diag) {
         // A friction's smoothing has its own range (`ranges::FRICTION_SMOOTHING`): a near-Coulomb

@@ -19,3 +19,4 @@ pub mod path;
 pub mod ranges;
 pub mod shape;
 pub mod speeds;
+pub mod time_scales;

@@ -262,12 +262,12 @@ pub(crate) fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
 
 /// The mechanism's fastest time scales at q = 0: the highest natural frequency of its springs,
 /// stages, stops and meshes (Hz) and the highest decay rate of its dampers (1/s), each on the
-/// inertia it acts on (`model::ranges::time_scales`, the same figures the loader checks against
+/// inertia it acts on (`model::time_scales`, the same figures the loader checks against
 /// its ranges). A coarse bound, not an eigen-analysis: it is there to see a stiff model, which the
 /// excitation alone does not show. `(0, 0)` when the mass matrix cannot be formed or the
 /// mechanism is too large to invert here.
 pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f64) {
-    use crate::model::ranges::{compliances, time_scales};
+    use crate::model::time_scales::{compliances, time_scales};
     let n = mech.ndof();
     if n == 0 {
         return (0.0, 0.0);
