@@ -75,6 +75,11 @@ pub struct SpeedResult {
     pub hbm_locked: Option<HbmState>,
     /// Where the locked twin's low-amplitude branch folds below s = 1, as `hbm_lower_fold`.
     pub hbm_locked_fold: Option<f64>,
+    /// With an engine: its order torques T_k at this speed, `(order, N·m)` for each order the
+    /// analysis takes from it (k·n, k = 1..=`engine_multiples`), before any joint's share.
+    /// Empty without an engine (and then left out of `results.json`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub engine_torques: Vec<(f64, f64)>,
 }
 
 /// One periodic steady state by harmonic balance.
@@ -229,6 +234,7 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             hbm_ramp: None,
             hbm_locked: None,
             hbm_locked_fold: None,
+            engine_torques: engine_torques(spec, p),
         })
         .collect();
     let mut speeds = speeds;
@@ -280,12 +286,45 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
     (result, failures)
 }
 
+/// The engine's order torques at a speed, `(order, N·m)`: the harmonics the study's loading put
+/// there from the engine (empty without one).
+fn engine_torques(spec: &MultiOrderSpec, p: &SpeedPoint) -> Vec<(f64, f64)> {
+    if spec.engine.is_none() {
+        return Vec::new();
+    }
+    p.harmonics.iter().map(|h| (h.multiple * spec.order, h.amplitude)).collect()
+}
+
+/// The orders of the engine torques over every speed, ascending (empty without an engine).
+pub(crate) fn engine_orders(result: &MultiOrderResult) -> Vec<f64> {
+    let mut orders: Vec<f64> = Vec::new();
+    for (o, _) in result.speeds.iter().flat_map(|s| &s.engine_torques) {
+        if !orders.iter().any(|x| (x - o).abs() <= 1e-12 * o.abs()) {
+            orders.push(*o);
+        }
+    }
+    orders.sort_by(f64::total_cmp);
+    orders
+}
+
+impl SpeedResult {
+    /// The engine's order torque T at `order` at this speed, N·m (NaN when it has none there).
+    pub fn engine_torque(&self, order: f64) -> f64 {
+        self.engine_torques.iter().find(|(o, _)| (o - order).abs() <= 1e-12 * order.abs()).map_or(f64::NAN, |t| t.1)
+    }
+}
+
 /// The CSV table: one row per speed, per multiple the nonlinear, locked and ratio columns and
 /// the linear ones as asked for, then the steadiness columns.
 pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Table {
     let mut table = Table::new(spec.name.clone());
     table.push("rpm", "rpm", result.speeds.iter().map(|s| s.rpm).collect());
     let has_locked = study.locked.is_some();
+    // The engine's order torques at each speed: what drives every response column after them.
+    for o in engine_orders(result) {
+        let col = result.speeds.iter().map(|s| s.engine_torque(o)).collect();
+        table.push(format!("engine_T_order{}_Nm", fmt_mult(o)), "N·m", col);
+    }
     for (k, m) in spec.multiples.iter().enumerate() {
         let tag = fmt_mult(*m);
         let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
@@ -508,12 +547,14 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
     let cases: Vec<crate::linear::SpeedCase> =
         spec.speeds.iter().map(|p| crate::linear::SpeedCase { rpm: p.rpm, harmonics: p.harmonics.clone() }).collect();
     let mech = &study.mechanism;
-    let res = crate::linear::multi_order_response(mech, &rspec, spec.order, &cases, None).map_err(|e| {
-        crate::error::Error::Model {
-            mechanism: mech.name.clone(),
-            message: format!("linear multi-order response: {e}"),
-        }
-    })?;
+    let options = crate::linear::MultiOrderOptions { modal: spec.modal(), inputs: None };
+    let res =
+        crate::linear::multi_order_response_with(mech, &rspec, spec.order, &cases, None, &options).map_err(|e| {
+            crate::error::Error::Model {
+                mechanism: mech.name.clone(),
+                message: format!("linear multi-order response: {e}"),
+            }
+        })?;
     let pick = |r: &crate::linear::SpeedResponse, locked: bool| -> Vec<f64> {
         spec.multiples
             .iter()

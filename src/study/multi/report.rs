@@ -140,6 +140,16 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
              tracked multiple at order 1. The gravity × deflection terms, second order, are neglected.\n"
         );
     }
+    if let Some((z, how)) = spec.modal().filter(|_| spec.linear) {
+        let _ = writeln!(
+            md,
+            "Modal damping of the linear columns: {} ({}; modes with the spin free at each speed). The time \
+             runs and the harmonic balance keep the mechanism's own dampers.\n",
+            z.describe(),
+            how.describe()
+        );
+    }
+    md += &engine_table(r);
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -239,6 +249,26 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         );
         md += &ramp_table(spec, r);
     }
+    md
+}
+
+/// With an engine: its order torques T_k at each speed (N·m, before any joint's share), the
+/// excitation every other table answers.
+fn engine_table(r: &MultiOrderResult) -> String {
+    let orders = super::engine_orders(r);
+    let mut md = String::new();
+    if orders.is_empty() {
+        return md;
+    }
+    let _ =
+        writeln!(md, "The engine's order torques T_k at each speed (N·m, from its cylinder pressure and inertia):\n");
+    let head: String = orders.iter().map(|o| format!(" T order {} (N·m) |", fmt_mult(*o))).collect();
+    let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(orders.len()));
+    for s in &r.speeds {
+        let cells: String = orders.iter().map(|&o| format!(" {} |", cell(s.engine_torque(o), 4))).collect();
+        let _ = writeln!(md, "| {} |{cells}", s.rpm);
+    }
+    md.push('\n');
     md
 }
 
