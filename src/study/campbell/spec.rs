@@ -31,7 +31,7 @@ pub struct CampbellSpec {
     pub modal_damping: Option<crate::linear::ModalDamping>,
     /// How `modal_damping` meets the joint dampers: `Replace` (absent) or `Add` (on top of them).
     /// Only with `modal_damping`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_combination: Option<crate::linear::ModalCombination>,
 }
 

@@ -24,7 +24,7 @@ impl Analysis for LinearResponseSpec {
         let at = |field: &str| c.at(field);
         let l = self;
         require_steady_spin(c, "LinearResponse", &l.name, true)?;
-        check_excite(src, spec, mech, &at("excite"), &l.excite)?;
+        check_excite(src, spec, mech, &at("excite"), &l.excite, Some(&[l.rpm]))?;
         rpm(src, &at("rpm"), l.rpm)?;
         if !(pos(l.from) && l.to.is_finite() && l.from < l.to && l.to <= MAX_ORDER) {
             return Err(src.error(&at("from"), format!("need 0 < from < to ≤ {MAX_ORDER}")));

@@ -178,7 +178,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     let free_orders: Vec<(f64, String)> = free.modes.iter().map(|m| (m.order, m.label.clone())).collect();
     let rspec = ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
-        inputs: study.inputs(&spec.excite),
+        inputs: study.inputs(&crate::study::excite_at_rpm(&spec.excite, spec.rpm)),
         body: study.spec.response_body.clone(),
         lock: study.spec.lock.clone(),
     };

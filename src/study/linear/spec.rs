@@ -43,7 +43,7 @@ pub struct LinearResponseSpec {
     /// How `modal_damping` meets the joint dampers: `Replace` (absent: the ratios are the whole
     /// damping, and damper variants do not apply) or `Add` (the ratios come on top of the
     /// dampers, of each variant's). Only with `modal_damping`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_combination: Option<crate::linear::ModalCombination>,
     /// The joints the oscillating torque acts at, each with its share and phase lead (default:
     /// the spin joint alone). The mean torque stays on the spin joint.

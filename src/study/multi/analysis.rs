@@ -106,7 +106,8 @@ impl Analysis for MultiOrderSpec {
                 }
             }
         }
-        check_excite(src, spec, mech, &at("excite"), &m.excite)?;
+        let speeds: Vec<f64> = m.speeds.iter().map(|p| p.rpm).collect();
+        check_excite(src, spec, mech, &at("excite"), &m.excite, Some(&speeds))?;
         modal_fields(src, &at, m.modal_damping.as_ref(), m.modal_combination)?;
         if m.modal_damping.is_some() && !m.linear {
             return Err(src.error(

@@ -454,9 +454,10 @@ fn hbm_states(
     let omega = rpm_to_rad_s(p.rpm);
     let path = study.mechanism.rotation_rates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
+    let excite = crate::study::excite_at_rpm(&spec.excite, p.rpm);
     let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
     for (from, to) in [(hi, lo), (lo, hi)] {
-        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, &spec.excite, 10, from, to)?;
+        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, &excite, 10, from, to)?;
         for guess in branch.guesses_at(spec.order) {
             let sol = hbm.solve(spec.order, Some(guess)).map_err(super::hbm::hbm_error(study))?;
             let stable = hbm.stability(&sol).ok().map(|s| s.stable);
@@ -494,7 +495,7 @@ fn ramp(
     let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
     let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
     let kane = study.kane_from(shared, locked)?;
-    let inputs = study.excited_joints(mech, &spec.excite);
+    let inputs = study.excited_joints(mech, &crate::study::excite_at_rpm(&spec.excite, p.rpm));
     let opts = HbmOptions { harmonics: 10, ..HbmOptions::default() };
     let err = super::hbm::hbm_error(study);
     let mut hbm = RoutedHbm::new(&kane, spin, omega, (&p.harmonics, &[]), &inputs, opts).map_err(&err)?;
@@ -547,7 +548,12 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
     let cases: Vec<crate::linear::SpeedCase> =
         spec.speeds.iter().map(|p| crate::linear::SpeedCase { rpm: p.rpm, harmonics: p.harmonics.clone() }).collect();
     let mech = &study.mechanism;
-    let options = crate::linear::MultiOrderOptions { modal: spec.modal(), inputs: None };
+    // Each speed's shares, where a joint's law makes them follow the speed.
+    let per_speed: Vec<Vec<crate::linear::Input>> =
+        spec.speeds.iter().map(|p| study.inputs(&crate::study::excite_at_rpm(&spec.excite, p.rpm))).collect();
+    let laws = spec.excite.iter().any(|e| !e.law.is_constant());
+    let options =
+        crate::linear::MultiOrderOptions { modal: spec.modal(), inputs: laws.then_some(per_speed.as_slice()) };
     let res =
         crate::linear::multi_order_response_with(mech, &rspec, spec.order, &cases, None, &options).map_err(|e| {
             crate::error::Error::Model {
@@ -598,7 +604,7 @@ fn steady(
         ramp_s: spec.ramp_s,
     };
     let mut kane = study.kane_from(shared, locked)?;
-    study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
+    study.apply_excitation(&mut kane, mech, &crate::study::excite_at_rpm(&spec.excite, point.rpm), &excitation);
     let fs = study.spec.integration.sample_hz;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
     let bar = progress.bar(spec.max_time_s, &label);

@@ -78,11 +78,11 @@ pub struct MultiOrderSpec {
     /// the spin free, of the mechanism and of its locked twin at each speed. The time runs and
     /// the harmonic balance keep the mechanism's own dampers (their equations are nonlinear, the
     /// modes are not theirs). Default: the dampers as built.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_damping: Option<crate::linear::ModalDamping>,
     /// How `modal_damping` meets the joint dampers: `Replace` (absent) or `Add` (on top of them).
     /// Only with `modal_damping`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_combination: Option<crate::linear::ModalCombination>,
 }
 
