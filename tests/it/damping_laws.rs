@@ -209,6 +209,15 @@ fn amplitude_laws_scale_the_excited_share_with_speed() {
     // Between two speeds the rpm² response scales as (rpm₂/rpm₁)² times the transfer's ratio.
     let ratio = |k: usize| rpm2.speeds[k].linear.as_ref().unwrap()[0] / constant.speeds[k].linear.as_ref().unwrap()[0];
     assert_relative_eq!(ratio(2) / ratio(0), (1400.0f64 / 700.0).powi(2), max_relative = 1e-12);
+    // The summaries give the share in force.
+    assert!(report.summary.contains("| 1400 | 1.960000 |"), "{}", report.summary);
+    assert!(
+        report
+            .summary
+            .contains("- excitation share at `shaft` at 1400 rpm: 1.960000 (1 × 1.960000 by its law in speed)"),
+        "{}",
+        report.summary
+    );
     // LinearResponse at 1400 rpm: per N·m times (1400/1000)².
     let v = &report.linear[0].variants[0];
     for (&n, &r) in v.orders.iter().zip(&v.response) {

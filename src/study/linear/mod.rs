@@ -462,6 +462,19 @@ pub(crate) fn render_response(
     if let Some((z, how)) = modal {
         let _ = writeln!(md, "- modal damping: {} ({})", z.describe(), how.describe());
     }
+    for (e, at) in spec.excite.iter().zip(crate::study::excite_at_rpm(&spec.excite, spec.rpm)) {
+        if !e.law.is_constant() {
+            let _ = writeln!(
+                md,
+                "- excitation share at `{}` at {} rpm: {:.6} ({} × {:.6} by its law in speed)",
+                e.joint,
+                spec.rpm,
+                at.scale,
+                e.scale,
+                e.law.factor(spec.rpm).unwrap_or(f64::NAN)
+            );
+        }
+    }
     match modal {
         None => {
             let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);

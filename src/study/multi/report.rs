@@ -150,6 +150,7 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         );
     }
     md += &engine_table(r);
+    md += &share_table(spec);
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -267,6 +268,28 @@ fn engine_table(r: &MultiOrderResult) -> String {
     for s in &r.speeds {
         let cells: String = orders.iter().map(|&o| format!(" {} |", cell(s.engine_torque(o), 4))).collect();
         let _ = writeln!(md, "| {} |{cells}", s.rpm);
+    }
+    md.push('\n');
+    md
+}
+
+/// With amplitude laws in speed: each excited joint's share at each speed (its `scale` times its
+/// law's factor), the multiplier on every harmonic there.
+fn share_table(spec: &MultiOrderSpec) -> String {
+    let mut md = String::new();
+    if spec.excite.iter().all(|e| e.law.is_constant()) {
+        return md;
+    }
+    let _ =
+        writeln!(md, "Excitation shares at each speed (scale × the joint's law in speed; every harmonic times it):\n");
+    let head: String = spec.excite.iter().map(|e| format!(" `{}` |", e.joint)).collect();
+    let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(spec.excite.len()));
+    for p in &spec.speeds {
+        let cells: String = crate::study::excite_at_rpm(&spec.excite, p.rpm)
+            .iter()
+            .map(|e| format!(" {} |", cell(e.scale, 6)))
+            .collect();
+        let _ = writeln!(md, "| {} |{cells}", p.rpm);
     }
     md.push('\n');
     md
