@@ -96,7 +96,7 @@ fn check_law(src: &Source, p: &str, law: &crate::study::AmplitudeLaw, laws_at: O
                 return Err(src.error(p, format!("a table needs 2 to {MAX_LIST} (rpm, factor) points")));
             }
             for (i, &(r, f)) in points.iter().enumerate() {
-                if !(r.is_finite() && r >= 0.0 && r <= super::MAX_RPM) {
+                if !(0.0..=super::MAX_RPM).contains(&r) {
                     return Err(
                         src.error(p, format!("point {i}: rpm must lie in 0..={}, got {}", g(super::MAX_RPM), g(r)))
                     );
