@@ -338,3 +338,55 @@ fn multi_order_reports_the_engine_order_torques_per_speed() {
     assert!(report.summary.contains("| rpm | T order 2 (N·m) | T order 4 (N·m) |"), "{}", report.summary);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// One rigid rotor on the spin joint with a small loss to ground.
+const ROTOR: &str = r#"Mechanism(
+    name: "rigid_rotor",
+    bodies: [Body(name: "rotor", mass: 10.0, inertia: 20.0)],
+    joints: [Joint(name: "spin", kind: Revolute, parent: "ground", child: "rotor", at: (0.0, 0.0))],
+    loads: [GroundDamper(body: "rotor", c: 0.01)],
+)"#;
+
+/// A run-up with an engine: its cuts CSV gives the engine's T_k at every block's speed and the
+/// summary at the run's first and last speed, equal to the DFT above at those speeds (the same
+/// bound as the MultiOrder's: 1e-9 of the largest T_k; rounding is what remains).
+#[test]
+fn a_run_up_reports_the_engine_order_torques_per_block_speed() {
+    let dir = folder("runup");
+    std::fs::write(dir.join("rotor.ron"), ROTOR).unwrap();
+    std::fs::write(dir.join("four.ron"), INLINE_FOUR).unwrap();
+    let report = run_study(
+        &dir,
+        r#"Study(name: "runup", mechanism: "rotor.ron", analyses: [
+    Transient(name: "runup", duration_s: 12.0, speed: Torque(rpm_from: 1500.0, rpm_to: 3000.0),
+              engine: (file: "four.ron", max_order: 4.0),
+              map: (samples_per_rev: 64, revs_per_block: 16, hop_revs: 16.0, max_order: 8.0),
+              write_time_series: false),
+])"#,
+    );
+    let src = Source::read_with(&dir.join("four.ron"), &ReadPolicy::unrestricted()).unwrap();
+    let engine = Engine::new(src.parse_as::<EngineSpec>("Engine").unwrap()).unwrap();
+    let csv = std::fs::read_to_string(dir.join("out").join("runup").join("runup_cuts.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("{name} in {header:?}"));
+    let (rpm, t2, t4) = (col("rpm"), col("engine_T_order2_Nm"), col("engine_T_order4_Nm"));
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect()).collect();
+    assert!(rows.len() > 10, "{} blocks", rows.len());
+    let (mut worst, mut top): (f64, f64) = (0.0, 0.0);
+    for row in &rows {
+        let omega = row[rpm] * PI / 30.0;
+        for (c, order) in [(t2, 2.0), (t4, 4.0)] {
+            let want = dft_order(&engine, omega, order);
+            top = top.max(want);
+            worst = worst.max((row[c] - want).abs());
+        }
+    }
+    println!("run-up T_k over {} blocks vs DFT: {:.1e} of the largest", rows.len(), worst / top);
+    assert!(worst <= 1e-9 * top, "{worst:e}");
+    let t = &report.transient[0];
+    let start = dft_order(&engine, t.rpm_start * PI / 30.0, 2.0);
+    let line = format!("| {:.1} | {:.4} |", t.rpm_start, start);
+    assert!(report.summary.contains(&line), "{line} in {}", report.summary);
+    std::fs::remove_dir_all(&dir).ok();
+}
