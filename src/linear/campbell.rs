@@ -8,7 +8,7 @@
 //! located by bisection on the eigen-order of the crossing's own mode, each probe speed
 //! linearised afresh and its mode picked by MAC with the bracket's shapes.
 
-use super::{C64, Damping, LinResult, LinearModel, ModalDamping, Spin};
+use super::{C64, Damping, LinResult, LinearModel, ModalCombination, ModalDamping, Spin};
 use crate::model::excitation::rpm_to_rad_s;
 use crate::model::mechanism::Mechanism;
 use nalgebra::DMatrix;
@@ -144,7 +144,7 @@ struct Tracker<'a> {
     spin_joint: &'a str,
     spin: Spin,
     damping: Damping,
-    modal: Option<&'a ModalDamping>,
+    modal: Option<(&'a ModalDamping, ModalCombination)>,
 }
 
 impl Tracker<'_> {
@@ -152,7 +152,7 @@ impl Tracker<'_> {
     fn sample(&self, rpm: f64, guess: Option<&[f64]>) -> LinResult<(Vec<f64>, DMatrix<f64>, Vec<TrackMode>)> {
         let model = LinearModel::new(self.mech, self.spin_joint, rpm_to_rad_s(rpm), guess)?;
         let model = match self.modal {
-            Some(z) => model.with_modal_damping(self.spin, z)?,
+            Some((z, how)) => model.with_modal_damping_combined(self.spin, z, how)?,
             None => model,
         };
         let modes = model
@@ -323,6 +323,24 @@ pub fn campbell_until(
     spin: Spin,
     damping: Damping,
     modal: Option<&ModalDamping>,
+    guess: Option<&[f64]>,
+    deadline: Option<crate::deadline::Deadline>,
+) -> LinResult<Campbell> {
+    let modal = modal.map(|z| (z, ModalCombination::Replace));
+    campbell_modal_until(mech, spin_joint, rpm, orders, spin, damping, modal, guess, deadline)
+}
+
+/// [`campbell_until`] with the modal damping replacing the mechanism's dampers or added to them
+/// ([`LinearModel::with_modal_damping_combined`]).
+#[allow(clippy::too_many_arguments)]
+pub fn campbell_modal_until(
+    mech: &Mechanism,
+    spin_joint: &str,
+    rpm: &[f64],
+    orders: &[f64],
+    spin: Spin,
+    damping: Damping,
+    modal: Option<(&ModalDamping, ModalCombination)>,
     guess: Option<&[f64]>,
     deadline: Option<crate::deadline::Deadline>,
 ) -> LinResult<Campbell> {

@@ -58,6 +58,16 @@ pub enum ModalCombination {
     Add,
 }
 
+impl ModalCombination {
+    /// In words, for a report: where the modal ratios stand against the joint dampers.
+    pub fn describe(self) -> &'static str {
+        match self {
+            ModalCombination::Replace => "in place of the mechanism's dampers",
+            ModalCombination::Add => "added to the mechanism's dampers",
+        }
+    }
+}
+
 impl LinearModel {
     /// The same linear model with the mechanism's dampers replaced by modal damping `zeta` (see
     /// the module doc), the modes taken with the spin `spin` (held: the spin coordinate is left

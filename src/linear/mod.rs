@@ -74,10 +74,15 @@ mod modes;
 mod multi_order;
 mod response;
 
-pub use campbell::{CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell, campbell_until};
+pub use campbell::{
+    CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell, campbell_modal_until, campbell_until,
+};
 pub use damping::{ModalCombination, ModalDamping};
 pub use modes::{Modal, Mode, ModeKind};
-pub use multi_order::{GravityLine, HarmonicResponse, SpeedCase, SpeedResponse, multi_order_response};
+pub use multi_order::{
+    GravityLine, HarmonicResponse, MultiOrderOptions, SpeedCase, SpeedResponse, multi_order_response,
+    multi_order_response_with,
+};
 pub use response::{Extremes, FrfPoint, Input, OrderResponse, ResponseSpec};
 
 use crate::error::Error;

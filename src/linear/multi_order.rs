@@ -6,7 +6,7 @@
 //! of the superposition: the peak is then taken over the common period of all the lines in the
 //! rotor angle (one revolution for integer orders, d revolutions for orders in steps of 1/d).
 
-use super::{C64, LinResult, OrderResponse, ResponseSpec};
+use super::{C64, Input, LinResult, LinearError, ModalCombination, ModalDamping, OrderResponse, ResponseSpec, Spin};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -151,11 +151,54 @@ pub fn multi_order_response(
     cases: &[SpeedCase],
     guess: Option<&[f64]>,
 ) -> LinResult<Vec<SpeedResponse>> {
+    multi_order_response_with(mech, spec, base_order, cases, guess, &MultiOrderOptions::default())
+}
+
+/// What [`multi_order_response_with`] changes from the mechanism as built.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct MultiOrderOptions<'a> {
+    /// Modal damping of the mechanism and of its locked twin at every speed (modes with the spin
+    /// free), replacing the dampers or added to them.
+    pub modal: Option<(&'a ModalDamping, ModalCombination)>,
+    /// The excited joints of each speed case, in the order of the cases, in place of
+    /// `spec.inputs` (shares that follow the speed, such as a propeller's torque ∝ rpm²).
+    pub inputs: Option<&'a [Vec<Input>]>,
+}
+
+/// [`multi_order_response`] with modal damping and per-speed inputs ([`MultiOrderOptions`]).
+pub fn multi_order_response_with(
+    mech: &Mechanism,
+    spec: &ResponseSpec,
+    base_order: f64,
+    cases: &[SpeedCase],
+    guess: Option<&[f64]>,
+    options: &MultiOrderOptions<'_>,
+) -> LinResult<Vec<SpeedResponse>> {
+    if let Some(inputs) = options.inputs
+        && inputs.len() != cases.len()
+    {
+        return Err(LinearError::Invalid(format!(
+            "{} input lists for {} speed cases: give one per case",
+            inputs.len(),
+            cases.len()
+        )));
+    }
     let mut guess: Option<Vec<f64>> = guess.map(<[f64]>::to_vec);
     let mut out = Vec::with_capacity(cases.len());
-    for case in cases {
+    for (i, case) in cases.iter().enumerate() {
         let omega = rpm_to_rad_s(case.rpm);
-        let resp = OrderResponse::new(mech, spec, omega, guess.as_deref())?;
+        let resp = match options.inputs {
+            Some(inputs) => {
+                let at = ResponseSpec { inputs: inputs[i].clone(), ..spec.clone() };
+                OrderResponse::new(mech, &at, omega, guess.as_deref())?
+            }
+            None => OrderResponse::new(mech, spec, omega, guess.as_deref())?,
+        };
+        let mut resp = resp;
+        if let Some((z, how)) = options.modal {
+            resp.model = resp.model.with_modal_damping_combined(Spin::Free, z, how)?;
+            resp.locked = resp.locked.with_modal_damping_combined(Spin::Free, z, how)?;
+        }
         guess = Some(resp.model.op.q.clone());
         let mut harmonics = Vec::with_capacity(case.harmonics.len());
         for h in &case.harmonics {

@@ -135,8 +135,68 @@ pub struct ExciteAt {
     /// Its phase lead, rad (default 0).
     #[serde(default)]
     pub phase: f64,
+    /// How its share follows the mean speed (default `Constant`): the torque there is
+    /// `scale · law(rpm) · T_k`. Taken by LinearResponse (at its speed) and MultiOrder (at each of
+    /// its speeds); the other analyses refuse a law other than `Constant`.
+    #[serde(default, skip_serializing_if = "AmplitudeLaw::is_constant")]
+    pub law: AmplitudeLaw,
 }
 
 fn default_scale() -> f64 {
     1.0
+}
+
+/// A factor on an excited joint's share as a function of the mean speed, e.g. a propeller's
+/// blade-pass torque, which grows with the square of the speed.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub enum AmplitudeLaw {
+    /// The same share at every speed (factor 1).
+    #[default]
+    Constant,
+    /// Factor `(rpm / reference_rpm)²`: the share is `scale` at `reference_rpm`.
+    Rpm2 {
+        /// The speed at which the share is `scale`, rpm.
+        reference_rpm: f64,
+    },
+    /// `(rpm, factor)` pairs in ascending rpm, interpolated linearly; a speed outside the first
+    /// and last rpm is refused when the study is read (no extrapolation).
+    Table(Vec<(f64, f64)>),
+}
+
+impl AmplitudeLaw {
+    /// Whether this is the constant law (the default, left out when written).
+    pub fn is_constant(&self) -> bool {
+        matches!(self, AmplitudeLaw::Constant)
+    }
+
+    /// The factor at `rpm`; None outside a table's speed range.
+    pub fn factor(&self, rpm: f64) -> Option<f64> {
+        match self {
+            AmplitudeLaw::Constant => Some(1.0),
+            AmplitudeLaw::Rpm2 { reference_rpm } => Some((rpm / reference_rpm).powi(2)),
+            AmplitudeLaw::Table(points) => {
+                let (first, last) = (points.first()?, points.last()?);
+                if !(rpm >= first.0 && rpm <= last.0) {
+                    return None;
+                }
+                let i = points.windows(2).position(|w| rpm <= w[1].0)?;
+                let ((r0, f0), (r1, f1)) = (points[i], points[i + 1]);
+                Some(f0 + (f1 - f0) * (rpm - r0) / (r1 - r0))
+            }
+        }
+    }
+}
+
+/// An `excite` list with each joint's law evaluated at `rpm` into its share (every law then
+/// `Constant`); a speed outside a table was refused when the study was read, and reads as a
+/// NaN share here rather than a silent extrapolation.
+pub(crate) fn excite_at_rpm(excite: &[ExciteAt], rpm: f64) -> Vec<ExciteAt> {
+    excite
+        .iter()
+        .map(|e| ExciteAt {
+            scale: e.scale * e.law.factor(rpm).unwrap_or(f64::NAN),
+            law: AmplitudeLaw::Constant,
+            ..e.clone()
+        })
+        .collect()
 }

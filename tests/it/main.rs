@@ -12,6 +12,7 @@ mod cli;
 mod closed_form;
 mod couplings;
 mod cpva_paths;
+mod damping_laws;
 mod design_study;
 mod doc_snippets;
 mod elements;

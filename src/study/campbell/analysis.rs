@@ -11,7 +11,7 @@ use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{
     CAMPBELL_PER_DOF3_S, CAMPBELL_POINT_S, CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S,
 };
-use crate::study::validate::{MAX_POINTS, modal_ratios, order, require_steady_spin, rpm};
+use crate::study::validate::{MAX_POINTS, modal_fields, order, require_steady_spin, rpm};
 use serde::Serialize;
 
 impl Analysis for CampbellSpec {
@@ -30,9 +30,7 @@ impl Analysis for CampbellSpec {
         if c.orders.len() > 64 {
             return Err(src.error(&at("orders"), "at most 64 order lines"));
         }
-        if let Some(z) = &c.modal_damping {
-            modal_ratios(src, &at("modal_damping"), z)?;
-        }
+        modal_fields(src, &at, c.modal_damping.as_ref(), c.modal_combination)?;
         for (j, &n) in c.orders.iter().enumerate() {
             order(src, &format!("analyses[{k}].orders[{j}]"), n)?;
         }

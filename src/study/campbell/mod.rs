@@ -10,7 +10,7 @@ use super::linear::lin;
 use super::table::Table;
 use super::{Output, Study};
 use crate::error::Result;
-use crate::linear::{Campbell, Damping, Spin, campbell_until};
+use crate::linear::{Campbell, Damping, Spin, campbell_modal_until};
 use crate::plot::{LineStyle, Panel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -71,8 +71,8 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
         (0..steps).map(|i| spec.rpm_min + (spec.rpm_max - spec.rpm_min) * i as f64 / (steps - 1) as f64).collect();
     let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
-    let modal = spec.modal_damping.as_ref();
-    let c = campbell_until(
+    let modal = spec.modal();
+    let c = campbell_modal_until(
         mech,
         &study.spec.spin_joint,
         &rpm,
@@ -146,12 +146,8 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         spec.rpm_max,
         if spec.spin_held { "held" } else { "free" }
     );
-    if let Some(z) = &spec.modal_damping {
-        let _ = writeln!(
-            md,
-            "Modal damping: {} (in place of the mechanism's dampers; damped frequencies).\n",
-            z.describe()
-        );
+    if let Some((z, how)) = spec.modal() {
+        let _ = writeln!(md, "Modal damping: {} ({}; damped frequencies).\n", z.describe(), how.describe());
     }
     let _ = writeln!(
         md,

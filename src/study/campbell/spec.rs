@@ -25,10 +25,21 @@ pub struct CampbellSpec {
     /// a Campbell diagram shows the undamped ones, whose order lines are exact).
     #[serde(default)]
     pub damped: bool,
-    /// Modal damping in place of the mechanism's dampers (`All(ζ)` or `PerMode([…])`, modes
+    /// Modal damping, by default in place of the mechanism's dampers (`All(ζ)` or `PerMode([…])`, modes
     /// taken with the spin as `spin_held` says); the frequencies are then the damped ones.
     #[serde(default)]
     pub modal_damping: Option<crate::linear::ModalDamping>,
+    /// How `modal_damping` meets the joint dampers: `Replace` (absent) or `Add` (on top of them).
+    /// Only with `modal_damping`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modal_combination: Option<crate::linear::ModalCombination>,
+}
+
+impl CampbellSpec {
+    /// The modal damping in force with its combination (absent combination: `Replace`).
+    pub fn modal(&self) -> Option<(&crate::linear::ModalDamping, crate::linear::ModalCombination)> {
+        self.modal_damping.as_ref().map(|z| (z, self.modal_combination.unwrap_or_default()))
+    }
 }
 
 fn default_campbell_points() -> usize {

@@ -71,7 +71,7 @@ impl Analysis for HbmSpec {
         if !(h.parameter != HbmParameter::Order && mech.joints[spin].spring.is_none()) {
             require_steady_spin(c, "HarmonicBalance", &h.name, false)?;
         }
-        check_excite(src, spec, mech, &at("excite"), &h.excite)?;
+        check_excite(src, spec, mech, &at("excite"), &h.excite, None)?;
         check_hbm(src, spec, k, h)?;
         if h.route == super::HbmRoute::Cyclic {
             check_route(c, h)?;

@@ -10,7 +10,7 @@ use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S};
 use crate::study::validate::{
-    MAX_LIST, MAX_NAME_CHARS, MAX_ORDER, MAX_POINTS, check_excite, modal_ratios, pos, require_steady_spin, rpm,
+    MAX_LIST, MAX_NAME_CHARS, MAX_ORDER, MAX_POINTS, check_excite, modal_fields, pos, require_steady_spin, rpm,
 };
 use serde::Serialize;
 
@@ -24,7 +24,7 @@ impl Analysis for LinearResponseSpec {
         let at = |field: &str| c.at(field);
         let l = self;
         require_steady_spin(c, "LinearResponse", &l.name, true)?;
-        check_excite(src, spec, mech, &at("excite"), &l.excite)?;
+        check_excite(src, spec, mech, &at("excite"), &l.excite, Some(&[l.rpm]))?;
         rpm(src, &at("rpm"), l.rpm)?;
         if !(pos(l.from) && l.to.is_finite() && l.from < l.to && l.to <= MAX_ORDER) {
             return Err(src.error(&at("from"), format!("need 0 < from < to ≤ {MAX_ORDER}")));
@@ -32,14 +32,17 @@ impl Analysis for LinearResponseSpec {
         if l.points < 2 || l.points > MAX_POINTS {
             return Err(src.error(&at("points"), format!("need 2 to {MAX_POINTS} points")));
         }
-        if let Some(z) = &l.modal_damping {
-            modal_ratios(src, &at("modal_damping"), z)?;
-            if l.variants.iter().any(|v| !v.dampers.is_empty()) {
-                return Err(src.error(
-                    &at("modal_damping"),
-                    "modal damping replaces the dampers, so variants that set dampers do not apply",
-                ));
-            }
+        modal_fields(src, &at, l.modal_damping.as_ref(), l.modal_combination)?;
+        // Replacing modal damping and damper variants would give the damping twice over, one
+        // silently discarded; added, each variant's dampers carry the modal ratios on top.
+        if let Some((_, crate::linear::ModalCombination::Replace)) = l.modal()
+            && l.variants.iter().any(|v| !v.dampers.is_empty())
+        {
+            return Err(src.error(
+                &at("modal_damping"),
+                "modal damping replaces the dampers, so variants that set dampers do not apply \
+                 (modal_combination: Add puts the ratios on top of each variant's dampers)",
+            ));
         }
         if l.relative && spec.lock.is_empty() {
             return Err(src.error(

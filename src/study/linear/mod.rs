@@ -159,8 +159,16 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     // The modal table of the mechanism as built: eigen-orders, damping ratios and the joint that
     // dominates each mode, with the spin held (absorber alone) and free (coupled).
     let mut modes = Vec::new();
+    // With modal damping the damped rows are those of the damping in force in the response (the
+    // modal matrix of the spin-free modes, alone or with the dampers), not the dampers'.
+    let modal = spec.modal();
+    let damped_model = match modal {
+        Some((z, how)) => model.with_modal_damping_combined(Spin::Free, z, how).map_err(lin(mech))?,
+        None => model.clone(),
+    };
     for (spin, spin_held) in [(Spin::Held, true), (Spin::Free, false)] {
         for (damping, damped) in [(Damping::Undamped, false), (Damping::Damped, true)] {
+            let model = if damped { &damped_model } else { &model };
             for m in &model.modes(spin, damping).map_err(lin(mech))?.modes {
                 let (order, damping_ratio, label) = (m.order, m.damping_ratio, m.label.clone());
                 modes.push(ModeRow { spin_held, damped, order, damping_ratio, label });
@@ -170,7 +178,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     let free_orders: Vec<(f64, String)> = free.modes.iter().map(|m| (m.order, m.label.clone())).collect();
     let rspec = ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
-        inputs: study.inputs(&spec.excite),
+        inputs: study.inputs(&crate::study::excite_at_rpm(&spec.excite, spec.rpm)),
         body: study.spec.response_body.clone(),
         lock: study.spec.lock.clone(),
     };
@@ -194,11 +202,11 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
         watch(mech, format!("before variant `{}` ({} of {})", v.label, vi + 1, variants.len()))?;
         let m = with_dampers(mech, &v.dampers);
         let mut resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
-        // Modal damping replaces the dampers of both the mechanism and its locked twin (spin free,
-        // as the response is taken).
-        if let Some(z) = &spec.modal_damping {
-            resp.model = resp.model.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
-            resp.locked = resp.locked.with_modal_damping(Spin::Free, z).map_err(lin(&m))?;
+        // Modal damping replaces (or adds to) the dampers of both the mechanism and its locked
+        // twin, modes with the spin free as the response is taken.
+        if let Some((z, how)) = modal {
+            resp.model = resp.model.with_modal_damping_combined(Spin::Free, z, how).map_err(lin(&m))?;
+            resp.locked = resp.locked.with_modal_damping_combined(Spin::Free, z, how).map_err(lin(&m))?;
         }
         let mut pts = Vec::with_capacity(orders.len());
         for (c, chunk) in orders.chunks(CHUNK).enumerate() {
@@ -249,7 +257,8 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
             let joint = &m.joints[j];
             let Some(c) = m.coordinate(j) else { continue };
             let k = joint.spring.map_or(0.0, |s| s.stiffness);
-            let damper = if spec.modal_damping.is_some() { 0.0 } else { joint.damper };
+            let replaced = matches!(modal, Some((_, crate::linear::ModalCombination::Replace)));
+            let damper = if replaced { 0.0 } else { joint.damper };
             let (amplitude, torque) = orders
                 .iter()
                 .zip(&states)
@@ -334,6 +343,7 @@ pub(crate) fn render_response(
     for t in response_tables(study, spec, result) {
         files.push(t.write_csv(dir)?);
     }
+    let modal = spec.modal();
     let mut modal_md =
         String::from("| spin | damping | eigen-order | damping ratio | dominant joint |\n|---|---|---|---|---|\n");
     for m in &result.modes {
@@ -341,7 +351,12 @@ pub(crate) fn render_response(
             modal_md,
             "| {} | {} | {:.10} | {:.3e} | `{}` |",
             if m.spin_held { "held" } else { "free" },
-            if m.damped { "damped" } else { "undamped" },
+            match (m.damped, modal) {
+                (false, _) => "undamped",
+                (true, None) => "damped",
+                (true, Some((_, crate::linear::ModalCombination::Replace))) => "modal",
+                (true, Some((_, crate::linear::ModalCombination::Add))) => "dampers + modal",
+            },
             m.order,
             m.damping_ratio,
             m.label
@@ -444,10 +459,38 @@ pub(crate) fn render_response(
     for (o, l) in free_orders {
         let _ = writeln!(md, "- free undamped eigen-order {o:.10} (mode `{l}`)");
     }
-    if let Some(z) = &spec.modal_damping {
-        let _ = writeln!(md, "- modal damping: {} (in place of the mechanism's dampers)", z.describe());
+    if let Some((z, how)) = modal {
+        let _ = writeln!(md, "- modal damping: {} ({})", z.describe(), how.describe());
     }
-    let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
+    for (e, at) in spec.excite.iter().zip(crate::study::excite_at_rpm(&spec.excite, spec.rpm)) {
+        if !e.law.is_constant() {
+            let _ = writeln!(
+                md,
+                "- excitation share at `{}` at {} rpm: {:.6} ({} × {:.6} by its law in speed)",
+                e.joint,
+                spec.rpm,
+                at.scale,
+                e.scale,
+                e.law.factor(spec.rpm).unwrap_or(f64::NAN)
+            );
+        }
+    }
+    match modal {
+        None => {
+            let _ = writeln!(md, "\nModes at {} rpm (mechanism as built):\n\n{modal_md}", spec.rpm);
+        }
+        Some((z, how)) => {
+            let _ = writeln!(
+                md,
+                "\nModes at {} rpm (mechanism as built; the damped rows carry the damping in force: {}, {}, \
+                 modes with the spin free, so their ratios are the given ζ where the dampers and the \
+                 velocity coupling add nothing):\n\n{modal_md}",
+                spec.rpm,
+                z.describe(),
+                how.describe()
+            );
+        }
+    }
     md += &gravity_table(study, spec, results);
     if !normalised {
         let _ = writeln!(

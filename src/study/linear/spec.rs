@@ -36,15 +36,26 @@ pub struct LinearResponseSpec {
     /// Damping variants (default: the mechanism as it is).
     #[serde(default)]
     pub variants: Vec<Variant>,
-    /// Modal damping in place of the mechanism's dampers: `All(ζ)` or `PerMode([ζ1, ζ2, …])`
-    /// (lowest frequency first; modes of the mechanism with the spin free, and of its locked
-    /// twin). Default: the dampers as built. Not together with damper variants.
+    /// Modal damping: `All(ζ)` or `PerMode([ζ1, ζ2, …])` (lowest frequency first; modes of the
+    /// mechanism with the spin free, and of its locked twin). Default: the dampers as built.
     #[serde(default)]
     pub modal_damping: Option<crate::linear::ModalDamping>,
+    /// How `modal_damping` meets the joint dampers: `Replace` (absent: the ratios are the whole
+    /// damping, and damper variants do not apply) or `Add` (the ratios come on top of the
+    /// dampers, of each variant's). Only with `modal_damping`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modal_combination: Option<crate::linear::ModalCombination>,
     /// The joints the oscillating torque acts at, each with its share and phase lead (default:
     /// the spin joint alone). The mean torque stays on the spin joint.
     #[serde(default)]
     pub excite: Vec<ExciteAt>,
+}
+
+impl LinearResponseSpec {
+    /// The modal damping in force with its combination (absent combination: `Replace`).
+    pub fn modal(&self) -> Option<(&crate::linear::ModalDamping, crate::linear::ModalCombination)> {
+        self.modal_damping.as_ref().map(|z| (z, self.modal_combination.unwrap_or_default()))
+    }
 }
 
 fn default_points() -> usize {

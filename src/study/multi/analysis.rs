@@ -11,7 +11,9 @@ use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s, time_run_s};
-use crate::study::validate::{MAX_LIST, check_excite, common, order, pos, require_steady_spin, rpm, torque, tracking};
+use crate::study::validate::{
+    MAX_LIST, check_excite, common, modal_fields, order, pos, require_steady_spin, rpm, torque, tracking,
+};
 use serde::Serialize;
 
 impl Analysis for MultiOrderSpec {
@@ -104,7 +106,15 @@ impl Analysis for MultiOrderSpec {
                 }
             }
         }
-        check_excite(src, spec, mech, &at("excite"), &m.excite)?;
+        let speeds: Vec<f64> = m.speeds.iter().map(|p| p.rpm).collect();
+        check_excite(src, spec, mech, &at("excite"), &m.excite, Some(&speeds))?;
+        modal_fields(src, &at, m.modal_damping.as_ref(), m.modal_combination)?;
+        if m.modal_damping.is_some() && !m.linear {
+            return Err(src.error(
+                &at("modal_damping"),
+                "modal damping acts on the linear part only, and `linear` is false: it would change nothing",
+            ));
+        }
         order(src, &at("order"), m.order)?;
         if m.speeds.is_empty() || m.speeds.len() > MAX_LIST {
             return Err(src.error(&at("speeds"), format!("give 1 to {MAX_LIST} operating speeds")));

@@ -75,6 +75,11 @@ pub struct SpeedResult {
     pub hbm_locked: Option<HbmState>,
     /// Where the locked twin's low-amplitude branch folds below s = 1, as `hbm_lower_fold`.
     pub hbm_locked_fold: Option<f64>,
+    /// With an engine: its order torques T_k at this speed, `(order, N·m)` for each order the
+    /// analysis takes from it (k·n, k = 1..=`engine_multiples`), before any joint's share.
+    /// Empty without an engine (and then left out of `results.json`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub engine_torques: Vec<(f64, f64)>,
 }
 
 /// One periodic steady state by harmonic balance.
@@ -229,6 +234,7 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             hbm_ramp: None,
             hbm_locked: None,
             hbm_locked_fold: None,
+            engine_torques: engine_torques(spec, p),
         })
         .collect();
     let mut speeds = speeds;
@@ -280,12 +286,45 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
     (result, failures)
 }
 
+/// The engine's order torques at a speed, `(order, N·m)`: the harmonics the study's loading put
+/// there from the engine (empty without one).
+fn engine_torques(spec: &MultiOrderSpec, p: &SpeedPoint) -> Vec<(f64, f64)> {
+    if spec.engine.is_none() {
+        return Vec::new();
+    }
+    p.harmonics.iter().map(|h| (h.multiple * spec.order, h.amplitude)).collect()
+}
+
+/// The orders of the engine torques over every speed, ascending (empty without an engine).
+pub(crate) fn engine_orders(result: &MultiOrderResult) -> Vec<f64> {
+    let mut orders: Vec<f64> = Vec::new();
+    for (o, _) in result.speeds.iter().flat_map(|s| &s.engine_torques) {
+        if !orders.iter().any(|x| (x - o).abs() <= 1e-12 * o.abs()) {
+            orders.push(*o);
+        }
+    }
+    orders.sort_by(f64::total_cmp);
+    orders
+}
+
+impl SpeedResult {
+    /// The engine's order torque T at `order` at this speed, N·m (NaN when it has none there).
+    pub fn engine_torque(&self, order: f64) -> f64 {
+        self.engine_torques.iter().find(|(o, _)| (o - order).abs() <= 1e-12 * order.abs()).map_or(f64::NAN, |t| t.1)
+    }
+}
+
 /// The CSV table: one row per speed, per multiple the nonlinear, locked and ratio columns and
 /// the linear ones as asked for, then the steadiness columns.
 pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Table {
     let mut table = Table::new(spec.name.clone());
     table.push("rpm", "rpm", result.speeds.iter().map(|s| s.rpm).collect());
     let has_locked = study.locked.is_some();
+    // The engine's order torques at each speed: what drives every response column after them.
+    for o in engine_orders(result) {
+        let col = result.speeds.iter().map(|s| s.engine_torque(o)).collect();
+        table.push(format!("engine_T_order{}_Nm", fmt_mult(o)), "N·m", col);
+    }
     for (k, m) in spec.multiples.iter().enumerate() {
         let tag = fmt_mult(*m);
         let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
@@ -415,9 +454,10 @@ fn hbm_states(
     let omega = rpm_to_rad_s(p.rpm);
     let path = study.mechanism.rotation_rates(study.body);
     let mut out: Vec<HbmState> = Vec::new();
+    let excite = crate::study::excite_at_rpm(&spec.excite, p.rpm);
     let (lo, hi) = (spec.order - 0.4, spec.order + 0.4);
     for (from, to) in [(hi, lo), (lo, hi)] {
-        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, &spec.excite, 10, from, to)?;
+        let (mut hbm, branch, _) = super::hbm::branch(study, omega, &p.harmonics, &excite, 10, from, to)?;
         for guess in branch.guesses_at(spec.order) {
             let sol = hbm.solve(spec.order, Some(guess)).map_err(super::hbm::hbm_error(study))?;
             let stable = hbm.stability(&sol).ok().map(|s| s.stable);
@@ -455,7 +495,7 @@ fn ramp(
     let body = if locked { study.locked_body.unwrap_or(study.body) } else { study.body };
     let spin = mech.joint_index(&study.spec.spin_joint).unwrap_or(study.spin);
     let kane = study.kane_from(shared, locked)?;
-    let inputs = study.excited_joints(mech, &spec.excite);
+    let inputs = study.excited_joints(mech, &crate::study::excite_at_rpm(&spec.excite, p.rpm));
     let opts = HbmOptions { harmonics: 10, ..HbmOptions::default() };
     let err = super::hbm::hbm_error(study);
     let mut hbm = RoutedHbm::new(&kane, spin, omega, (&p.harmonics, &[]), &inputs, opts).map_err(&err)?;
@@ -508,12 +548,19 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
     let cases: Vec<crate::linear::SpeedCase> =
         spec.speeds.iter().map(|p| crate::linear::SpeedCase { rpm: p.rpm, harmonics: p.harmonics.clone() }).collect();
     let mech = &study.mechanism;
-    let res = crate::linear::multi_order_response(mech, &rspec, spec.order, &cases, None).map_err(|e| {
-        crate::error::Error::Model {
-            mechanism: mech.name.clone(),
-            message: format!("linear multi-order response: {e}"),
-        }
-    })?;
+    // Each speed's shares, where a joint's law makes them follow the speed.
+    let per_speed: Vec<Vec<crate::linear::Input>> =
+        spec.speeds.iter().map(|p| study.inputs(&crate::study::excite_at_rpm(&spec.excite, p.rpm))).collect();
+    let laws = spec.excite.iter().any(|e| !e.law.is_constant());
+    let options =
+        crate::linear::MultiOrderOptions { modal: spec.modal(), inputs: laws.then_some(per_speed.as_slice()) };
+    let res =
+        crate::linear::multi_order_response_with(mech, &rspec, spec.order, &cases, None, &options).map_err(|e| {
+            crate::error::Error::Model {
+                mechanism: mech.name.clone(),
+                message: format!("linear multi-order response: {e}"),
+            }
+        })?;
     let pick = |r: &crate::linear::SpeedResponse, locked: bool| -> Vec<f64> {
         spec.multiples
             .iter()
@@ -557,7 +604,7 @@ fn steady(
         ramp_s: spec.ramp_s,
     };
     let mut kane = study.kane_from(shared, locked)?;
-    study.apply_excitation(&mut kane, mech, &spec.excite, &excitation);
+    study.apply_excitation(&mut kane, mech, &crate::study::excite_at_rpm(&spec.excite, point.rpm), &excitation);
     let fs = study.spec.integration.sample_hz;
     let label = format!("{} {} rpm{}", spec.name, point.rpm, if locked { " locked" } else { "" });
     let bar = progress.bar(spec.max_time_s, &label);

@@ -140,6 +140,17 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
              tracked multiple at order 1. The gravity × deflection terms, second order, are neglected.\n"
         );
     }
+    if let Some((z, how)) = spec.modal().filter(|_| spec.linear) {
+        let _ = writeln!(
+            md,
+            "Modal damping of the linear columns: {} ({}; modes with the spin free at each speed). The time \
+             runs and the harmonic balance keep the mechanism's own dampers.\n",
+            z.describe(),
+            how.describe()
+        );
+    }
+    md += &engine_table(r);
+    md += &share_table(spec);
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -239,6 +250,48 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         );
         md += &ramp_table(spec, r);
     }
+    md
+}
+
+/// With an engine: its order torques T_k at each speed (N·m, before any joint's share), the
+/// excitation every other table answers.
+fn engine_table(r: &MultiOrderResult) -> String {
+    let orders = super::engine_orders(r);
+    let mut md = String::new();
+    if orders.is_empty() {
+        return md;
+    }
+    let _ =
+        writeln!(md, "The engine's order torques T_k at each speed (N·m, from its cylinder pressure and inertia):\n");
+    let head: String = orders.iter().map(|o| format!(" T order {} (N·m) |", fmt_mult(*o))).collect();
+    let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(orders.len()));
+    for s in &r.speeds {
+        let cells: String = orders.iter().map(|&o| format!(" {} |", cell(s.engine_torque(o), 4))).collect();
+        let _ = writeln!(md, "| {} |{cells}", s.rpm);
+    }
+    md.push('\n');
+    md
+}
+
+/// With amplitude laws in speed: each excited joint's share at each speed (its `scale` times its
+/// law's factor), the multiplier on every harmonic there.
+fn share_table(spec: &MultiOrderSpec) -> String {
+    let mut md = String::new();
+    if spec.excite.iter().all(|e| e.law.is_constant()) {
+        return md;
+    }
+    let _ =
+        writeln!(md, "Excitation shares at each speed (scale × the joint's law in speed; every harmonic times it):\n");
+    let head: String = spec.excite.iter().map(|e| format!(" `{}` |", e.joint)).collect();
+    let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(spec.excite.len()));
+    for p in &spec.speeds {
+        let cells: String = crate::study::excite_at_rpm(&spec.excite, p.rpm)
+            .iter()
+            .map(|e| format!(" {} |", cell(e.scale, 6)))
+            .collect();
+        let _ = writeln!(md, "| {} |{cells}", p.rpm);
+    }
+    md.push('\n');
     md
 }
 

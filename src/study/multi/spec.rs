@@ -74,6 +74,23 @@ pub struct MultiOrderSpec {
     /// the spin joint alone). The mean torque stays on the spin joint.
     #[serde(default)]
     pub excite: Vec<ExciteAt>,
+    /// Modal damping of the linear part (`linear: true`): `All(ζ)` or `PerMode([…])`, modes with
+    /// the spin free, of the mechanism and of its locked twin at each speed. The time runs and
+    /// the harmonic balance keep the mechanism's own dampers (their equations are nonlinear, the
+    /// modes are not theirs). Default: the dampers as built.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modal_damping: Option<crate::linear::ModalDamping>,
+    /// How `modal_damping` meets the joint dampers: `Replace` (absent) or `Add` (on top of them).
+    /// Only with `modal_damping`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub modal_combination: Option<crate::linear::ModalCombination>,
+}
+
+impl MultiOrderSpec {
+    /// The modal damping in force with its combination (absent combination: `Replace`).
+    pub fn modal(&self) -> Option<(&crate::linear::ModalDamping, crate::linear::ModalCombination)> {
+        self.modal_damping.as_ref().map(|z| (z, self.modal_combination.unwrap_or_default()))
+    }
 }
 
 fn default_window() -> f64 {

@@ -23,7 +23,7 @@ impl Analysis for SweepSpec {
         let at = |field: &str| c.at(field);
         let o = spec.order_tracking;
         let s = self;
-        check_excite(src, spec, mech, &at("excite"), &s.excite)?;
+        check_excite(src, spec, mech, &at("excite"), &s.excite, None)?;
         rpm(src, &at("rpm"), s.rpm)?;
         order_range(src, &at("order_min"), s.order_min, s.order_max)?;
         if !pos(s.duration_s) {

@@ -238,7 +238,7 @@ pub(super) fn check_transient(
     }
     if let Some(e) = &t.engine {
         // The engine's order, highest order and ramp were checked when it was loaded.
-        check_excite(src, spec, mech, &at("engine.excite"), &e.excite)?;
+        check_excite(src, spec, mech, &at("engine.excite"), &e.excite, None)?;
         let excited: Vec<(String, usize)> = if e.excite.is_empty() {
             vec![(at("engine"), spin)]
         } else {

@@ -65,6 +65,10 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
         let mut c = Table::new(format!("{}_cuts", spec.name));
         c.push("time_s", "s", m.time_s.clone());
         c.push("rpm", "rpm", m.rpm.clone());
+        // The engine's order torques at each block's speed: what excites the cuts beside them.
+        for (order, torques) in engine_torques(spec, &m.rpm) {
+            c.push(format!("engine_T_order{}_Nm", fmt_num(order)), "N·m", torques);
+        }
         for cut in &r.cuts {
             c.push(
                 format!("{}_{}x_{}", cut.signal, fmt_num(cut.order), unit_tag(cut.unit)),
@@ -75,6 +79,18 @@ pub(crate) fn tables(study: &Study, spec: &TransientSpec, r: &TransientResult) -
         out.push(c);
     }
     out
+}
+
+/// With an engine: each of its orders that carries torque (as the cuts take them) with its
+/// amplitude T_k at each of `rpm`, N·m, before any joint's share. Empty without an engine.
+fn engine_torques(spec: &TransientSpec, rpm: &[f64]) -> Vec<(f64, Vec<f64>)> {
+    let Some(series) = spec.engine.as_ref().and_then(|e| e.series.as_ref()) else { return Vec::new() };
+    let at = |order: f64, r: f64| {
+        // Base order ½: multiple j of the series is order j/2.
+        let h = series.harmonics(crate::model::excitation::rpm_to_rad_s(r), 0.5);
+        h.iter().find(|x| (0.5 * x.multiple - order).abs() <= 1e-9).map_or(f64::NAN, |x| x.amplitude)
+    };
+    super::engine_orders(spec).into_iter().map(|o| (o, rpm.iter().map(|&r| at(o, r)).collect())).collect()
 }
 
 /// A unit for a CSV header: `rad/s²` → `rad_s2`.
@@ -209,6 +225,24 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
             e.file,
             list(&orders)
         );
+        // T_k at the run's first and last speed; every block's in the cuts CSV.
+        let ends = [r.rpm_start, r.rpm_end];
+        let torques = engine_torques(spec, &ends);
+        if !torques.is_empty() {
+            let _ = writeln!(
+                md,
+                "Its order torques T_k (N·m) at the run's first and last speed (at every block's speed in `{}_cuts.csv`, \
+                 columns `engine_T_order<k>_Nm`):\n",
+                spec.name
+            );
+            let head: String = torques.iter().map(|(o, _)| format!(" T order {} |", fmt_num(*o))).collect();
+            let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(torques.len()));
+            for (i, rpm) in ends.iter().enumerate() {
+                let cells: String = torques.iter().map(|(_, t)| format!(" {} |", cell(t[i], 4))).collect();
+                let _ = writeln!(md, "| {} |{cells}", cell(*rpm, 1));
+            }
+            md.push('\n');
+        }
     }
     let target = spec.speed.rpm_range().1;
     if !matches!(spec.speed, SpeedProfile::Free { .. })

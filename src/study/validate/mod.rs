@@ -145,6 +145,27 @@ pub(crate) fn modal_ratios(src: &Source, path: &str, z: &crate::linear::ModalDam
     Ok(())
 }
 
+/// An analysis's `modal_damping` (at `at("modal_damping")`) and `modal_combination`: valid
+/// ratios, and no combination without ratios to combine (it would read as damping that is not
+/// there).
+pub(crate) fn modal_fields(
+    src: &Source,
+    at: &dyn Fn(&str) -> String,
+    z: Option<&crate::linear::ModalDamping>,
+    how: Option<crate::linear::ModalCombination>,
+) -> Result<()> {
+    match (z, how) {
+        (Some(z), _) => modal_ratios(src, &at("modal_damping"), z),
+        (None, Some(how)) => Err(src.error(
+            &at("modal_combination"),
+            format!(
+                "modal_combination: {how:?} without modal_damping: give the ratios (e.g. All(0.01)) or leave it out"
+            ),
+        )),
+        (None, None) => Ok(()),
+    }
+}
+
 pub(crate) fn rpm(src: &Source, path: &str, v: f64) -> Result<()> {
     check_rpm(v, false).map_err(|m| src.error(path, m))
 }
