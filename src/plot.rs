@@ -641,6 +641,21 @@ mod tests {
         assert!(matches!(legend_corner(&panel, ranges, (0.3, 0.2)), SeriesLabelPosition::UpperRight));
     }
 
+    /// The rewrite divides by [`FINE`] exactly, keeps the rotation angle and the text, and drops a
+    /// point equal to the one before it (here 1234,500 twice after 1234,500: plotters' whole units).
+    #[test]
+    fn vector_writes_two_decimals_and_drops_repeated_points() {
+        let fine = "<svg width=\"76000\" height=\"52000\" viewBox=\"0 0 76000 52000\" xmlns=\"http://www.w3.org/2000/svg\">\n\
+            <polyline fill=\"none\" stroke-width=\"200\" points=\"1234,500 1234,500 -7,12345 1234,500 \"/>\n\
+            <text x=\"100\" y=\"2005\" font-size=\"967.741935483871\" transform=\"rotate(270, 100, 2005)\">\n\
+            x = 3 &lt; 4\n</text>\n</svg>\n";
+        let v = vector(fine);
+        assert!(v.starts_with("<svg width=\"760\" height=\"520\" viewBox=\"0 0 760 520\""), "{v}");
+        assert!(v.contains("stroke-width=\"2\" points=\"12.34,5.00 -0.07,123.45 12.34,5.00 \""), "{v}");
+        assert!(v.contains("x=\"1.00\" y=\"20.05\" font-size=\"9.68\" transform=\"rotate(270, 1.00, 20.05)\""), "{v}");
+        assert!(v.contains("\nx = 3 &lt; 4\n</text>"), "{v}");
+    }
+
     #[test]
     fn tick_labels_are_short() {
         assert_eq!(tick(9.999999999999999e-6), "1e-5");
