@@ -300,10 +300,29 @@ fn tick(v: f64) -> String {
 
 type DynResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// Draws `title` (`size` pixels) centred at the top of `area` below a margin of `top` pixels (the
+/// centre taken without a right margin of `right` pixels) and returns the area below it, as
+/// plotters' chart caption does but with its 5-pixel gaps above and below the text in pixels:
+/// plotters caps them at 5 backend units, a twentieth of a pixel at [`FINE`] scale.
+fn caption<'a>(
+    area: &DrawingArea<SVGBackend<'a>, plotters::coord::Shift>,
+    title: &str,
+    size: u32,
+    (top, right): (u32, u32),
+) -> std::result::Result<DrawingArea<SVGBackend<'a>, plotters::coord::Shift>, Box<dyn std::error::Error>> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let style = TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Top));
+    let (_, h) = area.estimate_text_size(title, &style)?;
+    let (w, _) = area.dim_in_pixel();
+    area.draw_text(title, &style, ((w.saturating_sub(px(right)) / 2) as i32, px(top + 5) as i32))?;
+    Ok(area.margin(px(top + 10) + h, 0, 0, 0))
+}
+
 fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> DynResult {
     let ((x0, x1), (y0, y1)) = data_range(panel);
-    let mut builder = ChartBuilder::on(area);
-    builder.caption(&panel.title, font(18)).margin(px(12)).x_label_area_size(px(40)).y_label_area_size(px(70));
+    let below = caption(area, &panel.title, 18, (12, 12))?;
+    let mut builder = ChartBuilder::on(&below);
+    builder.margin(px(12)).margin_top(0).x_label_area_size(px(40)).y_label_area_size(px(70));
     // The two branches differ only in the y coordinate type; everything drawn is generic over it.
     let (w, h) = area.dim_in_pixel();
     let (w, h) = (w / FINE, h / FINE);
@@ -717,6 +736,14 @@ fn edges(c: &[f64]) -> Vec<f64> {
     e
 }
 
+/// The far edge of the group of cells `r` (edges `e`), moved on by a third of the group's width
+/// when another group follows: cells drawn edge to edge at sub-pixel positions leave hairline
+/// seams where the viewer's anti-aliasing lets the background through; the next group, drawn
+/// later, covers the overlap (a group is at least 1/`MAX_CELLS` of the axis, a few pixels).
+fn over(e: &[f64], r: &std::ops::Range<usize>) -> f64 {
+    if r.end + 1 < e.len() { e[r.end] + (e[r.end] - e[r.start]) / 3.0 } else { e[r.end] }
+}
+
 /// Writes `map` to an SVG file of `width`×`height` pixels.
 pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) -> Result<()> {
     use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
@@ -733,9 +760,10 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
         let level = |v: f64| {
             if peak > 0.0 && v > 0.0 { (1.0 + 20.0 * (v / peak).log10() / range).clamp(0.0, 1.0) } else { 0.0 }
         };
-        let mut chart = ChartBuilder::on(&main)
-            .caption(&map.title, font(18))
+        let below = caption(&main, &map.title, 18, (12, 12))?;
+        let mut chart = ChartBuilder::on(&below)
             .margin(px(12))
+            .margin_top(0)
             .x_label_area_size(px(40))
             .y_label_area_size(px(60))
             .build_cartesian_2d(xe[0]..xe[xe.len() - 1], ye[0]..ye[ye.len() - 1])?;
@@ -750,7 +778,10 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
                     .fold(f64::NAN, f64::max);
                 if v.is_finite() {
                     let c = ViridisRGB.get_color(level(v) as f32);
-                    cells.push(Rectangle::new([(xe[rx.start], ye[ry.start]), (xe[rx.end], ye[ry.end])], c.filled()));
+                    cells.push(Rectangle::new(
+                        [(xe[rx.start], ye[ry.start]), (over(&xe, rx), over(&ye, ry))],
+                        c.filled(),
+                    ));
                 }
             }
         }
@@ -770,16 +801,17 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
             chart.draw_series(std::iter::once(Text::new(label.clone(), (xe[0], *y), font(12).color(&WHITE))))?;
         }
         // The colour bar: dB below the peak.
-        let mut bar_chart = ChartBuilder::on(&bar)
-            .margin_top(px(40))
+        let below = caption(&bar, &map.z_label, 13, (40, 8))?;
+        let mut bar_chart = ChartBuilder::on(&below)
             .margin_bottom(px(52))
             .margin_right(px(8))
             .y_label_area_size(px(44))
-            .caption(&map.z_label, font(13))
             .build_cartesian_2d(0.0..1.0, -range..0.0)?;
         let steps = 64;
         bar_chart.draw_series((0..steps).map(|k| {
-            let (a, b) = (-range + range * k as f64 / steps as f64, -range + range * (k + 1) as f64 / steps as f64);
+            // Overlapping the next step by a third hides the seams, as for the cells.
+            let b = if k + 1 < steps { k as f64 + 4.0 / 3.0 } else { (k + 1) as f64 };
+            let (a, b) = (-range + range * k as f64 / steps as f64, -range + range * b / steps as f64);
             Rectangle::new(
                 [(0.0, a), (1.0, b)],
                 ViridisRGB.get_color(((k as f64 + 0.5) / steps as f64) as f32).filled(),
