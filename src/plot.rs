@@ -4,8 +4,15 @@
 //! This is the one module that sees plotters. SVG needs no system font library (plotters' default
 //! features, which pull in font-kit, stay off), so text is laid out with plotters' naive metrics
 //! and drawn by the SVG viewer.
+//!
+//! plotters works in whole backend pixels, which made the figures pixel images in SVG clothing
+//! (staircases when zoomed, a quarter of the points repeating the one before). So every figure
+//! is drawn [`FINE`] times larger and [`vector`] writes the result back at its nominal size with
+//! two decimals, dropping repeated points: a thin pass over plotters' regular output rather than
+//! an SVG writer of our own.
 
 use crate::error::{Error, Result};
+use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use std::path::Path;
@@ -40,6 +47,22 @@ pub struct Series {
     pub style: LineStyle,
 }
 
+/// A point marked and labelled on a panel (a resonance on a Campbell diagram), or with
+/// `marker: false` a label alone (an order line's name at its end). Labels are placed next to
+/// their points where they overlap neither another label nor a marker, pushed further out (with a
+/// leader line) when every near place is taken, so close points keep readable labels.
+#[derive(Debug, Clone, Default)]
+pub struct PointLabel {
+    /// Abscissa of the point.
+    pub x: f64,
+    /// Ordinate of the point.
+    pub y: f64,
+    /// The label.
+    pub text: String,
+    /// Draw a marker (an open circle) at the point.
+    pub marker: bool,
+}
+
 /// One set of axes.
 #[derive(Debug, Clone, Default)]
 pub struct Panel {
@@ -59,6 +82,8 @@ pub struct Panel {
     pub markers: Vec<(f64, String)>,
     /// The curves.
     pub series: Vec<Series>,
+    /// Labelled points, drawn over the curves.
+    pub labels: Vec<PointLabel>,
 }
 
 const PALETTE: [RGBColor; 8] = [
@@ -76,11 +101,134 @@ fn color(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
+/// Backend units per SVG pixel: plotters rounds to whole backend units, so drawing 100 times
+/// larger keeps positions to 1/100 pixel, the two decimals [`vector`] writes.
+pub const FINE: u32 = 100;
+
+/// `v` pixels in backend units.
+const fn px(v: u32) -> u32 {
+    v * FINE
+}
+
+/// The sans-serif font at `size` pixels.
+fn font(size: u32) -> FontDesc<'static> {
+    ("sans-serif", f64::from(px(size))).into_font()
+}
+
+/// Draws into an SVG of `width`×`height` pixels through `draw` (which sees a backend [`FINE`]
+/// times larger), then writes it to `path` at its nominal size ([`vector`]).
+fn write_fine(
+    path: &Path,
+    (width, height): (u32, u32),
+    draw: impl FnOnce(DrawingArea<SVGBackend, plotters::coord::Shift>) -> DynResult,
+) -> Result<()> {
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (px(width), px(height))).into_drawing_area();
+        draw(root).map_err(|e| plot_error(path, e))?;
+    }
+    std::fs::write(path, vector(&text)).map_err(|source| Error::Io {
+        file: path.to_path_buf(),
+        action: "cannot write plot",
+        source,
+    })
+}
+
+/// plotters' SVG (drawn [`FINE`] times larger) at its nominal size: every coordinate and length
+/// divided by [`FINE`] with exactly two decimals (integer arithmetic, so the text is the same
+/// on every machine), font sizes and stroke widths likewise, and a point equal to the one before
+/// it dropped from each polyline and polygon. Text between tags is left alone (plotters escapes
+/// `<` and `>` in it).
+pub fn vector(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len());
+    let mut rest = svg;
+    while let Some(open) = rest.find('<') {
+        out.push_str(&rest[..open]);
+        let Some(len) = rest[open..].find('>') else { break };
+        out.push_str(&vector_tag(&rest[open..open + len]));
+        out.push('>');
+        rest = &rest[open + len + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// One tag (`<name a="v" …`, without the closing `>`) rescaled.
+fn vector_tag(tag: &str) -> String {
+    let root = tag.starts_with("<svg");
+    let mut out = String::with_capacity(tag.len());
+    let mut rest = tag;
+    while let Some(eq) = rest.find("=\"") {
+        let name_start = rest[..eq].rfind([' ', '\n']).map_or(0, |i| i + 1);
+        let name = &rest[name_start..eq];
+        let Some(end) = rest[eq + 2..].find('"') else { break };
+        let value = &rest[eq + 2..eq + 2 + end];
+        out.push_str(&rest[..eq + 2]);
+        out.push_str(&rescale(root, name, value));
+        out.push('"');
+        rest = &rest[eq + 3 + end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// An attribute's value at nominal size.
+fn rescale(root: bool, name: &str, value: &str) -> String {
+    let whole = |v: &str| v.parse::<i64>().map_or_else(|_| v.to_string(), |n| (n / i64::from(FINE)).to_string());
+    match name {
+        "width" | "height" if root => whole(value),
+        "viewBox" => value.split(' ').map(whole).collect::<Vec<_>>().join(" "),
+        "x" | "y" | "x1" | "y1" | "x2" | "y2" | "cx" | "cy" | "r" | "width" | "height" => coord(value),
+        "font-size" | "stroke-width" => {
+            value.parse::<f64>().map_or_else(|_| value.to_string(), |v| trim(format!("{:.2}", v / f64::from(FINE))))
+        }
+        "points" => {
+            let mut pts: Vec<String> = Vec::new();
+            for p in value.split_whitespace() {
+                let p = p.split(',').map(coord).collect::<Vec<_>>().join(",");
+                if pts.last() != Some(&p) {
+                    pts.push(p);
+                }
+            }
+            pts.iter().map(|p| format!("{p} ")).collect()
+        }
+        // `rotate(angle, x, y)`: the angle stays, the centre scales.
+        "transform" => match value.strip_prefix("rotate(").and_then(|v| v.strip_suffix(')')) {
+            Some(args) => {
+                let a: Vec<&str> = args.split(", ").collect();
+                match a.as_slice() {
+                    [angle, x, y] => format!("rotate({angle}, {}, {})", coord(x), coord(y)),
+                    _ => value.to_string(),
+                }
+            }
+            None => value.to_string(),
+        },
+        _ => value.to_string(),
+    }
+}
+
+/// A whole number of backend units as pixels with two decimals.
+fn coord(v: &str) -> String {
+    match v.trim().parse::<i64>() {
+        Ok(n) => {
+            let f = i64::from(FINE);
+            let sign = if n < 0 { "-" } else { "" };
+            let a = n.abs();
+            format!("{sign}{}.{:02}", a / f, (a % f) * 100 / f)
+        }
+        Err(_) => v.to_string(),
+    }
+}
+
+/// A decimal without trailing zeros (`2.00` → `2`, `9.70` → `9.7`).
+fn trim(s: String) -> String {
+    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
 /// Writes `panels` side by side (one row) to an SVG file of `width`×`height` pixels per panel.
 pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Result<()> {
-    let draw = || -> std::result::Result<(), Box<dyn std::error::Error>> {
-        let cols = panels.len().max(1) as u32;
-        let root = SVGBackend::new(path, (width * cols, height)).into_drawing_area();
+    let cols = panels.len().max(1) as u32;
+    write_fine(path, (width * cols, height), |root| {
         root.fill(&WHITE)?;
         let areas = root.split_evenly((1, cols as usize));
         for (panel, area) in panels.iter().zip(areas.iter()) {
@@ -88,8 +236,7 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
         }
         root.present()?;
         Ok(())
-    };
-    draw().map_err(|e| plot_error(path, e))
+    })
 }
 
 /// A drawing error as the I/O error of the plot file it was writing.
@@ -153,12 +300,32 @@ fn tick(v: f64) -> String {
 
 type DynResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
+/// Draws `title` (`size` pixels) centred at the top of `area` below a margin of `top` pixels (the
+/// centre taken without a right margin of `right` pixels) and returns the area below it, as
+/// plotters' chart caption does but with its 5-pixel gaps above and below the text in pixels:
+/// plotters caps them at 5 backend units, a twentieth of a pixel at [`FINE`] scale.
+fn caption<'a>(
+    area: &DrawingArea<SVGBackend<'a>, plotters::coord::Shift>,
+    title: &str,
+    size: u32,
+    (top, right): (u32, u32),
+) -> std::result::Result<DrawingArea<SVGBackend<'a>, plotters::coord::Shift>, Box<dyn std::error::Error>> {
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let style = TextStyle::from(font(size)).pos(Pos::new(HPos::Center, VPos::Top));
+    let (_, h) = area.estimate_text_size(title, &style)?;
+    let (w, _) = area.dim_in_pixel();
+    area.draw_text(title, &style, ((w.saturating_sub(px(right)) / 2) as i32, px(top + 5) as i32))?;
+    Ok(area.margin(px(top + 10) + h, 0, 0, 0))
+}
+
 fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> DynResult {
     let ((x0, x1), (y0, y1)) = data_range(panel);
-    let mut builder = ChartBuilder::on(area);
-    builder.caption(&panel.title, ("sans-serif", 18)).margin(12).x_label_area_size(40).y_label_area_size(70);
+    let below = caption(area, &panel.title, 18, (12, 12))?;
+    let mut builder = ChartBuilder::on(&below);
+    builder.margin(px(12)).margin_top(0).x_label_area_size(px(40)).y_label_area_size(px(70));
     // The two branches differ only in the y coordinate type; everything drawn is generic over it.
     let (w, h) = area.dim_in_pixel();
+    let (w, h) = (w / FINE, h / FINE);
     let corner = legend_corner(panel, ((x0, x1), (y0, y1)), legend_size(panel, w, h));
     if panel.log_y {
         let mut chart = builder.build_cartesian_2d(x0..x1, (y0..y1).log_scale())?;
@@ -262,44 +429,176 @@ where
     X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
 {
-    chart
-        .configure_mesh()
-        .x_desc(&panel.x_label)
-        .y_desc(&panel.y_label)
+    mesh(chart.configure_mesh().x_desc(&panel.x_label).y_desc(&panel.y_label))
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
         .draw()?;
     for (x, label) in &panel.markers {
-        chart.draw_series(DashedLineSeries::new(vec![(*x, y0), (*x, y1)], 3, 4, BLACK.mix(0.4).stroke_width(1)))?;
-        chart.draw_series(std::iter::once(Text::new(label.clone(), (*x, y1), ("sans-serif", 13).into_font())))?;
+        chart.draw_series(DashedLineSeries::new(
+            vec![(*x, y0), (*x, y1)],
+            px(3),
+            px(4),
+            BLACK.mix(0.4).stroke_width(px(1)),
+        ))?;
+        chart.draw_series(std::iter::once(Text::new(label.clone(), (*x, y1), font(13))))?;
     }
     for s in &panel.series {
         let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).filter(keep(panel.log_y)).collect();
         let c = color(s.color);
-        let style = c.stroke_width(2);
+        let style = c.stroke_width(px(2));
         let anno = match s.style {
             LineStyle::Solid => chart.draw_series(LineSeries::new(pts, style))?,
-            LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?,
-            LineStyle::Dotted => chart.draw_series(DashedLineSeries::new(pts, 2, 4, style))?,
-            LineStyle::Points => chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))?,
+            LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(pts, px(8), px(5), style))?,
+            LineStyle::Dotted => chart.draw_series(DashedLineSeries::new(pts, px(2), px(4), style))?,
+            LineStyle::Points => chart.draw_series(pts.into_iter().map(|p| Circle::new(p, px(3), c.filled())))?,
         };
         if !s.label.is_empty() {
             // NOTE: a legend sample is one path; a short stub for dashed/dotted lines reads well
             // enough next to the label, which names the style's meaning (up/down, locked).
-            let len = match s.style {
+            let len = px(match s.style {
                 LineStyle::Solid => 20,
                 LineStyle::Dashed => 8,
                 LineStyle::Dotted | LineStyle::Points => 3,
-            };
-            anno.label(&s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(2)));
+            }) as i32;
+            anno.label(&s.label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(px(2))));
         }
     }
+    draw_labels(chart, &panel.labels)?;
+    let legend_font: TextStyle = font(12).into();
+    let at = legend_place(chart, panel, &legend_font, corner)?;
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.85))
-        .border_style(BLACK.mix(0.3))
-        .position(corner)
+        .border_style(BLACK.mix(0.3).stroke_width(px(1)))
+        .margin(px(10))
+        .legend_area_size(px(30))
+        .label_font(legend_font)
+        .position(at)
         .draw()?;
+    Ok(())
+}
+
+/// The mesh's fonts, tick marks and line widths at [`FINE`] scale: plotters' defaults are whole
+/// pixels (12-pixel labels, 5-pixel ticks, 1-pixel lines) and would shrink with the drawing.
+fn mesh<'m, 'a, 'b, X, Y>(
+    m: &'m mut MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>,
+) -> &'m mut MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
+where
+    X: Ranged + ValueFormatter<X::ValueType>,
+    Y: Ranged + ValueFormatter<Y::ValueType>,
+{
+    m.label_style(font(12))
+        .axis_desc_style(font(12))
+        .set_all_tick_mark_size(px(5))
+        .bold_line_style(BLACK.mix(0.2).stroke_width(px(1)))
+        .light_line_style(BLACK.mix(0.1).stroke_width(px(1)))
+        .axis_style(BLACK.stroke_width(px(1)))
+}
+
+/// The legend's upper-left corner for plotters' `corner`, with its 5-pixel inset from the frame
+/// kept at [`FINE`] scale (plotters insets by 5 backend units). The box is measured as plotters
+/// measures it: the labels' text block, the sample area and two margins.
+fn legend_place<'a, X, Y>(
+    chart: &ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    panel: &Panel,
+    style: &TextStyle,
+    corner: SeriesLabelPosition,
+) -> std::result::Result<SeriesLabelPosition, Box<dyn std::error::Error>>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    use SeriesLabelPosition as P;
+    let mut text = MultiLineText::<_, &str>::new((0, 0), style);
+    for s in panel.series.iter().filter(|s| !s.label.is_empty()) {
+        text.push_line(s.label.as_str());
+    }
+    let (w, h) = text.estimate_dimension()?;
+    let (w, h) = (w + px(30 + 2 * 10) as i32, h + px(2 * 10) as i32);
+    let (aw, ah) = chart.plotting_area().dim_in_pixel();
+    let (aw, ah, inset) = (aw as i32, ah as i32, px(5) as i32);
+    let x = match corner {
+        P::UpperLeft | P::MiddleLeft | P::LowerLeft => inset,
+        P::UpperMiddle | P::MiddleMiddle | P::LowerMiddle => (aw - w) / 2,
+        _ => aw - w - inset,
+    };
+    let y = match corner {
+        P::UpperLeft | P::UpperMiddle | P::UpperRight => inset,
+        P::MiddleLeft | P::MiddleMiddle | P::MiddleRight => (ah - h) / 2,
+        _ => ah - h - inset,
+    };
+    Ok(P::Coordinate(x, y))
+}
+
+/// A box in backend units: left, top, right, bottom.
+type Rect = (i32, i32, i32, i32);
+
+fn overlaps(a: Rect, b: Rect) -> bool {
+    a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+}
+
+/// Draws `labels` (markers and texts) with each text placed greedily in the first free place
+/// around its point: the four diagonal neighbours, then the same places pushed outwards step by
+/// step, joined to the point by a thin leader line. A place is free when it stays inside the
+/// plotting area and overlaps no text placed before and no marker. When none is free the text
+/// takes its first place anyway: every label is drawn.
+fn draw_labels<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    labels: &[PointLabel],
+) -> DynResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    if labels.is_empty() {
+        return Ok(());
+    }
+    let area = chart.plotting_area().strip_coord_spec();
+    let (bx, by) = area.get_base_pixel();
+    let (aw, ah) = area.dim_in_pixel();
+    let style: TextStyle = font(12).into();
+    let at: Vec<(i32, i32)> = labels
+        .iter()
+        .map(|l| {
+            let (x, y) = chart.backend_coord(&(l.x, l.y));
+            (x - bx, y - by)
+        })
+        .collect();
+    let r = px(4) as i32;
+    let mut taken: Vec<Rect> =
+        labels.iter().zip(&at).filter(|(l, _)| l.marker).map(|(_, &(x, y))| (x - r, y - r, x + r, y + r)).collect();
+    let (gap, step) = (px(3) as i32, px(2) as i32);
+    for (l, &(x, y)) in labels.iter().zip(&at) {
+        if l.marker {
+            area.draw(&Circle::new((x, y), px(4), BLACK.stroke_width(px(1))))?;
+        }
+        let (w, h) = area.estimate_text_size(&l.text, &style)?;
+        let (w, h) = (w as i32, h as i32);
+        let corners = [(gap, -gap - h), (gap, gap), (-gap - w, -gap - h), (-gap - w, gap)];
+        let mut places = Vec::new();
+        for k in 0..12 {
+            for (i, &(dx, dy)) in corners.iter().enumerate() {
+                let push = k * (h + step) * if i % 2 == 0 { -1 } else { 1 };
+                places.push((k, (x + dx, y + dy + push)));
+            }
+        }
+        let inside =
+            |&(_, (px0, py0)): &(i32, (i32, i32))| px0 >= 0 && py0 >= 0 && px0 + w <= aw as i32 && py0 + h <= ah as i32;
+        let free = |p: &(i32, (i32, i32))| {
+            inside(p) && !taken.iter().any(|&t| overlaps(t, (p.1.0, p.1.1, p.1.0 + w, p.1.1 + h)))
+        };
+        let (k, (tx, ty)) =
+            places.iter().find(|p| free(p)).or_else(|| places.iter().find(|p| inside(p))).copied().unwrap_or(places[0]);
+        if k > 0 {
+            // The leader ends at the text's nearer upright edge, half a line from its point's side.
+            let ex = if tx > x { tx } else { tx + w };
+            let ey = if ty > y { ty } else { ty + h };
+            area.draw(&PathElement::new(vec![(x, y), (ex, ey)], BLACK.mix(0.5).stroke_width(px(1))))?;
+        }
+        area.draw(&Text::new(l.text.clone(), (tx, ty), style.clone()))?;
+        taken.push((tx, ty, tx + w, ty + h));
+    }
     Ok(())
 }
 
@@ -359,6 +658,21 @@ mod tests {
         let flat = Series { label: "b".into(), x: x.clone(), y: vec![0.5; 100], color: 1, style: LineStyle::Dashed };
         let panel = Panel { series: vec![flat], ..Panel::default() };
         assert!(matches!(legend_corner(&panel, ranges, (0.3, 0.2)), SeriesLabelPosition::UpperRight));
+    }
+
+    /// The rewrite divides by [`FINE`] exactly, keeps the rotation angle and the text, and drops a
+    /// point equal to the one before it (here 1234,500 twice after 1234,500: plotters' whole units).
+    #[test]
+    fn vector_writes_two_decimals_and_drops_repeated_points() {
+        let fine = "<svg width=\"76000\" height=\"52000\" viewBox=\"0 0 76000 52000\" xmlns=\"http://www.w3.org/2000/svg\">\n\
+            <polyline fill=\"none\" stroke-width=\"200\" points=\"1234,500 1234,500 -7,12345 1234,500 \"/>\n\
+            <text x=\"100\" y=\"2005\" font-size=\"967.741935483871\" transform=\"rotate(270, 100, 2005)\">\n\
+            x = 3 &lt; 4\n</text>\n</svg>\n";
+        let v = vector(fine);
+        assert!(v.starts_with("<svg width=\"760\" height=\"520\" viewBox=\"0 0 760 520\""), "{v}");
+        assert!(v.contains("stroke-width=\"2\" points=\"12.34,5.00 -0.07,123.45 12.34,5.00 \""), "{v}");
+        assert!(v.contains("x=\"1.00\" y=\"20.05\" font-size=\"9.68\" transform=\"rotate(270, 1.00, 20.05)\""), "{v}");
+        assert!(v.contains("\nx = 3 &lt; 4\n</text>"), "{v}");
     }
 
     #[test]
@@ -422,13 +736,20 @@ fn edges(c: &[f64]) -> Vec<f64> {
     e
 }
 
+/// The far edge of the group of cells `r` (edges `e`), moved on by a third of the group's width
+/// when another group follows: cells drawn edge to edge at sub-pixel positions leave hairline
+/// seams where the viewer's anti-aliasing lets the background through; the next group, drawn
+/// later, covers the overlap (a group is at least 1/`MAX_CELLS` of the axis, a few pixels).
+fn over(e: &[f64], r: &std::ops::Range<usize>) -> f64 {
+    if r.end + 1 < e.len() { e[r.end] + (e[r.end] - e[r.start]) / 3.0 } else { e[r.end] }
+}
+
 /// Writes `map` to an SVG file of `width`×`height` pixels.
 pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) -> Result<()> {
     use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
-    let draw = || -> DynResult {
-        let root = SVGBackend::new(path, (width, height)).into_drawing_area();
+    write_fine(path, (width, height), |root| {
         root.fill(&WHITE)?;
-        let (main, bar) = root.split_horizontally(width.saturating_sub(90));
+        let (main, bar) = root.split_horizontally(px(width.saturating_sub(90)));
         if map.x.is_empty() || map.y.is_empty() || map.z.len() != map.x.len() {
             root.present()?;
             return Ok(());
@@ -439,11 +760,12 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
         let level = |v: f64| {
             if peak > 0.0 && v > 0.0 { (1.0 + 20.0 * (v / peak).log10() / range).clamp(0.0, 1.0) } else { 0.0 }
         };
-        let mut chart = ChartBuilder::on(&main)
-            .caption(&map.title, ("sans-serif", 18))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
+        let below = caption(&main, &map.title, 18, (12, 12))?;
+        let mut chart = ChartBuilder::on(&below)
+            .margin(px(12))
+            .margin_top(0)
+            .x_label_area_size(px(40))
+            .y_label_area_size(px(60))
             .build_cartesian_2d(xe[0]..xe[xe.len() - 1], ye[0]..ye[ye.len() - 1])?;
         let (gx, gy) = (groups(map.x.len()), groups(map.y.len()));
         let mut cells = Vec::with_capacity(gx.len() * gy.len());
@@ -456,13 +778,15 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
                     .fold(f64::NAN, f64::max);
                 if v.is_finite() {
                     let c = ViridisRGB.get_color(level(v) as f32);
-                    cells.push(Rectangle::new([(xe[rx.start], ye[ry.start]), (xe[rx.end], ye[ry.end])], c.filled()));
+                    cells.push(Rectangle::new(
+                        [(xe[rx.start], ye[ry.start]), (over(&xe, rx), over(&ye, ry))],
+                        c.filled(),
+                    ));
                 }
             }
         }
         chart.draw_series(cells)?;
-        chart
-            .configure_mesh()
+        mesh(&mut chart.configure_mesh())
             .disable_mesh()
             .x_desc(&map.x_label)
             .y_desc(&map.y_label)
@@ -472,41 +796,34 @@ pub fn write_heatmap_svg(path: &Path, map: &Heatmap, width: u32, height: u32) ->
         for (y, label) in &map.y_markers {
             chart.draw_series(std::iter::once(PathElement::new(
                 vec![(xe[0], *y), (xe[xe.len() - 1], *y)],
-                WHITE.mix(0.6).stroke_width(1),
+                WHITE.mix(0.6).stroke_width(px(1)),
             )))?;
-            chart.draw_series(std::iter::once(Text::new(
-                label.clone(),
-                (xe[0], *y),
-                ("sans-serif", 12).into_font().color(&WHITE),
-            )))?;
+            chart.draw_series(std::iter::once(Text::new(label.clone(), (xe[0], *y), font(12).color(&WHITE))))?;
         }
         // The colour bar: dB below the peak.
-        let mut bar_chart = ChartBuilder::on(&bar)
-            .margin_top(40)
-            .margin_bottom(52)
-            .margin_right(8)
-            .y_label_area_size(44)
-            .caption(&map.z_label, ("sans-serif", 13))
+        let below = caption(&bar, &map.z_label, 13, (40, 8))?;
+        let mut bar_chart = ChartBuilder::on(&below)
+            .margin_bottom(px(52))
+            .margin_right(px(8))
+            .y_label_area_size(px(44))
             .build_cartesian_2d(0.0..1.0, -range..0.0)?;
         let steps = 64;
         bar_chart.draw_series((0..steps).map(|k| {
-            let (a, b) = (-range + range * k as f64 / steps as f64, -range + range * (k + 1) as f64 / steps as f64);
+            // Overlapping the next step by a third hides the seams, as for the cells.
+            let b = if k + 1 < steps { k as f64 + 4.0 / 3.0 } else { (k + 1) as f64 };
+            let (a, b) = (-range + range * k as f64 / steps as f64, -range + range * b / steps as f64);
             Rectangle::new(
                 [(0.0, a), (1.0, b)],
                 ViridisRGB.get_color(((k as f64 + 0.5) / steps as f64) as f32).filled(),
             )
         }))?;
-        bar_chart
-            .configure_mesh()
+        mesh(&mut bar_chart.configure_mesh())
             .disable_mesh()
             .disable_x_axis()
             .y_desc("dB re peak")
-            .y_label_style(("sans-serif", 12))
-            .axis_desc_style(("sans-serif", 12))
             .y_label_formatter(&|v| format!("{v:.0}"))
             .draw()?;
         root.present()?;
         Ok(())
-    };
-    draw().map_err(|e| plot_error(path, e))
+    })
 }

@@ -20,6 +20,7 @@ mod engine;
 mod engine_excitation;
 mod engine_study;
 mod excite_at;
+mod figures;
 mod gear_reactions;
 mod gears;
 mod gravity;

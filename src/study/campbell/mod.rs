@@ -8,10 +8,11 @@ pub use spec::*;
 
 use super::linear::lin;
 use super::table::Table;
+use super::table::fmt_num;
 use super::{Output, Study};
 use crate::error::Result;
 use crate::linear::{Campbell, Damping, Spin, campbell_modal_until};
-use crate::plot::{LineStyle, Panel, Series};
+use crate::plot::{LineStyle, Panel, PointLabel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -99,6 +100,12 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
     Ok((c, failures))
 }
 
+/// A crossing's speed as marked on the figure: whole rpm, which is finer than the figure can
+/// show and as fine as a speed is read off a dial (the resonance table gives three decimals).
+pub(crate) fn rpm_label(rpm: f64) -> String {
+    format!("{rpm:.0} rpm")
+}
+
 /// Writes the Campbell CSV and figure, and returns the summary section with the files written.
 pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> Result<(String, Vec<PathBuf>)> {
     let steps = c.rpm.len();
@@ -115,9 +122,12 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
             style: LineStyle::Solid,
         })
         .collect();
+    // The order lines are named at their ends ("3n", as in the tables), not in the legend, which
+    // keeps to the modes; every crossing is marked with its speed.
+    let mut labels = Vec::new();
     for l in &c.order_lines {
         series.push(Series {
-            label: format!("order {}", l.order),
+            label: String::new(),
             x: c.rpm.clone(),
             y: l.frequency_hz.clone(),
             color: 7,
@@ -125,6 +135,14 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         });
     }
     let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    for l in &c.order_lines {
+        if let Some((&r, &f)) = c.rpm.iter().zip(&l.frequency_hz).rev().find(|(_, f)| f.is_finite()) {
+            labels.push(PointLabel { x: r, y: f, text: format!("{}n", fmt_num(l.order)), marker: false });
+        }
+    }
+    for x in &c.crossings {
+        labels.push(PointLabel { x: x.rpm, y: x.frequency_hz, text: rpm_label(x.rpm), marker: true });
+    }
     let panel = Panel {
         title: format!("Campbell diagram ({})", if spec.spin_held { "spin held" } else { "spin free" }),
         x_label: "spin speed, rpm".into(),
@@ -132,6 +150,7 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
         x_range: Some((spec.rpm_min, spec.rpm_max)),
         y_range: Some((0.0, 1.05 * top.max(f64::MIN_POSITIVE))),
         series,
+        labels,
         ..Panel::default()
     };
     let svg = dir.join(format!("{}.svg", spec.name));
