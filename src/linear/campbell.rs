@@ -309,41 +309,37 @@ pub fn campbell(
     modal: Option<&ModalDamping>,
     guess: Option<&[f64]>,
 ) -> LinResult<Campbell> {
-    campbell_until(mech, spin_joint, rpm, orders, spin, damping, modal, guess, None)
-}
-
-/// [`campbell`] that stops with [`LinearError::Watchdog`](super::LinearError::Watchdog) at the
-/// first speed reached past `deadline`.
-#[allow(clippy::too_many_arguments)]
-pub fn campbell_until(
-    mech: &Mechanism,
-    spin_joint: &str,
-    rpm: &[f64],
-    orders: &[f64],
-    spin: Spin,
-    damping: Damping,
-    modal: Option<&ModalDamping>,
-    guess: Option<&[f64]>,
-    deadline: Option<crate::deadline::Deadline>,
-) -> LinResult<Campbell> {
     let modal = modal.map(|z| (z, ModalCombination::Replace));
-    campbell_modal_until(mech, spin_joint, rpm, orders, spin, damping, modal, guess, deadline)
+    campbell_with(mech, spin_joint, rpm, orders, &CampbellOptions { spin, damping, modal, guess, deadline: None })
 }
 
-/// [`campbell_until`] with the modal damping replacing the mechanism's dampers or added to them
-/// ([`LinearModel::with_modal_damping_combined`]).
-#[allow(clippy::too_many_arguments)]
-pub fn campbell_modal_until(
+/// How [`campbell_with`] linearises and when it stops.
+#[derive(Debug, Clone, Copy)]
+pub struct CampbellOptions<'a> {
+    /// The spin held or free in the modes.
+    pub spin: Spin,
+    /// Damped or undamped frequencies (damped whenever `modal` is given).
+    pub damping: Damping,
+    /// Modal damping and how it meets the mechanism's dampers
+    /// ([`LinearModel::with_modal_damping_combined`]).
+    pub modal: Option<(&'a ModalDamping, ModalCombination)>,
+    /// A starting guess of the operating point at the first speed.
+    pub guess: Option<&'a [f64]>,
+    /// The watchdog's stop time: past it the diagram stops with
+    /// [`LinearError::Watchdog`](super::LinearError::Watchdog) at the next speed.
+    pub deadline: Option<crate::deadline::Deadline>,
+}
+
+/// [`campbell`] with every option: modal damping replacing the dampers or added to them, and a
+/// deadline.
+pub fn campbell_with(
     mech: &Mechanism,
     spin_joint: &str,
     rpm: &[f64],
     orders: &[f64],
-    spin: Spin,
-    damping: Damping,
-    modal: Option<(&ModalDamping, ModalCombination)>,
-    guess: Option<&[f64]>,
-    deadline: Option<crate::deadline::Deadline>,
+    opts: &CampbellOptions<'_>,
 ) -> LinResult<Campbell> {
+    let CampbellOptions { spin, damping, modal, guess, deadline } = *opts;
     let damping = if modal.is_some() { Damping::Damped } else { damping };
     let tracker = Tracker { mech, spin_joint, spin, damping, modal };
     let Some(&r0) = rpm.first() else {

@@ -75,7 +75,7 @@ mod multi_order;
 mod response;
 
 pub use campbell::{
-    CROSSING_RTOL, Campbell, CampbellTrack, Crossing, OrderLine, campbell, campbell_modal_until, campbell_until,
+    CROSSING_RTOL, Campbell, CampbellOptions, CampbellTrack, Crossing, OrderLine, campbell, campbell_with,
 };
 pub use damping::{ModalCombination, ModalDamping};
 pub use modes::{Modal, Mode, ModeKind};

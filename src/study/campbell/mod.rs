@@ -11,7 +11,7 @@ use super::table::Table;
 use super::table::fmt_num;
 use super::{Output, Study};
 use crate::error::Result;
-use crate::linear::{Campbell, Damping, Spin, campbell_modal_until};
+use crate::linear::{Campbell, CampbellOptions, Damping, Spin, campbell_with};
 use crate::plot::{LineStyle, Panel, PointLabel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -73,18 +73,8 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
     let spin = if spec.spin_held { Spin::Held } else { Spin::Free };
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
     let modal = spec.modal();
-    let c = campbell_modal_until(
-        mech,
-        &study.spec.spin_joint,
-        &rpm,
-        &spec.orders,
-        spin,
-        damping,
-        modal,
-        None,
-        study.spec.integration.deadline,
-    )
-    .map_err(lin(mech))?;
+    let opts = CampbellOptions { spin, damping, modal, guess: None, deadline: study.spec.integration.deadline };
+    let c = campbell_with(mech, &study.spec.spin_joint, &rpm, &spec.orders, &opts).map_err(lin(mech))?;
     let mut failures = Vec::new();
     for (k, t) in c.tracks.iter().enumerate() {
         if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {
