@@ -9,36 +9,12 @@
 //! (`tests/it/path_pair_form.rs`), hands every failure to it, and is chosen only after
 //! reproducing it at probe states ([`pair_agrees`]).
 
-use super::small_rates::{Install, Packed};
+use super::small_rates::{Install, Packed, PathPair};
 use super::{Kane, Model, NONE, PIVOT_TOL, SmallRhs};
 use crate::error::EngineError;
 use crate::model::joint::PathJoint;
 use crate::model::math::Vec2;
-use crate::model::path::PolarPath;
 use std::sync::Arc;
-
-/// The constants of the pair form of a rotor carrying one path absorber ([`Model::rhs_path_pair`]):
-/// body 0 a revolute root in its own frame, body 1 on a path joint drawn about the rotor axis
-/// (`at` = the rotor's joint point, (0, 0) in its frame) with its centre of mass at its frame
-/// origin.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PathPair {
-    /// The absorber's path, its constants prepared once.
-    path: PolarPath,
-    /// The joint's travel limit, m (infinite without one): the joint kind's `limited` test.
-    limit: f64,
-    /// `J₀ + I`: the rotor's inertia about its axis plus the absorber's centroidal inertia, kg·m².
-    j_sum: f64,
-    /// The absorber's mass m, kg, and centroidal inertia I, kg·m².
-    mass: f64,
-    i_com: f64,
-    /// Per body: joint spring k (N·m/rad, N/m) and its free coordinate, joint damper, ground
-    /// damper (the rotor's and the absorber's absolute rotation).
-    k_spring: [f64; 2],
-    q_free: [f64; 2],
-    c_joint: [f64; 2],
-    c_ground: [f64; 2],
-}
 
 /// The pair form's constants when `kane` is a rotor carrying one path absorber (see [`PathPair`]).
 pub(super) fn path_pair(kane: &Model, p: &Packed) -> Option<PathPair> {
@@ -153,4 +129,21 @@ impl Model {
         xdot[..4].copy_from_slice(&[w, sd, ud0, ud1]);
         Ok(())
     }
+}
+
+/// The fixed-size joint-rates form of `kane`: the pair form where `kane` is a rotor carrying one
+/// path absorber and the form reproduces the general one at probe states (a term the general
+/// engine gains, and this form does not know, keeps the general form); else, unless
+/// `pair_only` (joint rates as speeds, where only the pair form applies), the composite-body form
+/// of [`super::small_rates`].
+pub(super) fn choose(kane: &Model, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
+    let (rhs, p) = super::small_rates::small(kane)?;
+    if let Some(pair) = path_pair(kane, &p) {
+        let mut with_pair = p.clone();
+        with_pair.pair = Some(pair);
+        if pair_agrees(kane, &with_pair, rhs, install) {
+            return Some((Model::rhs_path_pair, with_pair));
+        }
+    }
+    (!pair_only).then_some((rhs, p))
 }

@@ -82,12 +82,12 @@ impl Small {
         match kane.form {
             super::Form::Pairs => Self::pairs(kane),
             super::Form::MappedRates => {
-                super::small_rates::small(kane, false, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
+                super::path_pair::choose(kane, false, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
             }
             // With joint rates only a rotor carrying one path absorber, whose joint rates are its
             // absolute speeds (W = I), has a fixed-size form: the pair form of `small_rates`.
             super::Form::Rates => {
-                super::small_rates::small(kane, true, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
+                super::path_pair::choose(kane, true, &Self::install).map(|(rhs, p)| Self::with_rates(rhs, p))
             }
             // Geared trees (whose state is reduced) take the general form.
             super::Form::Geared => None,

@@ -33,11 +33,11 @@
 //! The exception is the commonest tree, a rotor carrying one path absorber about its axis: it
 //! takes the pair form of [`super::path_pair`], which hands every failure back to this form.
 
-use super::path_pair::{PathPair, pair_agrees, path_pair};
 use super::{GROUND_PARENT, Model, NONE, Node, PIVOT_TOL, SMALL, SmallRhs};
 use crate::error::EngineError;
 use crate::model::joint::{JointMotion, PathJoint};
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
+use crate::model::path::PolarPath;
 
 /// Sets an engine's fixed-size instance to the composite-body one given with its data; passed
 /// in by `small.rs`, which owns that instance's type (so this module does not import it back).
@@ -73,11 +73,36 @@ pub(super) struct Packed {
     pub(super) pair: Option<PathPair>,
 }
 
-/// Packs the data of `kane` (already built, `Form::MappedRates` or, with `pair_only`,
-/// `Form::Rates`; at most `SMALL` speeds, one body per speed, no point forces: checked by the
-/// caller) when every joint's torques allow it. With `pair_only`, only the pair form of a rotor
-/// carrying one path absorber is offered (its speeds are the joint rates: W = I).
-pub(super) fn small(kane: &Model, pair_only: bool, install: &Install) -> Option<(SmallRhs, Packed)> {
+/// The constants of the pair form of a rotor carrying one path absorber
+/// ([`Model::rhs_path_pair`](super::Model::rhs_path_pair), built in [`super::path_pair`]; kept
+/// here, packed with the composite-body data it falls back on):
+/// body 0 a revolute root in its own frame, body 1 on a path joint drawn about the rotor axis
+/// (`at` = the rotor's joint point, (0, 0) in its frame) with its centre of mass at its frame
+/// origin.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PathPair {
+    /// The absorber's path, its constants prepared once.
+    pub(super) path: PolarPath,
+    /// The joint's travel limit, m (infinite without one): the joint kind's `limited` test.
+    pub(super) limit: f64,
+    /// `J₀ + I`: the rotor's inertia about its axis plus the absorber's centroidal inertia, kg·m².
+    pub(super) j_sum: f64,
+    /// The absorber's mass m, kg, and centroidal inertia I, kg·m².
+    pub(super) mass: f64,
+    pub(super) i_com: f64,
+    /// Per body: joint spring k (N·m/rad, N/m) and its free coordinate, joint damper, ground
+    /// damper (the rotor's and the absorber's absolute rotation).
+    pub(super) k_spring: [f64; 2],
+    pub(super) q_free: [f64; 2],
+    pub(super) c_joint: [f64; 2],
+    pub(super) c_ground: [f64; 2],
+}
+
+/// Packs the data of `kane` (already built, `Form::MappedRates` or `Form::Rates`; at most
+/// `SMALL` speeds, one body per speed, no point forces: checked by the caller) when every
+/// joint's torques allow it. The pair form is chosen on top of it by
+/// [`super::path_pair::choose`].
+pub(super) fn small(kane: &Model) -> Option<(SmallRhs, Packed)> {
     let n = kane.n;
     let rhs: SmallRhs = match n {
         1 => Model::rhs_small_rates::<1>,
@@ -124,15 +149,7 @@ pub(super) fn small(kane: &Model, pair_only: bool, install: &Install) -> Option<
         }
         p.torque[jt.joint] = i;
     }
-    if let Some(pair) = path_pair(kane, &p) {
-        // Selected only when it reproduces the general form at probe states: a term the
-        // general engine gains (and this form does not know) keeps the general form.
-        let with_pair = Packed { pair: Some(pair), ..p.clone() };
-        if pair_agrees(kane, &with_pair, rhs, install) {
-            return Some((Model::rhs_path_pair, with_pair));
-        }
-    }
-    (!pair_only).then_some((rhs, p))
+    Some((rhs, p))
 }
 
 /// The motion of body `nd`'s joint at `q`, with a path's mounting rotation prepared once
