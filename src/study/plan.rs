@@ -265,11 +265,13 @@ pub(crate) fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
 /// inertia it acts on (`model::time_scales`, the same figures the loader checks against
 /// its ranges). A coarse bound, not an eigen-analysis: it is there to see a stiff model, which the
 /// excitation alone does not show. `(0, 0)` when the mass matrix cannot be formed or the
-/// mechanism is too large to invert here.
+/// mechanism has over 200 coordinates.
 pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f64) {
     use crate::model::time_scales::{compliances, time_scales};
+    // The plan is asked once per time-domain analysis (and per comparison's mechanism): past 200
+    // coordinates the O(n³) compliances would cost more than the estimate is worth.
     let n = mech.ndof();
-    if n == 0 {
+    if n == 0 || n > 200 {
         return (0.0, 0.0);
     }
     let Ok(mut kane) = crate::kane::Kane::new(mech) else { return (0.0, 0.0) };

@@ -428,17 +428,19 @@ fn compute_with(
                 BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
                 BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
             };
+            // Where the branch got to: ` at order = 3.1765350 after 669 points`.
+            let reached = p.last().map_or(String::new(), |last| {
+                format!(
+                    " at {} = {:.7}{} after {} points",
+                    ax.column,
+                    last.parameter * ax.to_unit,
+                    ax.suffix(),
+                    p.len()
+                )
+            });
             if b.end == BranchEnd::Watchdog {
                 let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
-                let at = p.last().map_or(String::new(), |last| {
-                    format!(
-                        " at {} = {:.7}{} after {} points",
-                        ax.column,
-                        last.parameter * ax.to_unit,
-                        ax.suffix(),
-                        p.len()
-                    )
-                });
+                let at = &reached;
                 failures.push(format!(
                     "{}{what}, continued from {from}: stopped by the watchdog{at}: the analysis overran its time \
                      budget of {budget:.1} s (the points reached are kept)",
@@ -446,13 +448,7 @@ fn compute_with(
                 ));
             }
             let stopped_short = match (stopped, p.last()) {
-                (Some(reason), Some(last)) => Some(format!(
-                    "stopped because {reason}, at {} = {:.7}{} after {} points",
-                    ax.column,
-                    last.parameter * ax.to_unit,
-                    ax.suffix(),
-                    p.len()
-                )),
+                (Some(reason), Some(_)) => Some(format!("stopped because {reason},{reached}")),
                 _ => None,
             };
             // A branch that stalled (or hit its point cap) short of its range is a failure of
