@@ -73,6 +73,7 @@ impl Mechanism {
 
         // Bodies: merge parts, check numbers and names.
         let mut body_specs = Vec::with_capacity(spec.bodies.len());
+        let mut massless = Vec::new();
         let mut body_index: HashMap<String, usize> = HashMap::new();
         for (i, b) in spec.bodies.iter().enumerate() {
             let path = format!("bodies[{i}]");
@@ -94,8 +95,10 @@ impl Mechanism {
                 );
             }
             let props = merged.inertia_props(src, &path)?;
+            // Checked once the couplings are known: a massless body is harmless on a joint
+            // without a coordinate of its own (a pinion whose inertia its gear carries).
             if props.mass == 0.0 && props.i_com == 0.0 {
-                return Err(src.error(&path, format!("body `{name}` has no mass and no inertia")));
+                massless.push(i);
             }
             body_specs.push((name, props));
         }
@@ -263,6 +266,21 @@ impl Mechanism {
         // Couplings: a rigidly driven joint loses its coordinate (numbered again over the rest).
         let index_of = |name: &str| joint_names.get(name).and_then(|&k| new_index[joint_specs[k].3]);
         let gears = crate::model::gears::resolve(&spec.gears, &mut joints, spec.speeds, &index_of, src)?;
+        // A massless body on a joint with its own coordinate leaves that coordinate without
+        // inertia (the mass matrix singular); welded or rigidly geared, it adds nothing.
+        for &i in &massless {
+            let t = new_index[i].unwrap_or(usize::MAX);
+            if joints.get(t).is_none_or(|j| j.coordinate.is_some()) {
+                return Err(src.error(
+                    &format!("bodies[{i}]"),
+                    format!(
+                        "body `{}` has no mass and no inertia (a massless body is accepted only on a welded or \
+                         rigidly geared joint, whose motion it cannot leave without inertia)",
+                        body_specs[i].0
+                    ),
+                ));
+            }
+        }
 
         // Loads.
         let (gx, gy) = spec.gravity;

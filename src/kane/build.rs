@@ -15,6 +15,13 @@ impl Model {
     /// Builds the model of `mech` (vectors in the world frame when `world`) with a workspace
     /// sized for it, and checks that M is positive definite at q = 0.
     pub(super) fn build(mech: &Mechanism, world: bool) -> Result<(Self, Workspace)> {
+        Self::build_checked(mech, world, true)
+    }
+
+    /// [`Model::build`], the positive-definiteness check optional: a geared mechanism's
+    /// unconstrained tree may hold massless pinions whose rows only the reduction `Tᵀ M T` fills
+    /// (the reduced M is checked instead).
+    pub(super) fn build_checked(mech: &Mechanism, world: bool, check: bool) -> Result<(Self, Workspace)> {
         let (n, nb) = (mech.ndof(), mech.bodies.len());
         let parent = mech.parents();
         let internal = |message: String| Error::Model { mechanism: mech.name.clone(), message };
@@ -155,8 +162,10 @@ impl Model {
         }
         let mut ws = Workspace::new(&k);
         let mut zeros = vec![0.0; n];
-        k.evaluate(&mut ws, 0.0, &zeros, &zeros, false);
-        k.factor_solve(&mut ws, &mut zeros)?;
+        if check {
+            k.evaluate(&mut ws, 0.0, &zeros, &zeros, false);
+            k.factor_solve(&mut ws, &mut zeros)?;
+        }
         k.small = k.small_form();
         k.tree = k.tree_order();
         Ok((k, ws))

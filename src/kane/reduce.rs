@@ -107,7 +107,7 @@ impl Geared {
                 })
             })
             .collect();
-        let (mut full, _) = Model::build(&full_mech, world)?;
+        let (mut full, _) = Model::build_checked(&full_mech, world, false)?;
         // NOTE: an independent joint's nonlinear couplings (stages, friction, stops) are the
         // outer engine's, which adds them on the reduced coordinates (with their exact
         // Jacobians); the inner tree keeps only the driven joints'. Keeping both counted them

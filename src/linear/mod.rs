@@ -12,7 +12,10 @@
 //! One root joint, the *spin joint* s, turns at the constant rate Ω (rad/s); every other joint j
 //! sits at a relative equilibrium `q_j = q⁰_j`, `q̇_j = 0`, so `u⁰ = W q̇⁰` with `q̇⁰ = Ω e_s`
 //! (with absolute angular velocities as speeds every body of the spinning subtree has u⁰ = Ω, as
-//! in the paper's eqs. 9 and 11). The spin angle must be *cyclic*: F may not depend on it. That
+//! in the paper's eqs. 9 and 11). In a geared mechanism whose meshes pass the rotation on, the
+//! joints meshed to the spin turn with it: `q̇⁰ = Ω z`, z the rigid rotation
+//! ([`Mechanism::rigid_rotation`], docs/design.md "Gears"), and what is said of the spin angle
+//! below holds of the angle along z. The spin angle must be *cyclic*: F may not depend on it. That
 //! holds when the spin joint has no spring ([`LinearError::SpinSpring`] otherwise) and no load
 //! needs the world orientation. Gravity and world-frame forces do: with them the steady spin is
 //! not an equilibrium, the motion is periodic in the rotor angle. They are taken out of the
@@ -80,7 +83,7 @@ pub use campbell::{
 pub use damping::{ModalCombination, ModalDamping};
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{
-    GravityLine, HarmonicResponse, MultiOrderOptions, SpeedCase, SpeedResponse, multi_order_response,
+    ElementLines, GravityLine, HarmonicResponse, MultiOrderOptions, SpeedCase, SpeedResponse, multi_order_response,
     multi_order_response_with,
 };
 pub use response::{Extremes, FrfPoint, Input, OrderResponse, ResponseSpec};
@@ -252,6 +255,10 @@ pub struct OperatingPoint {
     /// Index of the spin joint's coordinate (differs from the joint's when a welded joint
     /// precedes it).
     pub spin_coordinate: usize,
+    /// The rigid rotation z ([`Mechanism::rigid_rotation`]): each coordinate's rate per unit spin
+    /// rate in the steady motion `q⁰ + Ωt z` (1 at the spin coordinate, the gear ratios at the
+    /// joints meshed to it, 0 elsewhere).
+    pub rotation: Vec<f64>,
     /// Spin speed Ω, rad/s.
     pub omega: f64,
     /// Coordinates at t = 0 (the spin angle is 0; the others at their relative equilibrium), rad.
@@ -454,9 +461,7 @@ impl LinearModel {
         if let Some(stiffness) = held {
             return Err(LinearError::SpinSpring { mechanism: mech.name.clone(), joint: spin_joint.into(), stiffness });
         }
-        if let Some(why) = mech.spin_breaks_cyclic(sj) {
-            return Err(LinearError::Invalid(why));
-        }
+        let rotation = mech.rigid_rotation(sj).map_err(LinearError::Invalid)?;
         if !omega_rad_s.is_finite() {
             return Err(LinearError::Invalid(format!("spin speed must be finite, got {omega_rad_s} rad/s")));
         }
@@ -470,8 +475,7 @@ impl LinearModel {
         let mut kane = Kane::new(&prepared)?;
         let w_inv = prepared.speeds.w_inverse_matrix(&prepared.speed_parents());
         let parents = prepared.speed_parents();
-        let mut qdot0 = vec![0.0; n];
-        qdot0[s] = omega_rad_s;
+        let qdot0: Vec<f64> = rotation.iter().map(|z| omega_rad_s * z).collect();
         let mut u = vec![0.0; n];
         prepared.speeds.u_from_qdot(&parents, &qdot0, &mut u);
         let g_s: DVector<f64> = w_inv.row(s).transpose();
@@ -544,6 +548,14 @@ impl LinearModel {
         // Gravity forces the rotation at order 1 (its mean is zero, so the equilibrium above,
         // found without it, is the one to expand about).
         let gravity_loaded = mech.loads.needs_world_orientation();
+        if gravity_loaded && rotation.iter().enumerate().any(|(k, &z)| k != s && z != 0.0) {
+            return Err(LinearError::WorldOrientation {
+                mechanism: mech.name.clone(),
+                detail: "joints geared or meshed to the spin joint turn at their own rates, so gravity forces \
+                         several orders"
+                    .into(),
+            });
+        }
         let gravity_force = if gravity_loaded {
             let mut loaded = model_mech.clone();
             loaded.loads.gravity = mech.loads.gravity;
@@ -557,6 +569,7 @@ impl LinearModel {
             op: OperatingPoint {
                 spin_joint: sj,
                 spin_coordinate: s,
+                rotation,
                 omega: omega_rad_s,
                 q,
                 u,

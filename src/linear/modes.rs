@@ -117,8 +117,19 @@ impl LinearModel {
         let chol = select(&self.mass, &ui, &ui)
             .cholesky()
             .ok_or_else(|| LinearError::MassMatrix { mechanism: self.mech.name.clone() })?;
+        // The kept angles are the deviations from the rigid rotation, `p_j = q*_j − z_j θ*`
+        // (`p = q*` off a geared train, where z_j = 0): θ* drops out of every equation because
+        // F_q z = 0, and `ṗ_j = (W⁻¹u)_j − z_j (W⁻¹u)_s`.
+        let s_row = self.w_inv.row(self.op.spin_coordinate).clone_owned();
+        let mut w_p = self.w_inv.clone();
+        for (j, &z) in self.op.rotation.iter().enumerate() {
+            if j != self.op.spin_coordinate && z != 0.0 {
+                let row = w_p.row(j) - &s_row * z;
+                w_p.set_row(j, &row);
+            }
+        }
         let mut s = DMatrix::zeros(nq + nu, nq + nu);
-        s.view_mut((0, nq), (nq, nu)).copy_from(&select(&self.w_inv, &qi, &ui));
+        s.view_mut((0, nq), (nq, nu)).copy_from(&select(&w_p, &qi, &ui));
         s.view_mut((nq, 0), (nu, nq)).copy_from(&chol.solve(&select(&self.f_q, &ui, &qi)));
         s.view_mut((nq, nq), (nu, nu)).copy_from(&chol.solve(&select(self.f_u_of(damping), &ui, &ui)));
         Ok((s, qi, ui))
@@ -161,10 +172,9 @@ impl LinearModel {
         let mut rigid = Vec::new();
         let mut modes = Vec::new();
         if spin == Spin::Free {
-            let mut shape_q = vec![C64::new(0.0, 0.0); n];
-            shape_q[s] = C64::new(1.0, 0.0);
-            let mut share = vec![0.0; n];
-            share[s] = 1.0;
+            let shape_q: Vec<C64> = self.op.rotation.iter().map(|&z| C64::new(z, 0.0)).collect();
+            let mut share: Vec<f64> = (0..n).map(|j| self.op.rotation[j].powi(2) * mq[(j, j)]).collect();
+            normalise(&mut share);
             rigid.push(Mode {
                 kind: ModeKind::SpinAngle,
                 eigenvalue: C64::new(0.0, 0.0),
@@ -200,6 +210,13 @@ impl LinearModel {
             if spin == Spin::Free && kind == ModeKind::Vibration && rep.norm() > 0.0 {
                 // θ̇* = u_s*: the spin angle's part of the eigenvector.
                 q[s] = u[s] / rep;
+                // Back from the deviations p to the coordinates: q*_j = p_j + z_j θ*.
+                let theta = q[s];
+                for (j, &z) in self.op.rotation.iter().enumerate() {
+                    if j != s {
+                        q[j] += z * theta;
+                    }
+                }
             }
             let mut qdot = vec![C64::new(0.0, 0.0); n];
             for k in 0..n {

@@ -67,6 +67,33 @@ pub struct SpeedResponse {
     /// The order-1 response to gravity (and world-frame forces), when the mechanism has it
     /// (see the `gravity` submodule); included in `peak` and `locked_peak`.
     pub gravity: Option<GravityLine>,
+    /// The elements of [`MultiOrderOptions::elements`], in their order (gravity's line not
+    /// included).
+    pub elements: Vec<ElementLines>,
+}
+
+/// The linear steady response of one element (a joint's coordinate, and the torque its spring
+/// and damper transmit) to the harmonics of a multi-order torque, each `amplitude·sin(k·nΩt +
+/// phase)` as in [`HarmonicResponse`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElementLines {
+    /// The joint (tree index).
+    pub joint: usize,
+    /// Per harmonic, the amplitude of the joint's coordinate, rad (m for a slide).
+    pub amplitude: Vec<f64>,
+    /// Per harmonic, its phase, rad.
+    pub phase: Vec<f64>,
+    /// Per harmonic, the amplitude of `k q + c q̇` of the joint's spring k and damper c, N·m (N
+    /// for a slide); empty for a joint with a staged spring, friction or end stops, whose torque
+    /// is not linear.
+    pub torque: Vec<f64>,
+    /// Per harmonic, the torque's phase, rad.
+    pub torque_phase: Vec<f64>,
+    /// Peak |q − q⁰| of the superposed harmonics over one revolution of the base order, rad (m);
+    /// None when a multiple is not an integer.
+    pub peak: Option<f64>,
+    /// The same for the torque, N·m (N); None as for `peak`, or without a linear torque.
+    pub peak_torque: Option<f64>,
 }
 
 /// The steady order-1 line of a body's angular acceleration forced by gravity at the nominal
@@ -139,6 +166,63 @@ fn superposed_peak(h: &[(f64, f64, f64)]) -> Option<f64> {
     Some(peak)
 }
 
+/// Each element's lines at one speed: the coordinate amplitudes q̂ per N·m under the weighted
+/// inputs (eq. 22, one solve per input and harmonic for all coordinates), times each harmonic's
+/// torque; the transmitted torque is `(k + i·kΩ·c)·q̂` at the harmonic's frequency.
+fn element_lines(
+    mech: &Mechanism,
+    resp: &OrderResponse,
+    elements: &[usize],
+    base_order: f64,
+    omega: f64,
+    harmonics: &[Harmonic],
+) -> LinResult<Vec<ElementLines>> {
+    if elements.is_empty() {
+        return Ok(Vec::new());
+    }
+    let per_harmonic =
+        harmonics.iter().map(|h| resp.coordinate_responses(h.multiple * base_order)).collect::<LinResult<Vec<_>>>()?;
+    let mut out = Vec::with_capacity(elements.len());
+    for &j in elements {
+        let Some(c) = mech.coordinate(j) else { continue };
+        let joint = &mech.joints[j];
+        let linear = joint.couplings.is_empty();
+        let k = joint.spring.map_or(0.0, |sp| sp.stiffness);
+        let mut e = ElementLines {
+            joint: j,
+            amplitude: Vec::new(),
+            phase: Vec::new(),
+            torque: Vec::new(),
+            torque_phase: Vec::new(),
+            peak: None,
+            peak_torque: None,
+        };
+        for (h, q) in harmonics.iter().zip(&per_harmonic) {
+            let turn = if h.amplitude < 0.0 { PI } else { 0.0 };
+            let qh = q[c] * h.amplitude.abs();
+            e.amplitude.push(qh.norm());
+            e.phase.push(h.phase + qh.arg() + turn);
+            if linear {
+                let w = h.multiple * base_order * omega;
+                let t = C64::new(k, w * joint.damper) * qh;
+                e.torque.push(t.norm());
+                e.torque_phase.push(h.phase + t.arg() + turn);
+            }
+        }
+        let lines = |a: &[f64], p: &[f64]| -> Vec<(f64, f64, f64)> {
+            harmonics.iter().zip(a.iter().zip(p)).map(|(h, (&a, &p))| (h.multiple, a, p)).collect()
+        };
+        // One line peaks at its amplitude, exactly (and whatever its multiple).
+        let peak = |l: Vec<(f64, f64, f64)>| if let [(_, a, _)] = l[..] { Some(a) } else { superposed_peak(&l) };
+        e.peak = peak(lines(&e.amplitude, &e.phase));
+        if linear {
+            e.peak_torque = peak(lines(&e.torque, &e.torque_phase));
+        }
+        out.push(e);
+    }
+    Ok(out)
+}
+
 /// The linear steady-state response per order of `spec.body`'s angular acceleration to the
 /// multi-order torque of each speed case (eq. 24 at base order `base_order`), superposing the
 /// harmonics each through the frequency response at its own order, with the locked comparison
@@ -163,6 +247,9 @@ pub struct MultiOrderOptions<'a> {
     /// The excited joints of each speed case, in the order of the cases, in place of
     /// `spec.inputs` (shares that follow the speed, such as a propeller's torque ∝ rpm²).
     pub inputs: Option<&'a [Vec<Input>]>,
+    /// Joints (tree indices) whose coordinate and spring-and-damper torque are reported at every
+    /// speed ([`SpeedResponse::elements`]); a joint without coordinate is skipped.
+    pub elements: &'a [usize],
 }
 
 /// [`multi_order_response`] with modal damping and per-speed inputs ([`MultiOrderOptions`]).
@@ -257,6 +344,7 @@ pub fn multi_order_response_with(
                 (peak_in_rotor_angle(&lines(false)), peak_in_rotor_angle(&lines(true)))
             }
         };
+        let elements = element_lines(mech, &resp, options.elements, base_order, omega, &case.harmonics)?;
         out.push(SpeedResponse {
             rpm: case.rpm,
             omega,
@@ -265,6 +353,7 @@ pub fn multi_order_response_with(
             peak,
             locked_peak,
             gravity,
+            elements,
         });
     }
     Ok(out)

@@ -5,7 +5,7 @@
 //! them, and these methods, which read the mechanism, do not import each other.
 
 use crate::error::{Error, Result};
-use crate::model::gears::{Follow, Gear, renumber};
+use crate::model::gears::{Follow, Gear, LOOP_TOL, renumber};
 use crate::model::mechanism::Mechanism;
 use crate::model::speeds::Speeds;
 
@@ -76,47 +76,93 @@ impl Mechanism {
             .collect()
     }
 
-    /// Why the spin angle of root joint `spin` is not cyclic through a coupling, if it is not: the
-    /// linear analysis drops that angle, which is right only when shifting it changes no force.
-    /// A joint geared to the spin coordinate keeps it cyclic when it turns about a fixed axis of
-    /// its own (a revolute joint on ground) with no spring and no compliant mesh; any other joint
-    /// moved by the spin angle through a coupling changes the forces with it.
-    pub fn spin_breaks_cyclic(&self, spin: usize) -> Option<String> {
-        let s = self.joints.get(spin)?.coordinate?;
+    /// The rigid rotation driven by root joint `spin` (issue 29, item 1): per reduced coordinate,
+    /// its rate when the spin coordinate turns at unit rate and no spring, shaft or mesh deflects
+    /// (z with `z[s] = 1`). Rigid gears are already in the coordinates; a compliant mesh between
+    /// a turning joint and another passes the rotation on through its ratio (`q̇_joint = ratio ·
+    /// q̇_follows` leaves its deflection unchanged), so a branched gearbox whose shafts are springs
+    /// between meshes turns as a whole along z. Coordinates the rotation does not reach (a
+    /// pendulum, a shaft's twist behind a hub) get 0.
+    ///
+    /// The linear analysis and harmonic balance expand about `q⁰ + Ωt z`, which is a steady motion
+    /// only when shifting the coordinates along z changes no force: every joint that turns with
+    /// the rotation must turn about a fixed axis of its own (a revolute joint on ground) with no
+    /// spring, staged spring or end stop to ground. Errs with the reason otherwise, and when a
+    /// loop of meshes has ratios whose product is not 1 (then no rigid rotation exists: the train
+    /// locks up statically).
+    pub fn rigid_rotation(&self, spin: usize) -> std::result::Result<Vec<f64>, String> {
+        let s = self
+            .joints
+            .get(spin)
+            .and_then(|j| j.coordinate)
+            .ok_or_else(|| "the spin joint has no coordinate".to_string())?;
         let map = self.follow_map();
+        let mut z: Vec<Option<f64>> = vec![None; self.ndof()];
+        z[s] = Some(1.0);
+        let rate = |z: &[Option<f64>], j: usize| map[j].and_then(|f| z[f.coordinate].map(|r| f.factor * r));
+        let meshes: Vec<&Gear> = self.gears.iter().filter(|g| g.mesh.is_some()).collect();
+        // Each sweep reaches at least one more coordinate or stops: at most one per mesh.
+        for _ in 0..=meshes.len() {
+            let mut changed = false;
+            for g in &meshes {
+                let (Some(fj), Some(ff)) = (map[g.joint], map[g.follows]) else { continue };
+                match (rate(&z, g.joint), rate(&z, g.follows)) {
+                    (None, Some(rf)) => {
+                        z[fj.coordinate] = Some(g.ratio * rf / fj.factor);
+                        changed = true;
+                    }
+                    (Some(rj), None) => {
+                        z[ff.coordinate] = Some(rj / g.ratio / ff.factor);
+                        changed = true;
+                    }
+                    (Some(rj), Some(rf))
+                        if (rj - g.ratio * rf).abs() > LOOP_TOL * rj.abs().max((g.ratio * rf).abs()) =>
+                    {
+                        return Err(format!(
+                            "the mesh of joint `{}` on `{}` (ratio {}) closes a loop of couplings whose ratios \
+                             disagree: turning the train as a whole needs {} here, so the gears cannot turn without \
+                             deflecting a mesh (no rigid rotation; check the ratios' values and signs)",
+                            self.joints[g.joint].name,
+                            self.joints[g.follows].name,
+                            g.ratio,
+                            rj / rf
+                        ));
+                    }
+                    _ => {}
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        let z: Vec<f64> = z.into_iter().map(|r| r.unwrap_or(0.0)).collect();
         for (j, joint) in self.joints.iter().enumerate() {
-            if j == spin || map[j].is_none_or(|f| f.coordinate != s) {
+            let Some(r) = map[j].map(|f| f.factor * z[f.coordinate]) else { continue };
+            if j == spin || r == 0.0 {
                 continue;
             }
-            let meshed = self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == j || g.follows == j));
             let sprung = joint.spring.is_some_and(|sp| sp.stiffness != 0.0);
-            if joint.parent.is_some() || !joint.kind.rotates() || sprung || meshed {
-                return Some(format!(
-                    "joint `{}` is geared to the spin joint `{}` and {}, so the spin angle is not cyclic; the \
-                     linear analysis needs it cyclic (put the compliance in a shaft spring after a rigid gear, or \
-                     mount the gears on a carrier driven by the spin joint)",
+            let staged = joint.couplings.stages.is_some() || joint.couplings.stops.is_some();
+            if joint.parent.is_some() || !joint.kind.rotates() || sprung || staged {
+                return Err(format!(
+                    "joint `{}` turns with the spin joint `{}` (through a gear or mesh) and {}, so the \
+                     rotation is not cyclic; the linear analysis and harmonic balance need every joint that \
+                     turns with the spin to turn on a bearing of its own (a revolute joint on ground) with no \
+                     spring to ground (put a shaft's compliance in a mesh of ratio 1 between two such joints, \
+                     or in a joint spring behind them)",
                     joint.name,
                     self.joints[spin].name,
-                    if meshed {
-                        "meshes compliantly"
-                    } else if sprung {
+                    if sprung {
                         "has a spring"
+                    } else if staged {
+                        "has a staged spring or end stops"
                     } else {
                         "does not turn about a fixed axis of its own"
                     }
                 ));
             }
         }
-        // The spin joint's own mesh turns with its angle too.
-        if self.gears.iter().any(|g| g.mesh.is_some() && (g.joint == spin || g.follows == spin)) {
-            return Some(format!(
-                "the spin joint `{}` meshes compliantly with another joint, so the spin angle is not cyclic; the \
-                 linear analysis needs it cyclic (mount the gears on a carrier driven by the spin joint, or use a \
-                 rigid gear and a shaft spring)",
-                self.joints[spin].name
-            ));
-        }
-        None
+        Ok(z)
     }
 
     /// The first rigidly driven rotating joint on the path from ground to body `body`, if any: the

@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 
 /// Relative tolerance on the product of the ratios around a loop of couplings (and on its
 /// offset) for the loop to count as consistent: rounding of a few multiplications.
-const LOOP_TOL: f64 = 1e-12;
+pub(crate) const LOOP_TOL: f64 = 1e-12;
 
 /// A coupling as written in the mechanism file's `gears: [...]`:
 /// `Gear(joint: "output", follows: "input", ratio: -3.2)` says `q̇_output = −3.2 · q̇_input`.

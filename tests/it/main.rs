@@ -34,6 +34,7 @@ mod input_hardening;
 mod integration;
 mod joint_kinds;
 mod linear;
+mod marine_gearbox;
 mod modal_damping;
 mod no_nan_outputs;
 mod order_tracking;

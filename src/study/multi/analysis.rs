@@ -25,6 +25,35 @@ impl Analysis for MultiOrderSpec {
         let (src, k) = (r.src, r.k);
         let at = |f: &str| format!("analyses[{k}].{f}");
         let m = self;
+        if let Some(range) = m.speed_range.take() {
+            let field = at("speed_range");
+            if !m.speeds.is_empty() {
+                return Err(src.error(&field, "give either `speeds` or `speed_range`, not both"));
+            }
+            if !(2..=MAX_LIST).contains(&range.points) {
+                return Err(src.error(&format!("{field}.points"), format!("give 2 to {MAX_LIST} speeds")));
+            }
+            let ok = |v: f64| v.is_finite() && v > 0.0 && v <= crate::study::validate::MAX_RPM;
+            if !(ok(range.rpm_min) && ok(range.rpm_max) && range.rpm_min < range.rpm_max) {
+                return Err(src.error(
+                    &field,
+                    format!("need 0 < rpm_min < rpm_max ≤ 1e6, got {} and {} rpm", range.rpm_min, range.rpm_max),
+                ));
+            }
+            let step = (range.rpm_max - range.rpm_min) / (range.points - 1) as f64;
+            m.speeds = (0..range.points)
+                .map(|i| super::spec::SpeedPoint {
+                    // Rounded to 12 significant digits: 14.6 rpm, not 14.600000000000001.
+                    rpm: if i + 1 == range.points {
+                        range.rpm_max
+                    } else {
+                        format!("{:.11e}", range.rpm_min + step * i as f64).parse().unwrap_or(range.rpm_min)
+                    },
+                    harmonics: range.harmonics.clone(),
+                })
+                .collect();
+            // Not kept: the spec goes on (results.json, a Dask worker) with the speeds it became.
+        }
         let Some(file) = &m.engine else { return Ok(()) };
         let engine = r.engine(&at("engine"), file)?;
         if !(1..=crate::study::validate::MAX_LIST).contains(&m.engine_multiples) {

@@ -59,6 +59,11 @@ pub struct SpeedResult {
     pub linear_gravity: Option<f64>,
     /// The locked twin's, rad/s².
     pub linear_gravity_locked: Option<f64>,
+    /// Each reported element in the linear response (eq. 22 per harmonic, superposed): its
+    /// amplitude per tracked multiple and peak, and the torque of its spring and damper. Empty
+    /// without the linear part or without elements (and then left out of `results.json`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub linear_elements: Vec<ElementResponse>,
     /// Every periodic steady state found by harmonic balance at this speed.
     pub hbm: Vec<HbmState>,
     /// The torque scale s < 1 (every harmonic's amplitude times s) at which the low-amplitude
@@ -208,13 +213,13 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             )),
         }
     }
-    let (linear, linear_locked, gravity) = if spec.linear {
+    let (linear, linear_locked, gravity, linear_elements) = if spec.linear {
         linear_amplitudes(study, spec).unwrap_or_else(|e| {
             failures.push(format!("{} linear response: {e}", spec.name));
-            (Vec::new(), Vec::new(), Vec::new())
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new())
         })
     } else {
-        (Vec::new(), Vec::new(), Vec::new())
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new())
     };
     let speeds: Vec<SpeedResult> = spec
         .speeds
@@ -229,6 +234,7 @@ pub(crate) fn compute(study: &Study, spec: &MultiOrderSpec, progress: &Progress)
             linear_locked: linear_locked.get(i).cloned(),
             linear_gravity: gravity.get(i).copied().flatten().map(|g| g.0),
             linear_gravity_locked: gravity.get(i).copied().flatten().map(|g| g.1),
+            linear_elements: linear_elements.get(i).cloned().unwrap_or_default(),
             hbm: Vec::new(),
             hbm_lower_fold: None,
             hbm_ramp: None,
@@ -350,6 +356,22 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
         table.push("linear_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity));
         if has_locked {
             table.push("linear_locked_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity_locked));
+        }
+    }
+    if spec.linear {
+        // Each reported element in the linear response: its amplitude per order and peak, and its
+        // spring-and-damper torque.
+        for (e, &j) in study.elements.iter().enumerate() {
+            let joint = &study.mechanism.joints[j];
+            let pick = |s: &SpeedResult| s.linear_elements.get(e).filter(|x| x.joint == joint.name).cloned();
+            if !result.speeds.iter().any(|s| pick(s).is_some()) {
+                continue;
+            }
+            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |x| f(&x))).collect::<Vec<f64>>()
+            };
+            let torque = result.speeds.iter().filter_map(pick).any(|x| x.torque.is_some());
+            push_element_columns(&mut table, joint, &spec.multiples, torque, "linear_", &el);
         }
     }
     if spec.time_domain {
@@ -538,7 +560,10 @@ type GravityPerSpeed = Vec<Option<(f64, f64)>>;
 /// Linear amplitudes per speed and tracked multiple, of the mechanism and of its locked twin:
 /// each harmonic through the order-domain response of eq. (22); a multiple at order 1 also
 /// holds gravity's line, added as a phasor. With gravity, its order-1 line per speed.
-fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, PerSpeed, GravityPerSpeed)> {
+fn linear_amplitudes(
+    study: &Study,
+    spec: &MultiOrderSpec,
+) -> Result<(PerSpeed, PerSpeed, GravityPerSpeed, Vec<Vec<ElementResponse>>)> {
     let rspec = crate::linear::ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
         inputs: study.inputs(&spec.excite),
@@ -552,8 +577,11 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
     let per_speed: Vec<Vec<crate::linear::Input>> =
         spec.speeds.iter().map(|p| study.inputs(&crate::study::excite_at_rpm(&spec.excite, p.rpm))).collect();
     let laws = spec.excite.iter().any(|e| !e.law.is_constant());
-    let options =
-        crate::linear::MultiOrderOptions { modal: spec.modal(), inputs: laws.then_some(per_speed.as_slice()) };
+    let options = crate::linear::MultiOrderOptions {
+        modal: spec.modal(),
+        inputs: laws.then_some(per_speed.as_slice()),
+        elements: &study.elements,
+    };
     let res =
         crate::linear::multi_order_response_with(mech, &rspec, spec.order, &cases, None, &options).map_err(|e| {
             crate::error::Error::Model {
@@ -571,7 +599,51 @@ fn linear_amplitudes(study: &Study, spec: &MultiOrderSpec) -> Result<(PerSpeed, 
             .collect()
     };
     let gravity = res.iter().map(|r| r.gravity.map(|g| (g.amplitude, g.locked_amplitude))).collect();
-    Ok((res.iter().map(|r| pick(r, false)).collect(), res.iter().map(|r| pick(r, true)).collect(), gravity))
+    let elements = res.iter().map(|r| linear_elements(mech, spec, r)).collect();
+    Ok((res.iter().map(|r| pick(r, false)).collect(), res.iter().map(|r| pick(r, true)).collect(), gravity, elements))
+}
+
+/// The elements of one speed's linear response as the study reports them: per tracked multiple,
+/// the lines at that order added as phasors (0 where none is), and the superposed peaks.
+fn linear_elements(
+    mech: &crate::model::mechanism::Mechanism,
+    spec: &MultiOrderSpec,
+    r: &crate::linear::SpeedResponse,
+) -> Vec<ElementResponse> {
+    let per_multiple = |a: &[f64], p: &[f64]| -> Vec<f64> {
+        spec.multiples
+            .iter()
+            .map(|m| {
+                let same = |h: &crate::linear::HarmonicResponse| (h.multiple - m).abs() <= 1e-12 * m.abs().max(1.0);
+                let sum: crate::linear::C64 = r
+                    .harmonics
+                    .iter()
+                    .zip(a.iter().zip(p))
+                    .filter(|(h, _)| same(h))
+                    .map(|(_, (&a, &p))| crate::linear::C64::from_polar(a, p))
+                    .sum();
+                sum.norm()
+            })
+            .collect()
+    };
+    r.elements
+        .iter()
+        .map(|e| {
+            let joint = &mech.joints[e.joint];
+            ElementResponse {
+                joint: joint.name.clone(),
+                unit: joint.kind.coordinate_unit(),
+                amplitude: per_multiple(&e.amplitude, &e.phase),
+                peak: e.peak.unwrap_or(f64::NAN),
+                torque: (!e.torque.is_empty() && (joint.spring.is_some() || joint.damper != 0.0)).then(|| {
+                    super::elements::ElementTorque {
+                        amplitude: per_multiple(&e.torque, &e.torque_phase),
+                        peak: e.peak_torque.unwrap_or(f64::NAN),
+                    }
+                }),
+            }
+        })
+        .collect()
 }
 
 /// Integrates in windows of `window_s` until the amplitudes of the last two windows agree to

@@ -173,8 +173,12 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
             " last-two-window change | max abs relative angle (rad) | simulated (s) | mean-speed correction (rad/s) |";
         rule += "---|---|---|---|";
     }
+    let shown = thinned(r.speeds.len());
+    if shown.1 > 1 {
+        let _ = writeln!(md, "Every {}th of the {} speeds (each one is in the CSV):\n", shown.1, r.speeds.len());
+    }
     let _ = writeln!(md, "{head}\n{rule}");
-    for s in &r.speeds {
+    for s in r.speeds.iter().enumerate().filter(|(i, _)| shown.0(*i)).map(|(_, s)| s) {
         let mut row = format!("| {} |", s.rpm);
         for k in 0..spec.multiples.len() {
             if spec.time_domain {
@@ -208,6 +212,7 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');
+    md += &linear_element_peaks(r);
     // Element by element over the last window: every absorber and spring, not only the largest.
     let steady = r
         .speeds
@@ -253,6 +258,54 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     md
 }
 
+/// Which rows of an n-speed table the summary shows, and the stride: every one up to 60 speeds,
+/// else every ⌈n/40⌉th and the last (a fine speed grid stays readable; the CSV has them all).
+fn thinned(n: usize) -> (impl Fn(usize) -> bool, usize) {
+    let stride = if n > 60 { n.div_ceil(40) } else { 1 };
+    (move |i: usize| i.is_multiple_of(stride) || i + 1 == n, stride)
+}
+
+/// The largest linear torque of each reported element over the speeds, at its grid speed and
+/// refined between the grid speeds by the parabola through the largest value and its two
+/// neighbours (a resonance's peak on a fine grid); empty without linear elements.
+fn linear_element_peaks(r: &MultiOrderResult) -> String {
+    let Some(first) = r.speeds.iter().find(|s| !s.linear_elements.is_empty()) else { return String::new() };
+    let mut md = String::from(
+        "Linear response of the elements: the largest torque of each element's spring and damper over the \
+         speeds (superposed harmonics), at its grid speed and refined by a parabola through its neighbours:\n\n\
+         | element | peak torque (N·m; N) | at rpm | refined peak | at rpm |\n|---|---|---|---|---|\n",
+    );
+    for (e, el) in first.linear_elements.iter().enumerate() {
+        let values: Vec<(f64, f64)> = r
+            .speeds
+            .iter()
+            .map(|s| (s.rpm, s.linear_elements.get(e).and_then(|x| x.torque.as_ref()).map_or(f64::NAN, |t| t.peak)))
+            .collect();
+        let Some((i, &(rpm, top))) =
+            values.iter().enumerate().filter(|(_, v)| v.1.is_finite()).max_by(|a, b| a.1.1.total_cmp(&b.1.1))
+        else {
+            continue;
+        };
+        let refined =
+            (i > 0 && i + 1 < values.len()).then(|| parabola_vertex(values[i - 1], values[i], values[i + 1])).flatten();
+        let (rr, rt) = refined.map_or(("–".into(), "–".into()), |(x, y)| (format!("{x:.4}"), format!("{y:.5e}")));
+        let _ = writeln!(md, "| `{}` | {top:.5e} | {rpm} | {rt} | {rr} |", el.joint);
+    }
+    md.push('\n');
+    md
+}
+
+/// The maximum of the parabola through three points (x ascending, the middle one the largest):
+/// `(x, y)` at its vertex, None when the points do not bend down.
+fn parabola_vertex((x0, y0): (f64, f64), (x1, y1): (f64, f64), (x2, y2): (f64, f64)) -> Option<(f64, f64)> {
+    let (h0, h2) = (x0 - x1, x2 - x1);
+    // y = y1 + b t + a t², t = x − x1, through the two neighbours.
+    let a = ((y2 - y1) / h2 - (y0 - y1) / h0) / (h2 - h0);
+    let b = (y0 - y1) / h0 - a * h0;
+    let t = -b / (2.0 * a);
+    (a < 0.0 && (h0..=h2).contains(&t)).then(|| (x1 + t, y1 - b * b / (4.0 * a)))
+}
+
 /// With an engine: its order torques T_k at each speed (N·m, before any joint's share), the
 /// excitation every other table answers.
 fn engine_table(r: &MultiOrderResult) -> String {
@@ -265,7 +318,8 @@ fn engine_table(r: &MultiOrderResult) -> String {
         writeln!(md, "The engine's order torques T_k at each speed (N·m, from its cylinder pressure and inertia):\n");
     let head: String = orders.iter().map(|o| format!(" T order {} (N·m) |", fmt_mult(*o))).collect();
     let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(orders.len()));
-    for s in &r.speeds {
+    let shown = thinned(r.speeds.len());
+    for s in r.speeds.iter().enumerate().filter(|(i, _)| shown.0(*i)).map(|(_, s)| s) {
         let cells: String = orders.iter().map(|&o| format!(" {} |", cell(s.engine_torque(o), 4))).collect();
         let _ = writeln!(md, "| {} |{cells}", s.rpm);
     }
@@ -284,7 +338,8 @@ fn share_table(spec: &MultiOrderSpec) -> String {
         writeln!(md, "Excitation shares at each speed (scale × the joint's law in speed; every harmonic times it):\n");
     let head: String = spec.excite.iter().map(|e| format!(" `{}` |", e.joint)).collect();
     let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(spec.excite.len()));
-    for p in &spec.speeds {
+    let shown = thinned(spec.speeds.len());
+    for p in spec.speeds.iter().enumerate().filter(|(i, _)| shown.0(*i)).map(|(_, p)| p) {
         let cells: String = crate::study::excite_at_rpm(&spec.excite, p.rpm)
             .iter()
             .map(|e| format!(" {} |", cell(e.scale, 6)))

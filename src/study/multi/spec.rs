@@ -16,6 +16,24 @@ pub struct SpeedPoint {
     pub harmonics: Vec<Harmonic>,
 }
 
+/// Evenly spaced operating speeds with the same harmonics at each (a torsional engineer's forced
+/// response over speed, the harmonics' amplitudes following the speed through the excited
+/// joints' laws); expanded into `speeds` when the study is loaded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedRange {
+    /// Lowest speed, rpm (> 0).
+    pub rpm_min: f64,
+    /// Highest speed, rpm.
+    pub rpm_max: f64,
+    /// Number of speeds, 2 or more, ends included.
+    pub points: usize,
+    /// The order harmonics at every speed (`multiple` 1 = order n), N·m and rad; left out with
+    /// an `engine`, which gives them.
+    #[serde(default)]
+    pub harmonics: Vec<Harmonic>,
+}
+
 /// Load case 2: `T = T_m + Σ T_k sin(k n Ω t + α_k)` held at each speed until steady.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -24,8 +42,12 @@ pub struct MultiOrderSpec {
     pub name: String,
     /// Base excitation order n.
     pub order: f64,
-    /// The operating speeds and their harmonics.
+    /// The operating speeds and their harmonics (or `speed_range`).
+    #[serde(default)]
     pub speeds: Vec<SpeedPoint>,
+    /// Evenly spaced speeds instead of the list `speeds` (not both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_range: Option<SpeedRange>,
     /// Harmonic multiples m tracked (default 1 and 2).
     #[serde(default = "crate::study::spec::default_multiples")]
     pub multiples: Vec<f64>,

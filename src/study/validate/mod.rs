@@ -71,6 +71,11 @@ pub(crate) fn half_multiple(v: f64) -> bool {
 /// stops it. Returns whether the spin is unsteady but accepted, for an analysis whose other parts
 /// cannot take it (MultiOrder's time runs).
 pub(crate) fn require_steady_spin(c: &Checks<'_>, kind: &str, name: &str, linear: bool) -> Result<bool> {
+    // Geared or meshed joints must turn with the spin as a whole (no loop of disagreeing ratios,
+    // no turning joint held by a spring): else no steady spin exists to expand about.
+    if let Err(why) = c.mech.rigid_rotation(c.spin) {
+        return Err(c.src.error(&format!("analyses[{}]", c.k), format!("{kind} `{name}`: {why}")));
+    }
     let Some(why) = steady_spin_obstacle(c.mech, c.spin) else { return Ok(false) };
     if !linear || c.mech.joints[c.spin].spring.is_some() {
         return Err(c.src.error(&format!("analyses[{}]", c.k), format!("{kind} `{name}`: {why}")));
