@@ -44,8 +44,12 @@ impl Hbm {
                 self.qd[k] = self.qdt[k * nt + j];
                 self.qdd[k] = self.qddt[k * nt + j];
             }
-            self.q[spin] += omega * t;
-            self.qd[spin] += omega;
+            for (k, z) in self.rotation.iter().enumerate() {
+                if *z != 0.0 {
+                    self.q[k] += z * omega * t;
+                    self.qd[k] += z * omega;
+                }
+            }
             // The mean torque acts at the spin joint (through the evaluator's g); the oscillating
             // torques at their joints are subtracted below.
             let torque = tm;
@@ -57,7 +61,7 @@ impl Hbm {
                     &self.qdd,
                     torque,
                     spin,
-                    self.cyclic,
+                    self.spin_column_zero,
                     self.opts.fd_step,
                     &mut self.lin,
                 );
@@ -86,7 +90,7 @@ impl Hbm {
                     Parameter::Order | Parameter::Speed { .. } => {
                         let mut s = 0.0;
                         for k in 0..n {
-                            let qd_per = if k == spin { self.qd[k] - omega } else { self.qd[k] };
+                            let qd_per = self.qd[k] - self.rotation[k] * omega;
                             s += lin.b[i * n + k] * qd_per + 2.0 * lin.c[i * n + k] * self.qdd[k];
                         }
                         // A speed-following forcing (an engine's inertia torque, ∝ Ω²) adds
@@ -94,7 +98,8 @@ impl Hbm {
                         if param == Parameter::Order {
                             s / order
                         } else {
-                            s / omega + lin.b[i * n + spin] - scale * 2.0 * omega * per_w2
+                            let mean_rate: f64 = (0..n).map(|k| lin.b[i * n + k] * self.rotation[k]).sum();
+                            s / omega + mean_rate - scale * 2.0 * omega * per_w2
                         }
                     }
                 };

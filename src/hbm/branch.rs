@@ -350,6 +350,7 @@ mod tests {
             base_frequency: 100.0 * n,
             harmonics: 1,
             spin: 0,
+            rotation: vec![1.0],
             coefficients: vec![0.0; 3],
             mean_torque: 0.0,
             iterations: 0,

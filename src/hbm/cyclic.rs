@@ -628,7 +628,8 @@ impl RoutedHbm {
         let Some(red) = &self.reduction else { return sol };
         let coefficients = self.expand_coefficients(&sol.coefficients, sol.harmonics);
         let spin = red.coord_back[sol.spin];
-        HbmSolution { coefficients, spin, ..sol }
+        let rotation = red.coord_map.iter().map(|&r| sol.rotation[r]).collect();
+        HbmSolution { coefficients, spin, rotation, ..sol }
     }
 
     /// The reduced problem's solution read from a full one (each set by its representative).
@@ -641,7 +642,8 @@ impl RoutedHbm {
         }
         let coefficients =
             red.coord_back.iter().flat_map(|&c| sol.coefficients[c * nb..(c + 1) * nb].iter().copied()).collect();
-        HbmSolution { coefficients, spin: red.coord_map[sol.spin], ..sol.clone() }
+        let rotation = red.coord_back.iter().map(|&c| sol.rotation[c]).collect();
+        HbmSolution { coefficients, spin: red.coord_map[sol.spin], rotation, ..sol.clone() }
     }
 }
 
@@ -654,6 +656,7 @@ fn empty() -> HbmSolution {
         base_frequency: 0.0,
         harmonics: 0,
         spin: 0,
+        rotation: Vec::new(),
         coefficients: Vec::new(),
         mean_torque: 0.0,
         iterations: 0,

@@ -251,6 +251,12 @@ pub struct Hbm {
     /// The spin angle is cyclic (no gravity, no world-frame force): its column of ∂R/∂q is zero
     /// and its shift gives the trivial Floquet multiplier +1.
     cyclic: bool,
+    /// Each coordinate's share of the mean rotation Ωt (see [`HbmSolution::rotation`]).
+    rotation: Vec<f64>,
+    /// The spin angle alone moves no force (cyclic, and no joint meshed to it), so its column
+    /// of ∂R/∂q is zero and is not differenced; with meshes only the shift along `rotation` is
+    /// free of force.
+    spin_column_zero: bool,
     omega: f64,
     /// Torque scale s of the fixed-parameter solves.
     scale: f64,
@@ -381,6 +387,14 @@ impl Hbm {
         // with period 2π, and a periodic solution needs a base period that is a whole number of
         // revolutions (checked per solve, see `check_base`).
         let cyclic = !mech.loads.needs_world_orientation();
+        // The mean rotation of every coordinate (1 at the spin, the ratios through meshes): a
+        // geared train turns as a whole (issue 29, item 1).
+        let rotation = mech.rigid_rotation(spin_joint).map_err(HbmError::Invalid)?;
+        if !cyclic && rotation.iter().enumerate().any(|(k, &z)| k != spin && z != 0.0) {
+            return bad("gravity or a world-frame force with joints meshed to the spin joint: they turn at other \
+                        rates, so the forcing has no common period"
+                .into());
+        }
         if !(omega.is_finite() && omega > 0.0) {
             return bad(format!("mean speed must be positive and finite, got {omega} rad/s"));
         }
@@ -512,6 +526,8 @@ impl Hbm {
             ev,
             n,
             spin,
+            spin_column_zero: cyclic && rotation.iter().enumerate().all(|(k, &z)| k == spin || z == 0.0),
+            rotation,
             cyclic,
             omega,
             scale: 1.0,
@@ -643,6 +659,7 @@ impl Hbm {
             base_frequency: self.ratio * order * at.omega,
             harmonics: self.opts.harmonics,
             spin: self.spin,
+            rotation: self.rotation.clone(),
             coefficients,
             mean_torque: x[self.spin * self.nb] * self.t_scale,
             iterations,
@@ -674,10 +691,8 @@ impl Hbm {
             for j in 0..nt {
                 let t = 2.0 * PI * j as f64 / nt as f64 / w0;
                 let (mut q, mut qd) = (self.qt[k * nt + j], self.qdt[k * nt + j]);
-                if k == self.spin {
-                    q += at.omega * t;
-                    qd += at.omega;
-                }
+                q += self.rotation[k] * at.omega * t;
+                qd += self.rotation[k] * at.omega;
                 self.series[j] = law.torque(q, qd);
             }
             self.aft.spectrum(&self.series, &mut spec);

@@ -138,7 +138,9 @@ impl Evaluator {
             self.kane.residual_jacobian(t, q, &self.u, &self.ud, &mut lin.r, &mut lin.a, du, m);
             for i in 0..n {
                 lin.r[i] -= self.g[i] * torque;
-                lin.a[i * n + spin] = 0.0;
+                if cyclic {
+                    lin.a[i * n + spin] = 0.0;
+                }
                 let (b, c) = (&mut lin.b[i * n..(i + 1) * n], &mut lin.c[i * n..(i + 1) * n]);
                 b.fill(0.0);
                 c.fill(0.0);

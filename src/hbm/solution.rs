@@ -23,6 +23,10 @@ pub struct HbmSolution {
     pub harmonics: usize,
     /// Index of the spin coordinate.
     pub spin: usize,
+    /// Each coordinate's share of the mean rotation: `q_k(t) = rotation_k Ω t + p_k(t)`, 1 at
+    /// the spin coordinate, the gear ratios at joints meshed to it, 0 elsewhere
+    /// ([`crate::model::mechanism::Mechanism::rigid_rotation`]).
+    pub rotation: Vec<f64>,
     /// Fourier coefficients of the periodic parts p_k, row-major per coordinate k:
     /// `[a_k0, a_k1, b_k1, …, a_kH, b_kH]` (rad), `p_k(t) = a_k0 + Σ a_kh cos hω₀t + b_kh sin hω₀t`.
     /// The spin coordinate's `a_s0` is the gauge 0.
@@ -118,8 +122,10 @@ impl HbmSolution {
             q[k] = p;
             qd[k] = pd;
         }
-        q[self.spin] += self.omega * t;
-        qd[self.spin] += self.omega;
+        for (k, z) in self.rotation.iter().enumerate() {
+            q[k] += z * self.omega * t;
+            qd[k] += z * self.omega;
+        }
         (q, qd)
     }
 

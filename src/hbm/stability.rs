@@ -32,7 +32,7 @@
 //! obtained by differencing full time integrations.
 
 use super::{Hbm, HbmError, HbmSolution};
-use nalgebra::{Complex, DMatrix};
+use nalgebra::{Complex, DMatrix, DVector};
 use std::f64::consts::PI;
 
 /// Floquet multipliers of a periodic solution and the verdict.
@@ -157,7 +157,7 @@ impl Hbm {
             && 2 * nb > 12
             && let Some(phi) = self.tree_monodromy(period)
         {
-            return finish(phi, 2 * nb, drop, order);
+            return finish(phi, 2 * nb, drop, self.rotation_to_drop(coords, drop).as_deref(), order);
         }
         // [K | L] = C⁻¹ [A | B] at the N_t samples, stored as 2n² series of N_t values (entry
         // (i, c) of the n × 2n block is series i·2n + c), n = coords.len().
@@ -194,7 +194,17 @@ impl Hbm {
             }
         }
         let phi = monodromy(&sys, nb, ns, period);
-        finish(phi, 2 * nb, drop.and_then(|k| coords.iter().position(|&c| c == k)), order)
+        let rotation = self.rotation_to_drop(coords, drop);
+        finish(phi, 2 * nb, drop.and_then(|k| coords.iter().position(|&c| c == k)), rotation.as_deref(), order)
+    }
+
+    /// The rigid rotation over `coords` when the dropped state is the spin angle and joints turn
+    /// with it through meshes (then the trivial +1 belongs to the shift along it, not to the
+    /// spin angle alone); None when the spin angle alone is that shift.
+    fn rotation_to_drop(&self, coords: &[usize], drop: Option<usize>) -> Option<Vec<f64>> {
+        drop?;
+        let z: Vec<f64> = coords.iter().map(|&c| self.rotation[c]).collect();
+        z.iter().zip(coords).any(|(&z, &c)| c != self.spin && z != 0.0).then_some(z)
     }
 
     /// Φ(T) of the whole mechanism, row-major, in the states `(δq, δu)` with `δu = W δq̇` (W is
@@ -412,11 +422,33 @@ impl Hbm {
 }
 
 /// The multipliers of a d × d monodromy (row-major), without the state at `drop` (the cyclic
-/// spin angle), by decreasing modulus.
-fn finish(phi: Vec<f64>, d: usize, drop: Option<usize>, order: f64) -> Result<Vec<Complex<f64>>, HbmError> {
-    let phi = DMatrix::from_row_slice(d, d, &phi);
+/// spin angle), by decreasing modulus. With a rigid rotation z over the angles (the first d/2
+/// states) the trivial +1 has the eigenvector `[z; 0]`: Φ is first taken to the coordinates
+/// `p = q − z q_drop` (`Φ' = (I − N) Φ (I + N)`, `N = (z − e_drop) e_dropᵀ`), in which that
+/// eigenvector is the unit vector of the dropped state.
+fn finish(
+    phi: Vec<f64>,
+    d: usize,
+    drop: Option<usize>,
+    rotation: Option<&[f64]>,
+    order: f64,
+) -> Result<Vec<Complex<f64>>, HbmError> {
+    let mut phi = DMatrix::from_row_slice(d, d, &phi);
     if phi.iter().any(|v| !v.is_finite()) {
         return Err(HbmError::NonFinite { order });
+    }
+    if let (Some(p), Some(z)) = (drop, rotation) {
+        let mut zs = DVector::zeros(d);
+        zs.rows_mut(0, z.len()).copy_from(&DVector::from_row_slice(z));
+        let col = &phi * zs;
+        phi.set_column(p, &col);
+        let row = phi.row(p).clone_owned();
+        for (j, &zj) in z.iter().enumerate() {
+            if j != p && zj != 0.0 {
+                let r = phi.row(j) - &row * zj;
+                phi.set_row(j, &r);
+            }
+        }
     }
     let (reduced, dim) = match drop {
         Some(p) => (phi.remove_row(p).remove_column(p), d - 1),

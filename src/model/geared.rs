@@ -91,51 +91,14 @@ impl Mechanism {
     /// loop of meshes has ratios whose product is not 1 (then no rigid rotation exists: the train
     /// locks up statically).
     pub fn rigid_rotation(&self, spin: usize) -> std::result::Result<Vec<f64>, String> {
-        let s = self
-            .joints
-            .get(spin)
-            .and_then(|j| j.coordinate)
-            .ok_or_else(|| "the spin joint has no coordinate".to_string())?;
-        let map = self.follow_map();
-        let mut z: Vec<Option<f64>> = vec![None; self.ndof()];
-        z[s] = Some(1.0);
-        let rate = |z: &[Option<f64>], j: usize| map[j].and_then(|f| z[f.coordinate].map(|r| f.factor * r));
-        let meshes: Vec<&Gear> = self.gears.iter().filter(|g| g.mesh.is_some()).collect();
-        // Each sweep reaches at least one more coordinate or stops: at most one per mesh.
-        for _ in 0..=meshes.len() {
-            let mut changed = false;
-            for g in &meshes {
-                let (Some(fj), Some(ff)) = (map[g.joint], map[g.follows]) else { continue };
-                match (rate(&z, g.joint), rate(&z, g.follows)) {
-                    (None, Some(rf)) => {
-                        z[fj.coordinate] = Some(g.ratio * rf / fj.factor);
-                        changed = true;
-                    }
-                    (Some(rj), None) => {
-                        z[ff.coordinate] = Some(rj / g.ratio / ff.factor);
-                        changed = true;
-                    }
-                    (Some(rj), Some(rf))
-                        if (rj - g.ratio * rf).abs() > LOOP_TOL * rj.abs().max((g.ratio * rf).abs()) =>
-                    {
-                        return Err(format!(
-                            "the mesh of joint `{}` on `{}` (ratio {}) closes a loop of couplings whose ratios \
-                             disagree: turning the train as a whole needs {} here, so the gears cannot turn without \
-                             deflecting a mesh (no rigid rotation; check the ratios' values and signs)",
-                            self.joints[g.joint].name,
-                            self.joints[g.follows].name,
-                            g.ratio,
-                            rj / rf
-                        ));
-                    }
-                    _ => {}
-                }
-            }
-            if !changed {
-                break;
-            }
+        if self.joints.get(spin).and_then(|j| j.coordinate).is_none() {
+            return Err("the spin joint has no coordinate".to_string());
         }
-        let z: Vec<f64> = z.into_iter().map(|r| r.unwrap_or(0.0)).collect();
+        let (z, disagreement) = self.rotation_propagated(spin);
+        if let Some(why) = disagreement {
+            return Err(why);
+        }
+        let map = self.follow_map();
         for (j, joint) in self.joints.iter().enumerate() {
             let Some(r) = map[j].map(|f| f.factor * z[f.coordinate]) else { continue };
             if j == spin || r == 0.0 {
@@ -247,35 +210,58 @@ impl Mechanism {
     /// alike: a compliant mesh's steady deflection rate is zero), every other joint at rest
     /// relative to its parent. Without couplings: 1 at the spin joint, 0 elsewhere.
     pub fn steady_rates(&self, spin: usize) -> Vec<f64> {
+        let (z, _) = self.rotation_propagated(spin);
+        self.follow_map().iter().map(|f| f.map_or(0.0, |f| f.factor * z[f.coordinate])).collect()
+    }
+
+    /// The rotation from the spin coordinate through the compliant meshes, per reduced
+    /// coordinate (see [`Mechanism::rigid_rotation`]), and the first disagreement around a loop
+    /// of meshes, if any (the first rate to reach a coordinate is kept). Zeros without a spin
+    /// coordinate.
+    fn rotation_propagated(&self, spin: usize) -> (Vec<f64>, Option<String>) {
+        let Some(s) = self.joints.get(spin).and_then(|j| j.coordinate) else { return (vec![0.0; self.ndof()], None) };
         let map = self.follow_map();
-        let Some(s) = self.joints.get(spin).and_then(|j| j.coordinate) else { return vec![0.0; self.joints.len()] };
-        let mut w: Vec<f64> = map.iter().map(|f| f.filter(|f| f.coordinate == s).map_or(0.0, |f| f.factor)).collect();
-        // A compliant mesh joins two independent coordinates: the one not yet turning takes the
-        // other's rate through the ratio, and its rigid followers with it. Each sweep reaches one
-        // more mesh of a chain; meshes cannot reach more coordinates than there are.
-        for _ in 0..=self.gears.len() {
+        let mut z: Vec<Option<f64>> = vec![None; self.ndof()];
+        z[s] = Some(1.0);
+        let rate = |z: &[Option<f64>], j: usize| map[j].and_then(|f| z[f.coordinate].map(|r| f.factor * r));
+        let meshes: Vec<&Gear> = self.gears.iter().filter(|g| g.mesh.is_some()).collect();
+        let mut disagreement = None;
+        // Each sweep reaches at least one more coordinate or stops: at most one per mesh.
+        for _ in 0..=meshes.len() {
             let mut changed = false;
-            for g in self.gears.iter().filter(|g| g.mesh.is_some()) {
-                let (target_joint, rate) = match (w[g.joint] != 0.0, w[g.follows] != 0.0) {
-                    (false, true) => (g.joint, g.ratio * w[g.follows]),
-                    (true, false) => (g.follows, w[g.joint] / g.ratio),
-                    _ => continue,
-                };
-                let Some(ft) = map[target_joint] else { continue };
-                for (j, f) in map.iter().enumerate() {
-                    if let Some(f) = f
-                        && f.coordinate == ft.coordinate
-                    {
-                        w[j] = f.factor / ft.factor * rate;
+            for g in &meshes {
+                let (Some(fj), Some(ff)) = (map[g.joint], map[g.follows]) else { continue };
+                match (rate(&z, g.joint), rate(&z, g.follows)) {
+                    (None, Some(rf)) => {
+                        z[fj.coordinate] = Some(g.ratio * rf / fj.factor);
+                        changed = true;
                     }
+                    (Some(rj), None) => {
+                        z[ff.coordinate] = Some(rj / g.ratio / ff.factor);
+                        changed = true;
+                    }
+                    (Some(rj), Some(rf))
+                        if disagreement.is_none()
+                            && (rj - g.ratio * rf).abs() > LOOP_TOL * rj.abs().max((g.ratio * rf).abs()) =>
+                    {
+                        disagreement = Some(format!(
+                            "the mesh of joint `{}` on `{}` (ratio {}) closes a loop of couplings whose ratios \
+                             disagree: turning the train as a whole needs {} here, so the gears cannot turn without \
+                             deflecting a mesh (no rigid rotation; check the ratios' values and signs)",
+                            self.joints[g.joint].name,
+                            self.joints[g.follows].name,
+                            g.ratio,
+                            rj / rf
+                        ));
+                    }
+                    _ => {}
                 }
-                changed = true;
             }
             if !changed {
                 break;
             }
         }
-        w
+        (z.into_iter().map(|r| r.unwrap_or(0.0)).collect(), disagreement)
     }
 
     /// The constant map T from the reduced speeds (n) to the expanded tree's (columns of

@@ -173,14 +173,24 @@ fn ramp(spec: &TransientSpec) -> (f64, f64) {
     }
 }
 
-/// The initial state `[q; u]`: the named angles, the spin joint at the profile's first speed,
-/// the named rates relative to their parents, every other joint at rest relative to its parent.
+/// The initial state `[q; u]`: the named angles, the spin joint at the profile's first speed and
+/// the joints meshed to it at their steady rates ([`Mechanism::steady_rates`]: a train behind a
+/// compliant mesh starts turning with it, not against its mesh), the named rates relative to
+/// their parents, every other joint at rest relative to its parent.
+///
+/// [`Mechanism::steady_rates`]: crate::model::mechanism::Mechanism::steady_rates
 pub(crate) fn initial_state(study: &Study, spec: &TransientSpec) -> Vec<f64> {
     let mech = &study.mechanism;
     let n = mech.ndof();
     let coord = |name: &str| mech.joint_index(name).and_then(|j| mech.coordinate(j));
     let mut x = vec![0.0; 2 * n];
     let mut qdot = vec![0.0; n];
+    let start = rpm_to_rad_s(spec.speed.rpm_range().0);
+    for (joint, w) in mech.joints.iter().zip(mech.steady_rates(study.spin)) {
+        if let Some(k) = joint.coordinate {
+            qdot[k] = w * start;
+        }
+    }
     for (name, q) in &spec.angles {
         if let Some(c) = coord(name) {
             x[c] = *q;
@@ -192,7 +202,7 @@ pub(crate) fn initial_state(study: &Study, spec: &TransientSpec) -> Vec<f64> {
         }
     }
     if let Some(c) = mech.coordinate(study.spin) {
-        qdot[c] = rpm_to_rad_s(spec.speed.rpm_range().0);
+        qdot[c] = start;
     }
     mech.speeds.u_from_qdot(&mech.speed_parents(), &qdot, &mut x[n..]);
     x
