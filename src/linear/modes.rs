@@ -268,6 +268,9 @@ impl LinearModel {
             }
             let argmax = |v: &[f64]| v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
             let top = if stiff { argmax(&strain) } else { argmax(&share) };
+            // A compliant mesh (or a shaft between two meshes) holds its strain between two
+            // coordinates: it names the mode when it holds more than any coordinate's own spring.
+            let label = if stiff { self.strain_label(&q, kq, &joints) } else { joints[top].clone() };
             let (wn, zeta) = if rep.im != 0.0 {
                 (rep.norm(), if rep.norm() > 0.0 { -rep.re / rep.norm() } else { f64::NAN })
             } else {
@@ -290,7 +293,7 @@ impl LinearModel {
                 coordinate_share: share,
                 body_energy_share: energy,
                 strain_share: strain,
-                label: joints[top].clone(),
+                label,
             };
             if kind == ModeKind::SpinSpeed {
                 let mut mode = mode;
@@ -304,6 +307,45 @@ impl LinearModel {
         modes.sort_by(|a, b| a.natural_frequency_rad_s.total_cmp(&b.natural_frequency_rad_s));
         let stable = lambdas.iter().all(|l| l.re <= 1e-9 * scale);
         Ok(Modal { omega, spin, damping, joints, bodies, rigid, modes, stable })
+    }
+}
+
+impl LinearModel {
+    /// The element holding most of a mode's potential energy: a coordinate by its diagonal
+    /// stiffness less its meshes' share (`(K_jj − Σ k v_j²)|q_j|²`), or a compliant mesh by
+    /// `k|e|²`, e its deflection `q_follows − q_joint/ratio` through the follow map; a mesh is
+    /// named `mesh <joint>/<follows>`.
+    fn strain_label(&self, q: &[C64], kq: &DMatrix<f64>, joints: &[String]) -> String {
+        let mech = &self.mech;
+        let map = mech.follow_map();
+        let mut own: Vec<f64> = (0..q.len()).map(|j| kq[(j, j)]).collect();
+        let mut best: Option<(f64, String)> = None;
+        for g in &mech.gears {
+            let (Some(m), Some(fj), Some(ff)) = (g.mesh, map[g.joint], map[g.follows]) else { continue };
+            let mut v: Vec<(usize, f64)> = vec![(ff.coordinate, ff.factor), (fj.coordinate, -fj.factor / g.ratio)];
+            if v[0].0 == v[1].0 {
+                v = vec![(v[0].0, v[0].1 + v[1].1)];
+            }
+            let e: C64 = v.iter().map(|&(c, a)| q[c] * a).sum();
+            for &(c, a) in &v {
+                own[c] -= m.stiffness * a * a;
+            }
+            let energy = m.stiffness * e.norm_sqr();
+            if best.as_ref().is_none_or(|b| energy > b.0) {
+                best = Some((energy, format!("mesh {}/{}", mech.joints[g.joint].name, mech.joints[g.follows].name)));
+            }
+        }
+        let (j, top) = own
+            .iter()
+            .zip(q)
+            .map(|(k, x)| k * x.norm_sqr())
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 0.0));
+        match best {
+            Some((e, name)) if e > top => name,
+            _ => joints[j].clone(),
+        }
     }
 }
 

@@ -31,27 +31,38 @@ fn mechanism() -> Mechanism {
     Mechanism::from_file(Path::new("examples/marine_driveline.ron")).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// The plant's five shafts as `(name as kanedyn labels it, v, k)`: strain energy ½k(v·θ)² in the
+/// absolute angles (propeller, bull, LP gear, LP turbine, HP gear, HP turbine); a pinion's angle
+/// enters through its ratio.
+fn shafts() -> Vec<(&'static str, DVector<f64>, f64)> {
+    let spring = |name, i: usize, a: f64, j: usize, b: f64, k: f64| {
+        let mut v = DVector::zeros(6);
+        v[i] += a;
+        v[j] -= b;
+        (name, v, k)
+    };
+    vec![
+        spring("propeller_shaft", 1, 1.0, 0, 1.0, K_PS),
+        // The second-reduction pinion turns at −R2 × the bull gear; the intermediate shaft joins
+        // it to the first-reduction gear (a mesh of ratio 1 in the model).
+        spring("mesh lp_gear_1/lp_pinion_2", 1, -R2, 2, 1.0, 203.94e6 * F),
+        spring("mesh hp_gear_1/hp_pinion_2", 1, -R2, 4, 1.0, 24.17e6 * F),
+        // The first-reduction pinion turns at −R × its gear; the turbine shaft joins it to the
+        // turbine.
+        spring("lp_turbine_shaft", 2, -R_LP, 3, 1.0, 30.51e6 * F),
+        spring("hp_turbine_shaft", 4, -R_HP, 5, 1.0, 14.26e6 * F),
+    ]
+}
+
 /// (M, K, C_dampers) in the absolute angles (propeller, bull, LP gear, LP turbine, HP gear, HP
 /// turbine), from the book's table.
 fn hand_matrices() -> (DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
     let inertia = [2.454e6, 0.826e6, 1.283e4, 1.509e4, 2.723e4, 2.612e2].map(|i| i * F);
     let m = DMatrix::from_diagonal(&DVector::from_row_slice(&inertia));
     let mut k = DMatrix::zeros(6, 6);
-    // ½ k (a·θ_i − b·θ_j)²: a shaft between two inertias, a pinion's angle through its ratio.
-    let mut spring = |i: usize, a: f64, j: usize, b: f64, stiffness: f64| {
-        let mut v = DVector::zeros(6);
-        v[i] += a;
-        v[j] -= b;
+    for (_, v, stiffness) in shafts() {
         k += stiffness * &v * v.transpose();
-    };
-    spring(1, 1.0, 0, 1.0, K_PS);
-    // The second-reduction pinion turns at −R2 × the bull gear; the intermediate shaft joins it to
-    // the first-reduction gear.
-    spring(1, -R2, 2, 1.0, 203.94e6 * F);
-    spring(1, -R2, 4, 1.0, 24.17e6 * F);
-    // The first-reduction pinion turns at −R × its gear; the turbine shaft joins it to the turbine.
-    spring(2, -R_LP, 3, 1.0, 30.51e6 * F);
-    spring(4, -R_HP, 5, 1.0, 14.26e6 * F);
+    }
     let c = DMatrix::from_diagonal(&DVector::from_row_slice(&[3.86e6 * F, 0.0, 0.0, 108.77 * F, 0.0, 42.738 * F]));
     (m, k, c)
 }
@@ -93,12 +104,21 @@ fn hand_shaft_torque(rpm: f64) -> f64 {
 /// through the intermediate shafts (meshes of ratio 1). Its free modes equal the book's to the
 /// published digit and the hand-reduced matrices' to 1e-9 relative (the Jacobians are central
 /// differences of linear springs, exact up to rounding), at any speed (nothing here depends on
-/// the speed).
+/// the speed), and each is named by the shaft holding most of its strain energy in the hand
+/// modes (an intermediate shaft is a mesh between two gears in the model).
 #[test]
 fn free_modes_equal_the_book_and_the_hand_reduced_matrices() {
     let mech = mechanism();
     let (m, k, _) = hand_matrices();
-    let (hand, _) = hand_modes(&m, &k);
+    let (hand, phi) = hand_modes(&m, &k);
+    // The shaft holding most strain energy in each hand-built mode names it.
+    let names: Vec<&str> = phi[1..]
+        .iter()
+        .map(|p| {
+            let energy = |(_, v, k): &(&str, DVector<f64>, f64)| k * v.dot(p).powi(2);
+            shafts().iter().max_by(|a, b| energy(a).total_cmp(&energy(b))).unwrap().0
+        })
+        .collect();
     println!("hand: {:?} cpm", hand.iter().map(|w| w * 30.0 / PI).collect::<Vec<_>>());
     assert!(hand[0] < 1e-6 * hand[1], "one rigid rotation: {hand:?}");
     for rpm in [20.0, 85.0] {
@@ -106,8 +126,9 @@ fn free_modes_equal_the_book_and_the_hand_reduced_matrices() {
         assert_eq!(model.op.rotation, vec![1.0, 0.0, -R2, 0.0, -R2, 0.0]);
         let modal = model.modes(Spin::Free, Damping::Undamped).unwrap();
         assert_eq!(modal.modes.len(), 5);
-        for (mode, want) in modal.modes.iter().zip(&hand[1..]) {
+        for ((mode, want), name) in modal.modes.iter().zip(&hand[1..]).zip(&names) {
             assert_relative_eq!(mode.natural_frequency_rad_s, *want, max_relative = 1e-9);
+            assert_eq!(mode.label, *name);
         }
         // The SpinAngle mode is the rigid rotation itself.
         assert_eq!(modal.rigid[0].shape_q.iter().map(|c| c.re).collect::<Vec<_>>(), model.op.rotation);
