@@ -245,6 +245,76 @@ impl HbmSolution {
         peak
     }
 
+    /// The signed extremes `(min, max)` of the oscillating part of coordinate k over a period,
+    /// rad (m): `p_k(t) − a_k0` at its true lowest and highest points (sampled as for
+    /// [`HbmSolution::peak_amplitude`] and refined by Newton's method on p′ at every local
+    /// extreme of the samples). A wound-up spring's clearance is its mean `a_k0` plus these.
+    pub fn oscillation_range(&self, k: usize) -> (f64, f64) {
+        self.series_range(&self.coefficients[k * self.nb()..(k + 1) * self.nb()])
+    }
+
+    /// [`HbmSolution::oscillation_range`] of any series laid out like one coordinate's (an
+    /// element's torque, [`HbmSolution::element_torque_series`]).
+    pub fn series_range(&self, c: &[f64]) -> (f64, f64) {
+        let ns = 16 * (self.harmonics + 1);
+        let dtau = 2.0 * PI / ns as f64;
+        let value = |tau: f64| -> f64 {
+            (1..=self.harmonics)
+                .map(|h| {
+                    let (s, co) = (h as f64 * tau).sin_cos();
+                    c[2 * h - 1] * co + c[2 * h] * s
+                })
+                .sum()
+        };
+        let samples: Vec<f64> = (0..ns).map(|j| value(j as f64 * dtau)).collect();
+        let (mut lo, mut hi) =
+            samples.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        for j in 0..ns {
+            let (before, after) = (samples[(j + ns - 1) % ns], samples[(j + 1) % ns]);
+            let (p, top) = (samples[j], samples[j] >= before && samples[j] >= after);
+            if top || (p <= before && p <= after) {
+                let v = self.refine_signed(c, j as f64 * dtau, dtau, top);
+                (lo, hi) = (lo.min(v), hi.max(v));
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The largest (`top`) or smallest value of the series `c` met by Newton's method on p′
+    /// from τ0, each step clamped to `τ0 ± half`.
+    fn refine_signed(&self, c: &[f64], tau0: f64, half: f64, top: bool) -> f64 {
+        let series = |tau: f64| {
+            let (mut p, mut pd, mut pdd) = (0.0, 0.0, 0.0);
+            for h in 1..=self.harmonics {
+                let hf = h as f64;
+                let (s, co) = (hf * tau).sin_cos();
+                let (a, b) = (c[2 * h - 1], c[2 * h]);
+                p += a * co + b * s;
+                pd += hf * (b * co - a * s);
+                pdd -= hf * hf * (a * co + b * s);
+            }
+            (p, pd, pdd)
+        };
+        let better = |a: f64, b: f64| if top { a.max(b) } else { a.min(b) };
+        let (lo, hi) = (tau0 - half, tau0 + half);
+        let mut tau = tau0;
+        let (mut p, mut pd, mut pdd) = series(tau);
+        let mut best = p;
+        for _ in 0..20 {
+            if pdd == 0.0 {
+                break;
+            }
+            let next = (tau - pd / pdd).clamp(lo, hi);
+            if (next - tau).abs() <= 4.0 * f64::EPSILON * (1.0 + tau.abs()) {
+                break;
+            }
+            tau = next;
+            (p, pd, pdd) = series(tau);
+            best = better(best, p);
+        }
+        best
+    }
+
     /// |p(τ*)| at the stationary point τ* of the series `c` within `τ0 ± half` (see
     /// [`HbmSolution::peak_amplitude`]), by Newton's method on p′ with p″, each step clamped to
     /// the bracket.

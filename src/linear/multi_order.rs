@@ -94,6 +94,15 @@ pub struct ElementLines {
     pub peak: Option<f64>,
     /// The same for the torque, N·m (N); None as for `peak`, or without a linear torque.
     pub peak_torque: Option<f64>,
+    /// The coordinate at the operating point q⁰ (its mean in the steady state), rad (m).
+    pub mean: f64,
+    /// The lowest and highest value of the superposed oscillation about `mean`, rad (m); None as
+    /// for `peak`.
+    pub range: Option<(f64, f64)>,
+    /// The torque's mean `k (q⁰ − q_free)` (the damper adds nothing on average), N·m (N).
+    pub mean_torque: f64,
+    /// The same as `range` for the torque, N·m (N).
+    pub torque_range: Option<(f64, f64)>,
 }
 
 /// The steady order-1 line of a body's angular acceleration forced by gravity at the nominal
@@ -128,6 +137,27 @@ impl SpeedResponse {
         }
         (a.norm(), l.norm())
     }
+}
+
+/// The lowest and highest value of `Σ a sin(k φ + p)` over the lines `(k, a, p)` (integer
+/// multiples k of the base-order phase φ), sampled as [`superposed_peak`]; one line gives
+/// `(−|a|, |a|)` exactly. None when a multiple is not an integer.
+fn superposed_range(h: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
+    if let [(_, a, _)] = h {
+        return Some((-a.abs(), a.abs()));
+    }
+    if h.iter().any(|&(k, _, _)| (k - k.round()).abs() > 1e-12) {
+        return None;
+    }
+    let kmax = h.iter().fold(1.0f64, |a, &(k, _, _)| a.max(k.abs()));
+    let samples = PEAK_SAMPLES * kmax.ceil() as usize;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..samples {
+        let phi = 2.0 * PI * i as f64 / samples as f64;
+        let v: f64 = h.iter().map(|&(k, a, p)| a * (k * phi + p).sin()).sum();
+        (lo, hi) = (lo.min(v), hi.max(v));
+    }
+    Some((lo, hi))
 }
 
 /// Peak of `Σ a sin(o ψ + p)` over the lines `(o, a, p)` (orders in the rotor angle ψ), sampled
@@ -188,6 +218,7 @@ fn element_lines(
         let joint = &mech.joints[j];
         let linear = joint.couplings.is_empty();
         let k = joint.spring.map_or(0.0, |sp| sp.stiffness);
+        let mean = resp.model.op.q[c];
         let mut e = ElementLines {
             joint: j,
             amplitude: Vec::new(),
@@ -196,6 +227,10 @@ fn element_lines(
             torque_phase: Vec::new(),
             peak: None,
             peak_torque: None,
+            mean,
+            range: None,
+            mean_torque: k * (mean - joint.spring.map_or(0.0, |sp| sp.free_angle)),
+            torque_range: None,
         };
         for (h, q) in harmonics.iter().zip(&per_harmonic) {
             let turn = if h.amplitude < 0.0 { PI } else { 0.0 };
@@ -215,8 +250,10 @@ fn element_lines(
         // One line peaks at its amplitude, exactly (and whatever its multiple).
         let peak = |l: Vec<(f64, f64, f64)>| if let [(_, a, _)] = l[..] { Some(a) } else { superposed_peak(&l) };
         e.peak = peak(lines(&e.amplitude, &e.phase));
+        e.range = superposed_range(&lines(&e.amplitude, &e.phase));
         if linear {
             e.peak_torque = peak(lines(&e.torque, &e.torque_phase));
+            e.torque_range = superposed_range(&lines(&e.torque, &e.torque_phase));
         }
         out.push(e);
     }

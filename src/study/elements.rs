@@ -24,6 +24,52 @@ pub struct ElementTorque {
     pub amplitude: Vec<f64>,
     /// Peak of the oscillating part, N·m (N for a slide).
     pub peak: f64,
+    /// The torque's mean, lowest, highest and largest absolute value, the spring's preload
+    /// `k (q − q_free)` included (what loads the element), N·m (N for a slide).
+    #[serde(flatten)]
+    pub range: Range,
+}
+
+/// The honest extremes of a steady quantity (issue 29, item 3): its mean, lowest and highest
+/// value, and the largest absolute value `max(|min|, |max|)`, mean included (a wound-up
+/// spring's clearance to its stop is the largest |q|, not the oscillation about its mean).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Range {
+    /// Mean over the steady state.
+    pub mean: f64,
+    /// Lowest value.
+    pub min: f64,
+    /// Highest value.
+    pub max: f64,
+    /// `max(|min|, |max|)`.
+    pub max_abs: f64,
+}
+
+impl Range {
+    /// From the mean and the oscillating part's signed extremes `(lo, hi)` about it.
+    pub fn about(mean: f64, (lo, hi): (f64, f64)) -> Self {
+        let (min, max) = (mean + lo, mean + hi);
+        Range { mean, min, max, max_abs: min.abs().max(max.abs()) }
+    }
+
+    /// Of samples over a window, the extremes refined between the samples as
+    /// [`refined_peak`] does (`slope`: the samples' time derivative, if known; `dt` their step).
+    fn of_samples(y: &[f64], slope: Option<&[f64]>, dt: f64) -> Self {
+        let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
+        let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        // `refined_peak` refines the largest |y − m|: with m below every sample that is the
+        // highest point, with m above every sample the lowest.
+        let span = (hi - lo).max(1e-300) + hi.abs().max(lo.abs());
+        let top = lo - span + refined_peak(y, slope, dt, lo - span);
+        let bottom = hi + span - refined_peak(y, slope, dt, hi + span);
+        Range::about(mean, (bottom.min(lo) - mean, top.max(hi) - mean))
+    }
+
+    /// Shifted by a constant (a preload).
+    fn shifted(self, by: f64) -> Self {
+        let (min, max) = (self.min + by, self.max + by);
+        Range { mean: self.mean + by, min, max, max_abs: min.abs().max(max.abs()) }
+    }
 }
 
 /// What one element does in a steady state.
@@ -37,6 +83,10 @@ pub struct ElementResponse {
     pub amplitude: Vec<f64>,
     /// Peak of the coordinate's oscillation about its mean.
     pub peak: f64,
+    /// The coordinate's mean, lowest, highest and largest absolute value (rad; m for a slide):
+    /// its wind-up included.
+    #[serde(flatten)]
+    pub range: Range,
     /// The transmitted torque, when the joint has a spring or a damper.
     pub torque: Option<ElementTorque>,
 }
@@ -80,6 +130,14 @@ pub(crate) fn from_hbm(
                 })
                 .collect();
             let couplings = &mech.joints[j].couplings;
+            let free = mech.joints[j].spring.map_or(0.0, |sp| sp.free_angle);
+            // The joint's coordinate is a·p_k + offset: its extremes swap with the sign of a.
+            let signed = |(lo, hi): (f64, f64)| if a >= 0.0 { (a * lo, a * hi) } else { (a * hi, a * lo) };
+            let coefficients = &sol.coefficients[k * (2 * sol.harmonics + 1)..];
+            let range = Range::about(a * coefficients[0] + f.offset, signed(sol.oscillation_range(k)));
+            // The series is k·a·p (mean k·a·a₀): the preload k (offset − free) completes the mean.
+            let torque_range =
+                |series: &[f64]| Range::about(series[0] + stiff * (f.offset - free), sol.series_range(series));
             let torque = if !couplings.is_empty() {
                 // The couplings have no closed form in the coefficients: sampled along the motion
                 // (a driven joint's own coordinate is factor · q + offset).
@@ -87,11 +145,12 @@ pub(crate) fn from_hbm(
                 let nonlinear = sol.force_series(k, &|q, qd| -couplings.torque(a * q + f.offset, a * qd));
                 series.iter_mut().zip(&nonlinear).for_each(|(s, b)| *s += b);
                 let (amplitude, peak) = sol.series_torques(&series, multiples);
-                Some(ElementTorque { amplitude, peak })
+                Some(ElementTorque { amplitude, peak, range: torque_range(&series) })
             } else {
                 (stiff != 0.0 || damp != 0.0).then(|| {
                     let (amplitude, peak) = sol.element_torques(k, a * stiff, a * damp, multiples);
-                    ElementTorque { amplitude, peak }
+                    let series = sol.element_torque_series(k, a * stiff, a * damp);
+                    ElementTorque { amplitude, peak, range: torque_range(&series) }
                 })
             };
             Some(ElementResponse {
@@ -99,6 +158,7 @@ pub(crate) fn from_hbm(
                 unit: mech.joints[j].kind.coordinate_unit(),
                 amplitude,
                 peak: a.abs() * sol.peak_amplitude(k),
+                range,
                 torque,
             })
         })
@@ -137,17 +197,22 @@ pub(crate) fn from_window(
             let mean = last.iter().sum::<f64>() / last.len().max(1) as f64;
             refined_peak(last, slope.map(|d| &d[from..]), 1.0 / fs, mean)
         };
+        let last = |signal: &[f64]| signal.len().saturating_sub(window);
+        let preload = mech.joints[j].spring.map_or(0.0, |sp| -sp.stiffness * sp.free_angle);
         let torque = if let Some(f) = element_torque(mech, j) {
             let t: Vec<f64> = q2.iter().zip(qd2).map(|(&q, &qd)| f(q, qd)).collect();
-            Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t, None) })
+            let range = Range::of_samples(&t[last(&t)..], None, 1.0 / fs).shifted(preload);
+            Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t, None), range })
         } else {
             None
         };
+        let from = last(q2);
         out.push(ElementResponse {
             joint: mech.joints[j].name.clone(),
             unit: mech.joints[j].kind.coordinate_unit(),
             amplitude: amplitudes(q2)?,
             peak: peak(q2, Some(qd2)),
+            range: Range::of_samples(&q2[from..], Some(&qd2[from..]), 1.0 / fs),
             torque,
         });
     }
@@ -230,6 +295,9 @@ pub(crate) fn push_element_columns(
         table.push(format!("{name}_{}x_{unit}", fmt_num(*m)), unit, value(&|x| x.amplitude[k]));
     }
     table.push(format!("{name}_peak_{unit}"), unit, value(&|x| x.peak));
+    for (tag, read) in RANGE_COLUMNS {
+        table.push(format!("{name}_{tag}_{unit}"), unit, value(&|x| read(&x.range)));
+    }
     if torque {
         for (k, m) in multiples.iter().enumerate() {
             let v = value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.amplitude[k]));
@@ -240,8 +308,19 @@ pub(crate) fn push_element_columns(
             force_unit,
             value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| t.peak)),
         );
+        for (tag, read) in RANGE_COLUMNS {
+            let v = value(&|x| x.torque.as_ref().map_or(f64::NAN, |t| read(&t.range)));
+            table.push(format!("{name}_torque_{tag}_{force}"), force_unit, v);
+        }
     }
 }
+
+/// A read-out of one number of a [`Range`].
+type RangeField = fn(&Range) -> f64;
+
+/// The CSV columns of a [`Range`]: tag and read-out.
+const RANGE_COLUMNS: [(&str, RangeField); 4] =
+    [("mean", |r| r.mean), ("min", |r| r.min), ("max", |r| r.max), ("max_abs", |r| r.max_abs)];
 
 /// The summary's table of elements in steady states: one row per (speed in rpm, element), with
 /// the amplitudes at `multiples`·n, the peak and the torque; empty when there is no row.
@@ -251,10 +330,21 @@ pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResp
         let amps: Vec<String> = e.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
         let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
             let per: Vec<String> = t.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
-            format!("{}; peak {:.4e}", per.join(", "), t.peak)
+            format!("{}; peak {:.4e}; max abs {:.4e}", per.join(", "), t.peak, t.range.max_abs)
         });
-        let _ =
-            writeln!(body, "| {rpm} | `{}` | {} {} | {:.4e} | {torque} |", e.joint, amps.join(", "), e.unit, e.peak);
+        let r = &e.range;
+        let _ = writeln!(
+            body,
+            "| {rpm} | `{}` | {} {} | {:.4e} | {:.4e} [{:.4e}, {:.4e}] | {:.4e} | {torque} |",
+            e.joint,
+            amps.join(", "),
+            e.unit,
+            e.peak,
+            r.mean,
+            r.min,
+            r.max,
+            r.max_abs
+        );
     }
     if body.is_empty() {
         return body;
@@ -262,7 +352,8 @@ pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResp
     let tags: Vec<String> = multiples.iter().map(|m| format!("{}n", fmt_num(*m))).collect();
     format!(
         "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
-         N·m, N for a slide):\n\n| rpm | joint | amplitude | peak | torque |\n|---|---|---|---|---|\n{body}\n",
+         N·m, N for a slide; mean [min, max] and the largest |q| include the wind-up):\n\n| rpm | joint | \
+         amplitude | peak | mean [min, max] | max abs | torque |\n|---|---|---|---|---|---|---|\n{body}\n",
         tags.join(", ")
     )
 }

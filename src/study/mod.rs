@@ -232,6 +232,7 @@ pub struct StudyReport {
 
 pub use backbone::FreeOscillationResult;
 pub use compare::CompareResult;
+pub use elements::{ElementResponse, ElementTorque, Range};
 pub use hbm::{HbmBranch, body_accel, jump_orders};
 pub use linear::{GravityResponse, LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};

@@ -29,6 +29,7 @@ mod hbm;
 mod hbm_cyclic;
 mod hbm_events;
 mod hbm_period_doubling;
+mod honest_peaks;
 mod honest_summaries;
 mod input_hardening;
 mod integration;

@@ -8,7 +8,7 @@ pub use spec::*;
 
 mod report;
 
-use super::elements::{ElementResponse, from_hbm, from_window, push_element_columns};
+use super::elements::{ElementResponse, Range, from_hbm, from_window, push_element_columns};
 use super::sim::{self, Progress};
 use super::table::Table;
 use super::{Output, Study};
@@ -635,10 +635,12 @@ fn linear_elements(
                 unit: joint.kind.coordinate_unit(),
                 amplitude: per_multiple(&e.amplitude, &e.phase),
                 peak: e.peak.unwrap_or(f64::NAN),
+                range: Range::about(e.mean, e.range.unwrap_or((f64::NAN, f64::NAN))),
                 torque: (!e.torque.is_empty() && (joint.spring.is_some() || joint.damper != 0.0)).then(|| {
                     super::elements::ElementTorque {
                         amplitude: per_multiple(&e.torque, &e.torque_phase),
                         peak: e.peak_torque.unwrap_or(f64::NAN),
+                        range: Range::about(e.mean_torque, e.torque_range.unwrap_or((f64::NAN, f64::NAN))),
                     }
                 }),
             }
