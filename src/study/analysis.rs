@@ -11,7 +11,8 @@
 //! - [`Analysis::plan`] estimates its work from the file alone, against the limits;
 //! - [`Analysis::run`] writes its CSV and SVG files and returns its summary section, its failures
 //!   and its results ([`Output`]); [`Kept`] files the results into the [`StudyReport`];
-//! - [`Analysis::json`] gives its entry in `results.json` from those results.
+//! - [`Analysis::json`] gives its entry in `results.json` from those results, and
+//!   [`Analysis::digest`] its line in the terminal's digest.
 
 use super::json::Json;
 use super::plan::AnalysisPlan;
@@ -65,6 +66,11 @@ pub(crate) trait Analysis {
     /// missing). `nth`: how many analyses of its kind ran to the end before it in the same list,
     /// which finds a result that carries no name.
     fn json(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<Json>;
+
+    /// Its key findings in one line for the terminal's digest (see `digest`), read off its
+    /// results in `report` by the functions its summary section uses; None when they are
+    /// missing. `nth` as for [`Analysis::json`].
+    fn digest(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<String>;
 }
 
 /// What an analysis's checks see: the study as written, its mechanism and spin joint, the file

@@ -23,7 +23,7 @@
 //! same data.
 
 pub use super::table::{Column, Table};
-use super::{Study, StudyReport, StudySpec};
+use super::{AnalysisSpec, Study, StudyReport, StudySpec};
 use crate::error::{Error, Result};
 use serde::Serialize;
 use serde_json::value::RawValue;
@@ -190,19 +190,9 @@ pub(crate) fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: 
         .iter()
         .enumerate()
         .map(|(index, a)| {
-            let prefix = format!("{} `{}` ", a.kind(), a.name());
-            let inner = format!(": {} `{}`", a.kind(), a.name());
-            let failures: Vec<&str> = report
-                .failures
-                .iter()
-                .filter(|f| f.starts_with(&prefix) || f.contains(&inner))
-                .map(String::as_str)
-                .collect();
+            let failures = failures_of(a, &report.failures);
             let completed_here = completed.get(index).copied().unwrap_or(false);
-            // How many of its kind ran to the end before it: a result that carries no name (a
-            // Campbell diagram) is found by its place among them.
-            let nth =
-                analyses[..index].iter().zip(completed).filter(|(b, done)| **done && b.kind() == a.kind()).count();
+            let nth = nth_of_kind(analyses, completed, index);
             let parts = if completed_here { a.analysis().json(study, report, nth) } else { None };
             let (result, findings, tables, inner_tables) = match parts {
                 Some(j) => (Some(j.result), Some(j.findings), j.tables, j.inner_tables),
@@ -226,4 +216,20 @@ pub(crate) fn entries<'a>(study: &'a Study, report: &'a StudyReport, completed: 
             }
         })
         .collect()
+}
+
+/// The entries of `failures` that belong to analysis `a`: its own (they start with its kind and
+/// name) and those of the analyses a comparison ran inside it (they name it after a colon).
+pub(crate) fn failures_of<'a>(a: &AnalysisSpec, failures: &'a [String]) -> Vec<&'a str> {
+    let prefix = format!("{} `{}` ", a.kind(), a.name());
+    let inner = format!(": {} `{}`", a.kind(), a.name());
+    failures.iter().filter(|f| f.starts_with(&prefix) || f.contains(&inner)).map(String::as_str).collect()
+}
+
+/// How many analyses of the kind of `analyses[index]` ran to the end before it (`completed`
+/// telling which did): a result that carries no name (a Campbell diagram) is found by its place
+/// among them.
+pub(crate) fn nth_of_kind(analyses: &[AnalysisSpec], completed: &[bool], index: usize) -> usize {
+    let kind = analyses[index].kind();
+    analyses[..index].iter().zip(completed).filter(|(b, done)| **done && b.kind() == kind).count()
 }

@@ -13,10 +13,11 @@
 //! `spec.rs` (the study file's frame and shared settings), `load.rs` (reading and checking a
 //! study), `validate/` (the checks every analysis shares and the limits), `plan.rs` (the cost
 //! model), `sim.rs` (time runs and excitation), `elements.rs`, `table.rs` and `output.rs` (what
-//! the analyses write), `json.rs` (`results.json`). See docs/design.md, "The study layout".
+//! the analyses write), `json.rs` (`results.json`), `digest.rs` (what `kanedyn run` prints).
+//! See docs/design.md, "The study layout".
 //!
-//! The public face is what this module re-exports (the study file's types, [`Study`], [`run`]
-//! and the results in [`StudyReport`]) and the modules [`design`] (design studies case by case),
+//! The public face is what this module re-exports (the study file's types, [`Study`], [`run`],
+//! the results in [`StudyReport`] and their terminal [`digest`]) and the modules [`design`] (design studies case by case),
 //! [`json`] (the `results.json` document) and [`validate`] (the input limits, `validate::limits`).
 
 mod analysis;
@@ -24,6 +25,7 @@ mod backbone;
 mod campbell;
 mod compare;
 pub mod design;
+mod digest;
 mod elements;
 mod hbm;
 pub mod json;
@@ -50,6 +52,7 @@ pub use backbone::FreeOscillationSpec;
 pub use campbell::CampbellSpec;
 pub use compare::{CompareMechanism, CompareSpec};
 pub use design::{DesignParameter, DesignSpec, Quantity, Sampling};
+pub use digest::{MAX_LINES as DIGEST_MAX_LINES, digest};
 pub use hbm::{HbmParameter, HbmRoute, HbmSpec};
 pub use linear::{LinearResponseSpec, Variant};
 pub use load::LoadOptions;

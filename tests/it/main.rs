@@ -9,6 +9,7 @@ mod support;
 mod campbell_crossings;
 mod catalog;
 mod cli;
+mod cli_digest;
 mod closed_form;
 mod couplings;
 mod cpva_paths;

@@ -8,6 +8,7 @@ use crate::model::mechanism::Mechanism;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, rhs_s, time_run_s};
@@ -60,6 +61,24 @@ impl Analysis for FreeOscillationSpec {
         }
         let r = report.free.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { order_over_linear: r.order_ratios() }, vec![table(r)])
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.free.iter().find(|r| r.name == self.name)?;
+        let ratios: Vec<f64> = r.order_ratios().into_iter().filter(|x| x.is_finite()).collect();
+        let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mut line = format!(
+            "`{}` at {} rpm, linear order {}, {}",
+            r.joint,
+            num(r.rpm),
+            num(r.linear_order),
+            count(r.amplitudes.len(), "amplitude", "amplitudes")
+        );
+        if !ratios.is_empty() {
+            line += &format!("; order over linear {} to {}", num(lo), num(hi));
+        }
+        Some(line)
     }
 }
 

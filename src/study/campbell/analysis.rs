@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{
@@ -77,6 +78,26 @@ impl Analysis for CampbellSpec {
         // A Campbell diagram carries no name: the n-th completed one is the n-th result.
         let c = report.campbell.get(nth)?;
         Json::new(c, &Findings { modes: mode_findings(self, c) }, campbell_tables(self, c))
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, nth: usize) -> Option<String> {
+        let c = report.campbell.get(nth)?;
+        let (lo, hi) = (c.rpm.first()?, c.rpm.last()?);
+        let mut line = format!("{}, {}–{} rpm; ", count(c.tracks.len(), "mode", "modes"), num(*lo), num(*hi));
+        match c.crossings.first() {
+            None => line += "no order line crosses a mode",
+            Some(x) => {
+                line += &format!(
+                    "{}, first at {} rpm (order {}, mode `{}`, {} Hz)",
+                    count(c.crossings.len(), "crossing", "crossings"),
+                    num(x.rpm),
+                    num(x.order),
+                    x.label,
+                    num(x.frequency_hz)
+                )
+            }
+        }
+        Some(line)
     }
 }
 

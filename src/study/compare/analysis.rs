@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::io::Source;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::count;
 use crate::study::json::{AnalysisEntry, Json, entries};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::JSON_PER_CSV_BYTE;
@@ -84,6 +85,18 @@ impl Analysis for CompareSpec {
         let mut json = Json::new(&Mechanisms { mechanisms }, &Findings { labels }, Vec::new())?;
         json.inner_tables = inner;
         Some(json)
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.compares.iter().find(|r| r.name == self.name)?;
+        let labels: Vec<&str> = r.mechanisms.iter().map(|m| m.label.as_str()).collect();
+        let runs: usize = r.mechanisms.iter().map(|m| m.completed.len()).sum();
+        let done: usize = r.mechanisms.iter().map(|m| m.completed.iter().filter(|c| **c).count()).sum();
+        Some(format!(
+            "{} ({}): {done} of {runs} analyses complete",
+            count(labels.len(), "mechanism", "mechanisms"),
+            labels.join(", ")
+        ))
     }
 }
 

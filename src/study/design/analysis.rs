@@ -73,6 +73,12 @@ impl Analysis for DesignSpec {
         let r = report.designs.iter().find(|r| r.name == self.name)?;
         Json::new(r, &findings(r), vec![r.table()])
     }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.designs.iter().find(|r| r.name == self.name)?;
+        let f = findings(r);
+        Some(format!("{} cases: {} complete, {} partial, {} failed", f.cases, f.ok, f.partial, f.failed))
+    }
 }
 
 impl Kept for DesignResult {

@@ -9,6 +9,7 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::digest::count;
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s};
@@ -131,6 +132,25 @@ impl Analysis for HbmSpec {
         let findings = findings(study, &branches, &overlay_of(self, &report.sweeps));
         let tables = tables(&study.mechanism, self, &branches);
         Json::new(&Branches { branches }, &Branches { branches: findings }, tables)
+    }
+
+    fn digest(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
+        let f = findings(study, &branches, &overlay_of(self, &report.sweeps));
+        let points: usize = f.iter().map(|b| b.points).sum();
+        let stable: usize = f.iter().map(|b| b.stable).sum();
+        let unstable: usize = f.iter().map(|b| b.unstable).sum();
+        let folds: usize = branches.iter().map(|b| b.folds.len()).sum();
+        let short = branches.iter().filter(|b| b.stopped_short.is_some()).count();
+        let mut line = format!(
+            "{}, {points} points ({stable} stable, {unstable} unstable), {}",
+            count(branches.len(), "branch", "branches"),
+            count(folds, "fold", "folds")
+        );
+        if short > 0 {
+            line += &format!("; {short} stopped short of the range");
+        }
+        Some(line)
     }
 }
 

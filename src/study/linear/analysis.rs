@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S};
@@ -126,6 +127,20 @@ impl Analysis for LinearResponseSpec {
         }
         let r = report.linear.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { variants: variant_findings(r) }, response_tables(study, self, r))
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.linear.iter().find(|r| r.name == self.name)?;
+        let mut line = count(r.variants.len(), "variant", "variants");
+        if let Some(nt) = r.n_t {
+            line += &format!(", tuning order n_t = {}", num(nt));
+        }
+        // The deepest notch over the variants: the absorber's best attenuation.
+        let best = r.variants.iter().filter(|v| v.min.1.is_finite()).min_by(|a, b| a.min.1.total_cmp(&b.min.1));
+        if let Some(v) = best {
+            line += &format!("; smallest ratio to locked twin {} at n = {} ({})", num(v.min.1), num(v.min.0), v.label);
+        }
+        Some(line)
     }
 }
 

@@ -7,6 +7,7 @@ use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, stft_s, time_run_s};
@@ -116,6 +117,35 @@ impl Analysis for SweepSpec {
         let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
         let (findings, tables) = (findings(self, &runs), tables(self, &runs));
         Json::new(&Runs { runs }, &findings, tables)
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
+        let f = findings(self, &runs);
+        // The peak the absorber has to live with: the largest main-order amplitude of the free
+        // runs after the ramp-in (the locked twin is the reference, not the design).
+        let peak = runs
+            .iter()
+            .filter(|r| !r.locked)
+            .filter_map(|r| {
+                let t = r.trace(1.0)?;
+                let samples = t.time_s.iter().zip(&t.order).zip(&t.amplitude);
+                let ((_, n), a) = samples
+                    .filter(|((s, _), a)| **s >= f.skip_before_s && a.is_finite())
+                    .max_by(|(_, a), (_, b)| a.total_cmp(b))?;
+                Some((*a, *n, r.label()))
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        let mut line = count(runs.len(), "run", "runs");
+        if let Some((a, n, label)) = peak {
+            line += &format!("; main-order peak {} rad/s² at n = {} ({label})", num(a), num(n));
+        }
+        let differ: Vec<String> =
+            f.amplitudes.iter().filter(|a| !a.up_down_differ.is_empty()).map(|a| num(a.amplitude)).collect();
+        if !differ.is_empty() {
+            line += &format!("; up/down sweeps jump apart at T_n = {} N·m", differ.join(", "));
+        }
+        Some(line)
     }
 }
 

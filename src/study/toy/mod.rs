@@ -68,6 +68,10 @@ impl Analysis for ToySpec {
         }
         Json::new(&Result { doubled: 2.0 * self.value }, &(), vec![self.table()])
     }
+
+    fn digest(&self, _study: &Study, _report: &StudyReport, _nth: usize) -> Option<String> {
+        Some(format!("twice {} is {}", self.value, 2.0 * self.value))
+    }
 }
 
 #[cfg(test)]

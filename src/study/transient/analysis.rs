@@ -10,6 +10,7 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::digest::num;
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, time_run_s};
@@ -105,6 +106,27 @@ impl Analysis for TransientSpec {
             .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
             .collect();
         Json::new(r, &Findings { cuts }, tables(study, self, r))
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.transient.iter().find(|r| r.name == self.name)?;
+        let mut line = format!("{}→{} rpm", num(r.rpm_start), num(r.rpm_end));
+        // The response's cuts come first; its largest peak is the resonance the run passed.
+        let response = r.cuts.iter().filter(|c| c.signal == r.cuts[0].signal);
+        match response.filter(|c| c.peak.is_finite()).max_by(|a, b| a.peak.total_cmp(&b.peak)) {
+            Some(c) => {
+                line += &format!(
+                    "; {} peaks at order {}: {} {} at {} rpm",
+                    c.signal,
+                    num(c.order),
+                    num(c.peak),
+                    c.unit,
+                    num(c.peak_rpm)
+                )
+            }
+            None => line += "; no order–rpm map",
+        }
+        Some(line)
     }
 }
 
