@@ -65,6 +65,8 @@ enum Command {
         #[command(flatten)]
         limits: LimitArgs,
     },
+    /// Print the JSON Schema of results.json (docs/results.schema.json is this output).
+    Schema,
 }
 
 /// The limits a study's estimated work is checked against at load (see the README's "Limits
@@ -131,6 +133,9 @@ fn main() -> ExitCode {
         Command::Check { file, limits } => check_file(&file, &limits),
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
         Command::Run { study, out, threads, verbose, limits } => run(&study, &out, threads, verbose, &limits),
+        Command::Schema => serde_json::to_string_pretty(&kanedyn::study::json::schema())
+            .map(|text| println!("{text}"))
+            .map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

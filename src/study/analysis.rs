@@ -23,6 +23,7 @@ use crate::error::{Error, Result};
 use crate::io::ReadPolicy;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
+use schemars::{Schema, SchemaGenerator};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -66,6 +67,12 @@ pub(crate) trait Analysis {
     /// missing). `nth`: how many analyses of its kind ran to the end before it in the same list,
     /// which finds a result that carries no name.
     fn json(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<Json>;
+
+    /// The JSON Schemas of its entry's `result` and `findings`: those of the types
+    /// [`Analysis::json`] serialises (a property of the kind, for the registry's schema).
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema)
+    where
+        Self: Sized;
 
     /// Its key findings in one line for the terminal's digest (see `digest`), read off its
     /// results in `report` by the functions its summary section uses; None when they are

@@ -133,6 +133,29 @@ macro_rules! analyses {
                 kinds
             }
 
+            /// The kinds as written in the study file, in registry order.
+            // One push per entry, because an entry's `cfg` can only sit on a statement.
+            #[allow(unused_doc_comments, clippy::vec_init_then_push)]
+            pub fn kinds() -> Vec<&'static str> {
+                let mut kinds = Vec::new();
+                $($(#[$attr])* kinds.push(stringify!($kind));)*
+                kinds
+            }
+
+            /// Per kind, the JSON Schemas of its `results.json` entry's `result` and `findings`
+            /// ([`Analysis::json_schemas`]).
+            #[allow(unused_doc_comments)]
+            pub(crate) fn json_schemas(
+                generator: &mut schemars::SchemaGenerator,
+            ) -> Vec<(&'static str, schemars::Schema, schemars::Schema)> {
+                let mut out = Vec::new();
+                $($(#[$attr])* {
+                    let (result, findings) = <$spec as Analysis>::json_schemas(generator);
+                    out.push((stringify!($kind), result, findings));
+                })*
+                out
+            }
+
             /// The analysis behind the entry, to prepare when the study is loaded.
             #[allow(unused_doc_comments)]
             pub(crate) fn analysis_mut(&mut self) -> &mut dyn Analysis {

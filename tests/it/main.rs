@@ -48,6 +48,7 @@ mod reliability_ii;
 mod report_html;
 mod reproducible_runs;
 mod results_json;
+mod results_schema;
 mod rollers;
 mod ron_errors;
 mod shapes;

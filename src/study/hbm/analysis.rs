@@ -17,7 +17,25 @@ use crate::study::validate::{
     MAX_RPM, MAX_TORQUE_NM, check_excite, check_harmonics, check_max_step, order, order_range, pos,
     require_steady_spin, rpm, torques,
 };
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// A harmonic-balance analysis's `result` in `results.json`.
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "HarmonicBalanceResult")]
+struct Branches<'a> {
+    /// Its branches: per amplitude, one continued from each end of the order range (one fewer
+    /// where a branch failed).
+    branches: Vec<&'a HbmBranch>,
+}
+
+/// What the summary reads off a harmonic-balance analysis (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "HarmonicBalanceFindings")]
+struct BranchesFindings {
+    /// One entry per branch, in the order of the result's branches.
+    branches: Vec<super::BranchFindings>,
+}
 
 impl Analysis for HbmSpec {
     fn rename_references(&mut self, rename: &dyn Fn(&str) -> String) {
@@ -124,14 +142,14 @@ impl Analysis for HbmSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Branches<T> {
-            branches: Vec<T>,
-        }
         let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
         let findings = findings(study, &branches, &overlay_of(self, &report.sweeps));
         let tables = tables(&study.mechanism, self, &branches);
-        Json::new(&Branches { branches }, &Branches { branches: findings }, tables)
+        Json::new(&Branches { branches }, &BranchesFindings { branches: findings }, tables)
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Branches<'static>>(), generator.subschema_for::<BranchesFindings>())
     }
 
     fn digest(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {

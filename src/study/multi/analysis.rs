@@ -15,7 +15,16 @@ use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s, time_run_s};
 use crate::study::validate::{
     MAX_LIST, check_excite, common, modal_fields, order, pos, require_steady_spin, rpm, torque, tracking,
 };
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a multi-order analysis (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "MultiOrderFindings")]
+struct Findings {
+    /// One entry per speed, in the order of the result's speeds.
+    speeds: Vec<SpeedFindings>,
+}
 
 impl Analysis for MultiOrderSpec {
     fn comparable() -> bool {
@@ -194,12 +203,12 @@ impl Analysis for MultiOrderSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            speeds: Vec<SpeedFindings>,
-        }
         let r = report.multi.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { speeds: findings(r) }, vec![table(study, self, r)])
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<MultiOrderResult>(), generator.subschema_for::<Findings>())
     }
 
     fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {

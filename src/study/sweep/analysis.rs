@@ -12,7 +12,16 @@ use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, stft_s, time_run_s};
 use crate::study::validate::{check_excite, common, g, order_range, pos, rpm, torques, tracking};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// An order sweep's `result` in `results.json`.
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "OrderSweepResult")]
+struct Runs<'a> {
+    /// The runs, the locked twin's included, in the order run.
+    runs: Vec<&'a SweepRun>,
+}
 
 impl Analysis for SweepSpec {
     fn comparable() -> bool {
@@ -110,13 +119,13 @@ impl Analysis for SweepSpec {
     }
 
     fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Runs<'a> {
-            runs: Vec<&'a SweepRun>,
-        }
         let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
         let (findings, tables) = (findings(self, &runs), tables(self, &runs));
         Json::new(&Runs { runs }, &findings, tables)
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Runs<'static>>(), generator.subschema_for::<super::SweepFindings>())
     }
 
     fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
