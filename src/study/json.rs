@@ -48,7 +48,8 @@ pub const FORMAT_VERSION: u32 = 1;
 /// are SI (kg, m, s, rad, N·m, Hz) unless a field's name or description says otherwise (speeds
 /// in rpm, orders in cycles per revolution, ratios dimensionless). Numbers are IEEE doubles in
 /// shortest round-trip form; NaN and infinity never appear (JSON cannot carry them): a number
-/// that does not exist or does not apply is `null`, never 0 or a made-up value.
+/// that does not exist or does not apply is `null`, never 0 or a made-up value (where a
+/// description says NaN or None, the file holds `null`).
 #[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 #[schemars(rename = "KanedynResults")]
 pub struct Document<'a> {
@@ -314,6 +315,13 @@ pub fn schema() -> serde_json::Value {
 /// object holds its listed fields only.
 fn as_written(schema: &mut Schema) {
     let Some(object) = schema.as_object_mut() else { return };
+    // Doc comments link Rust items as [`Item`] and wrap at 100 columns; a JSON reader gets the
+    // plain name and each paragraph on one line.
+    if let Some(serde_json::Value::String(text)) = object.get_mut("description") {
+        let paragraphs: Vec<String> =
+            text.split("\n\n").map(|p| p.split_whitespace().collect::<Vec<_>>().join(" ")).collect();
+        *text = paragraphs.join("\n\n").replace("[`", "`").replace("`]", "`");
+    }
     match object.get_mut("type") {
         Some(serde_json::Value::String(t)) if t == "number" => {
             object.insert("type".into(), serde_json::json!(["number", "null"]));

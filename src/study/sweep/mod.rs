@@ -388,7 +388,8 @@ pub struct RunFindings {
 pub struct AmplitudeFindings {
     /// Torque amplitude T_n, N·m.
     pub amplitude: f64,
-    /// Order intervals where the main-order traces differ by more than [`BRANCH_FACTOR`].
+    /// Order intervals where the main-order traces differ by more than [`BRANCH_FACTOR`] (one
+    /// is over 1.5 times the other).
     pub up_down_differ: Vec<(f64, f64)>,
 }
 
