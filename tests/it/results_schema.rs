@@ -74,6 +74,35 @@ fn the_schema_names_every_kind_and_describes_every_field() {
     assert!(undocumented.is_empty(), "fields without a description: {undocumented:?}");
 }
 
+#[test]
+fn a_partial_results_json_validates_against_the_schema() {
+    // A harmonic balance that diverges from one end: its entry is `partial`, the document too.
+    let dir = std::env::temp_dir().join(format!("kanedyn_results_schema_partial_{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    crate::support::examples::copy_cpva(&dir);
+    let study = dir.join("iso.ron");
+    std::fs::write(
+        &study,
+        r#"Study(name: "iso", mechanism: "cpva.ron", lock: ["pivot"], analyses: [
+    LinearResponse(name: "before", rpm: 1000.0, from: 0.9, to: 1.1, points: 11),
+    HarmonicBalance(name: "diverges", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [1e6],
+                    harmonics: 1, multiples: [1.0]),
+])"#,
+    )
+    .unwrap();
+    let doc = results_json(&study, &dir.join("out"));
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(doc["status"], "partial");
+    assert_eq!(doc["analyses"][1]["status"], "partial");
+    assert_eq!(doc["analyses"][1]["failures"].as_array().map(Vec::len), Some(1));
+    let v = validator();
+    assert_eq!(errors(&v, &doc), Vec::<String>::new());
+    // An entry's status is one of three words.
+    let mut d = doc.clone();
+    d["analyses"][1]["status"] = "stopped".into();
+    assert!(!v.is_valid(&d));
+}
+
 /// Runs `study` into `out` and returns its results.json.
 fn results_json(study: &Path, out: &Path) -> Value {
     let s = Study::from_file(study).unwrap_or_else(|e| panic!("{}: {e}", study.display()));
