@@ -142,3 +142,41 @@ fn more_analyses_than_fit_are_folded_into_one_line() {
     assert!(PathBuf::from(lines.last().unwrap()).is_file());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn many_failures_are_cut_to_a_few_lines_and_counted() {
+    let dir = scratch("failures");
+    copy_cpva(&dir);
+    // Each harmonic balance diverges from its lower end: one failure per analysis.
+    let diverging: Vec<String> = (0..8)
+        .map(|k| {
+            format!(
+                "        HarmonicBalance(name: \"d{k}\", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [1e6], \
+                 harmonics: 1, multiples: [1.0]),"
+            )
+        })
+        .collect();
+    let study = dir.join("many_failures.ron");
+    std::fs::write(
+        &study,
+        format!(
+            "Study(\n    name: \"mf\",\n    mechanism: \"cpva.ron\",\n    lock: [\"pivot\"],\n    analyses: [\n{}\n    ],\n)\n",
+            diverging.join("\n")
+        ),
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let (ok, lines, _) = run(&study, &out, &[]);
+    assert!(!ok);
+    assert!(lines.len() <= MAX_LINES, "{lines:?}");
+    assert!(lines[0].contains("PARTIAL RESULTS: 8 failures in 8 of 8 analyses"), "{lines:?}");
+    let at = lines.iter().position(|l| l == "Failures (8):").expect("a Failures block");
+    // Four listed, each on one line with its place in the file, then the count of the rest.
+    for (k, line) in lines[at + 1..at + 5].iter().enumerate() {
+        let place = format!("many_failures.ron:{}:", 6 + k);
+        assert!(line.starts_with(&format!("  - HarmonicBalance `d{k}` (")) && line.contains(&place), "{line}");
+    }
+    assert_eq!(lines[at + 5], "  … and 4 more failures: see summary.md");
+    assert!(PathBuf::from(lines.last().unwrap()).ends_with("mf/report.html"));
+    std::fs::remove_dir_all(&dir).ok();
+}
