@@ -24,8 +24,8 @@ use serde::Serialize;
 #[derive(Serialize, JsonSchema)]
 #[schemars(rename = "HarmonicBalanceResult")]
 struct Branches<'a> {
-    /// Its branches: per amplitude, one continued from each end of the order range (one fewer
-    /// where a branch failed).
+    /// Its branches: per amplitude, one continued from each end of the continued parameter's
+    /// range (order, speed or torque; one fewer where a branch failed).
     branches: Vec<&'a HbmBranch>,
 }
 
