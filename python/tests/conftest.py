@@ -77,8 +77,8 @@ class StudyRuns:
             out = self.root / f"run{len(self.done)}"
             ok, stdout, err = self.cli("run", study, "--out", out)
             assert ok, err
-            name = next(line for line in stdout.splitlines() if line.startswith("# Study `"))[len("# Study `") : -1]
-            self.done[study] = out / name
+            # The digest's last line is the study's report page, in its output folder.
+            self.done[study] = Path(stdout.splitlines()[-1]).parent
         return self.done[study]
 
 

@@ -46,7 +46,9 @@ enum Command {
         #[arg(long = "joint-torque", value_name = "NAME=VALUE")]
         joint_torque: Vec<String>,
     },
-    /// Run a study file: every analysis, with CSV, SVG and a Markdown summary in OUT/<study name>/.
+    /// Run a study file: every analysis, with CSV, SVG, a Markdown summary, results.json and
+    /// report.html in OUT/<study name>/. Prints a digest of at most 25 lines (status, key findings,
+    /// failures) ending with the path of report.html.
     Run {
         /// Study file (RON).
         study: PathBuf,
@@ -56,9 +58,15 @@ enum Command {
         /// Number of worker threads (default: all cores; at most 4 per core).
         #[arg(long)]
         threads: Option<usize>,
+        /// Also print the full summary (every table of summary.md) and the files written, before
+        /// the digest.
+        #[arg(long, short)]
+        verbose: bool,
         #[command(flatten)]
         limits: LimitArgs,
     },
+    /// Print the JSON Schema of results.json (docs/results.schema.json is this output).
+    Schema,
 }
 
 /// The limits a study's estimated work is checked against at load (see the README's "Limits
@@ -124,7 +132,10 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { file, limits } => check_file(&file, &limits),
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
-        Command::Run { study, out, threads, limits } => run(&study, &out, threads, &limits),
+        Command::Run { study, out, threads, verbose, limits } => run(&study, &out, threads, verbose, &limits),
+        Command::Schema => serde_json::to_string_pretty(&kanedyn::study::json::schema())
+            .map(|text| println!("{text}"))
+            .map_err(Into::into),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -311,7 +322,7 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
     Ok(())
 }
 
-fn run(file: &Path, out: &Path, threads: Option<usize>, limits: &LimitArgs) -> Result<()> {
+fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &LimitArgs) -> Result<()> {
     if let Some(n) = threads {
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
         let cap = THREADS_PER_CORE * cores;
@@ -326,12 +337,17 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, limits: &LimitArgs) -> R
     let study = Study::from_file_with(file, &limits.options()?)?;
     let start = std::time::Instant::now();
     let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: true })?;
-    println!("{}", report.summary);
-    println!("files written:");
-    for f in &report.files {
-        println!("  {}", f.display());
+    if verbose {
+        println!("{}", report.summary);
+        println!("files written:");
+        for f in &report.files {
+            println!("  {}", f.display());
+        }
+        println!();
     }
-    println!("study `{}` finished in {:.2} s", study.spec.name, start.elapsed().as_secs_f64());
+    for line in kanedyn::study::digest(&study, &report, start.elapsed().as_secs_f64()) {
+        println!("{line}");
+    }
     if !report.failures.is_empty() {
         let summary = report.files.iter().find(|f| f.ends_with("summary.md"));
         bail!(

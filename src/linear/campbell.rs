@@ -15,7 +15,7 @@ use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
 /// One tracked mode over the speeds of a Campbell diagram.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct CampbellTrack {
     /// The most frequent label along the track (joint with the largest coordinate share).
     pub label: String,
@@ -34,7 +34,7 @@ pub struct CampbellTrack {
 }
 
 /// An engine-order line `f = n·rpm/60`.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct OrderLine {
     /// The order n.
     pub order: f64,
@@ -43,7 +43,7 @@ pub struct OrderLine {
 }
 
 /// Where an order line crosses a mode: a resonance speed.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct Crossing {
     /// The order n of the line.
     pub order: f64,
@@ -61,7 +61,7 @@ pub struct Crossing {
 }
 
 /// Campbell data: natural frequencies against spin speed, with order lines.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct Campbell {
     /// Spin speeds, rpm.
     pub rpm: Vec<f64>,

@@ -149,7 +149,7 @@ pub enum SignalError {
 /// The amplitude of one harmonic multiple of the excitation order, window by window.
 ///
 /// All vectors have one entry per analysis window (block), in time order.
-#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, schemars::JsonSchema)]
 pub struct OrderTrace {
     /// The harmonic multiple m (1 = the excitation order n itself, 2 = 2n, …).
     pub multiple: f64,

@@ -11,7 +11,8 @@
 //! - [`Analysis::plan`] estimates its work from the file alone, against the limits;
 //! - [`Analysis::run`] writes its CSV and SVG files and returns its summary section, its failures
 //!   and its results ([`Output`]); [`Kept`] files the results into the [`StudyReport`];
-//! - [`Analysis::json`] gives its entry in `results.json` from those results.
+//! - [`Analysis::json`] gives its entry in `results.json` from those results, and
+//!   [`Analysis::digest`] its line in the terminal's digest.
 
 use super::json::Json;
 use super::plan::AnalysisPlan;
@@ -22,6 +23,7 @@ use crate::error::{Error, Result};
 use crate::io::ReadPolicy;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
+use schemars::{Schema, SchemaGenerator};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -65,6 +67,17 @@ pub(crate) trait Analysis {
     /// missing). `nth`: how many analyses of its kind ran to the end before it in the same list,
     /// which finds a result that carries no name.
     fn json(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<Json>;
+
+    /// The JSON Schemas of its entry's `result` and `findings`: those of the types
+    /// [`Analysis::json`] serialises (a property of the kind, for the registry's schema).
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema)
+    where
+        Self: Sized;
+
+    /// Its key findings in one line for the terminal's digest (see `digest`), read off its
+    /// results in `report` by the functions its summary section uses; None when they are
+    /// missing. `nth` as for [`Analysis::json`].
+    fn digest(&self, study: &Study, report: &StudyReport, nth: usize) -> Option<String>;
 }
 
 /// What an analysis's checks see: the study as written, its mechanism and spin joint, the file

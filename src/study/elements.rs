@@ -18,7 +18,7 @@ use serde::Serialize;
 use std::fmt::Write as _;
 
 /// The torque an element's spring and damper transmit.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ElementTorque {
     /// Amplitude per tracked multiple of the order, N·m (N for a slide).
     pub amplitude: Vec<f64>,
@@ -73,7 +73,7 @@ impl Range {
 }
 
 /// What one element does in a steady state.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ElementResponse {
     /// The joint's name.
     pub joint: String,
@@ -81,7 +81,7 @@ pub struct ElementResponse {
     pub unit: &'static str,
     /// Amplitude of the coordinate per tracked multiple of the order.
     pub amplitude: Vec<f64>,
-    /// Peak of the coordinate's oscillation about its mean.
+    /// Peak of the coordinate's oscillation about its mean, in `unit`.
     pub peak: f64,
     /// The coordinate's mean, lowest, highest and largest absolute value (rad; m for a slide):
     /// its wind-up included.
@@ -220,7 +220,7 @@ pub(crate) fn from_window(
 }
 
 /// One element's order traces over a sweep.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ElementTraces {
     /// The joint's name.
     pub joint: String,
@@ -228,7 +228,7 @@ pub struct ElementTraces {
     pub unit: &'static str,
     /// The coordinate's order traces, one per tracked multiple (same windows as the response's).
     pub traces: Vec<OrderTrace>,
-    /// Largest |q| after the ramp-in.
+    /// Largest |q| after the ramp-in, in `unit`.
     pub peak: f64,
     /// The spring-and-damper torque's order traces (N·m; N for a slide), when the joint has one.
     pub torque: Option<Vec<OrderTrace>>,

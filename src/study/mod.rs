@@ -13,10 +13,11 @@
 //! `spec.rs` (the study file's frame and shared settings), `load.rs` (reading and checking a
 //! study), `validate/` (the checks every analysis shares and the limits), `plan.rs` (the cost
 //! model), `sim.rs` (time runs and excitation), `elements.rs`, `table.rs` and `output.rs` (what
-//! the analyses write), `json.rs` (`results.json`). See docs/design.md, "The study layout".
+//! the analyses write), `json.rs` (`results.json`), `digest.rs` (what `kanedyn run` prints).
+//! See docs/design.md, "The study layout".
 //!
-//! The public face is what this module re-exports (the study file's types, [`Study`], [`run`]
-//! and the results in [`StudyReport`]) and the modules [`design`] (design studies case by case),
+//! The public face is what this module re-exports (the study file's types, [`Study`], [`run`],
+//! the results in [`StudyReport`] and their terminal [`digest`]) and the modules [`design`] (design studies case by case),
 //! [`json`] (the `results.json` document) and [`validate`] (the input limits, `validate::limits`).
 
 mod analysis;
@@ -24,6 +25,7 @@ mod backbone;
 mod campbell;
 mod compare;
 pub mod design;
+mod digest;
 mod elements;
 mod hbm;
 pub mod json;
@@ -50,6 +52,7 @@ pub use backbone::FreeOscillationSpec;
 pub use campbell::CampbellSpec;
 pub use compare::{CompareMechanism, CompareSpec};
 pub use design::{DesignParameter, DesignSpec, Quantity, Sampling};
+pub use digest::{MAX_LINES as DIGEST_MAX_LINES, digest};
 pub use hbm::{HbmParameter, HbmRoute, HbmSpec};
 pub use linear::{LinearResponseSpec, Variant};
 pub use load::LoadOptions;
@@ -128,6 +131,29 @@ macro_rules! analyses {
                     }
                 })*
                 kinds
+            }
+
+            /// The kinds as written in the study file, in registry order.
+            // One push per entry, because an entry's `cfg` can only sit on a statement.
+            #[allow(unused_doc_comments, clippy::vec_init_then_push)]
+            pub fn kinds() -> Vec<&'static str> {
+                let mut kinds = Vec::new();
+                $($(#[$attr])* kinds.push(stringify!($kind));)*
+                kinds
+            }
+
+            /// Per kind, the JSON Schemas of its `results.json` entry's `result` and `findings`
+            /// ([`Analysis::json_schemas`]).
+            #[allow(unused_doc_comments)]
+            pub(crate) fn json_schemas(
+                generator: &mut schemars::SchemaGenerator,
+            ) -> Vec<(&'static str, schemars::Schema, schemars::Schema)> {
+                let mut out = Vec::new();
+                $($(#[$attr])* {
+                    let (result, findings) = <$spec as Analysis>::json_schemas(generator);
+                    out.push((stringify!($kind), result, findings));
+                })*
+                out
             }
 
             /// The analysis behind the entry, to prepare when the study is loaded.

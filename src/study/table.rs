@@ -8,7 +8,7 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// The content of one CSV file: its columns, in order, with their units.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Table {
     /// The file name without `.csv`.
     pub name: String,
@@ -19,7 +19,7 @@ pub struct Table {
 }
 
 /// One column of a [`Table`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Column {
     /// The header, as in the CSV file (it carries the unit too, e.g. `amp_1x_rad_s2`).
     pub name: String,

@@ -516,7 +516,7 @@ impl Recorder {
 
 /// How one run ended, with its counters (or the sum over consecutive chunks, see
 /// [`Outcome::absorb`]). Serialised (study results) with the error as its message.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, schemars::JsonSchema)]
 pub struct Outcome {
     /// Integration counters (also on failure).
     pub stats: IntegrateStats,
@@ -526,8 +526,10 @@ pub struct Outcome {
     pub t_end: f64,
     /// State at the end time when the run completed.
     pub x_end: Option<Vec<f64>>,
-    /// Why the run ended early, if it did; the samples recorded up to there are kept.
+    /// Why the run ended early, if it did (its message); the samples recorded up to there are
+    /// kept.
     #[serde(serialize_with = "message_or_none")]
+    #[schemars(with = "Option<String>")]
     pub error: Option<IntegrateError>,
 }
 

@@ -62,7 +62,7 @@ pub struct Sample<'a> {
 }
 
 /// Counters of one run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, schemars::JsonSchema)]
 pub struct IntegrateStats {
     /// Accepted steps.
     pub accepted: usize,

@@ -8,11 +8,22 @@ use crate::model::mechanism::Mechanism;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, rhs_s, time_run_s};
 use crate::study::validate::{MAX_LIST, g, require_steady_spin, rpm};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a free oscillation (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "FreeOscillationFindings")]
+struct Findings {
+    /// Per release amplitude, the free-oscillation order over the linear order (1 for a
+    /// tautochronic path; `null` where the run gave no order).
+    order_over_linear: Vec<f64>,
+}
 
 impl Analysis for FreeOscillationSpec {
     fn comparable() -> bool {
@@ -54,12 +65,30 @@ impl Analysis for FreeOscillationSpec {
     }
 
     fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            order_over_linear: Vec<f64>,
-        }
         let r = report.free.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { order_over_linear: r.order_ratios() }, vec![table(r)])
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<FreeOscillationResult>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.free.iter().find(|r| r.name == self.name)?;
+        let ratios: Vec<f64> = r.order_ratios().into_iter().filter(|x| x.is_finite()).collect();
+        let lo = ratios.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = ratios.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mut line = format!(
+            "`{}` at {} rpm, linear order {}, {}",
+            r.joint,
+            num(r.rpm),
+            num(r.linear_order),
+            count(r.amplitudes.len(), "amplitude", "amplitudes")
+        );
+        if !ratios.is_empty() {
+            line += &format!("; order over linear {} to {}", num(lo), num(hi));
+        }
+        Some(line)
     }
 }
 

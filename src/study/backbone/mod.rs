@@ -46,7 +46,7 @@ const RTOL: f64 = 1e-12;
 const SLOWEST: f64 = 0.25;
 
 /// The backbone of one joint.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct FreeOscillationResult {
     /// The analysis name.
     pub name: String,

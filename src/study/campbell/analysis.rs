@@ -6,13 +6,23 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{
     CAMPBELL_PER_DOF3_S, CAMPBELL_POINT_S, CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S,
 };
 use crate::study::validate::{MAX_POINTS, modal_fields, order, require_steady_spin, rpm};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a Campbell diagram (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "CampbellFindings")]
+struct Findings {
+    /// One entry per tracked mode, in the order of the result's tracks.
+    modes: Vec<ModeFindings>,
+}
 
 impl Analysis for CampbellSpec {
     fn check(&self, c: &Checks<'_>) -> Result<()> {
@@ -70,13 +80,33 @@ impl Analysis for CampbellSpec {
     }
 
     fn json(&self, _study: &Study, report: &StudyReport, nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            modes: Vec<ModeFindings>,
-        }
         // A Campbell diagram carries no name: the n-th completed one is the n-th result.
         let c = report.campbell.get(nth)?;
         Json::new(c, &Findings { modes: mode_findings(self, c) }, campbell_tables(self, c))
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Campbell>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, nth: usize) -> Option<String> {
+        let c = report.campbell.get(nth)?;
+        let (lo, hi) = (c.rpm.first()?, c.rpm.last()?);
+        let mut line = format!("{}, {}–{} rpm; ", count(c.tracks.len(), "mode", "modes"), num(*lo), num(*hi));
+        match c.crossings.first() {
+            None => line += "no order line crosses a mode",
+            Some(x) => {
+                line += &format!(
+                    "{}, first at {} rpm (order {}, mode `{}`, {} Hz)",
+                    count(c.crossings.len(), "crossing", "crossings"),
+                    num(x.rpm),
+                    num(x.order),
+                    x.label,
+                    num(x.frequency_hz)
+                )
+            }
+        }
+        Some(line)
     }
 }
 
@@ -87,7 +117,7 @@ impl Kept for crate::linear::Campbell {
 }
 
 /// The summary's reading of one tracked mode of a Campbell diagram.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ModeFindings {
     /// The mode's label (its dominant joint).
     pub label: String,

@@ -6,12 +6,30 @@ use crate::error::Result;
 use crate::io::Source;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::count;
 use crate::study::json::{AnalysisEntry, Json, entries};
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::JSON_PER_CSV_BYTE;
 use crate::study::validate::{MAX_ANALYSES, check_file_name};
 use crate::study::{AnalysisSpec, Study};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// A comparison's `result` in `results.json`.
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "CompareResult")]
+struct Mechanisms<'a> {
+    /// Per compared mechanism, in the file's order.
+    mechanisms: Vec<ComparedEntry<'a>>,
+}
+
+/// What the summary reads off a comparison (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "CompareFindings")]
+struct Findings {
+    /// The mechanisms' labels, in the file's order.
+    labels: Vec<String>,
+}
 
 impl Analysis for CompareSpec {
     fn check(&self, c: &Checks<'_>) -> Result<()> {
@@ -59,14 +77,6 @@ impl Analysis for CompareSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Mechanisms<'a> {
-            mechanisms: Vec<ComparedEntry<'a>>,
-        }
-        #[derive(Serialize)]
-        struct Findings {
-            labels: Vec<String>,
-        }
         let r = report.compares.iter().find(|r| r.name == self.name)?;
         let subs = &study.comparisons.iter().find(|(k, _)| study.spec.analyses[*k].name() == self.name)?.1;
         let mechanisms: Vec<ComparedEntry> = subs
@@ -84,6 +94,22 @@ impl Analysis for CompareSpec {
         let mut json = Json::new(&Mechanisms { mechanisms }, &Findings { labels }, Vec::new())?;
         json.inner_tables = inner;
         Some(json)
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Mechanisms<'static>>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.compares.iter().find(|r| r.name == self.name)?;
+        let labels: Vec<&str> = r.mechanisms.iter().map(|m| m.label.as_str()).collect();
+        let runs: usize = r.mechanisms.iter().map(|m| m.completed.len()).sum();
+        let done: usize = r.mechanisms.iter().map(|m| m.completed.iter().filter(|c| **c).count()).sum();
+        Some(format!(
+            "{} ({}): {done} of {runs} analyses complete",
+            count(labels.len(), "mechanism", "mechanisms"),
+            labels.join(", ")
+        ))
     }
 }
 
@@ -123,8 +149,9 @@ pub(super) fn check_compare(src: &Source, k: usize, c: &super::CompareSpec) -> R
     Ok(())
 }
 
-// One mechanism of a comparison in the document.
-#[derive(Debug, Clone, Serialize)]
+/// One mechanism of a comparison in `results.json`: its label, its mechanism and the entries of
+/// the analyses run on it.
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct ComparedEntry<'a> {
     /// Its label.
     pub label: &'a str,

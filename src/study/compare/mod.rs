@@ -39,7 +39,7 @@ pub type Compared = Vec<(String, Study)>;
 type Overlay = (Option<PathBuf>, Vec<(String, String)>);
 
 /// What a comparison ran.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CompareResult {
     /// The analysis name.
     pub name: String,
@@ -48,7 +48,7 @@ pub struct CompareResult {
 }
 
 /// One mechanism of a comparison.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ComparedMechanism {
     /// Its label.
     pub label: String,

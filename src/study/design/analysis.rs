@@ -12,6 +12,7 @@ use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CASE_SETUP_S, LINEAR_SETUP_PER_DOF3_S};
 use crate::study::validate::require_steady_spin;
+use schemars::{Schema, SchemaGenerator};
 
 impl Analysis for DesignSpec {
     fn prepare(&mut self, r: &mut Resources<'_>) -> Result<()> {
@@ -72,6 +73,16 @@ impl Analysis for DesignSpec {
     fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
         let r = report.designs.iter().find(|r| r.name == self.name)?;
         Json::new(r, &findings(r), vec![r.table()])
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<DesignResult>(), generator.subschema_for::<super::DesignFindings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.designs.iter().find(|r| r.name == self.name)?;
+        let f = findings(r);
+        Some(format!("{} cases: {} complete, {} partial, {} failed", f.cases, f.ok, f.partial, f.failed))
     }
 }
 

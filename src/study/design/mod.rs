@@ -65,7 +65,7 @@ pub const MAX_MECHANISM_VALUE: f64 = 1e12;
 pub const FOLD_MERGE_TOL: f64 = 1e-6;
 
 /// The status of one case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum CaseStatus {
     /// Every run of the case's analysis succeeded.
@@ -88,7 +88,7 @@ impl CaseStatus {
 }
 
 /// One case's row of the table.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CaseRow {
     /// Case index, from 0.
     pub index: usize,
@@ -103,7 +103,7 @@ pub struct CaseRow {
 }
 
 /// A column of the case table: CSV header and SI unit.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ColumnInfo {
     /// The CSV header.
     pub name: String,
@@ -112,7 +112,7 @@ pub struct ColumnInfo {
 }
 
 /// The results of a design study.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DesignResult {
     /// Analysis name.
     pub name: String,
@@ -147,7 +147,7 @@ impl DesignResult {
 }
 
 /// What the summary reads off a design study (also in `results.json`).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct DesignFindings {
     /// Cases run.
     pub cases: usize,

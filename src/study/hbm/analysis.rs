@@ -9,6 +9,7 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::digest::count;
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s};
@@ -16,7 +17,25 @@ use crate::study::validate::{
     MAX_RPM, MAX_TORQUE_NM, check_excite, check_harmonics, check_max_step, order, order_range, pos,
     require_steady_spin, rpm, torques,
 };
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// A harmonic-balance analysis's `result` in `results.json`.
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "HarmonicBalanceResult")]
+struct Branches<'a> {
+    /// Its branches: per amplitude, one continued from each end of the continued parameter's
+    /// range (order, speed or torque; one fewer where a branch failed).
+    branches: Vec<&'a HbmBranch>,
+}
+
+/// What the summary reads off a harmonic-balance analysis (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "HarmonicBalanceFindings")]
+struct BranchesFindings {
+    /// One entry per branch, in the order of the result's branches.
+    branches: Vec<super::BranchFindings>,
+}
 
 impl Analysis for HbmSpec {
     fn rename_references(&mut self, rename: &dyn Fn(&str) -> String) {
@@ -123,14 +142,33 @@ impl Analysis for HbmSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Branches<T> {
-            branches: Vec<T>,
-        }
         let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
         let findings = findings(study, &branches, &overlay_of(self, &report.sweeps));
         let tables = tables(&study.mechanism, self, &branches);
-        Json::new(&Branches { branches }, &Branches { branches: findings }, tables)
+        Json::new(&Branches { branches }, &BranchesFindings { branches: findings }, tables)
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Branches<'static>>(), generator.subschema_for::<BranchesFindings>())
+    }
+
+    fn digest(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let branches: Vec<&HbmBranch> = report.hbm.iter().filter(|b| b.analysis == self.name).collect();
+        let f = findings(study, &branches, &overlay_of(self, &report.sweeps));
+        let points: usize = f.iter().map(|b| b.points).sum();
+        let stable: usize = f.iter().map(|b| b.stable).sum();
+        let unstable: usize = f.iter().map(|b| b.unstable).sum();
+        let folds: usize = branches.iter().map(|b| b.folds.len()).sum();
+        let short = branches.iter().filter(|b| b.stopped_short.is_some()).count();
+        let mut line = format!(
+            "{}, {points} points ({stable} stable, {unstable} unstable), {}",
+            count(branches.len(), "branch", "branches"),
+            count(folds, "fold", "folds")
+        );
+        if short > 0 {
+            line += &format!("; {short} stopped short of the range");
+        }
+        Some(line)
     }
 }
 

@@ -23,7 +23,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// One branch of one amplitude.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct HbmBranch {
     /// The analysis name.
     pub analysis: String,
@@ -577,7 +577,7 @@ pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) 
 }
 
 /// What the summary counts per branch (also in `results.json`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct BranchFindings {
     /// Solved points.
     pub points: usize,

@@ -6,13 +6,23 @@ use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, LINEAR_SETUP_PER_DOF3_S, LINEAR_SETUP_S};
 use crate::study::validate::{
     MAX_LIST, MAX_NAME_CHARS, MAX_ORDER, MAX_POINTS, check_excite, modal_fields, pos, require_steady_spin, rpm,
 };
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a linear response (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "LinearFindings")]
+struct Findings {
+    /// One entry per variant, in the order of the result's variants.
+    variants: Vec<VariantFindings>,
+}
 
 impl Analysis for LinearResponseSpec {
     fn comparable() -> bool {
@@ -120,12 +130,26 @@ impl Analysis for LinearResponseSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            variants: Vec<VariantFindings>,
-        }
         let r = report.linear.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { variants: variant_findings(r) }, response_tables(study, self, r))
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<LinearResult>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.linear.iter().find(|r| r.name == self.name)?;
+        let mut line = count(r.variants.len(), "variant", "variants");
+        if let Some(nt) = r.n_t {
+            line += &format!(", tuning order n_t = {}", num(nt));
+        }
+        // The deepest notch over the variants: the absorber's best attenuation.
+        let best = r.variants.iter().filter(|v| v.min.1.is_finite()).min_by(|a, b| a.min.1.total_cmp(&b.min.1));
+        if let Some(v) = best {
+            line += &format!("; smallest ratio to locked twin {} at n = {} ({})", num(v.min.1), num(v.min.0), v.label);
+        }
+        Some(line)
     }
 }
 
@@ -137,7 +161,7 @@ impl Kept for LinearResult {
 
 /// The summary's orders of one linear-response variant in units of the tuning order n_t (None:
 /// the study locks no joint, so n_t is not defined, or there is no crossing).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct VariantFindings {
     /// The variant's label.
     pub label: String,

@@ -24,7 +24,7 @@ pub(crate) fn slug(label: &str) -> String {
 }
 
 /// Linear results of one variant, for tests and reports.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct ResponseVariant {
     /// The variant's label.
     pub label: String,
@@ -36,9 +36,9 @@ pub struct ResponseVariant {
     pub locked: Vec<f64>,
     /// |α̂| / |α̂_locked| at each order.
     pub ratio: Vec<f64>,
-    /// Smallest ratio and its order.
+    /// The smallest ratio: (its order, the ratio).
     pub min: (f64, f64),
-    /// Largest ratio and its order.
+    /// The largest ratio: (its order, the ratio).
     pub max: (f64, f64),
     /// First order above n_t where the ratio exceeds 1.
     pub crossing: Option<f64>,
@@ -53,7 +53,7 @@ pub struct ResponseVariant {
 /// The steady order-1 response that gravity forces at the nominal rotation, spin free, in the
 /// linear model (`linear::gravity`: exact to first order; the gravity × deflection terms are
 /// neglected).
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct GravityResponse {
     /// |α̂| of the watched body at order 1, rad/s².
     pub accel: f64,
@@ -64,7 +64,7 @@ pub struct GravityResponse {
 }
 
 /// One element's linear response per unit excitation torque over the orders of a variant.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct ElementFrf {
     /// The joint.
     pub joint: String,
@@ -78,7 +78,7 @@ pub struct ElementFrf {
 }
 
 /// A linear frequency-response analysis.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct LinearResult {
     /// Analysis name.
     pub name: String,
@@ -93,7 +93,7 @@ pub struct LinearResult {
 }
 
 /// One mode of the modal table of a linear response analysis.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct ModeRow {
     /// Spin held (the absorbers alone) rather than free (coupled with the rotor).
     pub spin_held: bool,

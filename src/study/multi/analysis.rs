@@ -8,13 +8,23 @@ use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::digest::num;
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, hbm_branch_s, time_run_s};
 use crate::study::validate::{
     MAX_LIST, check_excite, common, modal_fields, order, pos, require_steady_spin, rpm, torque, tracking,
 };
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a multi-order analysis (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "MultiOrderFindings")]
+struct Findings {
+    /// One entry per speed, in the order of the result's speeds.
+    speeds: Vec<SpeedFindings>,
+}
 
 impl Analysis for MultiOrderSpec {
     fn comparable() -> bool {
@@ -222,12 +232,35 @@ impl Analysis for MultiOrderSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            speeds: Vec<SpeedFindings>,
-        }
         let r = report.multi.iter().find(|r| r.name == self.name)?;
         Json::new(r, &Findings { speeds: findings(r) }, vec![table(study, self, r)])
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<MultiOrderResult>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.multi.iter().find(|r| r.name == self.name)?;
+        let (lo, hi) = (r.speeds.first()?.rpm, r.speeds.last()?.rpm);
+        let mut line = format!("{} speeds, {}–{} rpm", r.speeds.len(), num(lo), num(hi));
+        let f = findings(r);
+        // The main order's amplitude over the locked twin's: what the absorber buys, speed by speed.
+        let ratios: Vec<(f64, f64)> =
+            f.iter().filter_map(|s| Some((s.rpm, *s.ratio.first()?))).filter(|(_, x)| x.is_finite()).collect();
+        let best = ratios.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+        let worst = ratios.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+        if let (Some(b), Some(w), Some(m)) = (best, worst, r.multiples.first()) {
+            line += &format!(
+                "; {}n over locked twin {} (at {} rpm) to {} (at {} rpm)",
+                num(*m),
+                num(b.1),
+                num(b.0),
+                num(w.1),
+                num(w.0)
+            );
+        }
+        Some(line)
     }
 }
 

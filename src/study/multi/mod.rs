@@ -22,7 +22,7 @@ use report::{fmt_mult, render};
 use std::path::Path;
 
 /// The steady state at one speed (of the mechanism or of its locked twin).
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct Steady {
     /// Amplitude of each tracked multiple over the last window, rad/s².
     pub amplitudes: Vec<f64>,
@@ -41,7 +41,7 @@ pub struct Steady {
 }
 
 /// One operating speed.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct SpeedResult {
     /// Mean speed, rpm.
     pub rpm: f64,
@@ -88,7 +88,7 @@ pub struct SpeedResult {
 }
 
 /// One periodic steady state by harmonic balance.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct HbmState {
     /// Amplitude per tracked multiple, rad/s².
     pub amplitudes: Vec<f64>,
@@ -166,7 +166,7 @@ impl SpeedResult {
 }
 
 /// A multi-order analysis over speed.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct MultiOrderResult {
     /// Analysis name.
     pub name: String,
@@ -434,7 +434,7 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
 }
 
 /// What the summary computes per speed beyond the results (also in `results.json`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct SpeedFindings {
     /// Mean speed, rpm.
     pub rpm: f64,

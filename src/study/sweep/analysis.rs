@@ -7,11 +7,21 @@ use crate::model::excitation::rpm_to_rad_s;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output};
+use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, stft_s, time_run_s};
 use crate::study::validate::{check_excite, common, g, order_range, pos, rpm, torques, tracking};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// An order sweep's `result` in `results.json`.
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "OrderSweepResult")]
+struct Runs<'a> {
+    /// The runs, the locked twin's included, in the order run.
+    runs: Vec<&'a SweepRun>,
+}
 
 impl Analysis for SweepSpec {
     fn comparable() -> bool {
@@ -109,13 +119,42 @@ impl Analysis for SweepSpec {
     }
 
     fn json(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Runs<'a> {
-            runs: Vec<&'a SweepRun>,
-        }
         let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
         let (findings, tables) = (findings(self, &runs), tables(self, &runs));
         Json::new(&Runs { runs }, &findings, tables)
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<Runs<'static>>(), generator.subschema_for::<super::SweepFindings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let runs: Vec<&SweepRun> = report.sweeps.iter().filter(|r| r.analysis == self.name).collect();
+        let f = findings(self, &runs);
+        // The peak the absorber has to live with: the largest main-order amplitude of the free
+        // runs after the ramp-in (the locked twin is the reference, not the design).
+        let peak = runs
+            .iter()
+            .filter(|r| !r.locked)
+            .filter_map(|r| {
+                let t = r.trace(1.0)?;
+                let samples = t.time_s.iter().zip(&t.order).zip(&t.amplitude);
+                let ((_, n), a) = samples
+                    .filter(|((s, _), a)| **s >= f.skip_before_s && a.is_finite())
+                    .max_by(|(_, a), (_, b)| a.total_cmp(b))?;
+                Some((*a, *n, r.label()))
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        let mut line = count(runs.len(), "run", "runs");
+        if let Some((a, n, label)) = peak {
+            line += &format!("; main-order peak {} rad/s² at n = {} ({label})", num(a), num(n));
+        }
+        let differ: Vec<String> =
+            f.amplitudes.iter().filter(|a| !a.up_down_differ.is_empty()).map(|a| num(a.amplitude)).collect();
+        if !differ.is_empty() {
+            line += &format!("; up/down sweeps jump apart at T_n = {} N·m", differ.join(", "));
+        }
+        Some(line)
     }
 }
 

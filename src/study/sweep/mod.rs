@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 /// One sweep run: the order traces of the response and what the run did. Serialised into
 /// `results.json` without the time series (which is there as a table, like its CSV).
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct SweepRun {
     /// The analysis name.
     pub analysis: String,
@@ -358,7 +358,7 @@ fn fmt_intervals(iv: &[(f64, f64)]) -> String {
 
 /// What the summary reads off a sweep's traces (also in `results.json`). Order intervals are
 /// `(from, to)` pairs of excitation orders.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct SweepFindings {
     /// Windows centred before this time are left out (the ramp-in plus 1 s), s.
     pub skip_before_s: f64,
@@ -369,7 +369,7 @@ pub struct SweepFindings {
 }
 
 /// What the summary reads off one sweep run.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct RunFindings {
     /// The run's file label ([`SweepRun::label`]).
     pub label: String,
@@ -384,11 +384,12 @@ pub struct RunFindings {
 }
 
 /// Where the up and the down sweep of one amplitude differ.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct AmplitudeFindings {
     /// Torque amplitude T_n, N·m.
     pub amplitude: f64,
-    /// Order intervals where the main-order traces differ by more than [`BRANCH_FACTOR`].
+    /// Order intervals where the main-order traces differ by more than [`BRANCH_FACTOR`] (one
+    /// is over 1.5 times the other).
     pub up_down_differ: Vec<(f64, f64)>,
 }
 

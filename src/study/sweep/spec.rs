@@ -4,7 +4,7 @@ use crate::study::ExciteAt;
 use serde::{Deserialize, Serialize};
 
 /// Direction of an order sweep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Direction {
     /// From the lower order to the higher.
     Up,

@@ -39,6 +39,13 @@ impl Kept for Doubled {
     fn keep(self: Box<Self>, _report: &mut StudyReport) {}
 }
 
+/// The toy's `result` in `results.json`.
+#[derive(Serialize, schemars::JsonSchema)]
+struct Doubling {
+    /// Twice the value.
+    doubled: f64,
+}
+
 impl Analysis for ToySpec {
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         if !self.value.is_finite() {
@@ -62,11 +69,15 @@ impl Analysis for ToySpec {
     }
 
     fn json(&self, _study: &Study, _report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Result {
-            doubled: f64,
-        }
-        Json::new(&Result { doubled: 2.0 * self.value }, &(), vec![self.table()])
+        Json::new(&Doubling { doubled: 2.0 * self.value }, &(), vec![self.table()])
+    }
+
+    fn json_schemas(generator: &mut schemars::SchemaGenerator) -> (schemars::Schema, schemars::Schema) {
+        (generator.subschema_for::<Doubling>(), generator.subschema_for::<()>())
+    }
+
+    fn digest(&self, _study: &Study, _report: &StudyReport, _nth: usize) -> Option<String> {
+        Some(format!("twice {} is {}", self.value, 2.0 * self.value))
     }
 }
 

@@ -10,11 +10,21 @@ use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
+use crate::study::digest::num;
 use crate::study::json::Json;
 use crate::study::plan::AnalysisPlan;
 use crate::study::plan::{CSV_CELL_BYTES, time_run_s};
 use crate::study::validate::{MAX_LIST, MAX_RPM, MAX_TRANSIENT_S, check_excite, g, order, pos, torque};
+use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
+
+/// What the summary reads off a transient (its `findings` in `results.json`).
+#[derive(Serialize, JsonSchema)]
+#[schemars(rename = "TransientFindings")]
+struct Findings {
+    /// One entry per order cut, in the order of the result's cuts.
+    cuts: Vec<CutFindings>,
+}
 
 impl Analysis for TransientSpec {
     fn comparable() -> bool {
@@ -94,10 +104,6 @@ impl Analysis for TransientSpec {
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
-        #[derive(Serialize)]
-        struct Findings {
-            cuts: Vec<CutFindings>,
-        }
         let r = report.transient.iter().find(|r| r.name == self.name)?;
         let cuts = r
             .cuts
@@ -105,6 +111,31 @@ impl Analysis for TransientSpec {
             .map(|c| CutFindings { signal: c.signal.clone(), order: c.order, peak: c.peak, peak_rpm: c.peak_rpm })
             .collect();
         Json::new(r, &Findings { cuts }, tables(study, self, r))
+    }
+
+    fn json_schemas(generator: &mut SchemaGenerator) -> (Schema, Schema) {
+        (generator.subschema_for::<TransientResult>(), generator.subschema_for::<Findings>())
+    }
+
+    fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
+        let r = report.transient.iter().find(|r| r.name == self.name)?;
+        let mut line = format!("{}→{} rpm", num(r.rpm_start), num(r.rpm_end));
+        // The response's cuts come first; its largest peak is the resonance the run passed.
+        let response = r.cuts.iter().filter(|c| c.signal == r.cuts[0].signal);
+        match response.filter(|c| c.peak.is_finite()).max_by(|a, b| a.peak.total_cmp(&b.peak)) {
+            Some(c) => {
+                line += &format!(
+                    "; {} peaks at order {}: {} {} at {} rpm",
+                    c.signal,
+                    num(c.order),
+                    num(c.peak),
+                    c.unit,
+                    num(c.peak_rpm)
+                )
+            }
+            None => line += "; no order–rpm map",
+        }
+        Some(line)
     }
 }
 
@@ -316,7 +347,7 @@ pub(super) fn check_transient(
 }
 
 /// The summary's reading of one order cut of a transient.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct CutFindings {
     /// The signal cut.
     pub signal: String,

@@ -35,7 +35,7 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 /// One order cut of the map: the amplitude of one signal at one order against the blocks' speed.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct OrderCut {
     /// The signal: the response body's acceleration (`<body>_accel`) or an element's coordinate
     /// (`<joint>_q`).
@@ -53,13 +53,13 @@ pub struct OrderCut {
 }
 
 /// An element's largest excursion over the run.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct ElementPeak {
     /// The joint.
     pub joint: String,
     /// Unit of its coordinate (rad or m).
     pub unit: &'static str,
-    /// Largest |q| over the run.
+    /// Largest |q| over the run, in `unit`.
     pub peak: f64,
     /// When it occurred, s.
     pub at_time_s: f64,
@@ -69,16 +69,16 @@ pub struct ElementPeak {
 
 /// What a transient produced. Serialised into `results.json` without the sampled signals and the
 /// map's cells (which are there as tables, like their CSV files).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, schemars::JsonSchema)]
 pub struct TransientResult {
     /// The analysis name.
     pub name: String,
     /// Polar moment of inertia of the spin joint's load in rigid rotation, kg·m² (the
     /// feed-forward's J).
     pub rigid_inertia_kg_m2: f64,
-    /// Spin speed at the start and at the end of the run (as reached), rpm.
+    /// Spin speed at the start of the run, rpm.
     pub rpm_start: f64,
-    /// See `rpm_start`.
+    /// Spin speed at the end of the run (as reached, which a torque-driven run-up may miss), rpm.
     pub rpm_end: f64,
     /// The map's speed resolution: the widest spread of speeds inside one block, rpm.
     pub map_speed_resolution_rpm: f64,
@@ -432,7 +432,7 @@ pub(crate) fn compute(
 }
 
 /// The range of one joint's reaction over a transient (after its first second).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct ReactionRange {
     /// The joint.
     pub joint: String,
