@@ -33,7 +33,7 @@ pub struct ElementTorque {
 /// The honest extremes of a steady quantity (issue 29, item 3): its mean, lowest and highest
 /// value, and the largest absolute value `max(|min|, |max|)`, mean included (a wound-up
 /// spring's clearance to its stop is the largest |q|, not the oscillation about its mean).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Range {
     /// Mean over the steady state.
     pub mean: f64,
