@@ -295,7 +295,8 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
     let _ = writeln!(md, "# Study `{}`\n", study.spec.name);
     let _ = writeln!(
         md,
-        "Mechanism `{}` ({} DOF), excitation on joint `{}`, response: angular acceleration of `{}`{}.\n",
+        "Mechanism `{}` ({} DOF), spin joint `{}` (the steady rotation; the excitation acts there unless an \
+         analysis lists its joints in `excite`), response: angular acceleration of `{}`{}.\n",
         study.mechanism.name,
         study.mechanism.ndof(),
         study.spec.spin_joint,

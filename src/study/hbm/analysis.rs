@@ -92,6 +92,23 @@ impl Analysis for HbmSpec {
         }
         check_excite(src, spec, mech, &at("excite"), &h.excite, None)?;
         check_hbm(src, spec, k, h)?;
+        // Each requested value must lie in the continued range, in the parameter's unit.
+        let (lo, hi) = match h.parameter {
+            HbmParameter::Order => (h.order_min, h.order_max),
+            HbmParameter::Speed { rpm_min, rpm_max, .. } => (rpm_min, rpm_max),
+            HbmParameter::Torque { min, max, .. } => (min, max),
+        };
+        if h.orbits_at.len() > crate::study::validate::MAX_LIST {
+            return Err(src.error(&at("orbits_at"), format!("at most {} values", crate::study::validate::MAX_LIST)));
+        }
+        for (i, &v) in h.orbits_at.iter().enumerate() {
+            if !(v.is_finite() && lo <= v && v <= hi) {
+                return Err(src.error(
+                    &at(&format!("orbits_at[{i}]")),
+                    format!("{v} lies outside the continued range {lo}..{hi}: no branch can cross it there"),
+                ));
+            }
+        }
         if h.route == super::HbmRoute::Cyclic {
             check_route(c, h)?;
         }

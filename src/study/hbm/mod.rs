@@ -22,6 +22,24 @@ use crate::signal::findings::jump_order;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// A periodic state the branch crosses at one of the analysis's `orbits_at` values, solved there
+/// by Newton's method from the nearer branch point, with its Floquet stability.
+#[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
+pub struct HbmOrbit {
+    /// The value of the continued parameter (order, rpm or N·m).
+    pub at: f64,
+    /// Response-body acceleration amplitude per reported multiple, rad/s².
+    pub accel: Vec<f64>,
+    /// Largest peak |relative angle| of the non-spin joints, rad.
+    pub relative_angle: f64,
+    /// Floquet stability (None: not computed).
+    pub stable: Option<bool>,
+    /// Largest Floquet multiplier modulus (NaN: not computed).
+    pub max_multiplier: f64,
+    /// Each reported element, from the Fourier series.
+    pub elements: Vec<ElementResponse>,
+}
+
 /// One branch of one amplitude.
 #[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct HbmBranch {
@@ -43,6 +61,10 @@ pub struct HbmBranch {
     pub elements: Vec<Vec<ElementResponse>>,
     /// Floquet stability per point (None: not computed).
     pub stable: Vec<Option<bool>>,
+    /// The states this branch crosses at each of the analysis's `orbits_at` values (empty
+    /// without them; and then left out of `results.json`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub orbits: Vec<HbmOrbit>,
     /// Largest Floquet multiplier modulus per point (NaN: not computed): the stability margin,
     /// how far below 1 a stable point sits.
     pub max_multiplier: Vec<f64>,
@@ -407,7 +429,7 @@ fn compute_with(
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
             }
-            let (hbm, b, wall_s) = match solved {
+            let (mut hbm, b, wall_s) = match solved {
                 Ok(x) => x,
                 Err(e) => {
                     let what = if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") };
@@ -482,7 +504,9 @@ fn compute_with(
                     }
                 }
             }
+            let orbits = orbits_on(study, spec, &mut hbm, &b, (&path, scale));
             branches.push(HbmBranch {
+                orbits,
                 stopped_short,
                 analysis: spec.name.clone(),
                 curve_parameter,
@@ -531,6 +555,42 @@ fn compute_with(
         }
     }
     (branches, failures)
+}
+
+/// The states branch `b` crosses at each of `spec.orbits_at` (in the axis unit; `scale` takes it
+/// to the continued parameter), each solved there from its nearer branch point and its stability
+/// computed; a crossing whose solve fails is left out (the branch's points stay).
+fn orbits_on(
+    study: &Study,
+    spec: &HbmSpec,
+    hbm: &mut crate::hbm::RoutedHbm,
+    b: &crate::hbm::Branch,
+    (path, scale): (&[(usize, f64)], f64),
+) -> Vec<HbmOrbit> {
+    let mut out = Vec::new();
+    for &at in &spec.orbits_at {
+        let value = at * scale;
+        for guess in b.guesses_at(value) {
+            let solved = match spec.parameter {
+                HbmParameter::Order => hbm.solve(value, Some(guess)),
+                HbmParameter::Speed { order, .. } => hbm.set_speed(value).and_then(|()| hbm.solve(order, Some(guess))),
+                HbmParameter::Torque { order, .. } => {
+                    hbm.set_torque_scale(value).and_then(|()| hbm.solve(order, Some(guess)))
+                }
+            };
+            let Ok(mut sol) = solved else { continue };
+            sol.stability = hbm.stability(&sol).ok();
+            out.push(HbmOrbit {
+                at,
+                accel: spec.multiples.iter().map(|&m| body_accel(&sol, path, m)).collect(),
+                relative_angle: sol.max_peak_amplitude(),
+                stable: sol.stability.as_ref().map(|st| st.stable),
+                max_multiplier: sol.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus),
+                elements: from_hbm(&study.mechanism, &study.elements, &sol, &spec.multiples),
+            });
+        }
+    }
+    out
 }
 
 /// One CSV table per branch: the continued parameter, the acceleration per reported multiple,
@@ -784,7 +844,66 @@ pub(crate) fn render(
             let _ = writeln!(md, "- The branch{what} continued from {} {why}; its points are shown.", br.from);
         }
     }
+    md += &orbit_table(spec, branches, ax.column);
     Ok((md, files))
+}
+
+/// The summary's table of the states at the requested values (`orbits_at`): every distinct
+/// state the branches of one amplitude cross there (the two directions of continuation often
+/// cross the same one: states whose accelerations and largest angle agree to 1e-6 relative count
+/// once), with its stability.
+fn orbit_table(spec: &HbmSpec, branches: &[HbmBranch], column: &str) -> String {
+    if spec.orbits_at.is_empty() {
+        return String::new();
+    }
+    let mut md = format!(
+        "States at the requested values of {column} (every periodic state the branches cross there, solved \
+         at that value):\n\n| T_n (N·m) | {column} | states | stable / unstable | main-order acceleration \
+         (rad/s²) and largest angle (rad) of each, stability |\n|---|---|---|---|---|\n"
+    );
+    let same = |a: &HbmOrbit, b: &HbmOrbit| {
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-6 * x.abs().max(y.abs()).max(1e-12);
+        a.accel.iter().zip(&b.accel).all(|(x, y)| close(*x, *y)) && close(a.relative_angle, b.relative_angle)
+    };
+    let mut amplitudes: Vec<f64> = Vec::new();
+    for br in branches {
+        if !amplitudes.iter().any(|a| a.to_bits() == br.amplitude.to_bits()) {
+            amplitudes.push(br.amplitude);
+        }
+    }
+    for amp in amplitudes {
+        for &at in &spec.orbits_at {
+            let mut found: Vec<&HbmOrbit> = Vec::new();
+            for o in branches
+                .iter()
+                .filter(|b| b.amplitude.to_bits() == amp.to_bits())
+                .flat_map(|b| &b.orbits)
+                .filter(|o| o.at == at)
+            {
+                if !found.iter().any(|f| same(f, o)) {
+                    found.push(o);
+                }
+            }
+            found.sort_by(|a, b| a.relative_angle.total_cmp(&b.relative_angle));
+            let stable = found.iter().filter(|o| o.stable == Some(true)).count();
+            let unstable = found.iter().filter(|o| o.stable == Some(false)).count();
+            let each: Vec<String> = found
+                .iter()
+                .map(|o| {
+                    let st = match o.stable {
+                        Some(true) => "stable",
+                        Some(false) => "unstable",
+                        None => "?",
+                    };
+                    format!("{:.5e}, {:.5}, {st}", o.accel.first().copied().unwrap_or(f64::NAN), o.relative_angle)
+                })
+                .collect();
+            let amp = if amp.is_nan() { "–".to_string() } else { amp.to_string() };
+            let _ = writeln!(md, "| {amp} | {at} | {} | {stable} / {unstable} | {} |", found.len(), each.join("; "));
+        }
+    }
+    md.push('\n');
+    md
 }
 
 fn list(v: &[f64]) -> String {

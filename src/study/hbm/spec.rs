@@ -61,6 +61,11 @@ pub struct HbmSpec {
     /// at load with the difference found. `General` solves every coordinate (the reference).
     #[serde(default)]
     pub route: HbmRoute,
+    /// Values of the continued parameter (order, rpm or N·m, as `parameter` says) at which every
+    /// periodic state the branches cross is solved exactly and reported with its stability
+    /// (issue 29, item 7): coexisting orbits, such as a gravity-loaded rotor's at one speed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub orbits_at: Vec<f64>,
     /// The engine's series, filled when the study is loaded (not part of the file).
     #[serde(skip)]
     pub engine_series: Option<crate::combustion::OscillatingSeries>,
