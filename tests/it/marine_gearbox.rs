@@ -326,3 +326,42 @@ fn harmonic_balance_of_a_meshed_train_is_a_periodic_orbit_of_the_time_equations(
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A Campbell diagram in the high-pressure turbine's own speed and orders (`speed_of` its
+/// first-reduction pinion, which turns at 78.2365/9.4094 × 9.4094 = 78.2365 times the
+/// propeller): order 1 of the turbine crosses each mode where the turbine's rpm equals the mode's
+/// frequency in cpm (the hand modes, to 1e-8 relative); a joint that does not turn with the
+/// spin (a shaft's twist) is refused at `speed_of`.
+#[test]
+fn a_campbell_diagram_in_a_turbines_speed() {
+    let dir = std::env::temp_dir().join(format!("kanedyn_marine_turbine_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy("examples/marine_driveline.ron", dir.join("m.ron")).unwrap();
+    let study = |speed_of: &str| {
+        format!(
+            r#"Study(name: "t", mechanism: "m.ron", spin_joint: "bull", response_body: "propeller",
+    analyses: [Campbell(name: "c", rpm_min: 100.0, rpm_max: 2500.0, points: 25, orders: [1.0], spin_held: false,
+                        speed_of: "{speed_of}")])"#
+        )
+    };
+    std::fs::write(dir.join("s.ron"), study("hp_pinion_1")).unwrap();
+    let s = Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
+    let report = run(&s, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let (m, k, _) = hand_matrices();
+    // The four modes below 2500 cpm (the fifth is at 2883).
+    let cpm: Vec<f64> = hand_modes(&m, &k).0[1..5].iter().map(|w| w * 30.0 / PI).collect();
+    let c = &report.campbell[0];
+    assert_eq!(c.rpm.first(), Some(&100.0));
+    let found: Vec<f64> = c.crossings.iter().map(|x| x.rpm).collect();
+    println!("turbine-speed crossings of order 1: {found:?}; modes {cpm:?} cpm");
+    assert_eq!(found.len(), 4);
+    for (x, want) in c.crossings.iter().zip(&cpm) {
+        assert_eq!(x.order, 1.0);
+        assert_relative_eq!(x.rpm, *want, max_relative = 1e-8);
+    }
+    std::fs::write(dir.join("bad.ron"), study("hp_turbine_shaft")).unwrap();
+    let err = Study::from_file(&dir.join("bad.ron")).unwrap_err().to_string();
+    assert!(err.contains("speed_of") && err.contains("hp_turbine_shaft"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -26,7 +26,7 @@ struct Findings {
 
 impl Analysis for CampbellSpec {
     fn check(&self, c: &Checks<'_>) -> Result<()> {
-        let Checks { src, k, .. } = *c;
+        let Checks { src, k, mech, spin, .. } = *c;
         let at = |field: &str| c.at(field);
         require_steady_spin(c, "Campbell", &self.name, true)?;
         let c = self;
@@ -41,6 +41,18 @@ impl Analysis for CampbellSpec {
             return Err(src.error(&at("orders"), "at most 64 order lines"));
         }
         modal_fields(src, &at, c.modal_damping.as_ref(), c.modal_combination)?;
+        if let Some(name) = &c.speed_of
+            && c.speed_ratio(mech, spin).is_none()
+        {
+            return Err(src.error(
+                &at("speed_of"),
+                format!(
+                    "joint `{name}` is not a joint of mechanism `{}` that turns with the spin joint (through \
+                     gears or meshes), so its speed cannot be the diagram's",
+                    mech.name
+                ),
+            ));
+        }
         for (j, &n) in c.orders.iter().enumerate() {
             order(src, &format!("analyses[{k}].orders[{j}]"), n)?;
         }

@@ -74,7 +74,24 @@ pub(crate) fn compute_campbell(study: &Study, spec: &CampbellSpec) -> Result<(Ca
     let damping = if spec.damped { Damping::Damped } else { Damping::Undamped };
     let modal = spec.modal();
     let opts = CampbellOptions { spin, damping, modal, guess: None, deadline: study.spec.integration.deadline };
-    let c = campbell_with(mech, &study.spec.spin_joint, &rpm, &spec.orders, &opts).map_err(lin(mech))?;
+    // In a named shaft's speed: computed at the spin speeds rpm/r with the spin orders n·r (the
+    // same frequencies), then read back in the shaft's speed and orders.
+    let r = spec.speed_ratio(mech, study.spin).unwrap_or(1.0);
+    let spin_rpm: Vec<f64> = rpm.iter().map(|v| v / r).collect();
+    let spin_orders: Vec<f64> = spec.orders.iter().map(|n| n * r).collect();
+    let mut c = campbell_with(mech, &study.spec.spin_joint, &spin_rpm, &spin_orders, &opts).map_err(lin(mech))?;
+    if r != 1.0 {
+        c.rpm.clone_from(&rpm);
+        for (line, &n) in c.order_lines.iter_mut().zip(&spec.orders) {
+            line.order = n;
+        }
+        for x in &mut c.crossings {
+            x.rpm *= r;
+            // The shaft's own order as written (n·r / r may not round back to n).
+            let k = spin_orders.iter().position(|&o| o == x.order);
+            x.order = k.map_or(x.order / r, |k| spec.orders[k]);
+        }
+    }
     let mut failures = Vec::new();
     for (k, t) in c.tracks.iter().enumerate() {
         if let Some(i) = t.frequency_hz.iter().position(|f| !f.is_finite()) {
@@ -135,7 +152,7 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
     }
     let panel = Panel {
         title: format!("Campbell diagram ({})", if spec.spin_held { "spin held" } else { "spin free" }),
-        x_label: "spin speed, rpm".into(),
+        x_label: spec.speed_of.as_ref().map_or("spin speed, rpm".into(), |j| format!("speed of `{j}`, rpm")),
         y_label: "frequency, Hz".into(),
         x_range: Some((spec.rpm_min, spec.rpm_max)),
         y_range: Some((0.0, 1.05 * top.max(f64::MIN_POSITIVE))),
@@ -149,10 +166,11 @@ pub(crate) fn render_campbell(spec: &CampbellSpec, c: &Campbell, dir: &Path) -> 
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "## Campbell diagram `{}`: {}–{} rpm, spin {}\n",
+        "## Campbell diagram `{}`: {}–{} rpm{}, spin {}\n",
         spec.name,
         spec.rpm_min,
         spec.rpm_max,
+        spec.speed_of.as_ref().map_or(String::new(), |j| format!(" of `{j}` (speeds and orders are its own)")),
         if spec.spin_held { "held" } else { "free" }
     );
     if let Some((z, how)) = spec.modal() {

@@ -33,6 +33,23 @@ pub struct CampbellSpec {
     /// Only with `modal_damping`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_combination: Option<crate::linear::ModalCombination>,
+    /// The joint whose speed the rpm range, the order lines and the crossings refer to (default
+    /// the spin joint): a shaft geared or meshed to the spin joint, turning at |r| times its
+    /// speed in the steady rotation (its steady rate, `Mechanism::steady_rates`), e.g. a
+    /// turbine's shaft behind a reduction gear whose orders are its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_of: Option<String>,
+}
+
+impl CampbellSpec {
+    /// The named shaft's speed per unit spin speed, |r| (1 without `speed_of`); None when the
+    /// joint is unknown or does not turn with the spin.
+    pub fn speed_ratio(&self, mech: &crate::model::mechanism::Mechanism, spin: usize) -> Option<f64> {
+        let Some(name) = &self.speed_of else { return Some(1.0) };
+        let j = mech.joint_index(name)?;
+        let r = mech.steady_rates(spin)[j].abs();
+        (r > 0.0 && r.is_finite()).then_some(r)
+    }
 }
 
 impl CampbellSpec {
