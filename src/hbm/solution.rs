@@ -283,42 +283,19 @@ impl HbmSolution {
     /// The largest (`top`) or smallest value of the series `c` met by Newton's method on p′
     /// from τ0, each step clamped to `τ0 ± half`.
     fn refine_signed(&self, c: &[f64], tau0: f64, half: f64, top: bool) -> f64 {
-        let series = |tau: f64| {
-            let (mut p, mut pd, mut pdd) = (0.0, 0.0, 0.0);
-            for h in 1..=self.harmonics {
-                let hf = h as f64;
-                let (s, co) = (hf * tau).sin_cos();
-                let (a, b) = (c[2 * h - 1], c[2 * h]);
-                p += a * co + b * s;
-                pd += hf * (b * co - a * s);
-                pdd -= hf * hf * (a * co + b * s);
-            }
-            (p, pd, pdd)
-        };
-        let better = |a: f64, b: f64| if top { a.max(b) } else { a.min(b) };
-        let (lo, hi) = (tau0 - half, tau0 + half);
-        let mut tau = tau0;
-        let (mut p, mut pd, mut pdd) = series(tau);
-        let mut best = p;
-        for _ in 0..20 {
-            if pdd == 0.0 {
-                break;
-            }
-            let next = (tau - pd / pdd).clamp(lo, hi);
-            if (next - tau).abs() <= 4.0 * f64::EPSILON * (1.0 + tau.abs()) {
-                break;
-            }
-            tau = next;
-            (p, pd, pdd) = series(tau);
-            best = better(best, p);
-        }
-        best
+        if top { self.refine_by(c, tau0, half, |p| p) } else { -self.refine_by(c, tau0, half, |p| -p) }
     }
 
     /// |p(τ*)| at the stationary point τ* of the series `c` within `τ0 ± half` (see
     /// [`HbmSolution::peak_amplitude`]), by Newton's method on p′ with p″, each step clamped to
     /// the bracket.
     fn refine_extremum(&self, c: &[f64], tau0: f64, half: f64) -> f64 {
+        self.refine_by(c, tau0, half, f64::abs)
+    }
+
+    /// The largest `score(p)` over the points Newton's method on p′ visits from τ0 (each step
+    /// clamped to `τ0 ± half`), the start included: |p| for a peak, ±p for a signed extreme.
+    fn refine_by(&self, c: &[f64], tau0: f64, half: f64, score: impl Fn(f64) -> f64) -> f64 {
         let series = |tau: f64| {
             let (mut p, mut pd, mut pdd) = (0.0, 0.0, 0.0);
             for h in 1..=self.harmonics {
@@ -334,7 +311,7 @@ impl HbmSolution {
         let (lo, hi) = (tau0 - half, tau0 + half);
         let mut tau = tau0;
         let (mut p, mut pd, mut pdd) = series(tau);
-        let mut best = p.abs();
+        let mut best = score(p);
         for _ in 0..20 {
             if pdd == 0.0 {
                 break;
@@ -345,7 +322,7 @@ impl HbmSolution {
             }
             tau = next;
             (p, pd, pdd) = series(tau);
-            best = best.max(p.abs());
+            best = best.max(score(p));
         }
         best
     }

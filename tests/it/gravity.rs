@@ -272,18 +272,7 @@ fn coexisting_orbits_under_gravity_are_found_and_classified() {
         let end = flow(&x0);
         let turn = omega * period;
         let gap = (0..x0.len()).map(|i| (end[i] - x0[i] - if i == 0 { turn } else { 0.0 }).abs()).fold(0.0, f64::max);
-        let d = x0.len();
-        let mut phi = nalgebra::DMatrix::zeros(d, d);
-        for c in 0..d {
-            let h = 1e-6 * (1.0 + x0[c].abs());
-            let (mut xp, mut xm) = (x0.clone(), x0.clone());
-            xp[c] += h;
-            xm[c] -= h;
-            let (ep, em) = (flow(&xp), flow(&xm));
-            for r in 0..d {
-                phi[(r, c)] = (ep[r] - em[r]) / (2.0 * h);
-            }
-        }
+        let phi = crate::support::shooting::differenced_monodromy(&mut flow, &x0);
         let shooting_max = phi.complex_eigenvalues().iter().map(|m| m.norm()).fold(0.0, f64::max);
         println!(
             "state with pendulum peak {:.5} rad: period gap {gap:.1e}, max |μ| HBM {hbm_max:.8}, shooting {shooting_max:.8}",

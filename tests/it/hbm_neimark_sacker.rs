@@ -6,27 +6,12 @@
 //! pair of multipliers near n = 2.995 (the absorber's swing beats against the shaft mode).
 
 use crate::support::shooting::shooting_multipliers;
+use crate::support::wound_shaft::WOUND;
 use kanedyn::hbm::{BifurcationClass, ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Harmonic, Order};
 use kanedyn::model::mechanism::Mechanism;
 use std::f64::consts::PI;
-
-const MECHANISM: &str = r#"Mechanism(
-    name: "shaft_cpva_loss",
-    speeds: AbsoluteAngularVelocities,
-    bodies: [
-        Body(name: "hub", mass: 20.0, inertia: 0.5),
-        Body(name: "rotor", part: "catalog:bodies/flywheel_rotor.ron"),
-        Body(name: "pendulum", part: "catalog:bodies/cpva_pendulum.ron"),
-    ],
-    joints: [
-        Joint(name: "spin", parent: "ground", child: "hub"),
-        Joint(name: "shaft", parent: "hub", child: "rotor", spring: (stiffness: 5.0e4), damper: 2.0),
-        Joint(name: "pivot", part: "catalog:joints/cpva_pivot.ron", parent: "rotor", child: "pendulum", at: (0.17, 0.0)),
-    ],
-    loads: [GroundDamper(body: "rotor", c: 2.0)],
-)"#;
 
 /// The located Neimark–Sacker point does not depend on the step (0.1, 0.02: to 1e-7; measured
 /// 2e-11), and 5e-4 either side of it the shooting monodromy's multipliers are all inside the
@@ -37,7 +22,7 @@ const MECHANISM: &str = r#"Mechanism(
 fn a_neimark_sacker_point_is_a_complex_pair_through_the_unit_circle_of_shooting() {
     let dir = std::env::temp_dir().join(format!("kanedyn_ns_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("m.ron"), MECHANISM).unwrap();
+    std::fs::write(dir.join("m.ron"), WOUND).unwrap();
     let mech = Mechanism::from_file(&dir.join("m.ron")).unwrap();
     let spin = mech.joint_index("spin").unwrap();
     let (rpm, torque) = (1000.0, 40.0);

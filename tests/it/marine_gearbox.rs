@@ -310,17 +310,7 @@ fn harmonic_balance_of_a_meshed_train_is_a_periodic_orbit_of_the_time_equations(
         assert!(gap <= 1e-7, "{gap:e}");
         // The monodromy by central differences, in p = q − z q_s, without the spin angle.
         let d = 2 * n;
-        let mut phi = DMatrix::zeros(d, d);
-        for c in 0..d {
-            let h = 1e-6 * (1.0 + x0[c].abs());
-            let (mut xp, mut xm) = (x0.clone(), x0.clone());
-            xp[c] += h;
-            xm[c] -= h;
-            let (ep, em) = (flow(&xp), flow(&xm));
-            for r in 0..d {
-                phi[(r, c)] = (ep[r] - em[r]) / (2.0 * h);
-            }
-        }
+        let phi = crate::support::shooting::differenced_monodromy(&mut flow, &x0);
         let mut p = DMatrix::identity(d, d);
         for k in 0..n {
             p[(k, 0)] = sol.rotation[k];

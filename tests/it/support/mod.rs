@@ -1,6 +1,6 @@
 //! Fixtures shared by the stories: the branched drivetrain with its closed form, the CLI runner,
 //! the paper's harmonic-balance problem, copies of the examples, a shooting solver for periodic
-//! orbits, a swept test signal.
+//! orbits, a swept test signal, a wound shaft-CPVA.
 
 #![allow(dead_code)] // each story uses some of them
 
@@ -10,3 +10,4 @@ pub mod cpva_hbm;
 pub mod examples;
 pub mod shooting;
 pub mod swept_signal;
+pub mod wound_shaft;
