@@ -28,6 +28,12 @@ impl Deadline {
         Instant::now() >= self.at
     }
 
+    /// The watchdog's sentence for every stop it makes: `the analysis overran its time budget of
+    /// 12.3 s` (`budget_s` in s; NaN without a deadline).
+    pub fn overran(budget_s: f64) -> String {
+        format!("the analysis overran its time budget of {budget_s:.1} s")
+    }
+
     /// Whether an optional deadline has passed (`None`: never).
     pub fn passed_opt(d: Option<Deadline>) -> bool {
         d.is_some_and(|d| d.passed())

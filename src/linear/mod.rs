@@ -202,7 +202,7 @@ pub enum LinearError {
         dim: usize,
     },
     /// The analysis passed the watchdog's deadline ([`crate::deadline::Deadline`]).
-    #[error("stopped by the watchdog {reached}: the analysis overran its time budget of {budget_s:.1} s")]
+    #[error("stopped by the watchdog {reached}: {}", crate::deadline::Deadline::overran(*budget_s))]
     Watchdog {
         /// Where it had got to (`at 1200 rpm after 40 of 1000 speeds`).
         reached: String,

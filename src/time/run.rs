@@ -163,8 +163,9 @@ pub enum IntegrateError {
     },
     /// The run went past [`IntegrateOptions::deadline`]: its analysis overran its time budget.
     #[error(
-        "stopped by the watchdog at t = {t_reached} s: the analysis overran its time budget of {budget_s:.1} s \
-         (a multiple of its planned CPU time, see `kanedyn check`); {stats}"
+        "stopped by the watchdog at t = {t_reached} s: {} (a multiple of its planned CPU time, see `kanedyn \
+         check`); {stats}",
+        crate::deadline::Deadline::overran(*budget_s)
     )]
     Deadline {
         /// The budget, s.

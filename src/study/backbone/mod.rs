@@ -208,10 +208,9 @@ pub(crate) fn compute(study: &Study, spec: &FreeOscillationSpec) -> Result<FreeO
     let watchdog = |done: usize| {
         deadline.filter(|d| d.passed()).map(|d| {
             model_err(format!(
-                "stopped by the watchdog after {done} of {} amplitudes: the analysis overran its time budget of \
-                 {:.1} s",
+                "stopped by the watchdog after {done} of {} amplitudes: {}",
                 spec.amplitudes.len(),
-                d.budget_s
+                crate::deadline::Deadline::overran(d.budget_s)
             ))
         })
     };

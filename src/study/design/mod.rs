@@ -341,10 +341,7 @@ pub fn run_case(study: &Study, spec: &DesignSpec, index: usize, values: &[f64]) 
     if let Some(d) = study.spec.integration.deadline
         && d.passed()
     {
-        let error = format!(
-            "not run: the design study overran its time budget of {:.1} s (stopped by the watchdog)",
-            d.budget_s
-        );
+        let error = format!("not run: {} (stopped by the watchdog)", crate::deadline::Deadline::overran(d.budget_s));
         return CaseRow {
             index,
             values: values.to_vec(),

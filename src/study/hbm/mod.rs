@@ -399,9 +399,9 @@ fn compute_with(
             let what = if amp.is_nan() { String::new() } else { format!(" {amp} N·m") };
             if let Some(d) = study.spec.integration.deadline.filter(|d| d.passed()) {
                 failures.push(format!(
-                    "{}{what}, continued from {from}: not run: the analysis overran its time budget of {:.1} s \
-                     (stopped by the watchdog)",
-                    spec.name, d.budget_s
+                    "{}{what}, continued from {from}: not run: {} (stopped by the watchdog)",
+                    spec.name,
+                    crate::deadline::Deadline::overran(d.budget_s)
                 ));
                 continue;
             }
@@ -464,9 +464,9 @@ fn compute_with(
                 let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
                 let at = &reached;
                 failures.push(format!(
-                    "{}{what}, continued from {from}: stopped by the watchdog{at}: the analysis overran its time \
-                     budget of {budget:.1} s (the points reached are kept)",
-                    spec.name
+                    "{}{what}, continued from {from}: stopped by the watchdog{at}: {} (the points reached are kept)",
+                    spec.name,
+                    crate::deadline::Deadline::overran(budget)
                 ));
             }
             let stopped_short = match (stopped, p.last()) {

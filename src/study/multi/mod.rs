@@ -527,9 +527,9 @@ fn ramp(
     if up.end == crate::hbm::BranchEnd::Watchdog {
         let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
         return Err(err(crate::hbm::HbmError::Invalid(format!(
-            "the torque ramp at {} rpm was stopped by the watchdog: the analysis overran its time budget of \
-             {budget:.1} s",
-            p.rpm
+            "the torque ramp at {} rpm was stopped by the watchdog: {}",
+            p.rpm,
+            crate::deadline::Deadline::overran(budget)
         ))));
     }
     let fold = up.folds.first().filter(|f| f.kind == FoldKind::Maximum).map(|f| f.parameter);
