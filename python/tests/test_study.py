@@ -176,14 +176,26 @@ def test_results_json_numbers_equal_the_summary(cli_run):
         ]
         assert row == expect
         compared += 1
-    # The elements' table: one row per speed and reported joint, the peak as results.json has it.
+    # The linear elements' peaks over speed: one row per reported joint, its largest torque as
+    # results.json's linear elements have it.
+    joints = [e["joint"] for e in multi["result"]["speeds"][0]["linear_elements"]]
+    assert [row[0] for row in tables[1]] == [f"`{j}`" for j in joints]
+    for row, j in zip(tables[1], range(len(joints))):
+        peaks = [(sp["linear_elements"][j]["torque"]["peak"], sp["rpm"]) for sp in multi["result"]["speeds"]]
+        top, rpm = max(peaks)
+        assert row[1] == rust_exp(top, 5) and row[2] == rust_display(rpm)
+        compared += 1
+    # The elements' table: one row per speed and reported joint, the peak and the range (mean
+    # [min, max], largest |q|) as results.json has them.
     element_rows = [(sp, e) for sp in multi["result"]["speeds"] for e in sp["response"]["elements"]]
-    assert len(tables[1]) == len(element_rows) > 0
-    for row, (sp, e) in zip(tables[1], element_rows):
+    assert len(tables[2]) == len(element_rows) > 0
+    for row, (sp, e) in zip(tables[2], element_rows):
         assert row[0] == rust_display(sp["rpm"]) and row[1] == f"`{e['joint']}`"
         assert row[3] == rust_exp(e["peak"], 4)
+        assert row[4] == f"{rust_exp(e['mean'], 4)} [{rust_exp(e['min'], 4)}, {rust_exp(e['max'], 4)}]"
+        assert row[5] == rust_exp(e["max_abs"], 4)
         compared += 1
-    for row, sp, f in zip(tables[2], multi["result"]["speeds"], multi["findings"]["speeds"]):
+    for row, sp, f in zip(tables[3], multi["result"]["speeds"], multi["findings"]["speeds"]):
         assert row[2] == f"{rust_exp(f['hbm_match'], 2)} relative"
         fold = sp["hbm_lower_fold"]
         assert (fold is None) == (row[3] == "reaches the full torques")
