@@ -9,15 +9,16 @@
 //! (`report_html.js`). Wide tables scroll in their own box; long ones show their first rows
 //! and fold the rest into a `<details>` element.
 //!
-//! Why a hand-written layer and not a plotting library (uPlot, ~50 kB, would have been the
-//! candidate): measured on the paper study (`examples/cpva_paper.ron`), the page was 926 kB
-//! with its seven figures, almost all of it the curves' points. A library draws from its own
-//! copy of the data, so the page would carry the data twice (SVG for the figures as printed,
-//! JSON for the library; about 1.7 MB, near the 2 MB bound), or drop the SVG figures and with
-//! them what plot.rs draws on them (the Campbell diagram's crossing and order-line labels, fold
-//! markers, the legends' placement). The figures already hold every drawn point; plot.rs adds
-//! each panel's axis mapping (a few hundred bytes), and about 250 lines of script invert it.
-
+//! Why a hand-written layer and not a plotting library (uPlot, MIT, about 50 kB minified, was
+//! the candidate), measured on the paper study (`examples/cpva_paper.ron`): its page was 926 kB
+//! before this layer, almost all of it the seven figures' SVG, whose curves are 27,762 drawn
+//! points. A library draws from its own copy of the data: about 580 kB of JSON for those points
+//! at six digits, so 1.55 MB with the library and the SVG figures kept, or the SVG figures
+//! dropped and with them what plot.rs draws on them (the Campbell diagram's crossing and
+//! order-line labels, fold lines, the legends' placement), to be drawn again in the library's
+//! terms. The figures already hold every drawn point: plot.rs adds each panel's axis mapping
+//! and each curve's label as groups (6 kB on that page) and the script that inverts the
+//! mapping is 10 kB (about 230 lines), so the page is 947 kB.
 use super::{AnalysisSpec, write_file};
 use crate::error::Result;
 use pulldown_cmark::{Options, Parser, html};
