@@ -126,9 +126,11 @@ pub(crate) fn write(
     let page = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
-         <title>{title}</title><style>{STYLE}</style></head>\n<body>\n{body}<script>\n{SCRIPT}</script>\n\
+         <title>{title}</title><style>{STYLE}{fold}</style></head>\n<body>\n{body}<script>\n{SCRIPT}</script>\n\
          </body></html>\n",
-        title = escape(&format!("kanedyn study {name}"))
+        title = escape(&format!("kanedyn study {name}")),
+        // A folded table's rows after its first SHOWN_ROWS are hidden while its fold is closed.
+        fold = format!(".fold:has(details:not([open])) tbody tr:nth-child(n+{}){{display:none}}", SHOWN_ROWS + 1)
     );
     let path = dir.join(FILE_NAME);
     write_file(&path, &page)?;
@@ -151,7 +153,7 @@ fn markdown(md: &str) -> String {
 
 /// Every table in a box of its own that scrolls sideways when the table is wider than the page;
 /// a table of more than [`FOLD_ROWS`] rows shows its first [`SHOWN_ROWS`] and folds the rest
-/// behind a `<details>` element (the style hides the further rows while it is closed).
+/// behind a `<details>` element (the page's style hides the further rows while it is closed).
 fn fit_tables(html: &str) -> String {
     let mut out = String::with_capacity(html.len() + 64);
     let mut rest = html;
@@ -270,7 +272,6 @@ fn lowercase_first(text: &str) -> String {
 const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1100px;margin:1em auto;padding:0 1em;\
 line-height:1.4}.table-box{overflow-x:auto;max-width:100%;margin:1em 0}table{border-collapse:collapse}\
 td,th{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}th{white-space:normal}\
-.fold:has(details:not([open])) tbody tr:nth-child(n+11){display:none}\
 .fold details summary{cursor:pointer;color:#05c}.fold details[open] .closed,.fold details:not([open]) .open{display:none}\
 figure{margin:1em 0}figure svg{max-width:100%;height:auto;cursor:crosshair;user-select:none}\
 figcaption{font-size:0.95em;color:#333}figcaption a.file{font-size:0.85em;color:#666}.hint{color:#555;font-size:0.9em}\
