@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
+use std::fmt::Write as _;
 use std::path::Path;
 
 /// How a series is drawn.
@@ -127,7 +128,7 @@ fn write_fine(
         let root = SVGBackend::with_string(&mut text, (px(width), px(height))).into_drawing_area();
         draw(root).map_err(|e| plot_error(path, e))?;
     }
-    std::fs::write(path, vector(&text)).map_err(|source| Error::Io {
+    std::fs::write(path, groups_for_readers(&vector(&text))).map_err(|source| Error::Io {
         file: path.to_path_buf(),
         action: "cannot write plot",
         source,
@@ -223,6 +224,65 @@ fn coord(v: &str) -> String {
 /// A decimal without trailing zeros (`2.00` → `2`, `9.70` → `9.7`).
 fn trim(s: String) -> String {
     if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+}
+
+/// Starts a marker that [`groups_for_readers`] turns into an SVG `<g>` tag: a text element whose
+/// content begins with this private-use character. plotters writes no groups of its own, and
+/// a drawn text is the one element whose content it passes through untouched (escaped).
+const MARK: char = '\u{E000}';
+/// Separates the fields of a marker (labels may hold spaces).
+const FIELD: char = '\u{E001}';
+
+/// Turns the marker texts that [`fill`] draws into groups: `panel` opens a
+/// `<g class="kd-panel">` that carries the axes' mapping (`data-px`: the pixel columns of the
+/// x range's ends, `data-py`: the pixel rows of the y range's ends, `data-x`, `data-y`: those
+/// ends in data units, `data-log-y`, the axis labels), `series` opens a `<g class="kd-series">`
+/// with the curve's label, `end` closes a group. A reader of the figure (report.html's zoom
+/// and hover layer) can then tell the curves from the grid and turn a point's pixels back into
+/// data values, without the figure carrying its data twice.
+fn groups_for_readers(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len());
+    let mut rest = svg;
+    while let Some(m) = rest.find(MARK) {
+        let (Some(open), Some(close)) = (rest[..m].rfind("<text"), rest[m..].find("</text>")) else { break };
+        let end = m + close + "</text>".len();
+        let end = if rest[end..].starts_with('\n') { end + 1 } else { end };
+        out.push_str(&rest[..open]);
+        let content = rest[m + MARK.len_utf8()..m + close].trim_end();
+        let f: Vec<&str> = content.split(FIELD).collect();
+        match f.as_slice() {
+            ["panel", pl, pr, pb, pt, x0, x1, y0, y1, log, xl, yl] => {
+                let _ = writeln!(
+                    out,
+                    "<g class=\"kd-panel\" data-px=\"{pl} {pr}\" data-py=\"{pb} {pt}\" data-x=\"{x0} {x1}\" \
+                     data-y=\"{y0} {y1}\" data-log-y=\"{log}\" data-x-label=\"{xl}\" data-y-label=\"{yl}\">"
+                );
+            }
+            ["series", label] => {
+                let _ = writeln!(out, "<g class=\"kd-series\" data-label=\"{label}\">");
+            }
+            _ => out.push_str("</g>\n"),
+        }
+        rest = &rest[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Draws the marker `fields` (see [`groups_for_readers`]) at the data point `at`.
+fn mark<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    at: (f64, f64),
+    fields: &[&str],
+) -> DynResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let mut text = String::from(MARK);
+    text.push_str(&fields.join(&FIELD.to_string()));
+    chart.draw_series(std::iter::once(Text::new(text, at, font(1))))?;
+    Ok(())
 }
 
 /// Writes `panels` side by side (one row) to an SVG file of `width`×`height` pixels per panel.
@@ -442,7 +502,28 @@ where
         ))?;
         chart.draw_series(std::iter::once(Text::new(label.clone(), (*x, y1), font(13))))?;
     }
+    // The curves in a group that records the axes' mapping, each curve in its own group.
+    let (xr, yr) = (chart.x_range(), chart.y_range());
+    let ((xa, ya), (xb, yb)) = (chart.backend_coord(&(xr.start, yr.start)), chart.backend_coord(&(xr.end, yr.end)));
+    let pixel = |v: i32| coord(&v.to_string());
+    let (xs, ys) = ([xr.start, xr.end].map(|v| format!("{v:e}")), [yr.start, yr.end].map(|v| format!("{v:e}")));
+    let fields = [
+        "panel",
+        &pixel(xa),
+        &pixel(xb),
+        &pixel(ya),
+        &pixel(yb),
+        &xs[0],
+        &xs[1],
+        &ys[0],
+        &ys[1],
+        if panel.log_y { "1" } else { "0" },
+        &panel.x_label,
+        &panel.y_label,
+    ];
+    mark(chart, (xr.start, yr.start), &fields)?;
     for s in &panel.series {
+        mark(chart, (xr.start, yr.start), &["series", &s.label])?;
         let pts: Vec<(f64, f64)> = s.x.iter().copied().zip(s.y.iter().copied()).filter(keep(panel.log_y)).collect();
         let c = color(s.color);
         let style = c.stroke_width(px(2));
@@ -463,7 +544,9 @@ where
             anno.label(&s.label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(px(2))));
         }
+        mark(chart, (xr.start, yr.start), &["end"])?;
     }
+    mark(chart, (xr.start, yr.start), &["end"])?;
     draw_labels(chart, &panel.labels)?;
     let legend_font: TextStyle = font(12).into();
     let at = legend_place(chart, panel, &legend_font, corner)?;
@@ -673,6 +756,46 @@ mod tests {
         assert!(v.contains("stroke-width=\"2\" points=\"12.34,5.00 -0.07,123.45 12.34,5.00 \""), "{v}");
         assert!(v.contains("x=\"1.00\" y=\"20.05\" font-size=\"9.68\" transform=\"rotate(270, 1.00, 20.05)\""), "{v}");
         assert!(v.contains("\nx = 3 &lt; 4\n</text>"), "{v}");
+    }
+
+    /// The figure's groups let a reader turn pixels back into data: each curve sits in its own
+    /// `kd-series` group inside a `kd-panel` group whose mapping, inverted, gives the curve's
+    /// first point back (linear x, logarithmic y), and no marker text is left in the file.
+    #[test]
+    fn groups_carry_the_axes_mapping() {
+        let dir = std::env::temp_dir().join(format!("kanedyn_plot_groups_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let x: Vec<f64> = (0..40).map(|i| 1.0 + 0.05 * i as f64).collect();
+        let y: Vec<f64> = x.iter().map(|v| v.powi(3)).collect();
+        let series = Series { label: "cubic \"c\"".into(), x: x.clone(), y: y.clone(), ..Series::default() };
+        let panel = Panel {
+            x_label: "x, m".into(),
+            y_label: "y, N".into(),
+            log_y: true,
+            series: vec![series],
+            ..Panel::default()
+        };
+        let path = dir.join("g.svg");
+        write_svg(&path, &[panel], 500, 350).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        assert!(!svg.contains(MARK) && !svg.contains(FIELD));
+        assert_eq!(svg.matches("<g ").count(), svg.matches("</g>").count());
+        let attr = |name: &str| -> Vec<f64> {
+            let key = format!(" {name}=\"");
+            let v = &svg[svg.find(&key).unwrap_or_else(|| panic!("{name}")) + key.len()..];
+            v[..v.find('"').unwrap()].split(' ').map(|t| t.parse().unwrap()).collect()
+        };
+        let (pxs, pys, xs, ys) = (attr("data-px"), attr("data-py"), attr("data-x"), attr("data-y"));
+        assert!(svg.contains("data-log-y=\"1\" data-x-label=\"x, m\" data-y-label=\"y, N\""));
+        let series = svg.find("<g class=\"kd-series\" data-label=\"cubic &quot;c&quot;\">").expect("the curve's group");
+        let pts = &svg[series..];
+        let pts = &pts[pts.find("points=\"").unwrap() + 8..];
+        let first: Vec<f64> = pts.split_whitespace().next().unwrap().split(',').map(|t| t.parse().unwrap()).collect();
+        let xv = xs[0] + (first[0] - pxs[0]) / (pxs[1] - pxs[0]) * (xs[1] - xs[0]);
+        let yv = ys[0] * (ys[1] / ys[0]).powf((first[1] - pys[0]) / (pys[1] - pys[0]));
+        assert!((xv - x[0]).abs() < 1e-4, "{xv}");
+        assert!((yv / y[0] - 1.0).abs() < 1e-3, "{yv}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -308,16 +308,25 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
         }
     );
     // The absorbers' properties once, before the analyses (empty without an absorber).
-    let mut sections = crate::model::absorber::markdown(&study.mechanism);
+    let absorbers = crate::model::absorber::markdown(&study.mechanism);
+    let mut sections = absorbers.clone();
+    // Each analysis's section and files, for report.html to put its figures under its section.
+    let mut parts = Vec::new();
     let plan = study.plan();
     for (k, a) in study.spec.analyses.iter().enumerate() {
         let where_ = study.source.locate(&format!("analyses[{k}]")).to_string();
         // The watchdog: this analysis's loops stop once it overruns its plan by the set factor.
         let budget_s = study.spec.integration.watchdog.budget_s(plan.analyses[k].cpu_s);
         let timed = study.with_deadline(budget_s);
+        let first = report.files.len();
         let (section, completed) = run_guarded(&timed, a, &where_, &dir, &progress, &mut report);
         report.completed.push(completed);
         sections += &section;
+        parts.push(report_html::Part {
+            spec: a,
+            markdown: finite_text(&section),
+            files: report.files[first..].to_vec(),
+        });
     }
     if report.failures.is_empty() {
         md += "Status: complete.\n\n";
@@ -329,23 +338,32 @@ pub fn run(study: &Study, opts: &RunOptions) -> Result<StudyReport> {
             report.failures.len()
         );
     }
+    let head = finite_text(&(md.clone() + &absorbers));
     md += &sections;
     for f in &mut report.failures {
         *f = finite_text(f);
     }
+    let mut tail = String::new();
     if !report.failures.is_empty() {
-        let _ = writeln!(md, "## Failures\n");
+        let _ = writeln!(tail, "## Failures\n");
         for f in &report.failures {
-            let _ = writeln!(md, "- {f}");
+            let _ = writeln!(tail, "- {f}");
         }
-        md.push('\n');
+        tail.push('\n');
     }
+    md += &tail;
     let md = finite_text(&md);
     let path = dir.join("summary.md");
     write_file(&path, &md)?;
     report.files.push(path);
     report.files.push(json::write(study, &report, &dir)?);
-    let page = report_html::write(&dir, &study.spec.name, &md, &report.failures, &report.files)?;
+    let page = report_html::write(
+        &dir,
+        &study.spec.name,
+        (&head, &parts, &finite_text(&tail)),
+        &report.failures,
+        &report.files,
+    )?;
     report.files.push(page);
     report.summary = md;
     let final_dir = out.finish()?;
