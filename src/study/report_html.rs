@@ -123,14 +123,14 @@ pub(crate) fn write(
         }
         body.push_str("</ul>\n");
     }
+    let title = escape(&format!("kanedyn study {name}"));
+    // A folded table's rows after its first SHOWN_ROWS are hidden while its fold is closed.
+    let fold = format!(".fold:has(details:not([open])) tbody tr:nth-child(n+{}){{display:none}}", SHOWN_ROWS + 1);
     let page = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
          <title>{title}</title><style>{STYLE}{fold}</style></head>\n<body>\n{body}<script>\n{SCRIPT}</script>\n\
-         </body></html>\n",
-        title = escape(&format!("kanedyn study {name}")),
-        // A folded table's rows after its first SHOWN_ROWS are hidden while its fold is closed.
-        fold = format!(".fold:has(details:not([open])) tbody tr:nth-child(n+{}){{display:none}}", SHOWN_ROWS + 1)
+         </body></html>\n"
     );
     let path = dir.join(FILE_NAME);
     write_file(&path, &page)?;
