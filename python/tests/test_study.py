@@ -250,8 +250,9 @@ def test_results_json_numbers_equal_the_summary(cli_run):
         ]
         assert f["points"] == len(b["order"]) == f["stable"] + f["unstable"]
         compared += 1
-    # Sweep runs and findings, multi-order rows, element rows, HBM rows, linear, Campbell, branches.
-    assert compared == 6 + 2 + 7 + 7 + 7 + 3 + 1 + 4
+    # Sweep runs and findings, multi-order rows, linear element peaks, element rows, HBM rows,
+    # linear, Campbell, branches.
+    assert compared == 6 + 2 + 7 + 1 + 7 + 7 + 3 + 1 + 4
 
 
 def test_the_python_result_is_the_data_of_results_json(tmp_path):
