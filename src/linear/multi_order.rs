@@ -146,6 +146,12 @@ fn superposed_range(h: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
     if let [(_, a, _)] = h {
         return Some((-a.abs(), a.abs()));
     }
+    sampled_range(h)
+}
+
+/// The lowest and highest of the sampled superposition (see [`superposed_peak`]); None when a
+/// multiple is not an integer.
+fn sampled_range(h: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
     if h.iter().any(|&(k, _, _)| (k - k.round()).abs() > 1e-12) {
         return None;
     }
@@ -182,18 +188,8 @@ fn peak_in_rotor_angle(lines: &[(f64, f64, f64)]) -> Option<f64> {
 }
 
 fn superposed_peak(h: &[(f64, f64, f64)]) -> Option<f64> {
-    if h.iter().any(|&(k, _, _)| (k - k.round()).abs() > 1e-12) {
-        return None;
-    }
-    let kmax = h.iter().fold(1.0f64, |a, &(k, _, _)| a.max(k.abs()));
-    let samples = PEAK_SAMPLES * kmax.ceil() as usize;
-    let mut peak = 0.0f64;
-    for i in 0..samples {
-        let phi = 2.0 * PI * i as f64 / samples as f64;
-        let v: f64 = h.iter().map(|&(k, a, p)| a * (k * phi + p).sin()).sum();
-        peak = peak.max(v.abs());
-    }
-    Some(peak)
+    // max |v| over the samples, the larger of the highest and minus the lowest (same samples).
+    sampled_range(h).map(|(lo, hi)| hi.max(-lo).max(0.0))
 }
 
 /// Each element's lines at one speed: the coordinate amplitudes q̂ per N·m under the weighted

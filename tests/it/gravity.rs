@@ -125,6 +125,20 @@ fn harmonic_balance_with_gravity_matches_time_integration() {
     }
 }
 
+/// Writes `examples/<example>` turned into a vertical plane (gravity 9.81 m/s² along −y) to `to`;
+/// its catalog parts come from the shipped catalog.
+fn vertical(example: &str, to: &std::path::Path) {
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(example))
+        .unwrap();
+    let text = text.replacen(
+        "speeds: AbsoluteAngularVelocities,",
+        "speeds: AbsoluteAngularVelocities,\n    gravity: (0.0, -9.81),",
+        1,
+    );
+    assert!(text.contains("gravity: (0.0, -9.81)"));
+    std::fs::write(to, &text).unwrap();
+}
+
 /// A study's harmonic balance takes gravity when it continues at a fixed order (in speed here):
 /// the paper's four-absorber rotor of `examples/cpva4.ron` in a vertical plane, order 3, 60 N·m,
 /// continued from 300 to 600 rpm. Its branch at both ends equals the library's solve at that
@@ -134,15 +148,7 @@ fn harmonic_balance_with_gravity_matches_time_integration() {
 fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
     let dir = std::env::temp_dir().join(format!("kanedyn_gravity_study_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let text =
-        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva4.ron")).unwrap();
-    let text = text.replacen(
-        "speeds: AbsoluteAngularVelocities,",
-        "speeds: AbsoluteAngularVelocities,\n    gravity: (0.0, -9.81),",
-        1,
-    );
-    assert!(text.contains("gravity: (0.0, -9.81)"));
-    std::fs::write(dir.join("m.ron"), &text).unwrap();
+    vertical("cpva4.ron", &dir.join("m.ron"));
     // Its catalog parts come from the shipped catalog.
     let study_text = |parameter: &str| {
         format!(
@@ -195,14 +201,7 @@ fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
 fn coexisting_orbits_under_gravity_are_found_and_classified() {
     let dir = std::env::temp_dir().join(format!("kanedyn_gravity_orbits_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let text =
-        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva.ron")).unwrap();
-    let text = text.replacen(
-        "speeds: AbsoluteAngularVelocities,",
-        "speeds: AbsoluteAngularVelocities,\n    gravity: (0.0, -9.81),",
-        1,
-    );
-    std::fs::write(dir.join("m.ron"), &text).unwrap();
+    vertical("cpva.ron", &dir.join("m.ron"));
     std::fs::write(
         dir.join("s.ron"),
         r#"Study(name: "g", mechanism: "m.ron", analyses: [
