@@ -85,6 +85,16 @@ pub struct ContinuationOptions {
     /// The watchdog's stop time: past it the branch ends with [`BranchEnd::Watchdog`] and the
     /// points it reached (checked before every step; `None`: no deadline).
     pub deadline: Option<crate::deadline::Deadline>,
+    /// The corrector's tolerance along the branch, in place of [`HbmOptions::tol`](super::HbmOptions::tol)
+    /// (None: that one). A branch whose points only serve as starting guesses, each solved again
+    /// at the full tolerance where it is used, takes a looser one: the corrector then needs half
+    /// the iterations, so the step control lengthens the steps (fewer points, each with one
+    /// Jacobian fewer).
+    pub corrector_tol: Option<f64>,
+    /// Difference the per-sample derivatives one-sidedly along the branch (half the engine
+    /// calls of a Jacobian; about 1e-8 relative): for a branch of guesses (with `corrector_tol`),
+    /// never where the Jacobian decides a result (stability, located events).
+    pub one_sided: bool,
 }
 
 impl Default for ContinuationOptions {
@@ -99,6 +109,8 @@ impl Default for ContinuationOptions {
             stability: true,
             refine_folds: true,
             deadline: None,
+            corrector_tol: None,
+            one_sided: false,
         }
     }
 }
@@ -240,6 +252,23 @@ impl Hbm {
     /// may turn back at folds; it ends on reaching `to`, on leaving the range at `from`, or when
     /// the step control gives up (the points found are kept).
     pub fn continue_in(
+        &mut self,
+        parameter: Parameter,
+        from: f64,
+        to: f64,
+        guess: Option<&HbmSolution>,
+        copts: &ContinuationOptions,
+    ) -> Result<Branch, HbmError> {
+        let (tol, one_sided) = (self.opts.tol, self.ev.one_sided);
+        self.opts.tol = copts.corrector_tol.unwrap_or(tol);
+        self.ev.one_sided = copts.one_sided;
+        let branch = self.continue_with_tol(parameter, from, to, guess, copts);
+        (self.opts.tol, self.ev.one_sided) = (tol, one_sided);
+        branch
+    }
+
+    /// [`Hbm::continue_in`] with the corrector's tolerance and the differences already set.
+    fn continue_with_tol(
         &mut self,
         parameter: Parameter,
         from: f64,

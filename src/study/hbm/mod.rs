@@ -18,6 +18,15 @@ use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
+
+/// The corrector's tolerance on a branch whose points only serve as starting guesses (max norm
+/// of the Newton step, rad): each guess is solved again at the full tolerance where it is used.
+const GUESS_TOL: f64 = 1e-6;
+
+/// The smallest cosine between successive tangents on a branch of guesses (25.8°; 11.5° on an
+/// analysed branch): the quadratic predictor and the chord's check against another sheet keep
+/// such steps on the branch, and the truck study's order branches take half the points.
+const GUESS_MIN_COS: f64 = 0.9;
 use crate::signal::findings::jump_order;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -244,6 +253,9 @@ fn branch_with(
         stability: analysed,
         refine_folds: analysed,
         deadline: study.spec.integration.deadline,
+        corrector_tol: (!analysed).then_some(GUESS_TOL),
+        one_sided: !analysed,
+        min_cos: if analysed { defaults.min_cos } else { GUESS_MIN_COS },
         ..defaults
     };
     let b = hbm.continue_in(parameter, from, to, None, &copts).map_err(hbm_error(study))?;

@@ -465,8 +465,9 @@ pub(crate) fn findings(result: &MultiOrderResult) -> Vec<SpeedFindings> {
 
 /// All periodic steady states at the operating order: the response is continued in order from
 /// `order + 0.4` down to `order − 0.4` and back up (a branch crosses the operating order once per
-/// sheet of an S-shaped response, and each direction reaches the sheets connected to its start),
-/// and each crossing is solved exactly at the order; with the torque ramp's state ([`ramp`]).
+/// sheet of an S-shaped response, and each direction reaches the sheets connected to its start;
+/// the way back is skipped when the first branch ended on the state it would start from), and
+/// each crossing is solved exactly at the order; with the torque ramp's state ([`ramp`]).
 fn hbm_states(
     study: &Study,
     shared: &sim::SharedModels,
@@ -490,9 +491,26 @@ fn hbm_states(
                 out.push(HbmState { amplitudes, stable, max_relative_angle: sol.max_peak_amplitude(), elements });
             }
         }
+        // The way back starts where a branch from the rigid rotation at `lo` starts: when this
+        // branch reached `lo` at that very state, the way back would retrace it.
+        if from == hi
+            && branch.end == crate::hbm::BranchEnd::ReachedTarget
+            && let Some(end) = branch.points.last()
+            && hbm.solve(lo, None).is_ok_and(|start| same_state(&start, &end.solution))
+        {
+            break;
+        }
     }
     out.sort_by(|a, b| a.amplitudes[0].total_cmp(&b.amplitudes[0]));
     Ok((out, ramp(study, shared, spec, p, false)?))
+}
+
+/// Whether two harmonic-balance states at one order are the same periodic motion: their
+/// Fourier coefficients (rad) agree to 1e-6 of the larger one's largest.
+fn same_state(a: &crate::hbm::HbmSolution, b: &crate::hbm::HbmSolution) -> bool {
+    let scale = a.coefficients.iter().chain(&b.coefficients).fold(0.0_f64, |m, c| m.max(c.abs()));
+    a.coefficients.len() == b.coefficients.len()
+        && a.coefficients.iter().zip(&b.coefficients).all(|(x, y)| (x - y).abs() <= 1e-6 * scale.max(1e-12))
 }
 
 /// The torque ramp's state and, when its branch folds first, the torque scale of the fold.
@@ -522,7 +540,17 @@ fn ramp(
     let err = super::hbm::hbm_error(study);
     let mut hbm = RoutedHbm::new(&kane, spin, omega, (&p.harmonics, &[]), &inputs, opts).map_err(&err)?;
     let param = Parameter::TorqueScale { order: spec.order };
-    let copts = ContinuationOptions { deadline: study.spec.integration.deadline, ..ContinuationOptions::default() };
+    // Only the end state's stability is reported (solved again below), and the folds need none.
+    // The ramp is short and mostly straight (λ from 0.01 to 1): it starts at the largest default
+    // step and may take steps of a quarter of it; a fold is a sign change of dλ/ds between
+    // points, and a pair inside one step shows as a dip the step is aimed at.
+    let copts = ContinuationOptions {
+        deadline: study.spec.integration.deadline,
+        stability: false,
+        ds: 0.1,
+        ds_max: 0.25,
+        ..ContinuationOptions::default()
+    };
     let up = hbm.continue_in(param, 0.01, 1.0, None, &copts).map_err(&err)?;
     if up.end == crate::hbm::BranchEnd::Watchdog {
         let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
