@@ -39,6 +39,7 @@ mod joint_kinds;
 mod linear;
 mod marine_gearbox;
 mod modal_damping;
+mod multi_order_states;
 mod no_nan_outputs;
 mod order_tracking;
 mod paper_claims;
