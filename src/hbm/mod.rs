@@ -10,8 +10,9 @@
 //! AFT residual and the spectral Jacobian), `blocklu` (the Jacobian's factorisation by blocks
 //! along the mechanism's tree), `aft` (the real FFTs), `branch` (the branch data
 //! model and the continued [`Parameter`]), `continuation` (the pseudo-arclength walk),
-//! `stability` (Floquet multipliers) and `cyclic` (identical absorbers by one representative,
-//! [`RoutedHbm`] and its [`Route`]).
+//! `stability` (Floquet multipliers), `cyclic` (identical absorbers by one representative,
+//! [`RoutedHbm`] and its [`Route`]) and `fold2` (fold curves in order and torque, and their
+//! cusps: [`Hbm::continue_fold`]).
 //!
 //! # Formulation
 //!
@@ -103,6 +104,7 @@ mod branch;
 mod continuation;
 mod corrector;
 mod cyclic;
+mod fold2;
 mod reaction;
 mod sample;
 mod solution;
@@ -113,6 +115,7 @@ pub use branch::{
 };
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
+pub use fold2::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, ParameterPoint};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};

@@ -29,6 +29,7 @@ mod gravity_linear;
 mod hbm;
 mod hbm_cyclic;
 mod hbm_events;
+mod hbm_fold_curve;
 mod hbm_neimark_sacker;
 mod hbm_period_doubling;
 mod honest_peaks;

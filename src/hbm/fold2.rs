@@ -1,0 +1,439 @@
+//! Two-parameter continuation of folds of the harmonic balance in (excitation order n, torque
+//! scale s): the jump boundary of a response in the (order, torque) plane, and its cusp, where the
+//! two folds of a jump meet and the jump disappears.
+//!
+//! A fold of a branch in n at fixed s is a point where the Jacobian `J = ∂R̂/∂x` of the balance
+//! is singular. It is followed by the minimally augmented system (Govaerts, *Numerical Methods
+//! for Bifurcations of Dynamical Equilibria*, SIAM 2000, §4.3.2): with vectors b and c that keep
+//! the bordered matrix regular,
+//!
+//! `[[J, b], [cᵀ, 0]] [v; g] = [0; 1]`, `[[Jᵀ, c], [bᵀ, 0]] [w; g] = [0; 1]`,
+//!
+//! g(x, n, s) vanishes exactly where J is singular, and the fold curve is the solution set of the
+//! m + 1 equations `R̂(x, n, s) = 0, g(x, n, s) = 0` in the m + 2 unknowns (x, n, s), followed by
+//! pseudo-arclength continuation. The derivatives of g are `∂g/∂z = −wᵀ (∂J/∂z) v`: for the
+//! unknowns, `−wᵀ (J(x + hv) − J(x − hv)) / 2h` (the symmetry of second derivatives turns the
+//! directional derivative of J along v into the difference of two Jacobians); for the order, the
+//! same difference of `∂R̂/∂n`; for the torque scale, zero, since s multiplies the excitation,
+//! which does not depend on x. After every point b and c take the new w and v, so the bordered
+//! matrices stay far from singular along the curve.
+//!
+//! Along the curve s has a minimum at a cusp (there the projection of the fold curve on the
+//! (n, s) plane has its spike: in the normal form `x³ − s x − n = 0` the folds are
+//! `s = 3x², n = −2x³`): a sign change of ds/dσ between points, located by a secant search
+//! on ds/dσ to |ds/dσ| ≤ 1e-10; a cusp when dn/dσ vanishes with it.
+
+use super::{At, Hbm, HbmError, HbmSolution, Parameter};
+use nalgebra::{DMatrix, DVector};
+
+/// Relative step of the differences of the Jacobian along the null vector v (|v| = 1, in rad):
+/// central differences err by O(h²) of the third derivatives and by O(ε/h) of rounding.
+const FD_STEP: f64 = 1e-5;
+
+/// One point of a fold curve.
+#[derive(Debug, Clone)]
+pub struct FoldCurvePoint {
+    /// Excitation order n.
+    pub order: f64,
+    /// Torque scale s (the excitation amplitudes are s·T_k).
+    pub scale: f64,
+    /// Arclength along the curve, in the norm of (coefficients in rad, n, s).
+    pub arclength: f64,
+    /// The periodic state at the fold.
+    pub solution: HbmSolution,
+}
+
+/// A point of the (n, s) plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParameterPoint {
+    /// Excitation order n.
+    pub order: f64,
+    /// Torque scale s.
+    pub scale: f64,
+}
+
+/// Why a fold curve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FoldCurveEnd {
+    /// The curve left the (n, s) box it was asked for.
+    LeftBox,
+    /// The largest number of points was reached.
+    MaxPoints,
+    /// The corrector failed at every step down to the smallest.
+    StepTooSmall,
+}
+
+/// A fold curve in (n, s).
+#[derive(Debug, Clone)]
+pub struct FoldCurve {
+    /// The points, in the order followed.
+    pub points: Vec<FoldCurvePoint>,
+    /// The cusps met, located: two folds meet there, and on the far side in s the response has
+    /// no jump (ds/dσ and dn/dσ vanish together along the curve).
+    pub cusps: Vec<ParameterPoint>,
+    /// The other extrema of s along the curve (dn/dσ not zero there): the least or largest
+    /// torque of a jump region's boundary without a cusp (where an isola is born, say).
+    pub scale_extrema: Vec<ParameterPoint>,
+    /// Why it ended.
+    pub end: FoldCurveEnd,
+}
+
+/// Settings of a fold-curve continuation.
+#[derive(Debug, Clone, Copy)]
+pub struct FoldCurveOptions {
+    /// Order range n (the curve ends on leaving it).
+    pub orders: (f64, f64),
+    /// Torque-scale range s (likewise).
+    pub scales: (f64, f64),
+    /// First and largest arclength step.
+    pub ds: f64,
+    /// Largest arclength step.
+    pub ds_max: f64,
+    /// Smallest step before giving up.
+    pub ds_min: f64,
+    /// Largest number of points.
+    pub max_points: usize,
+    /// Newton iterations per corrector.
+    pub max_iter: usize,
+    /// Newton tolerance on the step (max norm, rad and the parameters).
+    pub tol: f64,
+}
+
+impl Default for FoldCurveOptions {
+    fn default() -> Self {
+        Self {
+            orders: (0.0, f64::INFINITY),
+            scales: (0.0, f64::INFINITY),
+            ds: 0.01,
+            ds_max: 0.05,
+            ds_min: 1e-8,
+            max_points: 2000,
+            max_iter: 12,
+            tol: 1e-10,
+        }
+    }
+}
+
+/// The augmented system's pieces at one point: R̂, J, ∂R̂/∂n, and g with its gradient in
+/// (x, n) (its s-derivative is zero), v and w.
+struct Augmented {
+    r: DVector<f64>,
+    j: DMatrix<f64>,
+    rn: DVector<f64>,
+    g: f64,
+    gx: DVector<f64>,
+    gn: f64,
+    v: DVector<f64>,
+    w: DVector<f64>,
+}
+
+impl Hbm {
+    /// `[[M, b], [cᵀ, 0]]`.
+    fn border(mat: &DMatrix<f64>, b: &DVector<f64>, c: &DVector<f64>) -> DMatrix<f64> {
+        let m = mat.nrows();
+        let mut out = DMatrix::zeros(m + 1, m + 1);
+        out.view_mut((0, 0), (m, m)).copy_from(mat);
+        out.view_mut((0, m), (m, 1)).copy_from(b);
+        out.view_mut((m, 0), (1, m)).copy_from(&c.transpose());
+        out
+    }
+
+    /// The augmented system at (x, n, s) with borders b, c.
+    fn augmented(&mut self, x: &[f64], at: &At, b: &DVector<f64>, c: &DVector<f64>) -> Result<Augmented, HbmError> {
+        let m = self.unknowns();
+        let order = at.order;
+        self.assemble(x, at, Some(Parameter::Order));
+        let (r, j, rn) = (self.rhat.clone(), self.jac.clone(), self.gp.clone());
+        let mut e = DVector::zeros(m + 1);
+        e[m] = 1.0;
+        let sv = Self::border(&j, b, c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let sw = Self::border(&j.transpose(), c, b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let (v, g) = (sv.rows(0, m).clone_owned(), sv[m]);
+        let w = sw.rows(0, m).clone_owned();
+        // J and ∂R̂/∂n at x ± h v̂.
+        let vn = v.norm();
+        if !(vn.is_finite() && vn > 0.0) {
+            return Err(HbmError::NonFinite { order });
+        }
+        let h = FD_STEP / vn;
+        let shifted = |sign: f64| -> Vec<f64> { x.iter().zip(v.iter()).map(|(xi, vi)| xi + sign * h * vi).collect() };
+        self.assemble(&shifted(1.0), at, Some(Parameter::Order));
+        let (jp, rnp) = (self.jac.clone(), self.gp.clone());
+        self.assemble(&shifted(-1.0), at, Some(Parameter::Order));
+        let gx = -((&jp - &self.jac).transpose() * &w) / (2.0 * h);
+        let gn = -w.dot(&(&rnp - &self.gp)) / (2.0 * h);
+        Ok(Augmented { r, j, rn, g, gx, gn, v, w })
+    }
+
+    /// ∂R̂/∂s, which depends on neither x nor n (s multiplies the excitation).
+    fn scale_derivative(&mut self, x: &[f64], at: &At) -> DVector<f64> {
+        self.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
+        self.gp.clone()
+    }
+
+    /// Borders from the singular vectors of J's smallest singular value (a start far from a
+    /// known null vector).
+    fn initial_borders(j: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>) {
+        let svd = j.clone().svd(true, true);
+        let k = svd.singular_values.imin();
+        let u = svd.u.as_ref().map(|u| u.column(k).clone_owned());
+        let vt = svd.v_t.as_ref().map(|v| v.row(k).transpose());
+        let m = j.nrows();
+        let unit = DVector::from_element(m, 1.0 / (m as f64).sqrt());
+        (u.unwrap_or_else(|| unit.clone()), vt.unwrap_or(unit))
+    }
+
+    /// The fold at torque scale `scale` nearest `guess` (a state near a fold of a branch in
+    /// order, e.g. the branch point before one of its [`Fold`](super::Fold)s): Newton's method on
+    /// `R̂ = 0, g = 0` in (x, n).
+    pub fn fold_at(&mut self, scale: f64, guess: &HbmSolution) -> Result<FoldCurvePoint, HbmError> {
+        let m = self.unknowns();
+        let mut x = self.unknowns_from(Some(guess));
+        let mut at = At { order: guess.order, omega: self.omega, scale };
+        self.assemble(&x, &at, Some(Parameter::Order));
+        let (mut b, mut c) = Self::initial_borders(&self.jac);
+        for it in 1..=self.opts.max_iter {
+            let aug = self.augmented(&x, &at, &b, &c)?;
+            let mut mat = DMatrix::zeros(m + 1, m + 1);
+            mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
+            mat.view_mut((0, m), (m, 1)).copy_from(&aug.rn);
+            mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
+            mat[(m, m)] = aug.gn;
+            let mut rhs = DVector::zeros(m + 1);
+            rhs.rows_mut(0, m).copy_from(&aug.r);
+            rhs[m] = aug.g;
+            let d = mat.lu().solve(&rhs).ok_or(HbmError::Singular { order: at.order })?;
+            let step = d.amax();
+            if !step.is_finite() {
+                return Err(HbmError::NonFinite { order: at.order });
+            }
+            for (xi, di) in x.iter_mut().zip(d.iter()) {
+                *xi -= di;
+            }
+            at.order -= d[m];
+            (b, c) = (aug.w.normalize(), aug.v.normalize());
+            if step <= self.opts.tol {
+                let solution = self.solution_from(&x, &at, it);
+                return Ok(FoldCurvePoint { order: at.order, scale, arclength: 0.0, solution });
+            }
+        }
+        Err(HbmError::NoConvergence { order: at.order, iterations: self.opts.max_iter, step: f64::NAN })
+    }
+
+    /// Follows the fold curve through `start` (from [`Hbm::fold_at`]) in the direction of
+    /// increasing s when `up`, else decreasing, until it leaves the box of `opts`.
+    pub fn continue_fold(
+        &mut self,
+        start: &FoldCurvePoint,
+        up: bool,
+        opts: &FoldCurveOptions,
+    ) -> Result<FoldCurve, HbmError> {
+        let m = self.unknowns();
+        let omega = self.omega;
+        let at_of = |y: &DVector<f64>| At { order: y[m], omega, scale: y[m + 1] };
+        let mut y = DVector::zeros(m + 2);
+        y.rows_mut(0, m).copy_from(&DVector::from_vec(self.unknowns_from(Some(&start.solution))));
+        (y[m], y[m + 1]) = (start.order, start.scale);
+        let x0 = self.unknowns_from(Some(&start.solution));
+        let rs = self.scale_derivative(&x0, &at_of(&y));
+        self.assemble(&x0, &at_of(&y), Some(Parameter::Order));
+        let (mut b, mut c) = Self::initial_borders(&self.jac);
+        // The tangent at the start, oriented by the requested direction of s.
+        let mut e_s = DVector::zeros(m + 2);
+        e_s[m + 1] = if up { 1.0 } else { -1.0 };
+        let (mut t, aug) = self.fold_tangent(&y, &rs, &b, &c, &e_s)?;
+        (b, c) = (aug.w.normalize(), aug.v.normalize());
+        if t[m + 1] * e_s[m + 1] < 0.0 {
+            t = -t;
+        }
+        let mut points = vec![start.clone()];
+        let (mut cusps, mut scale_extrema) = (Vec::new(), Vec::new());
+        let mut ds = opts.ds;
+        let mut s_arc = 0.0;
+        let inside = |y: &DVector<f64>| {
+            (opts.orders.0..=opts.orders.1).contains(&y[m]) && (opts.scales.0..=opts.scales.1).contains(&y[m + 1])
+        };
+        let end = loop {
+            if points.len() >= opts.max_points {
+                break FoldCurveEnd::MaxPoints;
+            }
+            if ds < opts.ds_min {
+                break FoldCurveEnd::StepTooSmall;
+            }
+            let pred = &y + &t * ds;
+            let (y_new, iters) = match self.fold_correct(&pred, &t, &rs, &b, &c, opts) {
+                Ok(r) => r,
+                Err(_) => {
+                    ds *= 0.5;
+                    continue;
+                }
+            };
+            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &rs, &b, &c, &t) else {
+                ds *= 0.5;
+                continue;
+            };
+            if t_new.dot(&t) < 0.0 {
+                t_new = -t_new;
+            }
+            if t_new.dot(&t) < 0.95 {
+                ds *= 0.5;
+                continue;
+            }
+            (b, c) = (aug.w.normalize(), aug.v.normalize());
+            let chord = (&y_new - &y).norm();
+            if t[m + 1] * t_new[m + 1] < 0.0
+                && let Some((p, tn)) = self.locate_extremum(&y, &t, chord, &rs, &b, &c, opts)
+            {
+                // At the located point |ds/dσ| ≤ 1e-10; at a cusp dn/dσ follows it to zero
+                // (the paper's rotor: 2e-11), elsewhere it stays of order one.
+                if tn.abs() <= 1e-6 { cusps.push(p) } else { scale_extrema.push(p) }
+            }
+            s_arc += chord;
+            let x_new: Vec<f64> = y_new.rows(0, m).iter().copied().collect();
+            let solution = self.solution_from(&x_new, &at_of(&y_new), iters);
+            points.push(FoldCurvePoint { order: y_new[m], scale: y_new[m + 1], arclength: s_arc, solution });
+            (y, t) = (y_new, t_new);
+            if !inside(&y) {
+                break FoldCurveEnd::LeftBox;
+            }
+            if iters <= 3 {
+                ds = (ds * 1.5).min(opts.ds_max);
+            } else if iters >= 6 {
+                ds *= 0.7;
+            }
+        };
+        Ok(FoldCurve { points, cusps, scale_extrema, end })
+    }
+
+    /// The augmented Jacobian `[[J, ∂R̂/∂n, ∂R̂/∂s], [∂g/∂x, ∂g/∂n, 0]]` at y bordered below by
+    /// `row`, and the augmented system there.
+    fn fold_matrix(
+        &mut self,
+        y: &DVector<f64>,
+        rs: &DVector<f64>,
+        b: &DVector<f64>,
+        c: &DVector<f64>,
+        row: &DVector<f64>,
+    ) -> Result<(DMatrix<f64>, Augmented), HbmError> {
+        let m = self.unknowns();
+        let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
+        let at = At { order: y[m], omega: self.omega, scale: y[m + 1] };
+        let aug = self.augmented(&x, &at, b, c)?;
+        let mut mat = DMatrix::zeros(m + 2, m + 2);
+        mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
+        mat.view_mut((0, m), (m, 1)).copy_from(&aug.rn);
+        mat.view_mut((0, m + 1), (m, 1)).copy_from(rs);
+        mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
+        mat[(m, m)] = aug.gn;
+        mat.view_mut((m + 1, 0), (1, m + 2)).copy_from(&row.transpose());
+        Ok((mat, aug))
+    }
+
+    /// The unit tangent of the fold curve at y, oriented along `row`.
+    fn fold_tangent(
+        &mut self,
+        y: &DVector<f64>,
+        rs: &DVector<f64>,
+        b: &DVector<f64>,
+        c: &DVector<f64>,
+        row: &DVector<f64>,
+    ) -> Result<(DVector<f64>, Augmented), HbmError> {
+        let m = self.unknowns();
+        let (mat, aug) = self.fold_matrix(y, rs, b, c, row)?;
+        let mut e = DVector::zeros(m + 2);
+        e[m + 1] = 1.0;
+        let z = mat.lu().solve(&e).ok_or(HbmError::Singular { order: y[m] })?;
+        let norm = z.norm();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(HbmError::NonFinite { order: y[m] });
+        }
+        Ok((z / norm, aug))
+    }
+
+    /// Newton's method on `R̂ = 0, g = 0, tᵀ(y − pred) = 0` from `pred`.
+    fn fold_correct(
+        &mut self,
+        pred: &DVector<f64>,
+        t: &DVector<f64>,
+        rs: &DVector<f64>,
+        b: &DVector<f64>,
+        c: &DVector<f64>,
+        opts: &FoldCurveOptions,
+    ) -> Result<(DVector<f64>, usize), HbmError> {
+        let m = self.unknowns();
+        let mut y = pred.clone();
+        for it in 1..=opts.max_iter {
+            let (mat, aug) = self.fold_matrix(&y, rs, b, c, t)?;
+            let mut rhs = DVector::zeros(m + 2);
+            rhs.rows_mut(0, m).copy_from(&aug.r);
+            rhs[m] = aug.g;
+            rhs[m + 1] = t.dot(&(&y - pred));
+            let d = mat.lu().solve(&rhs).ok_or(HbmError::Singular { order: y[m] })?;
+            let step = d.amax();
+            if !step.is_finite() || (y[m] - d[m]).is_nan() || y[m] - d[m] <= 0.0 {
+                return Err(HbmError::NonFinite { order: y[m] });
+            }
+            y -= d;
+            if step <= opts.tol {
+                return Ok((y, it));
+            }
+        }
+        Err(HbmError::NoConvergence { order: y[m], iterations: opts.max_iter, step: f64::NAN })
+    }
+
+    /// The extremum of s between y (tangent t) and the point a chord further on, where ds/dσ
+    /// changes sign: a secant (Illinois) search on the tangent's s-component along the step.
+    /// Returns the point and dn/dσ there.
+    #[allow(clippy::too_many_arguments)]
+    fn locate_extremum(
+        &mut self,
+        y: &DVector<f64>,
+        t: &DVector<f64>,
+        chord: f64,
+        rs: &DVector<f64>,
+        b: &DVector<f64>,
+        c: &DVector<f64>,
+        opts: &FoldCurveOptions,
+    ) -> Option<(ParameterPoint, f64)> {
+        let m = self.unknowns();
+        let slope = |this: &mut Self, sigma: f64| -> Option<(DVector<f64>, DVector<f64>)> {
+            let pred = y + t * sigma;
+            let (yc, _) = this.fold_correct(&pred, t, rs, b, c, opts).ok()?;
+            let (mut tc, _) = this.fold_tangent(&yc, rs, b, c, t).ok()?;
+            if tc.dot(t) < 0.0 {
+                tc = -tc;
+            }
+            Some((tc, yc))
+        };
+        let (mut s0, mut f0) = (0.0, t[m + 1]);
+        let (mut s1, mut f1) = (chord, slope(self, chord)?.0[m + 1]);
+        let mut best = None;
+        let mut side = 0;
+        for _ in 0..60 {
+            if f1 == f0 {
+                break;
+            }
+            let s = s1 - f1 * (s1 - s0) / (f1 - f0);
+            let (tc, yc) = slope(self, s)?;
+            let f = tc[m + 1];
+            best = Some((ParameterPoint { order: yc[m], scale: yc[m + 1] }, tc[m]));
+            if f.abs() < 1e-10 || (s1 - s0).abs() < 1e-12 * chord.max(1e-300) {
+                break;
+            }
+            if f.signum() == f0.signum() {
+                (s0, f0) = (s, f);
+                if side == -1 {
+                    f1 *= 0.5;
+                }
+                side = -1;
+            } else {
+                (s1, f1) = (s, f);
+                if side == 1 {
+                    f0 *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        best
+    }
+}

@@ -1,0 +1,84 @@
+//! The jump boundary of the paper's rotor in (order, torque) at 1000 rpm: the fold curve
+//! continued by the minimally augmented system (`src/hbm/fold2.rs`), against the one-parameter
+//! folds the issue quotes (each confirmed by independent shooting in `tests/it/hbm_events.rs`)
+//! and, for its cusp, against a bisection on one-parameter branches at a fine step.
+
+use crate::support::cpva_hbm::{cpva_hbm, single};
+use kanedyn::hbm::{ContinuationOptions, FoldCurve, FoldCurveOptions, Hbm, HbmOptions, HbmSolution};
+
+/// The reference torque: the torque scale s is the torque over 500 N·m.
+const T_REF: f64 = 500.0;
+
+/// The folds of the order branch over `from → to` at `torque` N·m (order, the state before it).
+fn folds_at(hbm: &mut Hbm, torque: f64, (from, to): (f64, f64), ds_max: f64) -> Vec<(f64, HbmSolution)> {
+    hbm.set_torque_scale(torque / T_REF).unwrap();
+    let copts = ContinuationOptions { stability: false, ds_max, ds: 0.01_f64.min(ds_max), ..Default::default() };
+    let b = hbm.continue_in_order(from, to, None, &copts).unwrap();
+    b.folds.iter().map(|f| (f.order, b.points[f.after].solution.clone())).collect()
+}
+
+/// The folds of `curve` at torque scale `s`: between consecutive points that bracket s, the
+/// fold solved at s from the nearer one.
+fn crossings(hbm: &mut Hbm, curve: &FoldCurve, s: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    for w in curve.points.windows(2) {
+        if (w[0].scale - s) * (w[1].scale - s) <= 0.0 {
+            let near = if (w[0].scale - s).abs() < (w[1].scale - s).abs() { &w[0] } else { &w[1] };
+            out.push(hbm.fold_at(s, &near.solution).unwrap().order);
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    out
+}
+
+#[test]
+fn the_fold_curve_passes_through_the_one_parameter_folds_and_its_cusp() {
+    let mut hbm = cpva_hbm(&single(T_REF), HbmOptions { stability_samples: 0, ..HbmOptions::default() });
+    let f40 = folds_at(&mut hbm, 40.0, (2.9, 3.3), 0.1);
+    assert_eq!(f40.len(), 2);
+    let lower = f40.iter().min_by(|a, b| a.0.total_cmp(&b.0)).unwrap();
+    let start = hbm.fold_at(40.0 / T_REF, &lower.1).unwrap();
+    let opts = FoldCurveOptions { orders: (2.85, 3.35), scales: (0.002, 1.05), ..FoldCurveOptions::default() };
+    // From the lower fold at 40 N·m down in torque: through the cusp, where the two folds of the
+    // jump meet, and up along the other fold beyond 500 N·m.
+    let curve = hbm.continue_fold(&start, false, &opts).unwrap();
+    println!("{} points, end {:?}, cusps {:?}", curve.points.len(), curve.end, curve.cusps);
+
+    // The issue's one-parameter folds (at 1000 rpm, n 2.9–3.3), each found on the curve at
+    // its torque to 1e-6 in n (the quoted digits round at 5e-8).
+    for (torque, quoted) in [(40.0, &[2.9403761, 3.1740911][..]), (5.0, &[3.1861538, 3.1871418]), (500.0, &[3.1015322])]
+    {
+        let found = crossings(&mut hbm, &curve, torque / T_REF);
+        println!("{torque} N·m: {found:?}");
+        assert_eq!(found.len(), quoted.len(), "{torque} N·m: {found:?}");
+        for (f, q) in found.iter().zip(quoted) {
+            assert!((f - q).abs() <= 1e-6, "{torque} N·m: fold at {f} against {q}");
+        }
+    }
+
+    // The cusp, against a bisection in torque on one-parameter branches at a step of 0.001
+    // around it: below the cusp torque the branch has no fold, above it two.
+    assert_eq!(curve.cusps.len(), 1, "{:?}", curve.cusps);
+    assert!(curve.scale_extrema.is_empty(), "{:?}", curve.scale_extrema);
+    assert_eq!(curve.end, kanedyn::hbm::FoldCurveEnd::LeftBox);
+    let cusp = curve.cusps[0];
+    let window = (3.16, 3.21);
+    let (mut lo, mut hi) = (2.0, 5.0);
+    assert!(folds_at(&mut hbm, lo, window, 0.001).is_empty());
+    assert_eq!(folds_at(&mut hbm, hi, window, 0.001).len(), 2);
+    let mut pair = Vec::new();
+    while hi - lo > 1e-5 {
+        let mid = 0.5 * (lo + hi);
+        let f = folds_at(&mut hbm, mid, window, 0.001);
+        if f.is_empty() {
+            lo = mid;
+        } else {
+            (hi, pair) = (mid, f);
+        }
+    }
+    let n_pair = 0.5 * (pair[0].0 + pair[1].0);
+    let torque = cusp.scale * T_REF;
+    println!("cusp: curve n {:.7} T {torque:.6} N·m; bisection n {n_pair:.7} T {hi:.6} N·m", cusp.order);
+    assert!((torque / hi - 1.0).abs() <= 1e-4, "cusp torque {torque} against {hi}");
+    assert!((cusp.order - n_pair).abs() <= 1e-4, "cusp order {} against {n_pair}", cusp.order);
+}
