@@ -30,11 +30,63 @@ use nalgebra::{DMatrix, DVector};
 /// central differences err by O(h²) of the third derivatives and by O(ε/h) of rounding.
 const FD_STEP: f64 = 1e-5;
 
+/// The plane of a fold curve: the torque scale s and either the excitation order n (at the
+/// problem's mean speed) or the mean speed Ω (at a fixed order).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FoldPlane {
+    /// (n, s) at the problem's mean speed.
+    Order,
+    /// (Ω, s) at excitation order `order`.
+    Speed {
+        /// The fixed excitation order n.
+        order: f64,
+    },
+}
+
+/// A plane with the scale of its first parameter: λ = n, or λ = Ω/Ω_ref (so that both
+/// parameters and the coefficients in rad weigh alike in the arclength).
+#[derive(Debug, Clone, Copy)]
+struct Plane {
+    kind: FoldPlane,
+    p_ref: f64,
+    /// Ω of an order plane.
+    omega: f64,
+}
+
+impl Plane {
+    fn at(&self, lambda: f64, scale: f64) -> At {
+        match self.kind {
+            FoldPlane::Order => At { order: lambda, omega: self.omega, scale },
+            FoldPlane::Speed { order } => At { order, omega: lambda * self.p_ref, scale },
+        }
+    }
+
+    fn lambda(&self, at: &At) -> f64 {
+        match self.kind {
+            FoldPlane::Order => at.order,
+            FoldPlane::Speed { .. } => at.omega / self.p_ref,
+        }
+    }
+
+    fn param(&self) -> Parameter {
+        match self.kind {
+            FoldPlane::Order => Parameter::Order,
+            FoldPlane::Speed { order } => Parameter::Speed { order },
+        }
+    }
+
+    fn point(&self, at: &At, arclength: f64, solution: HbmSolution) -> FoldCurvePoint {
+        FoldCurvePoint { order: at.order, omega: at.omega, scale: at.scale, arclength, solution }
+    }
+}
+
 /// One point of a fold curve.
 #[derive(Debug, Clone)]
 pub struct FoldCurvePoint {
     /// Excitation order n.
     pub order: f64,
+    /// Mean speed Ω, rad/s.
+    pub omega: f64,
     /// Torque scale s (the excitation amplitudes are s·T_k).
     pub scale: f64,
     /// Arclength along the curve, in the norm of (coefficients in rad, n, s).
@@ -43,11 +95,13 @@ pub struct FoldCurvePoint {
     pub solution: HbmSolution,
 }
 
-/// A point of the (n, s) plane.
+/// A point of a fold curve's plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParameterPoint {
     /// Excitation order n.
     pub order: f64,
+    /// Mean speed Ω, rad/s.
+    pub omega: f64,
     /// Torque scale s.
     pub scale: f64,
 }
@@ -81,8 +135,8 @@ pub struct FoldCurve {
 /// Settings of a fold-curve continuation.
 #[derive(Debug, Clone, Copy)]
 pub struct FoldCurveOptions {
-    /// Order range n (the curve ends on leaving it).
-    pub orders: (f64, f64),
+    /// Range of the plane's first parameter, n or Ω in rad/s (the curve ends on leaving it).
+    pub range: (f64, f64),
     /// Torque-scale range s (likewise).
     pub scales: (f64, f64),
     /// First and largest arclength step.
@@ -102,7 +156,7 @@ pub struct FoldCurveOptions {
 impl Default for FoldCurveOptions {
     fn default() -> Self {
         Self {
-            orders: (0.0, f64::INFINITY),
+            range: (0.0, f64::INFINITY),
             scales: (0.0, f64::INFINITY),
             ds: 0.01,
             ds_max: 0.05,
@@ -114,17 +168,25 @@ impl Default for FoldCurveOptions {
     }
 }
 
-/// The augmented system's pieces at one point: R̂, J, ∂R̂/∂n, and g with its gradient in
-/// (x, n) (its s-derivative is zero), v and w.
+/// The augmented system's pieces at one point: R̂, J, ∂R̂/∂λ, and g with its gradient in
+/// (x, λ) (its s-derivative is zero), v and w.
 struct Augmented {
     r: DVector<f64>,
     j: DMatrix<f64>,
-    rn: DVector<f64>,
+    rl: DVector<f64>,
     g: f64,
     gx: DVector<f64>,
-    gn: f64,
+    gl: f64,
     v: DVector<f64>,
     w: DVector<f64>,
+}
+
+/// A fold curve's walk: its plane, the borders b and c, and ∂R̂/∂s (constant).
+struct Walk {
+    plane: Plane,
+    b: DVector<f64>,
+    c: DVector<f64>,
+    rs: DVector<f64>,
 }
 
 impl Hbm {
@@ -138,67 +200,76 @@ impl Hbm {
         out
     }
 
-    /// The augmented system at (x, n, s) with borders b, c.
-    fn augmented(&mut self, x: &[f64], at: &At, b: &DVector<f64>, c: &DVector<f64>) -> Result<Augmented, HbmError> {
+    /// The plane `kind` scaled at the problem's current parameters.
+    fn plane(&self, kind: FoldPlane) -> Plane {
+        Plane { kind, p_ref: self.omega, omega: self.omega }
+    }
+
+    /// The augmented system at x and `at`.
+    fn augmented(&mut self, x: &[f64], at: &At, walk: &Walk) -> Result<Augmented, HbmError> {
         let m = self.unknowns();
         let order = at.order;
-        self.assemble(x, at, Some(Parameter::Order));
-        let (r, j, rn) = (self.rhat.clone(), self.jac.clone(), self.gp.clone());
+        let (param, scale) =
+            (walk.plane.param(), if walk.plane.kind == FoldPlane::Order { 1.0 } else { walk.plane.p_ref });
+        self.assemble(x, at, Some(param));
+        let (r, j, rl) = (self.rhat.clone(), self.jac.clone(), &self.gp * scale);
         let mut e = DVector::zeros(m + 1);
         e[m] = 1.0;
-        let sv = Self::border(&j, b, c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
-        let sw = Self::border(&j.transpose(), c, b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let sv = Self::border(&j, &walk.b, &walk.c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let sw = Self::border(&j.transpose(), &walk.c, &walk.b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
         let (v, g) = (sv.rows(0, m).clone_owned(), sv[m]);
         let w = sw.rows(0, m).clone_owned();
-        // J and ∂R̂/∂n at x ± h v̂.
+        // J and ∂R̂/∂λ at x ± h v̂.
         let vn = v.norm();
         if !(vn.is_finite() && vn > 0.0) {
             return Err(HbmError::NonFinite { order });
         }
         let h = FD_STEP / vn;
         let shifted = |sign: f64| -> Vec<f64> { x.iter().zip(v.iter()).map(|(xi, vi)| xi + sign * h * vi).collect() };
-        self.assemble(&shifted(1.0), at, Some(Parameter::Order));
-        let (jp, rnp) = (self.jac.clone(), self.gp.clone());
-        self.assemble(&shifted(-1.0), at, Some(Parameter::Order));
+        self.assemble(&shifted(1.0), at, Some(param));
+        let (jp, rlp) = (self.jac.clone(), self.gp.clone());
+        self.assemble(&shifted(-1.0), at, Some(param));
         let gx = -((&jp - &self.jac).transpose() * &w) / (2.0 * h);
-        let gn = -w.dot(&(&rnp - &self.gp)) / (2.0 * h);
-        Ok(Augmented { r, j, rn, g, gx, gn, v, w })
+        let gl = -scale * w.dot(&(&rlp - &self.gp)) / (2.0 * h);
+        Ok(Augmented { r, j, rl, g, gx, gl, v, w })
     }
 
-    /// ∂R̂/∂s, which depends on neither x nor n (s multiplies the excitation).
-    fn scale_derivative(&mut self, x: &[f64], at: &At) -> DVector<f64> {
+    /// The start of a walk in `kind` at x and `at`: borders from the singular vectors of J's
+    /// smallest singular value, and ∂R̂/∂s, which depends on neither x nor the other parameters
+    /// (s multiplies the excitation).
+    fn walk(&mut self, kind: FoldPlane, x: &[f64], at: &At) -> Walk {
+        let plane = self.plane(kind);
         self.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
-        self.gp.clone()
-    }
-
-    /// Borders from the singular vectors of J's smallest singular value (a start far from a
-    /// known null vector).
-    fn initial_borders(j: &DMatrix<f64>) -> (DVector<f64>, DVector<f64>) {
-        let svd = j.clone().svd(true, true);
+        let rs = self.gp.clone();
+        let svd = self.jac.clone().svd(true, true);
         let k = svd.singular_values.imin();
-        let u = svd.u.as_ref().map(|u| u.column(k).clone_owned());
-        let vt = svd.v_t.as_ref().map(|v| v.row(k).transpose());
-        let m = j.nrows();
+        let m = self.unknowns();
         let unit = DVector::from_element(m, 1.0 / (m as f64).sqrt());
-        (u.unwrap_or_else(|| unit.clone()), vt.unwrap_or(unit))
+        let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
+        let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
+        Walk { plane, b, c, rs }
     }
 
-    /// The fold at torque scale `scale` nearest `guess` (a state near a fold of a branch in
-    /// order, e.g. the branch point before one of its [`Fold`](super::Fold)s): Newton's method on
-    /// `R̂ = 0, g = 0` in (x, n).
-    pub fn fold_at(&mut self, scale: f64, guess: &HbmSolution) -> Result<FoldCurvePoint, HbmError> {
+    /// Newton's method on `R̂ = 0, g = 0` with one of (λ, s) free: λ when `free_lambda`, else s.
+    fn fold_solve(
+        &mut self,
+        walk: &mut Walk,
+        x: &mut [f64],
+        at: &mut At,
+        free_lambda: bool,
+    ) -> Result<usize, HbmError> {
         let m = self.unknowns();
-        let mut x = self.unknowns_from(Some(guess));
-        let mut at = At { order: guess.order, omega: self.omega, scale };
-        self.assemble(&x, &at, Some(Parameter::Order));
-        let (mut b, mut c) = Self::initial_borders(&self.jac);
         for it in 1..=self.opts.max_iter {
-            let aug = self.augmented(&x, &at, &b, &c)?;
+            let aug = self.augmented(x, at, walk)?;
             let mut mat = DMatrix::zeros(m + 1, m + 1);
             mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
-            mat.view_mut((0, m), (m, 1)).copy_from(&aug.rn);
+            if free_lambda {
+                mat.view_mut((0, m), (m, 1)).copy_from(&aug.rl);
+                mat[(m, m)] = aug.gl;
+            } else {
+                mat.view_mut((0, m), (m, 1)).copy_from(&walk.rs);
+            }
             mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
-            mat[(m, m)] = aug.gn;
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&aug.r);
             rhs[m] = aug.g;
@@ -210,39 +281,77 @@ impl Hbm {
             for (xi, di) in x.iter_mut().zip(d.iter()) {
                 *xi -= di;
             }
-            at.order -= d[m];
-            (b, c) = (aug.w.normalize(), aug.v.normalize());
+            if free_lambda {
+                *at = walk.plane.at(walk.plane.lambda(at) - d[m], at.scale);
+            } else {
+                at.scale -= d[m];
+            }
+            (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             if step <= self.opts.tol {
-                let solution = self.solution_from(&x, &at, it);
-                return Ok(FoldCurvePoint { order: at.order, scale, arclength: 0.0, solution });
+                return Ok(it);
             }
         }
         Err(HbmError::NoConvergence { order: at.order, iterations: self.opts.max_iter, step: f64::NAN })
     }
 
-    /// Follows the fold curve through `start` (from [`Hbm::fold_at`]) in the direction of
-    /// increasing s when `up`, else decreasing, until it leaves the box of `opts`.
+    /// The fold in `plane` at torque scale `scale` nearest `guess` (a state near a fold of a
+    /// branch in the plane's first parameter, e.g. the branch point before one of its
+    /// [`Fold`](super::Fold)s): Newton's method on `R̂ = 0, g = 0` in (x, n) or (x, Ω).
+    pub fn fold_at(&mut self, plane: FoldPlane, scale: f64, guess: &HbmSolution) -> Result<FoldCurvePoint, HbmError> {
+        let mut x = self.unknowns_from(Some(guess));
+        let mut at = At { order: guess.order, omega: guess.omega, scale };
+        if let FoldPlane::Speed { order } = plane {
+            at.order = order;
+        }
+        let mut walk = self.walk(plane, &x, &at);
+        let it = self.fold_solve(&mut walk, &mut x, &mut at, true)?;
+        let solution = self.solution_from(&x, &at, it);
+        Ok(walk.plane.point(&at, 0.0, solution))
+    }
+
+    /// The fold in `plane` at the value `value` of its first parameter (n, or Ω in rad/s)
+    /// nearest `guess`, the torque scale free: Newton's method on `R̂ = 0, g = 0` in (x, s).
+    pub fn fold_at_value(
+        &mut self,
+        plane: FoldPlane,
+        value: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
+        let mut x = self.unknowns_from(Some(guess));
+        let mut at = match plane {
+            FoldPlane::Order => At { order: value, omega: guess.omega, scale: guess.torque_scale },
+            FoldPlane::Speed { order } => At { order, omega: value, scale: guess.torque_scale },
+        };
+        let mut walk = self.walk(plane, &x, &at);
+        let it = self.fold_solve(&mut walk, &mut x, &mut at, false)?;
+        let solution = self.solution_from(&x, &at, it);
+        Ok(walk.plane.point(&at, 0.0, solution))
+    }
+
+    /// Follows the fold curve in `plane` through `start` (from [`Hbm::fold_at`]) in the
+    /// direction of increasing s when `up`, else decreasing, until it leaves the box of `opts`.
     pub fn continue_fold(
         &mut self,
+        plane: FoldPlane,
         start: &FoldCurvePoint,
         up: bool,
         opts: &FoldCurveOptions,
     ) -> Result<FoldCurve, HbmError> {
         let m = self.unknowns();
-        let omega = self.omega;
-        let at_of = |y: &DVector<f64>| At { order: y[m], omega, scale: y[m + 1] };
-        let mut y = DVector::zeros(m + 2);
-        y.rows_mut(0, m).copy_from(&DVector::from_vec(self.unknowns_from(Some(&start.solution))));
-        (y[m], y[m + 1]) = (start.order, start.scale);
         let x0 = self.unknowns_from(Some(&start.solution));
-        let rs = self.scale_derivative(&x0, &at_of(&y));
-        self.assemble(&x0, &at_of(&y), Some(Parameter::Order));
-        let (mut b, mut c) = Self::initial_borders(&self.jac);
+        let at0 = At { order: start.order, omega: start.omega, scale: start.scale };
+        let mut walk = self.walk(plane, &x0, &at0);
+        walk.plane.p_ref = start.omega;
+        let pl = walk.plane;
+        let at_of = |y: &DVector<f64>| pl.at(y[m], y[m + 1]);
+        let mut y = DVector::zeros(m + 2);
+        y.rows_mut(0, m).copy_from(&DVector::from_vec(x0));
+        (y[m], y[m + 1]) = (pl.lambda(&at0), start.scale);
         // The tangent at the start, oriented by the requested direction of s.
         let mut e_s = DVector::zeros(m + 2);
         e_s[m + 1] = if up { 1.0 } else { -1.0 };
-        let (mut t, aug) = self.fold_tangent(&y, &rs, &b, &c, &e_s)?;
-        (b, c) = (aug.w.normalize(), aug.v.normalize());
+        let (mut t, aug) = self.fold_tangent(&y, &walk, &e_s)?;
+        (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
         if t[m + 1] * e_s[m + 1] < 0.0 {
             t = -t;
         }
@@ -251,7 +360,12 @@ impl Hbm {
         let mut ds = opts.ds;
         let mut s_arc = 0.0;
         let inside = |y: &DVector<f64>| {
-            (opts.orders.0..=opts.orders.1).contains(&y[m]) && (opts.scales.0..=opts.scales.1).contains(&y[m + 1])
+            let at = at_of(y);
+            let first = match plane {
+                FoldPlane::Order => at.order,
+                FoldPlane::Speed { .. } => at.omega,
+            };
+            (opts.range.0..=opts.range.1).contains(&first) && (opts.scales.0..=opts.scales.1).contains(&y[m + 1])
         };
         let end = loop {
             if points.len() >= opts.max_points {
@@ -261,14 +375,14 @@ impl Hbm {
                 break FoldCurveEnd::StepTooSmall;
             }
             let pred = &y + &t * ds;
-            let (y_new, iters) = match self.fold_correct(&pred, &t, &rs, &b, &c, opts) {
+            let (y_new, iters) = match self.fold_correct(&pred, &t, &walk, opts) {
                 Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
                     continue;
                 }
             };
-            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &rs, &b, &c, &t) else {
+            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &walk, &t) else {
                 ds *= 0.5;
                 continue;
             };
@@ -279,19 +393,20 @@ impl Hbm {
                 ds *= 0.5;
                 continue;
             }
-            (b, c) = (aug.w.normalize(), aug.v.normalize());
+            (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             let chord = (&y_new - &y).norm();
             if t[m + 1] * t_new[m + 1] < 0.0
-                && let Some((p, tn)) = self.locate_extremum(&y, &t, chord, &rs, &b, &c, opts)
+                && let Some((p, tl)) = self.locate_extremum(&y, &t, chord, &walk, opts)
             {
-                // At the located point |ds/dσ| ≤ 1e-10; at a cusp dn/dσ follows it to zero
+                // At the located point |ds/dσ| ≤ 1e-10; at a cusp dλ/dσ follows it to zero
                 // (the paper's rotor: 2e-11), elsewhere it stays of order one.
-                if tn.abs() <= 1e-6 { cusps.push(p) } else { scale_extrema.push(p) }
+                if tl.abs() <= 1e-6 { cusps.push(p) } else { scale_extrema.push(p) }
             }
             s_arc += chord;
             let x_new: Vec<f64> = y_new.rows(0, m).iter().copied().collect();
-            let solution = self.solution_from(&x_new, &at_of(&y_new), iters);
-            points.push(FoldCurvePoint { order: y_new[m], scale: y_new[m + 1], arclength: s_arc, solution });
+            let at = at_of(&y_new);
+            let solution = self.solution_from(&x_new, &at, iters);
+            points.push(pl.point(&at, s_arc, solution));
             (y, t) = (y_new, t_new);
             if !inside(&y) {
                 break FoldCurveEnd::LeftBox;
@@ -305,26 +420,24 @@ impl Hbm {
         Ok(FoldCurve { points, cusps, scale_extrema, end })
     }
 
-    /// The augmented Jacobian `[[J, ∂R̂/∂n, ∂R̂/∂s], [∂g/∂x, ∂g/∂n, 0]]` at y bordered below by
+    /// The augmented Jacobian `[[J, ∂R̂/∂λ, ∂R̂/∂s], [∂g/∂x, ∂g/∂λ, 0]]` at y bordered below by
     /// `row`, and the augmented system there.
     fn fold_matrix(
         &mut self,
         y: &DVector<f64>,
-        rs: &DVector<f64>,
-        b: &DVector<f64>,
-        c: &DVector<f64>,
+        walk: &Walk,
         row: &DVector<f64>,
     ) -> Result<(DMatrix<f64>, Augmented), HbmError> {
         let m = self.unknowns();
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-        let at = At { order: y[m], omega: self.omega, scale: y[m + 1] };
-        let aug = self.augmented(&x, &at, b, c)?;
+        let at = walk.plane.at(y[m], y[m + 1]);
+        let aug = self.augmented(&x, &at, walk)?;
         let mut mat = DMatrix::zeros(m + 2, m + 2);
         mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
-        mat.view_mut((0, m), (m, 1)).copy_from(&aug.rn);
-        mat.view_mut((0, m + 1), (m, 1)).copy_from(rs);
+        mat.view_mut((0, m), (m, 1)).copy_from(&aug.rl);
+        mat.view_mut((0, m + 1), (m, 1)).copy_from(&walk.rs);
         mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
-        mat[(m, m)] = aug.gn;
+        mat[(m, m)] = aug.gl;
         mat.view_mut((m + 1, 0), (1, m + 2)).copy_from(&row.transpose());
         Ok((mat, aug))
     }
@@ -333,13 +446,11 @@ impl Hbm {
     fn fold_tangent(
         &mut self,
         y: &DVector<f64>,
-        rs: &DVector<f64>,
-        b: &DVector<f64>,
-        c: &DVector<f64>,
+        walk: &Walk,
         row: &DVector<f64>,
     ) -> Result<(DVector<f64>, Augmented), HbmError> {
         let m = self.unknowns();
-        let (mat, aug) = self.fold_matrix(y, rs, b, c, row)?;
+        let (mat, aug) = self.fold_matrix(y, walk, row)?;
         let mut e = DVector::zeros(m + 2);
         e[m + 1] = 1.0;
         let z = mat.lu().solve(&e).ok_or(HbmError::Singular { order: y[m] })?;
@@ -355,15 +466,13 @@ impl Hbm {
         &mut self,
         pred: &DVector<f64>,
         t: &DVector<f64>,
-        rs: &DVector<f64>,
-        b: &DVector<f64>,
-        c: &DVector<f64>,
+        walk: &Walk,
         opts: &FoldCurveOptions,
     ) -> Result<(DVector<f64>, usize), HbmError> {
         let m = self.unknowns();
         let mut y = pred.clone();
         for it in 1..=opts.max_iter {
-            let (mat, aug) = self.fold_matrix(&y, rs, b, c, t)?;
+            let (mat, aug) = self.fold_matrix(&y, walk, t)?;
             let mut rhs = DVector::zeros(m + 2);
             rhs.rows_mut(0, m).copy_from(&aug.r);
             rhs[m] = aug.g;
@@ -383,23 +492,20 @@ impl Hbm {
 
     /// The extremum of s between y (tangent t) and the point a chord further on, where ds/dσ
     /// changes sign: a secant (Illinois) search on the tangent's s-component along the step.
-    /// Returns the point and dn/dσ there.
-    #[allow(clippy::too_many_arguments)]
+    /// Returns the point and dλ/dσ there.
     fn locate_extremum(
         &mut self,
         y: &DVector<f64>,
         t: &DVector<f64>,
         chord: f64,
-        rs: &DVector<f64>,
-        b: &DVector<f64>,
-        c: &DVector<f64>,
+        walk: &Walk,
         opts: &FoldCurveOptions,
     ) -> Option<(ParameterPoint, f64)> {
         let m = self.unknowns();
         let slope = |this: &mut Self, sigma: f64| -> Option<(DVector<f64>, DVector<f64>)> {
             let pred = y + t * sigma;
-            let (yc, _) = this.fold_correct(&pred, t, rs, b, c, opts).ok()?;
-            let (mut tc, _) = this.fold_tangent(&yc, rs, b, c, t).ok()?;
+            let (yc, _) = this.fold_correct(&pred, t, walk, opts).ok()?;
+            let (mut tc, _) = this.fold_tangent(&yc, walk, t).ok()?;
             if tc.dot(t) < 0.0 {
                 tc = -tc;
             }
@@ -416,7 +522,8 @@ impl Hbm {
             let s = s1 - f1 * (s1 - s0) / (f1 - f0);
             let (tc, yc) = slope(self, s)?;
             let f = tc[m + 1];
-            best = Some((ParameterPoint { order: yc[m], scale: yc[m + 1] }, tc[m]));
+            let at = walk.plane.at(yc[m], yc[m + 1]);
+            best = Some((ParameterPoint { order: at.order, omega: at.omega, scale: at.scale }, tc[m]));
             if f.abs() < 1e-10 || (s1 - s0).abs() < 1e-12 * chord.max(1e-300) {
                 break;
             }

@@ -4,7 +4,9 @@
 //! and, for its cusp, against a bisection on one-parameter branches at a fine step.
 
 use crate::support::cpva_hbm::{cpva_hbm, single};
-use kanedyn::hbm::{ContinuationOptions, FoldCurve, FoldCurveOptions, Hbm, HbmOptions, HbmSolution};
+use kanedyn::hbm::{
+    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldPlane, Hbm, HbmOptions, HbmSolution, Parameter,
+};
 
 /// The reference torque: the torque scale s is the torque over 500 N·m.
 const T_REF: f64 = 500.0;
@@ -24,7 +26,7 @@ fn crossings(hbm: &mut Hbm, curve: &FoldCurve, s: f64) -> Vec<f64> {
     for w in curve.points.windows(2) {
         if (w[0].scale - s) * (w[1].scale - s) <= 0.0 {
             let near = if (w[0].scale - s).abs() < (w[1].scale - s).abs() { &w[0] } else { &w[1] };
-            out.push(hbm.fold_at(s, &near.solution).unwrap().order);
+            out.push(hbm.fold_at(FoldPlane::Order, s, &near.solution).unwrap().order);
         }
     }
     out.sort_by(f64::total_cmp);
@@ -37,11 +39,11 @@ fn the_fold_curve_passes_through_the_one_parameter_folds_and_its_cusp() {
     let f40 = folds_at(&mut hbm, 40.0, (2.9, 3.3), 0.1);
     assert_eq!(f40.len(), 2);
     let lower = f40.iter().min_by(|a, b| a.0.total_cmp(&b.0)).unwrap();
-    let start = hbm.fold_at(40.0 / T_REF, &lower.1).unwrap();
-    let opts = FoldCurveOptions { orders: (2.85, 3.35), scales: (0.002, 1.05), ..FoldCurveOptions::default() };
+    let start = hbm.fold_at(FoldPlane::Order, 40.0 / T_REF, &lower.1).unwrap();
+    let opts = FoldCurveOptions { range: (2.85, 3.35), scales: (0.002, 1.05), ..FoldCurveOptions::default() };
     // From the lower fold at 40 N·m down in torque: through the cusp, where the two folds of the
     // jump meet, and up along the other fold beyond 500 N·m.
-    let curve = hbm.continue_fold(&start, false, &opts).unwrap();
+    let curve = hbm.continue_fold(FoldPlane::Order, &start, false, &opts).unwrap();
     println!("{} points, end {:?}, cusps {:?}", curve.points.len(), curve.end, curve.cusps);
 
     // The one-parameter folds (at 1000 rpm, n 2.9–3.3), each found on the curve at
@@ -81,4 +83,61 @@ fn the_fold_curve_passes_through_the_one_parameter_folds_and_its_cusp() {
     println!("cusp: curve n {:.7} T {torque:.6} N·m; bisection n {n_pair:.7} T {hi:.6} N·m", cusp.order);
     assert!((torque / hi - 1.0).abs() <= 1e-4, "cusp torque {torque} against {hi}");
     assert!((cusp.order - n_pair).abs() <= 1e-4, "cusp order {} against {n_pair}", cusp.order);
+}
+
+/// The paper's multi-order load at 600 rpm (Table 1: n = 3, T_n = 670 N·m, T_2n = 430 N·m,
+/// α_2n = −0.32 rad) jumps: its low-amplitude state ends at a fold of the torque scale at
+/// s = 0.92908 (`tests/it/hbm.rs`, confirmed there by time integration). The fold curve in
+/// (speed, torque scale), continued from the fold of a speed branch at the Table 1 torques
+/// (s = 1), passes through 600 rpm at that scale; and the torque branch at the curve's speed
+/// for s = 1 turns exactly at s = 1.
+#[test]
+fn the_speed_torque_fold_curve_passes_through_the_600_rpm_fold() {
+    use kanedyn::cpva::CpvaParams;
+    use kanedyn::kane::Kane;
+    use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
+    let h = vec![
+        Harmonic { multiple: 1.0, amplitude: 670.0, phase: 0.0 },
+        Harmonic { multiple: 2.0, amplitude: 430.0, phase: -0.32 },
+    ];
+    let mech = CpvaParams::canonical().mechanism(None).unwrap();
+    let kane = Kane::new(&mech).unwrap();
+    let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+    let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(600.0), &h, opts).unwrap();
+    // The reference: the torque branch at 600 rpm, its first fold.
+    let copts = ContinuationOptions { stability: false, ..Default::default() };
+    let bt = hbm.continue_in(Parameter::TorqueScale { order: 3.0 }, 0.01, 1.5, None, &copts).unwrap();
+    let s_fold = bt.folds[0].parameter;
+    println!("600 rpm: torque fold at s = {s_fold:.8}");
+    assert!((s_fold - 0.92908).abs() < 5e-6, "the issue's 0.92908: {s_fold}");
+    // The curve's start: the speed branch at s = 1 from 900 rpm down, its fold.
+    let bs = hbm
+        .continue_in(Parameter::Speed { order: 3.0 }, rpm_to_rad_s(900.0), rpm_to_rad_s(600.0), None, &copts)
+        .unwrap();
+    let f = &bs.folds[0];
+    let plane = FoldPlane::Speed { order: 3.0 };
+    let start = hbm.fold_at(plane, 1.0, &bs.points[f.after].solution).unwrap();
+    println!(
+        "speed fold at s = 1: {:.6} rpm (branch {:.6})",
+        start.omega * 30.0 / std::f64::consts::PI,
+        f.parameter * 30.0 / std::f64::consts::PI
+    );
+    assert!((start.omega / f.parameter - 1.0).abs() < 1e-8);
+    let fopts = FoldCurveOptions {
+        range: (rpm_to_rad_s(500.0), rpm_to_rad_s(900.0)),
+        scales: (0.5, 1.2),
+        ..FoldCurveOptions::default()
+    };
+    let curve = hbm.continue_fold(plane, &start, false, &fopts).unwrap();
+    println!("{} points, end {:?}", curve.points.len(), curve.end);
+    let w600 = rpm_to_rad_s(600.0);
+    let near = curve
+        .points
+        .windows(2)
+        .find(|w| (w[0].omega - w600) * (w[1].omega - w600) <= 0.0)
+        .expect("the curve reaches 600 rpm");
+    let at600 = hbm.fold_at_value(plane, w600, &near[0].solution).unwrap();
+    println!("on the curve at 600 rpm: s = {:.8}", at600.scale);
+    // Both are the same fold solved two ways at 1e-10 on the coefficients.
+    assert!((at600.scale - s_fold).abs() <= 1e-7, "{} against {s_fold}", at600.scale);
 }
