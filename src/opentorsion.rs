@@ -440,68 +440,25 @@ struct Component {
     elements: Vec<Element>,
 }
 
+/// One element as written: every type's fields, checked against its `type` when it is laid on
+/// the nodes (so that a missing or misspelt field is reported at the element, with its name).
 #[derive(Debug, Deserialize)]
-#[serde(tag = "type")]
 #[allow(non_snake_case)]
-enum Element {
-    Disk {
-        name: String,
-        inertia: f64,
-        #[serde(default)]
-        damping: f64,
-        #[serde(default)]
-        excitation: Option<serde_json::Value>,
-    },
-    ShaftDiscrete {
-        name: String,
-        stiffness: f64,
-        #[serde(default)]
-        damping: f64,
-        #[serde(default)]
-        excitation: Option<serde_json::Value>,
-    },
-    ShaftContinuous {
-        name: String,
-        length: f64,
-        #[serde(default)]
-        innerDiameter: f64,
-        outerDiameter: f64,
-        #[serde(default)]
-        density: Option<f64>,
-        #[serde(default)]
-        excitation: Option<serde_json::Value>,
-    },
-    GearElement {
-        name: String,
-        inertia: f64,
-        #[serde(default)]
-        teeth: Option<f64>,
-        #[serde(default)]
-        diameter: Option<f64>,
-        #[serde(default)]
-        parent: Option<String>,
-        #[serde(default)]
-        excitation: Option<serde_json::Value>,
-    },
-}
-
-impl Element {
-    fn name(&self) -> &str {
-        match self {
-            Element::Disk { name, .. }
-            | Element::ShaftDiscrete { name, .. }
-            | Element::ShaftContinuous { name, .. }
-            | Element::GearElement { name, .. } => name,
-        }
-    }
-    fn excited(&self) -> bool {
-        match self {
-            Element::Disk { excitation, .. }
-            | Element::ShaftDiscrete { excitation, .. }
-            | Element::ShaftContinuous { excitation, .. }
-            | Element::GearElement { excitation, .. } => excitation.is_some(),
-        }
-    }
+struct Element {
+    name: String,
+    #[serde(rename = "type")]
+    kind: String,
+    inertia: Option<f64>,
+    damping: Option<f64>,
+    stiffness: Option<f64>,
+    length: Option<f64>,
+    innerDiameter: Option<f64>,
+    outerDiameter: Option<f64>,
+    density: Option<f64>,
+    teeth: Option<f64>,
+    diameter: Option<f64>,
+    parent: Option<String>,
+    excitation: Option<serde_json::Value>,
 }
 
 /// OpenTorsion's default shear modulus for a shaft given by its geometry, Pa.
@@ -576,7 +533,7 @@ fn from_tors(file: &Path, text: &str) -> Result<(Assembly, Vec<String>, Vec<Stri
     for (k, (a, b)) in tors.structure.iter().enumerate() {
         let (ca, ea) = split(a, &format!("structure[{k}][0]"))?;
         let (cb, _) = split(b, &format!("structure[{k}][1]"))?;
-        if !tors.components[ca].elements.iter().any(|e| e.name() == ea) {
+        if !tors.components[ca].elements.iter().any(|e| e.name == ea) {
             return Err(err(
                 &format!("structure[{k}][0]"),
                 format!("component `{}` has no element `{ea}`", tors.components[ca].name),
@@ -651,12 +608,17 @@ impl TorsBuilder {
         let comp = &tors.components[c];
         for (e, element) in comp.elements.iter().enumerate() {
             let path = format!("components[{c}].elements[{e}]");
-            let id = format!("{}.{}", comp.name, element.name());
-            if element.excited() {
+            let id = format!("{}.{}", comp.name, element.name);
+            if element.excitation.is_some() {
                 self.assembly.excited.push(id.clone());
             }
-            match element {
-                Element::Disk { inertia, damping, .. } => {
+            let need = |value: Option<f64>, field: &str| {
+                value.ok_or_else(|| err(&path, format!("{} `{id}` has no `{field}`", element.kind)))
+            };
+            let damping = element.damping.unwrap_or(0.0);
+            match element.kind.as_str() {
+                "Disk" => {
+                    let inertia = need(element.inertia, "inertia")?;
                     // OpenTorsion adds a disk to the previous one when both are on this node.
                     match self.assembly.disks.last_mut() {
                         Some(last) if last.node == self.node => {
@@ -664,43 +626,42 @@ impl TorsBuilder {
                             last.c += damping;
                         }
                         _ => {
-                            self.assembly.disks.push(Disk { node: self.node, inertia: *inertia, c: *damping, k: 0.0 });
+                            self.assembly.disks.push(Disk { node: self.node, inertia, c: damping, k: 0.0 });
                             self.disk_paths.push(path.clone());
                         }
                     }
                 }
-                Element::ShaftDiscrete { stiffness, damping, .. } => {
-                    self.assembly.shafts.push(Shaft {
-                        nl: self.node,
-                        nr: self.node + 1,
-                        k: *stiffness,
-                        c: *damping,
-                        mass: 0.0,
-                    });
+                "ShaftDiscrete" => {
+                    let k = need(element.stiffness, "stiffness")?;
+                    self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: damping, mass: 0.0 });
                     self.shaft_paths.push(path.clone());
                     self.node += 1;
                 }
-                Element::ShaftContinuous { length, innerDiameter, outerDiameter, density, .. } => {
-                    // mm to m; polar second moment of area J, stiffness G·J/L and the mass factor ρ·J·L/6.
-                    let (l, di, d) = (length * 1e-3, innerDiameter * 1e-3, outerDiameter * 1e-3);
+                "ShaftContinuous" => {
+                    // mm to m; polar second moment of area J, stiffness G·J/L and the mass factor
+                    // ρ·J·L/6. OpenTorsion gives such a shaft no damping.
+                    let l = need(element.length, "length")? * 1e-3;
+                    let d = need(element.outerDiameter, "outerDiameter")? * 1e-3;
+                    let di = element.innerDiameter.unwrap_or(0.0) * 1e-3;
                     let j = std::f64::consts::PI * (d.powi(4) - di.powi(4)) / 32.0;
-                    if !(l > 0.0 && j > 0.0) {
+                    if !(l > 0.0 && j > 0.0 && di >= 0.0) {
                         return Err(err(
                             &format!("{path}.length"),
                             format!("shaft `{id}`: length and outer diameter must be positive, outer above inner (mm)"),
                         ));
                     }
-                    let rho = density.unwrap_or(DENSITY);
+                    let rho = element.density.unwrap_or(DENSITY);
                     let (k, mass) = (SHEAR_MODULUS * j / l, rho * j * l / 6.0);
                     self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: 0.0, mass });
                     self.shaft_paths.push(path.clone());
                     self.node += 1;
                 }
-                Element::GearElement { inertia, teeth, diameter, parent, .. } => {
-                    let Some(radius) = teeth.or(*diameter) else {
+                "GearElement" => {
+                    let inertia = need(element.inertia, "inertia")?;
+                    let Some(radius) = element.teeth.or(element.diameter) else {
                         return Err(err(&path, format!("gear `{id}` has neither `teeth` nor `diameter`")));
                     };
-                    let parent = match parent {
+                    let parent = match &element.parent {
                         None => None,
                         Some(p) => match self.gear_index.get(&format!("{}.{p}", comp.name)) {
                             Some(&g) => {
@@ -720,11 +681,19 @@ impl TorsBuilder {
                         },
                     };
                     self.gear_index.insert(id.clone(), self.assembly.gears.len());
-                    self.assembly.gears.push(Gear { node: self.node, inertia: *inertia, radius, parent });
+                    self.assembly.gears.push(Gear { node: self.node, inertia, radius, parent });
                     self.gear_paths.push(path.clone());
                 }
+                other => {
+                    return Err(err(
+                        &format!("{path}.type"),
+                        format!(
+                            "unknown element type `{other}` (TORS types: Disk, ShaftDiscrete, ShaftContinuous, GearElement)"
+                        ),
+                    ));
+                }
             }
-            if let Some(&(to, k)) = next.get(&(c, element.name().to_string())) {
+            if let Some(&(to, k)) = next.get(&(c, element.name.clone())) {
                 if visited[to] {
                     return Err(err(
                         &format!("structure[{k}][1]"),

@@ -40,6 +40,7 @@ mod linear;
 mod marine_gearbox;
 mod modal_damping;
 mod no_nan_outputs;
+mod opentorsion;
 mod order_tracking;
 mod paper_claims;
 mod path_general;
