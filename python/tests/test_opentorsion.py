@@ -19,8 +19,8 @@ from conftest import EXAMPLES
 
 ot = pytest.importorskip("opentorsion", reason="opentorsion is installed by run-tests.sh")
 
-TORS = EXAMPLES / "opentorsion" / "marine_ex81.json"
-OVERLAY = EXAMPLES / "opentorsion" / "marine_ex81_cpva.ron"
+TORS = EXAMPLES / "opentorsion_marine.json"
+OVERLAY = EXAMPLES / "opentorsion_marine_cpva.ron"
 # The book's table is in lb·in·s², lb·in/rad and lb·in·s/rad; this factor takes all three to SI.
 F = 0.11298
 R_BULL, R_LP, R_HP = 9.4094, 40.0424, 78.2365
@@ -60,11 +60,11 @@ def plant():
 
 @pytest.fixture(scope="module")
 def ron(plant):
-    return kanedyn.from_opentorsion(plant, "marine_ex81")
+    return kanedyn.from_opentorsion(plant, "opentorsion_marine")
 
 
 def test_free_modes_equal_opentorsions_modal_analysis(plant, ron):
-    m = kanedyn.Mechanism.from_str(ron, "marine_ex81.ron")
+    m = kanedyn.Mechanism.from_str(ron, "opentorsion_marine.ron")
     modes = kanedyn.linearize(m, "node_1", 0.0).modes(spin="free", damped=False)
     got = np.asarray(modes.natural_frequencies_rad_s)
     # OpenTorsion's own analyses: the generalised eigenproblem (K, M) after its gear reduction,
@@ -93,10 +93,10 @@ def test_tors_file_and_kanedyn_import_give_the_same_ron(plant, ron, cli, tmp_pat
     ok, out, err = cli("import", TORS)
     assert ok, err
     assert out == ron
-    assert kanedyn.from_opentorsion(parsed, "marine_ex81") == ron
+    assert kanedyn.from_opentorsion(parsed, "opentorsion_marine") == ron
     # And the RON checked in next to the file is this one.
-    assert (EXAMPLES / "opentorsion" / "marine_ex81.ron").read_text() == ron
-    ok, _, err = cli("import", TORS, "-o", tmp_path / "m.ron", "--name", "marine_ex81")
+    assert (EXAMPLES / "opentorsion_marine.ron").read_text() == ron
+    ok, _, err = cli("import", TORS, "-o", tmp_path / "m.ron", "--name", "opentorsion_marine")
     assert ok, err
     assert (tmp_path / "m.ron").read_text() == ron
 
@@ -104,10 +104,10 @@ def test_tors_file_and_kanedyn_import_give_the_same_ron(plant, ron, cli, tmp_pat
 def test_harmonic_balance_with_a_cpva_added_by_an_overlay(ron, tmp_path):
     text = OVERLAY.read_text()
     assert len(text.splitlines()) <= 15
-    (tmp_path / "marine_ex81.ron").write_text(ron)
+    (tmp_path / "opentorsion_marine.ron").write_text(ron)
     shutil.copy(OVERLAY, tmp_path / OVERLAY.name)
     m = kanedyn.Mechanism.from_file(tmp_path / OVERLAY.name)
-    assert m.name == "marine_ex81_cpva" and m.ndof == 7 and m.coordinate_names[-1] == "pivot"
+    assert m.name == "opentorsion_marine_cpva" and m.ndof == 7 and m.coordinate_names[-1] == "pivot"
     absorber = m.check()["absorbers"][0]
     assert absorber["joint"] == "pivot" and abs(absorber["tuning_order"] - 5.0) < 1e-12
 

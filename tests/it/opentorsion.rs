@@ -106,24 +106,24 @@ fn gear_stage_across_components_equals_the_reflected_chain() {
 /// the same plant to rounding.
 #[test]
 fn marine_plant_equals_the_checked_in_ron_and_the_hand_written_model() {
-    let json = std::fs::read_to_string("examples/opentorsion/marine_ex81.json").unwrap();
-    let ron = convert(Path::new("marine_ex81.json"), &json, "marine_ex81").unwrap();
-    assert_eq!(ron, std::fs::read_to_string("examples/opentorsion/marine_ex81.ron").unwrap());
-    let imported = Mechanism::from_file(Path::new("examples/opentorsion/marine_ex81.ron")).unwrap();
+    let json = std::fs::read_to_string("examples/opentorsion_marine.json").unwrap();
+    let ron = convert(Path::new("opentorsion_marine.json"), &json, "opentorsion_marine").unwrap();
+    assert_eq!(ron, std::fs::read_to_string("examples/opentorsion_marine.ron").unwrap());
+    let imported = Mechanism::from_file(Path::new("examples/opentorsion_marine.ron")).unwrap();
     let hand = Mechanism::from_file(Path::new("examples/marine_driveline.ron")).unwrap();
     let want = free_modes(&hand, "bull");
     assert_eq!(want.len(), 5);
     assert_close(&free_modes(&imported, "node_1"), &want, 1e-12);
 
     // The CLI writes the same text, to stdout or to `-o`.
-    let (ok, stdout, stderr) = cli::kanedyn(&["import", "examples/opentorsion/marine_ex81.json"]);
+    let (ok, stdout, stderr) = cli::kanedyn(&["import", "examples/opentorsion_marine.json"]);
     assert!(ok, "{stderr}");
     assert_eq!(stdout, ron);
     let out = std::env::temp_dir().join(format!("kanedyn-import-{}.ron", std::process::id()));
     let (ok, _, stderr) =
-        cli::kanedyn(&["import", "examples/opentorsion/marine_ex81.json", "-o", out.to_str().unwrap(), "--name", "x"]);
+        cli::kanedyn(&["import", "examples/opentorsion_marine.json", "-o", out.to_str().unwrap(), "--name", "x"]);
     assert!(ok, "{stderr}");
-    assert_eq!(std::fs::read_to_string(&out).unwrap(), ron.replace("name: \"marine_ex81\"", "name: \"x\""));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), ron.replace("name: \"opentorsion_marine\"", "name: \"x\""));
     let _ = std::fs::remove_file(out);
 }
 
@@ -188,15 +188,15 @@ fn scratch(tag: &str) -> PathBuf {
     dir
 }
 
-/// The README's overlay (examples/opentorsion/marine_ex81_cpva.ron): at most 15 lines, it adds
+/// The README's overlay (examples/opentorsion_marine_cpva.ron): at most 15 lines, it adds
 /// one pendulum to the imported plant, tuned to order √(R/L) = 5.
 #[test]
 fn overlay_adds_an_absorber_to_the_imported_plant() {
-    let path = Path::new("examples/opentorsion/marine_ex81_cpva.ron");
+    let path = Path::new("examples/opentorsion_marine_cpva.ron");
     assert!(std::fs::read_to_string(path).unwrap().lines().count() <= 15);
-    let base = Mechanism::from_file(Path::new("examples/opentorsion/marine_ex81.ron")).unwrap();
+    let base = Mechanism::from_file(Path::new("examples/opentorsion_marine.ron")).unwrap();
     let mech = Mechanism::from_file(path).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(mech.name, "marine_ex81_cpva");
+    assert_eq!(mech.name, "opentorsion_marine_cpva");
     assert_eq!(mech.ndof(), base.ndof() + 1);
     assert_eq!(mech.bodies.len(), base.bodies.len() + 1);
     assert_eq!(mech.gears.len(), base.gears.len());
@@ -209,8 +209,7 @@ fn overlay_adds_an_absorber_to_the_imported_plant() {
 #[test]
 fn bad_overlays_give_located_errors() {
     let dir = scratch("bad");
-    std::fs::write(dir.join("base.ron"), std::fs::read_to_string("examples/opentorsion/marine_ex81.ron").unwrap())
-        .unwrap();
+    std::fs::write(dir.join("base.ron"), std::fs::read_to_string("examples/opentorsion_marine.ron").unwrap()).unwrap();
     let overlay = |name: &str, text: &str| {
         let p = dir.join(name);
         std::fs::write(&p, text).unwrap();
