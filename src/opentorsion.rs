@@ -498,7 +498,7 @@ fn parse_json<T: serde::de::DeserializeOwned>(file: &Path, text: &str) -> Result
 /// Reads a TORS JSON text (`file` names it in messages) into the node description OpenTorsion's
 /// `Parser.from_tors` builds, with the TORS path of each element (`components[c].elements[e]`)
 /// for messages.
-fn from_tors(file: &Path, text: &str) -> Result<(Assembly, Vec<String>, Vec<String>, Vec<String>)> {
+fn from_tors(file: &Path, text: &str) -> Result<TorsBuilder> {
     let tors: Tors = parse_json(file, text)?;
     let err = |path: &str, message: String| json_error(file, text, path, message);
     if tors.components.is_empty() {
@@ -580,10 +580,11 @@ fn from_tors(file: &Path, text: &str) -> Result<(Assembly, Vec<String>, Vec<Stri
             format!("component `{}` is not connected to the assembly", tors.components[c].name),
         ));
     }
-    Ok((b.assembly, b.shaft_paths, b.disk_paths, b.gear_paths))
+    Ok(b)
 }
 
-/// The node numbering of a TORS file, element by element.
+/// The node numbering of a TORS file, element by element: the assembly and the TORS path
+/// (`components[c].elements[e]`) of each of its shafts, disks and gears.
 #[derive(Default)]
 struct TorsBuilder {
     node: usize,
@@ -721,15 +722,15 @@ pub fn convert(file: &Path, text: &str, name: &str) -> Result<String> {
         let assembly: Assembly = parse_json(file, text)?;
         assembly.to_ron(name).map_err(|p| json_error(file, text, &p.path, p.message))
     } else {
-        let (assembly, shafts, disks, gears) = from_tors(file, text)?;
-        assembly.to_ron(name).map_err(|p| {
+        let tors = from_tors(file, text)?;
+        tors.assembly.to_ron(name).map_err(|p| {
             // The node form's path in TORS terms: the element, and its field under TORS's name.
             let (list, rest) = p.path.split_once('[').unwrap_or(("", ""));
             let (index, field) = rest.split_once(']').unwrap_or(("", ""));
             let paths = match list {
-                "shafts" => &shafts,
-                "disks" => &disks,
-                "gears" => &gears,
+                "shafts" => &tors.shaft_paths,
+                "disks" => &tors.disk_paths,
+                "gears" => &tors.gear_paths,
                 _ => return json_error(file, text, "", p.message),
             };
             let element = index.parse::<usize>().ok().and_then(|i| paths.get(i)).cloned().unwrap_or_default();

@@ -22,7 +22,11 @@ fn opentorsion_ron(py: Python<'_>, assembly_json: &str, name: &str) -> PyResult<
             .map_err(|e| argument_error(py, format!("the assembly's node form is not valid: {e}")))?;
         assembly.to_ron(name).map_err(|p| {
             // `shafts[2].k` is `shaft_elements[2]` of the OpenTorsion assembly.
-            let element = p.path.replace("shafts[", "shaft_elements[").replace("disks[", "disk_elements[").replace("gears[", "gear_elements[");
+            let element = p
+                .path
+                .replace("shafts[", "shaft_elements[")
+                .replace("disks[", "disk_elements[")
+                .replace("gears[", "gear_elements[");
             let at = if element.is_empty() { String::new() } else { format!("assembly.{element}: ") };
             argument_error(py, format!("{at}{}", p.message))
         })

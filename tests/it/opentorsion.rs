@@ -8,9 +8,7 @@
 //! of Gunter & Chen's Example 8.1 as a TORS file is compared with kanedyn's own hand-written
 //! model of it (examples/marine_driveline.ron).
 
-#[path = "support/cli.rs"]
-mod cli;
-
+use crate::support::cli;
 use kanedyn::error::Error;
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::linear::{Damping, LinearModel, Spin};
