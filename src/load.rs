@@ -48,7 +48,7 @@ impl Mechanism {
     }
 
     /// Validates a parsed spec, reading catalog parts under `policy`; an overlay (a spec with a
-    /// `base`) is merged with its base first ([`overlay`]).
+    /// `base`) is merged with its base first (see [`MechanismSpec::base`]).
     pub fn from_spec_with(spec: &MechanismSpec, src: &Source, policy: &ReadPolicy) -> Result<Self> {
         if let Some(base) = &spec.base {
             return overlay(spec, base, src, policy);

@@ -49,7 +49,7 @@ use std::path::Path;
 
 /// An OpenTorsion assembly node by node: the attributes of its `Shaft`, `Disk` and `Gear`
 /// elements, in the order of its element lists (what `kanedyn.from_opentorsion` sends from Python,
-/// and what [`from_tors`] builds from a TORS file).
+/// and what [`convert`] builds from a TORS file).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Assembly {
