@@ -285,3 +285,56 @@ fn bad_overlays_give_located_errors() {
     assert!(msg.contains("outside"), "{msg}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A shaft line whose middle node lies between two gear stages (so it turns on a bearing of its
+/// own and both its shafts are couplings of ratio 1), and a continuous shaft whose inertia is
+/// lumped to its ends: the free modes equal the hand-reduced absolute-angle model, built here
+/// from the element definitions (θ_child = −R_parent/R_child · θ_parent eliminated by hand).
+#[test]
+fn core_node_between_gear_stages_and_a_lumped_shaft_equal_the_hand_reduced_model() {
+    let tors = r#"{"components": [{"name": "line", "elements": [
+        {"name": "motor", "type": "Disk", "inertia": 0.6, "damping": 0.0},
+        {"name": "s0", "type": "ShaftDiscrete", "stiffness": 3.0e4, "damping": 0.0},
+        {"name": "a", "type": "GearElement", "inertia": 0.02, "diameter": 2.0},
+        {"name": "b", "type": "GearElement", "inertia": 0.01, "diameter": 1.0, "parent": "a"},
+        {"name": "s1", "type": "ShaftDiscrete", "stiffness": 2.0e4, "damping": 0.0},
+        {"name": "middle", "type": "Disk", "inertia": 0.3, "damping": 0.0},
+        {"name": "s2", "type": "ShaftDiscrete", "stiffness": 5.0e4, "damping": 0.0},
+        {"name": "c", "type": "GearElement", "inertia": 0.05, "diameter": 3.0},
+        {"name": "d", "type": "GearElement", "inertia": 0.02, "diameter": 1.5, "parent": "c"},
+        {"name": "s3", "type": "ShaftContinuous", "length": 500.0, "innerDiameter": 0.0, "outerDiameter": 60.0},
+        {"name": "load", "type": "Disk", "inertia": 1.5, "damping": 0.0}
+    ]}], "structure": []}"#;
+    let (ron, mech) = load(tors);
+    assert!(ron.contains(r#"Joint(name: "node_3", parent: "ground", child: "node_3")"#), "{ron}");
+    assert!(
+        ron.contains(r#"Gear(joint: "node_3", follows: "node_2", ratio: 1.0, mesh: (stiffness: 20000.0))"#),
+        "{ron}"
+    );
+    assert!(ron.contains("NOTE: shafts with inertia have it lumped"), "{ron}");
+    // The continuous shaft: J = πd⁴/32, k = G J / L, mass factor ρ J L / 6 (G = 80 GPa, ρ = 8000).
+    let j = std::f64::consts::PI * 0.06f64.powi(4) / 32.0;
+    let (k3, m3) = (80e9 * j / 0.5, 8000.0 * j * 0.5 / 6.0);
+    let inertia = [0.6, 0.02, 0.01, 0.3, 0.05, 0.02 + 3.0 * m3, 1.5 + 3.0 * m3];
+    let shafts = [(0, 1, 3.0e4), (2, 3, 2.0e4), (3, 4, 5.0e4), (5, 6, k3)];
+    // Independent angles θ0, θ1, θ3, θ4, θ6; θ2 = −2 θ1, θ5 = −2 θ4.
+    let mut t = nalgebra::DMatrix::<f64>::zeros(7, 5);
+    for (row, col, v) in [(0, 0, 1.0), (1, 1, 1.0), (2, 1, -2.0), (3, 2, 1.0), (4, 3, 1.0), (5, 3, -2.0), (6, 4, 1.0)] {
+        t[(row, col)] = v;
+    }
+    let m = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_row_slice(&inertia));
+    let mut k = nalgebra::DMatrix::<f64>::zeros(7, 7);
+    for (a, b, s) in shafts {
+        k[(a, a)] += s;
+        k[(b, b)] += s;
+        k[(a, b)] -= s;
+        k[(b, a)] -= s;
+    }
+    let (mr, kr) = (t.transpose() * &m * &t, t.transpose() * &k * &t);
+    let l_inv = mr.cholesky().unwrap().l().try_inverse().unwrap();
+    let eig = nalgebra::SymmetricEigen::new(&l_inv * kr * l_inv.transpose());
+    let mut want: Vec<f64> = eig.eigenvalues.iter().map(|l| l.max(0.0).sqrt()).collect();
+    want.sort_by(f64::total_cmp);
+    assert!(want[0] < 1e-6 * want[1], "one rigid rotation: {want:?}");
+    assert_close(&free_modes(&mech, "node_1"), &want[1..], 1e-9);
+}
