@@ -17,9 +17,10 @@
 //!   its own (a revolute joint on ground: its coordinate is its absolute angle, which is what
 //!   the gear constraint and the ground spring act on); so does the lowest node of a shaft line
 //!   without any such node. These are the *anchored* nodes;
-//! - the shafts on the paths between anchored nodes (the *core*) become compliant couplings of
-//!   ratio 1 between the two nodes' joints (`Gear(…, ratio: 1.0, mesh: …)`), which act on the
-//!   difference of the absolute angles exactly as the shaft does;
+//! - the nodes and shafts on the paths between anchored nodes (the *core*) turn on bearings too,
+//!   and those shafts become compliant couplings of ratio 1 between the two nodes' joints
+//!   (`Gear(…, ratio: 1.0, mesh: …)`), which act on the difference of the absolute angles
+//!   exactly as the shaft does;
 //! - every other shaft hangs its far node from the near one by a joint spring and damper (the
 //!   shaft's twist is the joint's coordinate);
 //! - a gear with a parent is `Gear(joint: child, follows: parent, ratio: −R_parent/R)`, the
@@ -116,6 +117,18 @@ pub struct Gear {
     #[serde(default)]
     pub parent: Option<usize>,
 }
+
+/// The head of every converted file: what was converted and how to read it.
+const HEADER: &str = "\
+// Converted from an OpenTorsion assembly by `kanedyn import` (kanedyn::opentorsion).
+// Units: inertia kg·m², stiffness N·m/rad, damping N·m·s/rad (OpenTorsion's).
+// One body per OpenTorsion node (`node_N`). A node in a gear stage, with a stiffness to
+// ground, or on the shafts between two such nodes turns on a bearing of its own (joint
+// `node_N` on ground), as does the first node of a shaft line without one. A shaft between
+// two bearing nodes is a coupling of ratio 1 with the shaft's stiffness (`mesh`), any other
+// shaft a joint spring (joint `shaft_S`) hanging the far node from the one nearer a bearing.
+// Comments cite OpenTorsion's elements: shaft S, disk D, gear G in the assembly's lists.
+";
 
 /// A problem found while converting: the field path in [`Assembly`]'s own form
 /// (`shafts[2].k`) and the message; the front ends locate it in their input.
@@ -313,19 +326,7 @@ impl Assembly {
         let num = |v: f64| format!("{v:?}");
         let mut out = String::new();
         let w = &mut out;
-        let _ = writeln!(w, "// Converted from an OpenTorsion assembly by `kanedyn import` (kanedyn::opentorsion).");
-        let _ = writeln!(w, "// Units: inertia kg·m², stiffness N·m/rad, damping N·m·s/rad (OpenTorsion's).");
-        let _ =
-            writeln!(w, "// One body per OpenTorsion node (`node_N`). A node in a gear stage or with a stiffness to");
-        let _ = writeln!(
-            w,
-            "// ground turns on a bearing of its own (joint `node_N` on ground), as does the first node of"
-        );
-        let _ =
-            writeln!(w, "// a shaft line without one; a shaft between two such nodes is a coupling of ratio 1 with");
-        let _ = writeln!(w, "// the shaft's stiffness (`mesh`), any other shaft a joint spring (joint `shaft_S`).");
-        let _ =
-            writeln!(w, "// Comments cite OpenTorsion's elements: shaft S, disk D, gear G in the assembly's lists.");
+        w.push_str(HEADER);
         if lumped {
             let _ = writeln!(w, "// NOTE: shafts with inertia have it lumped, half to each end node; OpenTorsion's");
             let _ = writeln!(w, "// consistent mass matrix couples the two ends, so frequencies differ slightly.");
