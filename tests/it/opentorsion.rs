@@ -338,3 +338,20 @@ fn core_node_between_gear_stages_and_a_lumped_shaft_equal_the_hand_reduced_model
     assert!(want[0] < 1e-6 * want[1], "one rigid rotation: {want:?}");
     assert_close(&free_modes(&mech, "node_1"), &want[1..], 1e-9);
 }
+
+/// The node form (`kanedyn.from_opentorsion`'s JSON) is read by the same converter: a
+/// two-disk shaft is sqrt(k (1/J1 + 1/J2)), and a bad element is located at its own field.
+#[test]
+fn node_form_converts_and_locates_its_errors() {
+    let (_, mech) = load(
+        r#"{"shafts": [{"nl": 0, "nr": 1, "k": 4.0e4}], "disks": [{"node": 0, "inertia": 2.5}, {"node": 1, "inertia": 4.0}]}"#,
+    );
+    assert_close(&free_modes(&mech, "node_0"), &[(4.0e4f64 * (1.0 / 2.5 + 1.0 / 4.0)).sqrt()], 1e-12);
+    let text = "{\"shafts\": [\n  {\"nl\": 0, \"nr\": 0, \"k\": 1.0}]}";
+    let (_, at, path, msg) = located(&convert(Path::new("n.json"), text, "n").unwrap_err());
+    assert_eq!((path.as_str(), at), ("shafts[0].nr", Some((2, 19))), "{msg}");
+    assert!(msg.contains("joins node 0 to itself"), "{msg}");
+    let text = "{\"disks\": [{\"node\": 2, \"inertia\": 1.0}]}";
+    let (_, _, _, msg) = located(&convert(Path::new("n.json"), text, "n").unwrap_err());
+    assert!(msg.contains("node 0 has no element"), "{msg}");
+}
