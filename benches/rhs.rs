@@ -40,6 +40,7 @@ fn chain(n: usize) -> Mechanism {
         })
         .collect();
     let spec = MechanismSpec {
+        base: None,
         name: format!("chain{n}"),
         speeds: Speeds::JointRates,
         gravity: (0.0, -9.81),

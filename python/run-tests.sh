@@ -5,8 +5,8 @@
 #
 # On a clean machine it creates a virtual environment (python/.venv, or $KANEDYN_VENV) and
 # installs maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json),
-# dask[distributed] (design studies on a cluster) and nbclient, nbformat, ipykernel and matplotlib
-# (the notebook example, executed by a test) into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
+# dask[distributed] (design studies on a cluster), nbclient, nbformat, ipykernel and matplotlib
+# (the notebook example, executed by a test) and opentorsion (the OpenTorsion importer's tests) into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
 # seconds. Needs python3 (≥ 3.9, with venv) and cargo on PATH; $PYTHON picks another
 # interpreter for a new environment.
 set -euo pipefail
@@ -21,11 +21,12 @@ if [ ! -x "$py" ]; then
     "${PYTHON:-python3}" -m venv "$venv"
 fi
 # Installed once; checked by import so that a half-made environment is completed.
-if ! "$py" -c "import maturin, numpy, pytest, mypy, jsonschema, distributed, nbclient, nbformat, ipykernel, matplotlib" 2>/dev/null; then
+if ! "$py" -c "import maturin, numpy, pytest, mypy, jsonschema, distributed, nbclient, nbformat, ipykernel, matplotlib, opentorsion" 2>/dev/null; then
     echo "run-tests: installing maturin, numpy, pytest, mypy (for the stub check), jsonschema (for results.json)," \
-        "dask[distributed] (design studies on a cluster), nbclient, nbformat, ipykernel, matplotlib (the notebook)"
+        "dask[distributed] (design studies on a cluster), nbclient, nbformat, ipykernel, matplotlib (the notebook)," \
+        "opentorsion (the importer's tests)"
     "$py" -m pip install --quiet --disable-pip-version-check "maturin>=1.9.4,<2" numpy pytest mypy jsonschema \
-        "dask[distributed]" nbclient nbformat ipykernel matplotlib
+        "dask[distributed]" nbclient nbformat ipykernel matplotlib opentorsion
 fi
 
 # The package, in release mode (the bit-for-bit tests compare against the release CLI, and the

@@ -169,6 +169,7 @@ impl CpvaParams {
             loads.push(LoadSpec::JointTorque { joint: "spin".into(), excitation });
         }
         MechanismSpec {
+            base: None,
             name: format!("cpva{}", if self.n_pendulums == 1 { String::new() } else { self.n_pendulums.to_string() }),
             speeds: Speeds::AbsoluteAngularVelocities,
             gravity: (0.0, 0.0),

@@ -24,6 +24,8 @@
 //! - [`signal`]: order tracking of sampled responses (STFT and angle domain).
 //! - [`study`]: one RON study file in, every trace, table and figure out; [`plot`] draws them.
 //! - [`cpva`]: the paper's rotor with pendulums, as a builder and in closed form.
+//! - [`opentorsion`]: OpenTorsion models (TORS JSON, or an assembly from Python) written as
+//!   mechanism RON (`kanedyn import`).
 
 // Index loops mirror the formulas (M_rs, paths r..s) and keep parallel arrays in step.
 #![warn(missing_docs)]
@@ -36,6 +38,8 @@ pub mod io;
 pub mod model;
 
 pub mod load;
+
+pub mod opentorsion;
 
 pub mod kane;
 

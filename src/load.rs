@@ -47,8 +47,12 @@ impl Mechanism {
         Self::from_spec_with(spec, &src, &ReadPolicy::within(Path::new("")))
     }
 
-    /// Validates a parsed spec, reading catalog parts under `policy`.
+    /// Validates a parsed spec, reading catalog parts under `policy`; an overlay (a spec with a
+    /// `base`) is merged with its base first (see [`MechanismSpec::base`]).
     pub fn from_spec_with(spec: &MechanismSpec, src: &Source, policy: &ReadPolicy) -> Result<Self> {
+        if let Some(base) = &spec.base {
+            return overlay(spec, base, src, policy);
+        }
         // Counts first: everything below is at least linear in them, the tree ordering quadratic.
         let max = policy.max_bodies;
         for (field, count, limit) in [
@@ -531,6 +535,103 @@ impl Part for JointSpec {
 
 /// The folder of `file`, for resolving the names it writes (empty for a bare file name: the
 /// current folder).
+/// An overlay: `spec` names a `base` mechanism file whose bodies, joints, loads and gears come
+/// first and `spec`'s are added after them.
+///
+/// The base is validated on its own first, so that its errors point into its own file; its
+/// file parts are resolved from its own folder. Then the overlay's names are checked against the
+/// base's (a clash is an error at the overlay's name), the two are merged and the merged spec is
+/// validated; an error there is moved back to the file and item it came from (`bodies[N]` of
+/// the merged spec is the overlay's `bodies[N − n_base]`). The base's `speeds` and `gravity`
+/// apply: an overlay that sets others is refused rather than silently overridden.
+fn overlay(spec: &MechanismSpec, base: &str, src: &Source, policy: &ReadPolicy) -> Result<Mechanism> {
+    let folder = folder_of(&src.file);
+    let file = policy.resolve(&folder, base).map_err(|m| src.error("base", format!("base mechanism: {m}")))?;
+    let base_src = Source::read_with(&file, policy).map_err(|e| src.error("base", format!("base mechanism: {e}")))?;
+    let mut base_spec: MechanismSpec = base_src.parse_as("Mechanism")?;
+    if base_spec.base.is_some() {
+        return Err(base_src.error(
+            "base",
+            format!(
+                "`{base}` is itself an overlay; an overlay's base must be a complete mechanism (overlays do not nest)"
+            ),
+        ));
+    }
+    Mechanism::from_spec_with(&base_spec, &base_src, policy)?;
+    let base_folder = folder_of(&base_src.file);
+    for (i, b) in base_spec.bodies.iter_mut().enumerate() {
+        if let Some(part) = &b.part {
+            *b = resolve_part::<BodySpec>(&base_folder, part, &base_src, &format!("bodies[{i}]"), policy, 0)?.merged(b);
+        }
+    }
+    for (k, j) in base_spec.joints.iter_mut().enumerate() {
+        if let Some(part) = &j.part {
+            *j =
+                resolve_part::<JointSpec>(&base_folder, part, &base_src, &format!("joints[{k}]"), policy, 0)?.merged(j);
+        }
+    }
+    if spec.speeds != base_spec.speeds && spec.speeds != crate::model::speeds::Speeds::default() {
+        return Err(src
+            .error("speeds", format!("an overlay keeps its base's speeds ({:?}); remove `speeds`", base_spec.speeds)));
+    }
+    if spec.gravity != base_spec.gravity && spec.gravity != (0.0, 0.0) {
+        return Err(src.error(
+            "gravity",
+            format!("an overlay keeps its base's gravity ({:?}); remove `gravity`", base_spec.gravity),
+        ));
+    }
+    let clash = |list: &str, name: Option<&String>, base_names: &[Option<&String>]| {
+        let n = name?;
+        let k = base_names.iter().position(|b| *b == Some(n))?;
+        Some(format!("`{n}` is already a name in the base `{base}` ({list}[{k}] there); choose another name"))
+    };
+    let base_bodies: Vec<Option<&String>> = base_spec.bodies.iter().map(|x| x.name.as_ref()).collect();
+    for (i, b) in spec.bodies.iter().enumerate() {
+        if let Some(msg) = clash("bodies", b.name.as_ref(), &base_bodies) {
+            return Err(src.error(&format!("bodies[{i}].name"), msg));
+        }
+    }
+    let base_joints: Vec<Option<&String>> = base_spec.joints.iter().map(|x| x.name.as_ref()).collect();
+    for (k, j) in spec.joints.iter().enumerate() {
+        if let Some(msg) = clash("joints", j.name.as_ref(), &base_joints) {
+            return Err(src.error(&format!("joints[{k}].name"), msg));
+        }
+    }
+    let counts = [
+        ("bodies", base_spec.bodies.len()),
+        ("joints", base_spec.joints.len()),
+        ("loads", base_spec.loads.len()),
+        ("gears", base_spec.gears.len()),
+    ];
+    let merged = MechanismSpec {
+        name: spec.name.clone(),
+        base: None,
+        speeds: base_spec.speeds,
+        gravity: base_spec.gravity,
+        bodies: base_spec.bodies.into_iter().chain(spec.bodies.iter().cloned()).collect(),
+        joints: base_spec.joints.into_iter().chain(spec.joints.iter().cloned()).collect(),
+        loads: base_spec.loads.into_iter().chain(spec.loads.iter().cloned()).collect(),
+        gears: base_spec.gears.into_iter().chain(spec.gears.iter().cloned()).collect(),
+    };
+    Mechanism::from_spec_with(&merged, src, policy).map_err(|e| match e {
+        // Errors inside a part file are already where they belong.
+        Error::Input { location, message } if location.file == src.file => {
+            let relocated = counts.iter().find_map(|&(list, n)| {
+                let rest = location.path.strip_prefix(list)?.strip_prefix('[')?;
+                let (index, tail) = rest.split_once(']')?;
+                let index: usize = index.parse().ok()?;
+                Some(if index < n {
+                    base_src.locate(&location.path)
+                } else {
+                    src.locate(&format!("{list}[{}]{tail}", index - n))
+                })
+            });
+            Error::Input { location: relocated.unwrap_or_else(|| src.locate(&location.path)), message }
+        }
+        other => other,
+    })
+}
+
 fn folder_of(file: &Path) -> PathBuf {
     file.parent().map(Path::to_path_buf).unwrap_or_default()
 }

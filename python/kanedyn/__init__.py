@@ -11,6 +11,7 @@ balance, or run a whole study file, with NumPy arrays in and out::
     modes = kanedyn.linearize(m, "spin", 1000.0).modes(spin="held", damped=False)
     branch = kanedyn.hbm_branch(m, "spin", 1000.0, 40.0, 3.3, 2.9)
     result = kanedyn.Study.from_file("examples/cpva_linear.ron").run()
+    ron = kanedyn.from_opentorsion(assembly)  # an opentorsion.Assembly, as mechanism RON
     cases = kanedyn.Study.from_file("examples/design_study.ron").run().designs["tuning"]
 
 Design studies can also run on a Dask cluster (``kanedyn.dask.run(study)``, equal bit for bit);
@@ -42,6 +43,7 @@ from ._kanedyn import (
     linearize,
     simulate,
 )
+from .opentorsion import from_opentorsion
 
 __all__ = [
     "ArgumentError",
@@ -60,6 +62,7 @@ __all__ = [
     "Study",
     "StudyResult",
     "__version__",
+    "from_opentorsion",
     "hbm_branch",
     "linearize",
     "simulate",

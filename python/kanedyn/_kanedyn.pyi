@@ -27,6 +27,7 @@ __all__ = [
     "HbmBranch",
     "Study",
     "StudyResult",
+    "_opentorsion_ron",
     "_panic_for_test",
 ]
 
@@ -507,3 +508,6 @@ class Study:
         """Runs every analysis; `out` None writes into a temporary folder that is removed."""
 
 def _panic_for_test(message: str) -> None: ...
+
+def _opentorsion_ron(assembly_json: str, name: str) -> str:
+    """Mechanism RON of an OpenTorsion assembly in kanedyn's node form; use `from_opentorsion`."""

@@ -3,7 +3,8 @@
 //! One Python module built from one file per stage of kanedyn's pipeline (see the root crate's
 //! module doc); each stage's file has a `register` function that adds its classes and functions
 //! here: the mechanism and its equations of motion, time runs (`simulate`), linear analysis
-//! (`linear`), harmonic balance (`hbm`), studies (`study`) and their design studies' cases (`design`); `arrays` holds the NumPy
+//! (`linear`), harmonic balance (`hbm`), studies (`study`) and their design studies' cases (`design`),
+//! OpenTorsion assemblies (`opentorsion`); `arrays` holds the NumPy
 //! conversions they share. The pure-Python package `kanedyn` re-exports what is public.
 //!
 //! Every entry point runs inside [`errors::guard`], so a Rust panic reaches Python as
@@ -17,6 +18,7 @@ pub mod errors;
 pub mod hbm;
 pub mod linear;
 pub mod mechanism;
+pub mod opentorsion;
 pub mod simulate;
 pub mod study;
 
@@ -31,6 +33,7 @@ fn _kanedyn(m: &Bound<'_, PyModule>) -> PyResult<()> {
     linear::register(m)?;
     hbm::register(m)?;
     study::register(m)?;
+    opentorsion::register(m)?;
     m.add_function(wrap_pyfunction!(panic_for_test, m)?)?;
     Ok(())
 }

@@ -67,6 +67,22 @@ enum Command {
     },
     /// Print the JSON Schema of results.json (docs/results.schema.json is this output).
     Schema,
+    /// Convert an OpenTorsion model (its TORS JSON assembly, as `Parser.from_tors` reads it) to
+    /// a commented mechanism RON to edit or extend; attach absorbers with an overlay (a
+    /// mechanism with `base: "FILE.ron"`, see the README). Writes to stdout without `-o`.
+    Import {
+        /// OpenTorsion TORS JSON file (or the node form that `kanedyn.from_opentorsion` sends).
+        file: PathBuf,
+        /// Write the RON to this file instead of stdout.
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// The mechanism's name (default: the input file's name without its extension).
+        #[arg(long)]
+        name: Option<String>,
+        /// Largest input file, kB.
+        #[arg(long, value_name = "KB", default_value_t = 1024)]
+        max_file_kb: u64,
+    },
 }
 
 /// The limits a study's estimated work is checked against at load (see the README's "Limits
@@ -136,6 +152,7 @@ fn main() -> ExitCode {
         Command::Schema => serde_json::to_string_pretty(&kanedyn::study::json::schema())
             .map(|text| println!("{text}"))
             .map_err(Into::into),
+        Command::Import { file, out, name, max_file_kb } => import(&file, out.as_deref(), name.as_deref(), max_file_kb),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -357,4 +374,24 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &
         );
     }
     Ok(())
+}
+
+/// `import`: an OpenTorsion model file to mechanism RON (kanedyn::opentorsion), checked by
+/// loading it as `kanedyn check` would, so that what is written is known to load.
+fn import(file: &Path, out: Option<&Path>, name: Option<&str>, max_file_kb: u64) -> Result<()> {
+    let policy = kanedyn::io::ReadPolicy::unrestricted().with_max_file_bytes(max_file_kb.saturating_mul(1024));
+    let src = kanedyn::io::Source::read_with(file, &policy)?;
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let ron = kanedyn::opentorsion::convert(file, &src.text, name.unwrap_or(&stem))?;
+    let written = out.map_or_else(|| PathBuf::from("<stdout>"), Path::to_path_buf);
+    // Loaded as if it sat where it is written, so a message names that file.
+    let loaded = Mechanism::from_source(
+        &kanedyn::io::Source::from_text(&written.display().to_string(), &ron),
+        &kanedyn::io::ReadPolicy::within(Path::new("")),
+    );
+    match out {
+        Some(path) => std::fs::write(path, &ron).with_context(|| format!("{}: cannot write", path.display()))?,
+        None => print!("{ron}"),
+    }
+    loaded.map(|_| ()).map_err(|e| anyhow!("the converted mechanism was written but does not load as it is: {e}"))
 }

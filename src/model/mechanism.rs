@@ -21,6 +21,12 @@ pub const GROUND: &str = "ground";
 pub struct MechanismSpec {
     /// Name used in reports and output folders.
     pub name: String,
+    /// An overlay's base: another mechanism file (relative to this one) whose bodies, joints,
+    /// loads and gears come first; this file's are added to them (absorbers on an imported
+    /// shaft line, say). The base's `speeds` and `gravity` apply, and a base cannot itself have
+    /// a base ([`crate::load`] merges them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
     /// Choice of generalized speeds (default `JointRates`).
     #[serde(default)]
     pub speeds: Speeds,

@@ -96,6 +96,7 @@ fn slider_pendulum_equals_lagrange() {
         let a = Vec2::new(gamma.cos(), gamma.sin());
         for speeds in [Speeds::JointRates, Speeds::AbsoluteAngularVelocities] {
             let spec = MechanismSpec {
+                base: None,
                 name: "slider_pendulum".into(),
                 speeds,
                 gravity: (0.0, -g),
@@ -149,6 +150,7 @@ fn bead_on_a_spinning_rod_equals_lagrange() {
     let mut rng = StdRng::seed_from_u64(2);
     for speeds in [Speeds::JointRates, Speeds::AbsoluteAngularVelocities] {
         let spec = MechanismSpec {
+            base: None,
             name: "bead".into(),
             speeds,
             gravity: (0.0, 0.0),
@@ -198,6 +200,7 @@ fn welded_body_equals_merged_inertia() {
     let mut rng = StdRng::seed_from_u64(3);
     for speeds in [Speeds::JointRates, Speeds::AbsoluteAngularVelocities] {
         let welded = MechanismSpec {
+            base: None,
             name: "welded".into(),
             speeds,
             gravity: (0.3, -9.81),
@@ -215,6 +218,7 @@ fn welded_body_equals_merged_inertia() {
             gears: Vec::new(),
         };
         let merged_spec = MechanismSpec {
+            base: None,
             name: "merged".into(),
             bodies: vec![body("rotor", merged.mass, (merged.com.x, merged.com.y), merged.i_com), pend.clone()],
             joints: vec![

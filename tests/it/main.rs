@@ -42,6 +42,7 @@ mod marine_gearbox;
 mod modal_damping;
 mod multi_order_states;
 mod no_nan_outputs;
+mod opentorsion;
 mod order_tracking;
 mod paper_claims;
 mod path_general;

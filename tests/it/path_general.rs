@@ -36,6 +36,7 @@ fn rotor_with(kind: JointKind, m: f64, i_b: Option<f64>) -> Mechanism {
         ..JointSpec::default()
     };
     Mechanism::from_spec(&MechanismSpec {
+        base: None,
         name: "general".into(),
         speeds: Speeds::AbsoluteAngularVelocities,
         gravity: (0.0, 0.0),

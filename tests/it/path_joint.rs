@@ -48,6 +48,7 @@ fn joint(name: &str, kind: JointKind, parent: &str, child: &str, at: (f64, f64))
 fn rotor_with_path(shape: PathShape, m: f64, i_b: Option<f64>, speeds: Speeds) -> Mechanism {
     let p = CpvaParams::canonical();
     Mechanism::from_spec(&MechanismSpec {
+        base: None,
         name: "path_cpva".into(),
         speeds,
         gravity: (0.0, 0.0),
@@ -84,6 +85,7 @@ fn circle_equals_the_revolute_pendulum_in_s_equal_l_phi() {
     let loads = vec![LoadSpec::JointTorque { joint: "spin".into(), excitation: Excitation::constant(40.0) }];
     let rotor = body("rotor", p.rotor_mass, (0.0, 0.0), Some(p.i_a()));
     let rev = Mechanism::from_spec(&MechanismSpec {
+        base: None,
         name: "rev".into(),
         speeds: Speeds::JointRates,
         gravity: (0.0, 0.0),
@@ -101,6 +103,7 @@ fn circle_equals_the_revolute_pendulum_in_s_equal_l_phi() {
     })
     .unwrap();
     let path_spec = |speeds| MechanismSpec {
+        base: None,
         name: "path".into(),
         speeds,
         gravity: (0.0, 0.0),

@@ -99,6 +99,7 @@ fn rotor_spec(seed: u64, limit: Option<f64>) -> MechanismSpec {
         },
     ];
     MechanismSpec {
+        base: None,
         name: format!("rotor{seed}"),
         speeds: Speeds::AbsoluteAngularVelocities,
         gravity: (0.0, 0.0),

@@ -128,7 +128,7 @@ fn random_spec(seed: u64) -> MechanismSpec {
     let gravity =
         if rng.random_bool(0.7) { (rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)) } else { (0.0, 0.0) };
     let speeds = if rng.random_bool(0.5) { Speeds::JointRates } else { Speeds::AbsoluteAngularVelocities };
-    MechanismSpec { name: format!("tree{seed}"), speeds, gravity, bodies, joints, loads, gears: Vec::new() }
+    MechanismSpec { base: None, name: format!("tree{seed}"), speeds, gravity, bodies, joints, loads, gears: Vec::new() }
 }
 
 fn random_state(mech: &Mechanism, rng: &mut StdRng) -> (Vec<f64>, Vec<f64>) {
@@ -721,6 +721,7 @@ fn bushy_spec(seed: u64, n: usize) -> MechanismSpec {
     }
     let speeds = if rng.random_bool(0.5) { Speeds::JointRates } else { Speeds::AbsoluteAngularVelocities };
     MechanismSpec {
+        base: None,
         name: format!("bushy{seed}"),
         speeds,
         gravity: (0.0, -9.81),
