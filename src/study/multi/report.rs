@@ -68,18 +68,22 @@ pub(super) fn render(
     };
     let mut panels = vec![panel];
     // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
-    // from the torque ramp's harmonic-balance state (else the lowest state) where there are none.
-    fn elements_of(s: &SpeedResult) -> Option<&Vec<crate::study::elements::ElementResponse>> {
+    // from the torque ramp's harmonic-balance state (else the lowest state) where there are none,
+    // or from the linear response in a linear-only analysis (the marine gearbox's propeller-shaft
+    // torque, the question of its study).
+    let linear_only = result.speeds.iter().all(|s| s.response.is_none() && s.hbm_ramp.is_none() && s.hbm.is_empty());
+    fn elements_of(s: &SpeedResult, linear_only: bool) -> Option<&Vec<crate::study::elements::ElementResponse>> {
         s.response
             .as_ref()
             .map(|r| &r.elements)
             .or_else(|| s.hbm_ramp.as_ref().map(|h| &h.elements))
             .or_else(|| s.hbm.first().map(|h| &h.elements))
+            .or_else(|| (linear_only && !s.linear_elements.is_empty()).then_some(&s.linear_elements))
     }
     let names: Vec<String> = result
         .speeds
         .iter()
-        .find_map(elements_of)
+        .find_map(|s| elements_of(s, linear_only))
         .map(|els| els.iter().map(|e| e.joint.clone()).collect())
         .unwrap_or_default();
     // What the shaft-like elements transmit, N·m (N for a slide): those with a spring or a
@@ -92,7 +96,7 @@ pub(super) fn render(
         mech.joint_index(name).is_some_and(|j| mech.joints[j].spring.is_some() || !mech.joints[j].couplings.is_empty())
     };
     let element_value = |s: &SpeedResult, e: usize, k: usize, torque: bool| {
-        let el = elements_of(s).and_then(|els| els.get(e));
+        let el = elements_of(s, linear_only).and_then(|els| els.get(e));
         let v = if torque {
             el.and_then(|el| el.torque.as_ref()).map(|t| &t.amplitude)
         } else {
@@ -104,12 +108,17 @@ pub(super) fn render(
         let mut element_series = Vec::new();
         for (e, name) in names.iter().enumerate().filter(|(_, n)| shaft(n) == torque) {
             for (k, m) in spec.multiples.iter().enumerate() {
+                // Linear values are dashed, as on the response panel.
                 element_series.push(Series {
-                    label: format!("{name}, {}", order_name(*m)),
+                    label: format!("{name}, {}{}", order_name(*m), if linear_only { ", linear" } else { "" }),
                     x: rpm.clone(),
                     y: result.speeds.iter().map(|s| element_value(s, e, k, torque)).collect(),
                     color: e,
-                    style: [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][k % 3],
+                    style: if linear_only {
+                        [LineStyle::Dashed, LineStyle::Dotted][k % 2]
+                    } else {
+                        [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][k % 3]
+                    },
                 });
             }
         }
