@@ -653,9 +653,7 @@ pub struct BranchFindings {
 /// The summary's readings of each branch, in order ([`BranchFindings`]); `overlay` is the sweeps
 /// drawn under the branches ([`overlay_of`]), whose jumps are read next to them.
 pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
-    // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
-    let t = study.spec.order_tracking;
-    let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
+    let lag = jump_lag(study);
     branches
         .iter()
         .map(|br| BranchFindings {
@@ -715,9 +713,9 @@ pub(crate) fn render(
                 for k in 0..spec.multiples.len() {
                     push_segments(&mut series, br, k, k == 0, &mut labelled);
                 }
-                // Each fold and bifurcation marked on the main-order curve where it happens,
-                // named with its parameter value (the summary's numbers); the branches from both
-                // ends of the range find the same ones.
+                // Each fold and bifurcation marked on the main-order curve where it happens and
+                // named with its parameter value to five digits (as the README quotes the folds);
+                // the branches from both ends of the range find the same ones, named once.
                 let points = br.folds.iter().map(|&f| (f, "fold".to_string())).chain(br.bifurcations.iter().cloned());
                 for (at, kind) in points {
                     let y = value_at_turn(br, at);
@@ -729,9 +727,7 @@ pub(crate) fn render(
             }
             // Where the overlaid up and down sweeps jump (the summary's "sweep jumps"), on their
             // main-order traces.
-            let t = study.spec.order_tracking;
-            let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
-            if let Some((up, down)) = jump_orders(overlay, amp, lag) {
+            if let Some((up, down)) = jump_orders(overlay, amp, jump_lag(study)) {
                 for (dir, at) in [(Direction::Up, up), (Direction::Down, down)] {
                     let trace =
                         overlay.iter().find(|r| r.amplitude == amp && r.direction == dir).and_then(|r| r.trace(1.0));
@@ -993,11 +989,17 @@ fn value_at_turn(br: &HbmBranch, at: f64) -> f64 {
     turn.or_else(|| (0..p.len()).min_by(|a, b| distance(a).total_cmp(&distance(b)))).map_or(f64::NAN, |i| y[i])
 }
 
-/// A sweep trace's amplitude at the order `at`: its sample just before it (a jump's order is
-/// where the amplitude leaves that value).
+/// A sweep trace's amplitude at the order `at`: its sample nearest that order.
 fn trace_value(t: &OrderTrace, at: f64) -> f64 {
     let before = t.order.iter().zip(&t.amplitude).filter(|(o, a)| o.is_finite() && a.is_finite());
     before.min_by(|a, b| (a.0 - at).abs().total_cmp(&(b.0 - at).abs())).map_or(f64::NAN, |(_, a)| *a)
+}
+
+/// The lag, in order-tracking windows, over which a sweep's jump is read: windows overlap, so a
+/// jump spreads over window/hop of them, and windows that far apart are compared.
+fn jump_lag(study: &Study) -> usize {
+    let t = study.spec.order_tracking;
+    ((t.window_s / t.hop_s).round() as usize).max(1)
 }
 
 /// The orders where the up and the down sweep of `amplitude` jump ([`jump_order`] on their
