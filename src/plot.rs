@@ -344,18 +344,35 @@ fn data_range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
     (panel.x_range.unwrap_or((x0, x1)), panel.y_range.unwrap_or((y0, y1)))
 }
 
-/// A tick label: at most four significant digits, exponent form only for very large or small values
-/// (plotters prints log-axis ticks as `9.999999999999999e-6` otherwise).
-fn tick(v: f64) -> String {
+/// A number as the figures write it, in legends, labels, titles and ticks alike: at most `sig`
+/// significant digits, trailing zeros dropped, in exponent form (`5e-4`, `2.5e5`) only below
+/// 1e-3 or from 1e5 on. One format for every figure: they used to switch between `0.3859`,
+/// `1.0057e-1` and plotters' `9.999999999999999e-6`.
+pub fn num(v: f64, sig: usize) -> String {
+    let sig = sig.max(1);
+    // Rounded to `sig` digits first, so that the form follows the number as written (99 999.9
+    // at four digits is 1e5, not 100000).
+    let v: f64 = format!("{v:.*e}", sig - 1).parse().unwrap_or(v);
     let a = v.abs();
     if v == 0.0 {
         "0".into()
+    } else if !v.is_finite() {
+        format!("{v}")
     } else if !(1e-3..1e5).contains(&a) {
-        format!("{v:.0e}")
+        let s = format!("{v:.*e}", sig - 1);
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.')),
+            _ => s,
+        }
     } else {
-        let s = format!("{:.*}", (3 - a.log10().floor() as i32).clamp(0, 6) as usize, v);
-        if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+        let decimals = (sig as i32 - 1 - a.log10().floor() as i32).clamp(0, 12) as usize;
+        trim(format!("{v:.decimals$}"))
     }
+}
+
+/// A tick label: [`num`] with four significant digits.
+fn tick(v: f64) -> String {
+    num(v, 4)
 }
 
 type DynResult = std::result::Result<(), Box<dyn std::error::Error>>;
@@ -804,8 +821,21 @@ mod tests {
         assert_eq!(tick(2.95), "2.95");
         assert_eq!(tick(600.0), "600");
         assert_eq!(tick(0.001), "0.001");
-        assert_eq!(tick(123456.0), "1e5");
+        assert_eq!(tick(123456.0), "1.235e5");
+        assert_eq!(tick(2e5), "2e5");
         assert_eq!(tick(0.0), "0");
+    }
+
+    #[test]
+    fn numbers_have_one_format() {
+        assert_eq!(num(5e-4, 5), "5e-4");
+        assert_eq!(num(1.0057e-1, 5), "0.10057");
+        assert_eq!(num(0.38594, 4), "0.3859");
+        assert_eq!(num(2.940_412, 5), "2.9404");
+        assert_eq!(num(3.0, 5), "3");
+        assert_eq!(num(-622.5, 5), "-622.5");
+        assert_eq!(num(2.512_675_2e5, 4), "2.513e5");
+        assert_eq!(num(99_999.9, 4), "1e5");
     }
 }
 

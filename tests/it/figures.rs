@@ -165,3 +165,293 @@ fn the_paper_study_figures_have_sub_pixel_coordinates_and_no_repeated_points() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// One panel's axes as the SVG records them for its readers (`g.kd-panel`: the pixel columns
+/// and rows of the axis ranges' ends, the ranges in data units, a log y axis, the labels).
+#[derive(Debug)]
+struct Axes {
+    px: (f64, f64),
+    py: (f64, f64),
+    x: (f64, f64),
+    y: (f64, f64),
+    log_y: bool,
+    y_label: String,
+}
+
+impl Axes {
+    /// The pixel position of a data point.
+    fn pixel(&self, x: f64, y: f64) -> (f64, f64) {
+        let f = |v: f64, (a, b): (f64, f64)| (v - a) / (b - a);
+        let t = if self.log_y { f(y.ln(), (self.y.0.ln(), self.y.1.ln())) } else { f(y, self.y) };
+        (self.px.0 + f(x, self.x) * (self.px.1 - self.px.0), self.py.0 + t * (self.py.1 - self.py.0))
+    }
+}
+
+impl Axes {
+    /// The data value of a pixel row.
+    fn value_at_row(&self, row: f64) -> f64 {
+        let t = (row - self.py.0) / (self.py.1 - self.py.0);
+        if self.log_y {
+            (self.y.0.ln() + t * (self.y.1.ln() - self.y.0.ln())).exp()
+        } else {
+            self.y.0 + t * (self.y.1 - self.y.0)
+        }
+    }
+}
+
+/// The points of the polylines in the series group labelled `label`.
+fn series_points(svg: &str, label: &str) -> Vec<(f64, f64)> {
+    let open = format!("<g class=\"kd-series\" data-label=\"{label}\">");
+    let start = svg.find(&open).unwrap_or_else(|| panic!("no series `{label}`")) + open.len();
+    let group = &svg[start..start + svg[start..].find("</g>").unwrap()];
+    attributes(group, "points")
+        .iter()
+        .flat_map(|l| l.split_whitespace())
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            (x.parse().unwrap(), y.parse().unwrap())
+        })
+        .collect()
+}
+
+/// The two numbers of a `data-…` attribute.
+fn pair(tag: &str, name: &str) -> (f64, f64) {
+    let v = attributes(tag, name)[0];
+    let (a, b) = v.split_once(' ').unwrap();
+    (a.parse().unwrap(), b.parse().unwrap())
+}
+
+/// Every panel of the SVG, in drawing order.
+fn panels(svg: &str) -> Vec<Axes> {
+    svg.split("<g class=\"kd-panel\"")
+        .skip(1)
+        .map(|t| {
+            let tag = format!(" {}", &t[..t.find('>').unwrap()]);
+            Axes {
+                px: pair(&tag, "data-px"),
+                py: pair(&tag, "data-py"),
+                x: pair(&tag, "data-x"),
+                y: pair(&tag, "data-y"),
+                log_y: attributes(&tag, "data-log-y")[0] == "1",
+                y_label: attributes(&tag, "data-y-label")[0].to_string(),
+            }
+        })
+        .collect()
+}
+
+/// The centres of the SVG's circles (markers).
+fn circles(svg: &str) -> Vec<(f64, f64)> {
+    svg.split("<circle")
+        .skip(1)
+        .map(|t| {
+            let tag = format!(" {}", &t[..t.find('>').unwrap()]);
+            (attributes(&tag, "cx")[0].parse().unwrap(), attributes(&tag, "cy")[0].parse().unwrap())
+        })
+        .collect()
+}
+
+/// A circle within `tol` pixels of `at`.
+fn marked(circles: &[(f64, f64)], at: (f64, f64), tol: f64) -> bool {
+    circles.iter().any(|c| (c.0 - at.0).abs() <= tol && (c.1 - at.1).abs() <= tol)
+}
+
+/// A CSV file as (header, rows of numbers; an empty cell NaN).
+fn csv_columns(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let head = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines.map(|l| l.split(',').map(|c| c.parse().unwrap_or(f64::NAN)).collect()).collect();
+    (head, rows)
+}
+
+/// The column `name` of a CSV read by [`csv_columns`].
+fn column(csv: &(Vec<String>, Vec<Vec<f64>>), name: &str) -> Vec<f64> {
+    let k = csv.0.iter().position(|h| h == name).unwrap_or_else(|| panic!("no column `{name}` in {:?}", csv.0));
+    csv.1.iter().map(|r| r[k]).collect()
+}
+
+/// The paper study (examples/cpva_paper.ron) with only the analyses `keep` says, run into a
+/// fresh folder; returns the study's output folder.
+fn run_only(file: &str, tag: &str, keep: impl Fn(&AnalysisSpec) -> bool) -> PathBuf {
+    let mut study = Study::from_file(Path::new(file)).unwrap_or_else(|e| panic!("{e}"));
+    study.spec.analyses.retain(keep);
+    let dir = std::env::temp_dir().join(format!("kanedyn_figures_{tag}_{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    dir
+}
+
+/// The paper's Fig. 5 (the multi-order analysis of examples/cpva_paper.ron): 7 speeds used to be
+/// joined by lines without a marker, so the jump at 600 rpm the README explains was invisible.
+/// Every sampled speed of every curve of the response panel has a marker at its CSV value, and
+/// the jump (harmonic balance's low-amplitude branch folds below the full torques at 600 rpm,
+/// not at 800: results.json's `hbm_lower_fold`) is marked and named at 600 rpm on the main order.
+#[test]
+fn the_multi_order_figure_marks_its_sampled_speeds_and_the_jump() {
+    let dir = run_only("examples/cpva_paper.ron", "multi", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let svg = std::fs::read_to_string(find(&dir, "multi_order.svg")).unwrap();
+    let csv = csv_columns(&find(&dir, "multi_order.csv"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(find(&dir, "results.json")).unwrap()).unwrap();
+    check_vector(&find(&dir, "multi_order.svg"));
+    std::fs::remove_dir_all(&dir).ok();
+    let (axes, dots) = (panels(&svg), circles(&svg));
+    let response = &axes[0];
+    assert!(response.y_label.ends_with("rad/s²"), "{response:?}");
+    let rpm = column(&csv, "rpm");
+    assert_eq!(rpm.len(), 7);
+    // plotters rounds positions to 1/100 pixel; 0.05 px is 0.1 rpm here, the speeds 200 rpm apart.
+    let mut checked = 0;
+    for name in [
+        "amp_1x_rad_s2",
+        "locked_1x_rad_s2",
+        "linear_1x_rad_s2",
+        "amp_2x_rad_s2",
+        "locked_2x_rad_s2",
+        "linear_2x_rad_s2",
+    ] {
+        for (r, v) in rpm.iter().zip(column(&csv, name)) {
+            assert!(marked(&dots, response.pixel(*r, v), 0.05), "{name} at {r} rpm = {v}: no marker");
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 42);
+
+    let speeds =
+        json["analyses"].as_array().unwrap().iter().find(|a| a["name"] == "multi_order").unwrap()["result"]["speeds"]
+            .as_array()
+            .unwrap()
+            .clone();
+    let folded: Vec<bool> = speeds.iter().map(|s| s["hbm_lower_fold"].is_number()).collect();
+    assert_eq!(folded, [true, false, false, false, false, false, false], "the jump the README explains");
+    let texts = texts(&svg);
+    assert!(texts.iter().any(|t| t == "jump between 600 and 800 rpm"), "{texts:?}");
+    let upper = column(&csv, "amp_1x_rad_s2")[0];
+    assert!(marked(&dots, response.pixel(600.0, upper), 0.05));
+}
+
+/// The truck study's question (examples/truck_study.ron: "what reaches the gearbox input …: the
+/// torque in the input shaft (element `clutch`)") is a torque; its figure plotted radians. The
+/// elements panel now plots each shaft-like element's transmitted torque on an axis in N·m, the
+/// clutch's main and second order at the CSV's time-domain values, a marker at each speed.
+#[test]
+fn the_truck_multi_order_figure_plots_the_input_shaft_torque_in_newton_metres() {
+    let dir = run_only("examples/truck_study.ron", "truck_orders", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let svg = std::fs::read_to_string(find(&dir, "orders.svg")).unwrap();
+    let csv = csv_columns(&find(&dir, "orders.csv"));
+    check_vector(&find(&dir, "orders.svg"));
+    std::fs::remove_dir_all(&dir).ok();
+    let axes = panels(&svg);
+    let torque = axes.iter().find(|a| a.y_label.contains("N·m")).unwrap_or_else(|| panic!("no axis in N·m: {axes:?}"));
+    assert!(torque.y_label.contains("torque"), "{torque:?}");
+    let labels: Vec<&str> = attributes(&svg, "data-label");
+    assert!(labels.contains(&"clutch, main order") && labels.contains(&"clutch, 2nd order"), "{labels:?}");
+    let dots = circles(&svg);
+    let rpm = column(&csv, "rpm");
+    assert_eq!(rpm.len(), 13);
+    for name in ["clutch_torque_1x_Nm", "clutch_torque_2x_Nm"] {
+        for (r, v) in rpm.iter().zip(column(&csv, name)) {
+            assert!(v > 0.0, "{name} at {r} rpm = {v}");
+            assert!(marked(&dots, torque.pixel(*r, v), 0.05), "{name} at {r} rpm = {v} N·m: not on the torque axis");
+        }
+    }
+}
+
+/// The paper study's harmonic balance over the sweeps (Figs. 3 and 4 with every periodic state):
+/// each fold of results.json is marked on its panel (a circle at the fold's order) and named with
+/// its order to five significant digits, and each sweep jump of the summary is marked.
+#[test]
+fn the_harmonic_balance_figure_marks_and_names_every_fold_and_jump() {
+    let dir = run_only("examples/cpva_paper.ron", "hbm", |a| {
+        matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::HarmonicBalance(_))
+    });
+    let svg = std::fs::read_to_string(find(&dir, "hbm.svg")).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(find(&dir, "results.json")).unwrap()).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let (axes, dots, texts) = (panels(&svg), circles(&svg), texts(&svg));
+    assert_eq!(axes.len(), 2, "one panel per amplitude, 40 and 500 N·m");
+    let branches =
+        json["analyses"].as_array().unwrap().iter().find(|a| a["name"] == "hbm").unwrap()["result"]["branches"]
+            .as_array()
+            .unwrap()
+            .clone();
+    let named = |prefix: &str, at: f64, digits: f64| {
+        texts
+            .iter()
+            .filter_map(|t| t.strip_prefix(prefix)?.parse::<f64>().ok())
+            .any(|v| (v - at).abs() <= 0.5 * 10f64.powf(-digits) * 10.0)
+    };
+    let mut folds = 0;
+    for b in &branches {
+        let panel = &axes[if b["amplitude"] == 40.0 { 0 } else { 1 }];
+        for f in b["folds"].as_array().unwrap().iter().map(|f| f.as_f64().unwrap()) {
+            // Five significant digits of an order near 3: four decimals, half a unit of the last.
+            assert!(named("fold ", f, 4.0), "fold at {f} not named; texts {texts:?}");
+            let x = panel.pixel(f, 1.0).0;
+            assert!(
+                dots.iter().any(|c| (c.0 - x).abs() <= 0.05 && (panel.py.1..=panel.py.0).contains(&c.1)),
+                "fold at {f}: no marker"
+            );
+            folds += 1;
+        }
+    }
+    assert_eq!(folds, 5, "the paper study's 5 folds (2 per 40 N·m branch, 1 at 500 N·m)");
+    // The sweeps' jumps, as the summary reads them: both directions at 40 N·m, the up-sweep at 500.
+    for prefix in ["up-sweep jumps at ", "down-sweep jumps at "] {
+        assert!(texts.iter().any(|t| t.starts_with(prefix)), "no `{prefix}…`: {texts:?}");
+    }
+    assert!(named("up-sweep jumps at ", 3.183, 3.0), "{texts:?}");
+}
+
+/// Every legend entry of the paper study's figures that states a value carries its unit: the
+/// figure 2 variants used to read "c_p = 5e-4" (the study file's labels, which also name the CSV
+/// files and so stay as written).
+#[test]
+fn legend_entries_with_a_value_carry_its_unit() {
+    let dir = run_only("examples/cpva_paper.ron", "legends", |a| {
+        matches!(a, AnalysisSpec::LinearResponse(_) | AnalysisSpec::Campbell(_))
+    });
+    let mut valued = 0;
+    for f in svgs(&dir) {
+        let svg = std::fs::read_to_string(&f).unwrap();
+        for label in attributes(&svg, "data-label") {
+            let Some((_, value)) = label.split_once(" = ") else { continue };
+            let mut words = value.split_whitespace();
+            let number = words.next().unwrap_or("");
+            assert!(number.parse::<f64>().is_ok(), "{}: `{label}`", f.display());
+            assert!(
+                words.next().is_some_and(|u| u.contains('/') || u.contains('·') || u.chars().all(char::is_alphabetic)),
+                "{}: `{label}` without a unit",
+                f.display()
+            );
+            valued += 1;
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    // The three variants in the response panel's legend and again in the elements' ("pivot (c_p = …)").
+    assert_eq!(valued, 6, "figure2's three c_p variants, twice");
+}
+
+/// The marine gearbox (examples/marine_gearbox.ron, Gunter & Chen's Example 8.1) asks for the
+/// propeller-shaft torque under the fifth-order propeller torque; its linear-only multi-order
+/// figure showed the propeller's acceleration alone. The elements' linear torques are now drawn
+/// on an N·m axis, and the propeller shaft's curve peaks at the CSV's largest torque (4.717e5
+/// N·m, the README's number): to 3 %, one pixel of the five-decade log axis, since the dashes
+/// only pass through the 901 sampled speeds.
+#[test]
+fn the_marine_gearbox_figure_plots_the_propeller_shaft_torque() {
+    let dir = run_only("examples/marine_gearbox.ron", "marine", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let svg = std::fs::read_to_string(find(&dir, "propeller_torque.svg")).unwrap();
+    let csv = csv_columns(&find(&dir, "propeller_torque.csv"));
+    std::fs::remove_dir_all(&dir).ok();
+    let axes = panels(&svg);
+    let torque = axes.iter().find(|a| a.y_label.contains("N·m")).unwrap_or_else(|| panic!("no axis in N·m: {axes:?}"));
+    let top =
+        series_points(&svg, "propeller_shaft, main order, linear").iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let drawn = torque.value_at_row(top);
+    let peak = column(&csv, "linear_propeller_shaft_torque_1x_Nm").into_iter().fold(0.0, f64::max);
+    assert!((4.70e5..4.73e5).contains(&peak), "{peak}");
+    assert!((drawn / peak - 1.0).abs() < 0.03, "drawn peak {drawn} N·m, CSV {peak} N·m");
+}

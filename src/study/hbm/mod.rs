@@ -16,7 +16,7 @@ use crate::hbm::{
 };
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
-use crate::plot::{LineStyle, Panel, Series};
+use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
 use crate::signal::OrderTrace;
 
 /// The corrector's tolerance on a branch whose points only serve as starting guesses (max norm
@@ -665,9 +665,7 @@ pub struct BranchFindings {
 /// The summary's readings of each branch, in order ([`BranchFindings`]); `overlay` is the sweeps
 /// drawn under the branches ([`overlay_of`]), whose jumps are read next to them.
 pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&SweepRun]) -> Vec<BranchFindings> {
-    // Windows overlap: a jump spreads over window/hop windows, so compare windows that far apart.
-    let t = study.spec.order_tracking;
-    let lag = ((t.window_s / t.hop_s).round() as usize).max(1);
+    let lag = jump_lag(study);
     branches
         .iter()
         .map(|br| BranchFindings {
@@ -722,13 +720,48 @@ pub(crate) fn render(
                 }
             }
             let mut labelled = [false; 2];
-            let mut markers: Vec<(f64, String)> = Vec::new();
+            let mut labels: Vec<PointLabel> = Vec::new();
             for br in branches.iter().filter(|b| same(b.amplitude, amp)) {
                 for k in 0..spec.multiples.len() {
                     push_segments(&mut series, br, k, k == 0, &mut labelled);
                 }
-                markers.extend(br.folds.iter().map(|&f| (f, "fold".to_string())));
+                // Each fold and bifurcation marked on the main-order curve where it happens and
+                // named with its parameter value to five digits (as the README quotes the folds);
+                // the branches from both ends of the range find the same ones, named once.
+                let points = br.folds.iter().map(|&f| (f, "fold".to_string())).chain(br.bifurcations.iter().cloned());
+                for (at, kind) in points {
+                    let y = value_at_turn(br, at);
+                    let seen = labels.iter().any(|l| (l.x - at).abs() < 1e-3 * ax.range.1.abs().max(1.0));
+                    if y.is_finite() && y > 0.0 && !seen {
+                        labels.push(PointLabel { x: at, y, text: format!("{kind} {}", num(at, 5)), marker: true });
+                    }
+                }
             }
+            // Where the overlaid up and down sweeps jump (the summary's "sweep jumps"), on their
+            // main-order traces.
+            if let Some((up, down)) = jump_orders(overlay, amp, jump_lag(study)) {
+                for (dir, at) in [(Direction::Up, up), (Direction::Down, down)] {
+                    let trace =
+                        overlay.iter().find(|r| r.amplitude == amp && r.direction == dir).and_then(|r| r.trace(1.0));
+                    if let (Some(at), Some(trace)) = (at, trace) {
+                        let y = trace_value(trace, at);
+                        if y.is_finite() && y > 0.0 {
+                            let name = if dir == Direction::Up { "up-sweep" } else { "down-sweep" };
+                            labels.push(PointLabel {
+                                x: at,
+                                y,
+                                text: format!("{name} jumps at {}", num(at, 4)),
+                                marker: true,
+                            });
+                        }
+                    }
+                }
+            }
+            let mut markers: Vec<(f64, String)> = branches
+                .iter()
+                .filter(|b| same(b.amplitude, amp))
+                .flat_map(|b| b.folds.iter().map(|&f| (f, String::new())))
+                .collect();
             markers.sort_by(|a, b| a.0.total_cmp(&b.0));
             markers.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-3);
             let title = match spec.parameter {
@@ -747,6 +780,7 @@ pub(crate) fn render(
                 x_range: Some(ax.range),
                 markers,
                 series,
+                labels,
                 ..Panel::default()
             }
         })
@@ -952,6 +986,32 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
         }
         i = j + 1;
     }
+}
+
+/// The main-order amplitude on branch `br`'s drawn curve at its turning point nearest the
+/// parameter value `at` (a fold turns the continuation back; a bifurcation elsewhere falls back
+/// to the nearest point), NaN on an empty branch.
+fn value_at_turn(br: &HbmBranch, at: f64) -> f64 {
+    let (p, Some(y)) = (&br.curve_parameter, br.curve_accel.first()) else { return f64::NAN };
+    let distance = |i: &usize| (p[*i] - at).abs();
+    let turn = (1..p.len().saturating_sub(1))
+        .filter(|&i| (p[i] - p[i - 1]) * (p[i + 1] - p[i]) <= 0.0)
+        .filter(|i| distance(i) < 1e-2 * at.abs().max(1e-9))
+        .min_by(|a, b| distance(a).total_cmp(&distance(b)));
+    turn.or_else(|| (0..p.len()).min_by(|a, b| distance(a).total_cmp(&distance(b)))).map_or(f64::NAN, |i| y[i])
+}
+
+/// A sweep trace's amplitude at the order `at`: its sample nearest that order.
+fn trace_value(t: &OrderTrace, at: f64) -> f64 {
+    let before = t.order.iter().zip(&t.amplitude).filter(|(o, a)| o.is_finite() && a.is_finite());
+    before.min_by(|a, b| (a.0 - at).abs().total_cmp(&(b.0 - at).abs())).map_or(f64::NAN, |(_, a)| *a)
+}
+
+/// The lag, in order-tracking windows, over which a sweep's jump is read: windows overlap, so a
+/// jump spreads over window/hop of them, and windows that far apart are compared.
+fn jump_lag(study: &Study) -> usize {
+    let t = study.spec.order_tracking;
+    ((t.window_s / t.hop_s).round() as usize).max(1)
 }
 
 /// The orders where the up and the down sweep of `amplitude` jump ([`jump_order`] on their

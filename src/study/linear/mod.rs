@@ -23,6 +23,30 @@ pub(crate) fn slug(label: &str) -> String {
     label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
 }
 
+/// A variant's legend entry with the unit of what it sets: the label as written when it names
+/// the unit, the label and the unit when it ends with the one damping it sets (`c_p = 5e-4` →
+/// `c_p = 5e-4 N·m·s/rad`: the paper study's labels, which also name its CSV files and so stay
+/// as they are), else the label and the dampings with their units in brackets.
+fn legend(study: &Study, v: &Variant) -> String {
+    let unit = |joint: &str| {
+        let slide =
+            study.mechanism.joint_index(joint).is_some_and(|j| study.mechanism.joints[j].kind.slide_axis().is_some());
+        if slide { "N·s/m" } else { "N·m·s/rad" }
+    };
+    if v.dampers.is_empty() || v.dampers.iter().any(|(j, _)| v.label.contains(unit(j))) {
+        return v.label.clone();
+    }
+    let last = v.label.rsplit([' ', '=']).next().and_then(|t| t.parse::<f64>().ok());
+    match (&v.dampers[..], last) {
+        ([(j, c)], Some(x)) if (x - c).abs() <= 1e-9 * c.abs() => format!("{} {}", v.label, unit(j)),
+        _ => {
+            let set: Vec<String> =
+                v.dampers.iter().map(|(j, c)| format!("{j}: {} {}", crate::plot::num(*c, 4), unit(j))).collect();
+            format!("{} ({})", v.label, set.join(", "))
+        }
+    }
+}
+
 /// Linear results of one variant, for tests and reports.
 #[derive(Debug, Clone, serde::Serialize, schemars::JsonSchema)]
 pub struct ResponseVariant {
@@ -376,11 +400,17 @@ pub(crate) fn render_response(
         markers.push((nr / scale, "n_r".to_string()));
     }
     let body = &study.spec.response_body;
+    let legends: Vec<String> = results
+        .iter()
+        .map(|r| {
+            spec.variants.iter().find(|v| v.label == r.label).map_or_else(|| r.label.clone(), |v| legend(study, v))
+        })
+        .collect();
     let mut series: Vec<Series> = results
         .iter()
         .enumerate()
         .map(|(k, r)| Series {
-            label: r.label.clone(),
+            label: legends[k].clone(),
             x: r.orders.iter().map(|n| n / scale).collect(),
             y: if normalised { r.ratio.clone() } else { r.response.clone() },
             color: k,
@@ -420,8 +450,9 @@ pub(crate) fn render_response(
         .iter()
         .enumerate()
         .flat_map(|(v, r)| {
+            let legend = &legends[v];
             r.elements.iter().enumerate().map(move |(e, el)| Series {
-                label: if results.len() > 1 { format!("{} ({})", el.joint, r.label) } else { el.joint.clone() },
+                label: if results.len() > 1 { format!("{} ({legend})", el.joint) } else { el.joint.clone() },
                 x: r.orders.iter().map(|n| n / scale).collect(),
                 y: el.amplitude.clone(),
                 color: e,

@@ -3,7 +3,7 @@
 
 use super::{MultiOrderResult, SpeedResult, table};
 use crate::error::Result;
-use crate::plot::{LineStyle, Panel, Series};
+use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
 use crate::study::elements::element_table;
 use crate::study::sweep::order_name;
 use crate::study::{MultiOrderSpec, Study, cell};
@@ -55,59 +55,87 @@ pub(super) fn render(
         }
     }
     let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
+    let labels = jump_labels(spec, result);
     let panel = Panel {
         y_range: Some((0.0, 1.1 * top.max(f64::MIN_POSITIVE))),
-        title: format!("Steady multi-order response, n = {}", spec.order),
+        title: format!("Steady multi-order response, n = {}", num(spec.order, 5)),
         x_label: "mean speed, rpm".into(),
         y_label: format!("{} angular acceleration, rad/s²", study.spec.response_body),
         log_y: false,
-        series,
+        series: with_sample_markers(series),
+        labels,
         ..Panel::default()
     };
     let mut panels = vec![panel];
     // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
-    // from the torque ramp's harmonic-balance state (else the lowest state) where there are none.
-    fn elements_of(s: &SpeedResult) -> Option<&Vec<crate::study::elements::ElementResponse>> {
+    // from the torque ramp's harmonic-balance state (else the lowest state) where there are none,
+    // or from the linear response in a linear-only analysis (the marine gearbox's propeller-shaft
+    // torque, the question of its study).
+    let linear_only = result.speeds.iter().all(|s| s.response.is_none() && s.hbm_ramp.is_none() && s.hbm.is_empty());
+    fn elements_of(s: &SpeedResult, linear_only: bool) -> Option<&Vec<crate::study::elements::ElementResponse>> {
         s.response
             .as_ref()
             .map(|r| &r.elements)
             .or_else(|| s.hbm_ramp.as_ref().map(|h| &h.elements))
             .or_else(|| s.hbm.first().map(|h| &h.elements))
+            .or_else(|| (linear_only && !s.linear_elements.is_empty()).then_some(&s.linear_elements))
     }
     let names: Vec<String> = result
         .speeds
         .iter()
-        .find_map(elements_of)
+        .find_map(|s| elements_of(s, linear_only))
         .map(|els| els.iter().map(|e| e.joint.clone()).collect())
         .unwrap_or_default();
-    let mut element_series = Vec::new();
-    for (e, name) in names.iter().enumerate() {
-        for (k, m) in spec.multiples.iter().enumerate() {
-            let y = result
-                .speeds
-                .iter()
-                .map(|s| {
-                    let els = elements_of(s);
-                    els.and_then(|els| els.get(e)).and_then(|el| el.amplitude.get(k).copied()).unwrap_or(f64::NAN)
-                })
-                .collect();
-            let style = [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][k % 3];
-            element_series.push(Series {
-                label: format!("{name} {}", order_name(*m)),
-                x: rpm.clone(),
-                y,
-                color: e,
-                style,
-            });
+    // What the shaft-like elements transmit, N·m (N for a slide): those with a spring or a
+    // coupling (staged spring, friction, stops) carry the driveline's torque, which a driveline
+    // study asks for (the truck study: "the torque in the input shaft") and their twist only
+    // implies. The others (an absorber's pivot, whose damper transmits next to nothing) keep
+    // their amplitude, in rad, on a panel of their own: one unit per axis.
+    let mech = &study.mechanism;
+    let shaft = |name: &str| {
+        mech.joint_index(name).is_some_and(|j| mech.joints[j].spring.is_some() || !mech.joints[j].couplings.is_empty())
+    };
+    let element_value = |s: &SpeedResult, e: usize, k: usize, torque: bool| {
+        let el = elements_of(s, linear_only).and_then(|els| els.get(e));
+        let v = if torque {
+            el.and_then(|el| el.torque.as_ref()).map(|t| &t.amplitude)
+        } else {
+            el.map(|el| &el.amplitude)
+        };
+        v.and_then(|v| v.get(k).copied()).unwrap_or(f64::NAN)
+    };
+    for torque in [true, false] {
+        let mut element_series = Vec::new();
+        for (e, name) in names.iter().enumerate().filter(|(_, n)| shaft(n) == torque) {
+            for (k, m) in spec.multiples.iter().enumerate() {
+                // Linear values are dashed, as on the response panel.
+                element_series.push(Series {
+                    label: format!("{name}, {}{}", order_name(*m), if linear_only { ", linear" } else { "" }),
+                    x: rpm.clone(),
+                    y: result.speeds.iter().map(|s| element_value(s, e, k, torque)).collect(),
+                    color: e,
+                    style: if linear_only {
+                        [LineStyle::Dashed, LineStyle::Dotted][k % 2]
+                    } else {
+                        [LineStyle::Solid, LineStyle::Dashed, LineStyle::Dotted][k % 3]
+                    },
+                });
+            }
         }
-    }
-    if !element_series.is_empty() {
+        if element_series.is_empty() {
+            continue;
+        }
+        let (title, y_label) = if torque {
+            ("Torque in the elements", "transmitted torque amplitude, N·m (N for slides)")
+        } else {
+            ("Elements", "amplitude, rad (m for slides)")
+        };
         panels.push(Panel {
-            title: format!("Elements, n = {}", spec.order),
+            title: format!("{title}, n = {}", num(spec.order, 5)),
             x_label: "mean speed, rpm".into(),
-            y_label: "amplitude, rad (m for slides)".into(),
+            y_label: y_label.into(),
             log_y: true,
-            series: element_series,
+            series: with_sample_markers(element_series),
             ..Panel::default()
         });
     }
@@ -115,6 +143,50 @@ pub(super) fn render(
     crate::plot::write_svg(&svg, &panels, 640, 480)?;
 
     Ok((summary(spec, result), vec![csv, svg]))
+}
+
+/// Few speeds (a list of operating points, not a fine grid): the lines between them are
+/// straight guesses, so each sampled speed gets a marker (filled circles, no legend entry).
+const MARKED_SPEEDS: usize = 40;
+
+/// `series` followed by a marker series for each of them when they have at most
+/// [`MARKED_SPEEDS`] points.
+fn with_sample_markers(series: Vec<Series>) -> Vec<Series> {
+    let marks: Vec<Series> = series
+        .iter()
+        .filter(|s| s.x.len() <= MARKED_SPEEDS)
+        .map(|s| Series { label: String::new(), style: LineStyle::Points, ..s.clone() })
+        .collect();
+    series.into_iter().chain(marks).collect()
+}
+
+/// The jumps between neighbouring speeds: where the torque ramp's low-amplitude branch reaches
+/// the full torques at one speed and folds before them at the next (`hbm_lower_fold`), a run
+/// settles on different states on either side, so the response jumps between those speeds. Each
+/// is marked at the main order's value on the upper state (time domain, else harmonic balance).
+fn jump_labels(spec: &MultiOrderSpec, result: &MultiOrderResult) -> Vec<PointLabel> {
+    let value = |s: &SpeedResult| {
+        let v = s.amplitude(0);
+        if v.is_finite() { v } else { s.hbm.last().and_then(|h| h.amplitudes.first().copied()).unwrap_or(f64::NAN) }
+    };
+    if !spec.hbm || spec.multiples.is_empty() {
+        return Vec::new();
+    }
+    result
+        .speeds
+        .windows(2)
+        .filter(|w| w[0].hbm_lower_fold.is_some() != w[1].hbm_lower_fold.is_some())
+        .filter_map(|w| {
+            let upper = if w[0].hbm_lower_fold.is_some() { &w[0] } else { &w[1] };
+            let y = value(upper);
+            y.is_finite().then(|| PointLabel {
+                x: upper.rpm,
+                y,
+                text: format!("jump between {} and {} rpm", num(w[0].rpm, 5), num(w[1].rpm, 5)),
+                marker: true,
+            })
+        })
+        .collect()
 }
 
 pub(super) fn fmt_mult(m: f64) -> String {
