@@ -898,7 +898,7 @@ mod tests {
     fn locates_json_paths() {
         let text = "{\n  \"a\": [1, {\"b\": \"x\\\"]\", \"c\": 2}],\n  \"d\": {}\n}";
         let at = |p: &str| line_col(text, locate_json(text, p));
-        assert_eq!(at("a[1].c"), (2, 30));
+        assert_eq!(at("a[1].c"), (2, 31));
         assert_eq!(at("d"), (3, 8));
         // Not found: the nearest enclosing value.
         assert_eq!(at("a[5]"), (2, 8));
