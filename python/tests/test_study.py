@@ -96,6 +96,23 @@ def rust_exp(x, digits):
     return f"{mantissa}e{int(exponent)}"
 
 
+def num(x, sig):
+    """`plot::num`, the summary's and the figures' number form: `sig` significant digits,
+    trailing zeros dropped, exponent form (no sign or padding) only below 1e-3 or from 1e5 on."""
+    x = float(f"{x:.{sig - 1}e}")
+    a = abs(x)
+    if x == 0:
+        return "0"
+    if not 1e-3 <= a < 1e5:
+        mantissa, exponent = f"{x:.{sig - 1}e}".split("e")
+        if "." in mantissa:
+            mantissa = mantissa.rstrip("0").rstrip(".")
+        return f"{mantissa}e{int(exponent)}"
+    decimals = min(max(sig - 1 - math.floor(math.log10(a)), 0), 12)
+    text = f"{x:.{decimals}f}"
+    return text.rstrip("0").rstrip(".") if "." in text else text
+
+
 def rust_display(x):
     """Rust's `{}` of an f64 (no trailing `.0`)."""
     return str(int(x)) if float(x).is_integer() else repr(x)
@@ -191,9 +208,9 @@ def test_results_json_numbers_equal_the_summary(cli_run):
     assert len(tables[2]) == len(element_rows) > 0
     for row, (sp, e) in zip(tables[2], element_rows):
         assert row[0] == rust_display(sp["rpm"]) and row[1] == f"`{e['joint']}`"
-        assert row[3] == rust_exp(e["peak"], 4)
-        assert row[4] == f"{rust_exp(e['mean'], 4)} [{rust_exp(e['min'], 4)}, {rust_exp(e['max'], 4)}]"
-        assert row[5] == rust_exp(e["max_abs"], 4)
+        assert row[3] == num(e["peak"], 5)
+        assert row[4] == f"{num(e['mean'], 5)} [{num(e['min'], 5)}, {num(e['max'], 5)}]"
+        assert row[5] == num(e["max_abs"], 5)
         compared += 1
     for row, sp, f in zip(tables[3], multi["result"]["speeds"], multi["findings"]["speeds"]):
         assert row[2] == f"{rust_exp(f['hbm_match'], 2)} relative"

@@ -12,6 +12,7 @@ use super::table::{Table, fmt_num};
 use crate::error::Result;
 use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
+use crate::plot::num;
 use crate::signal::OrderTrace;
 use crate::signal::findings::refined_peak;
 use serde::Serialize;
@@ -326,24 +327,27 @@ const RANGE_COLUMNS: [(&str, RangeField); 4] =
 /// the amplitudes at `multiples`·n, the peak and the torque; empty when there is no row.
 pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResponse)>, multiples: &[f64]) -> String {
     let mut body = String::new();
+    // The figures' number form (five significant digits, exponents only below 1e-3 or from 1e5
+    // on), so that an angle reads 0.38677 here as in the other tables, not 3.8677e-1.
+    let v = |x: f64| num(x, 5);
     for (rpm, e) in rows {
-        let amps: Vec<String> = e.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
+        let amps: Vec<String> = e.amplitude.iter().map(|a| v(*a)).collect();
         let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
-            let per: Vec<String> = t.amplitude.iter().map(|a| format!("{a:.4e}")).collect();
-            format!("{}; peak {:.4e}; max abs {:.4e}", per.join(", "), t.peak, t.range.max_abs)
+            let per: Vec<String> = t.amplitude.iter().map(|a| v(*a)).collect();
+            format!("{}; peak {}; max abs {}", per.join(", "), v(t.peak), v(t.range.max_abs))
         });
         let r = &e.range;
         let _ = writeln!(
             body,
-            "| {rpm} | `{}` | {} {} | {:.4e} | {:.4e} [{:.4e}, {:.4e}] | {:.4e} | {torque} |",
+            "| {rpm} | `{}` | {} {} | {} | {} [{}, {}] | {} | {torque} |",
             e.joint,
             amps.join(", "),
             e.unit,
-            e.peak,
-            r.mean,
-            r.min,
-            r.max,
-            r.max_abs
+            v(e.peak),
+            v(r.mean),
+            v(r.min),
+            v(r.max),
+            v(r.max_abs)
         );
     }
     if body.is_empty() {

@@ -471,19 +471,19 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
     for r in runs.iter().filter(|r| !r.locked) {
         for e in &r.elements {
             let largest = |t: &OrderTrace| t.amplitude.iter().copied().filter(|a| a.is_finite()).fold(0.0, f64::max);
-            let amps: Vec<String> = e.traces.iter().map(|t| format!("{:.4e}", largest(t))).collect();
+            let amps: Vec<String> = e.traces.iter().map(|t| crate::plot::num(largest(t), 5)).collect();
             let torque = e.torque.as_ref().map_or("–".to_string(), |ts| {
-                let per: Vec<String> = ts.iter().map(|t| format!("{:.4e}", largest(t))).collect();
-                format!("{}; peak {:.4e}", per.join(", "), e.torque_peak)
+                let per: Vec<String> = ts.iter().map(|t| crate::plot::num(largest(t), 5)).collect();
+                format!("{}; peak {}", per.join(", "), crate::plot::num(e.torque_peak, 5))
             });
             let _ = writeln!(
                 rows,
-                "| {} | `{}` | {} {} | {:.4e} | {torque} |",
+                "| {} | `{}` | {} {} | {} | {torque} |",
                 r.label(),
                 e.joint,
                 amps.join(", "),
                 e.unit,
-                e.peak
+                crate::plot::num(e.peak, 5)
             );
         }
     }
