@@ -151,6 +151,8 @@ pub struct FoldCurveOptions {
     pub max_iter: usize,
     /// Newton tolerance on the step (max norm, rad and the parameters).
     pub tol: f64,
+    /// The matrix kept singular along the curve.
+    pub test: Singularity,
 }
 
 impl Default for FoldCurveOptions {
@@ -164,6 +166,7 @@ impl Default for FoldCurveOptions {
             max_points: 2000,
             max_iter: 12,
             tol: 1e-10,
+            test: Singularity::Jacobian,
         }
     }
 }
@@ -187,6 +190,28 @@ struct Walk {
     b: DVector<f64>,
     c: DVector<f64>,
     rs: DVector<f64>,
+    /// The unknowns whose rows and columns of J form the matrix tested for singularity (all of
+    /// them for a fold).
+    block: Vec<usize>,
+}
+
+/// Which matrix a curve keeps singular.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Singularity {
+    /// The whole Jacobian: folds.
+    #[default]
+    Jacobian,
+    /// The diagonal block of coordinates `first..first + count`: on the unison problem of
+    /// identical absorbers (one representative, [`RoutedHbm`](super::RoutedHbm)'s reduction),
+    /// the representative absorber's own block is the Jacobian of every non-unison wavenumber
+    /// (the absorbers couple only through the rotor, which those motions leave alone), so its
+    /// singularity is the loss of unison (a +1 branch point of the full set).
+    Block {
+        /// First coordinate of the block.
+        first: usize,
+        /// Number of coordinates.
+        count: usize,
+    },
 }
 
 impl Hbm {
@@ -207,18 +232,26 @@ impl Hbm {
 
     /// The augmented system at x and `at`.
     fn augmented(&mut self, x: &[f64], at: &At, walk: &Walk) -> Result<Augmented, HbmError> {
-        let m = self.unknowns();
         let order = at.order;
+        let m = self.unknowns();
         let (param, scale) =
             (walk.plane.param(), if walk.plane.kind == FoldPlane::Order { 1.0 } else { walk.plane.p_ref });
         self.assemble(x, at, Some(param));
         let (r, j, rl) = (self.rhat.clone(), self.jac.clone(), &self.gp * scale);
-        let mut e = DVector::zeros(m + 1);
-        e[m] = 1.0;
-        let sv = Self::border(&j, &walk.b, &walk.c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
-        let sw = Self::border(&j.transpose(), &walk.c, &walk.b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
-        let (v, g) = (sv.rows(0, m).clone_owned(), sv[m]);
-        let w = sw.rows(0, m).clone_owned();
+        let idx = &walk.block;
+        let mb = idx.len();
+        let jb = DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]);
+        let mut e = DVector::zeros(mb + 1);
+        e[mb] = 1.0;
+        let sv = Self::border(&jb, &walk.b, &walk.c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let sw = Self::border(&jb.transpose(), &walk.c, &walk.b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        let (vb, g) = (sv.rows(0, mb).clone_owned(), sv[mb]);
+        let wb = sw.rows(0, mb).clone_owned();
+        // v and w in the whole space (zero off the block).
+        let (mut v, mut w) = (DVector::zeros(m), DVector::zeros(m));
+        for (a, &i) in idx.iter().enumerate() {
+            (v[i], w[i]) = (vb[a], wb[a]);
+        }
         // J and ∂R̂/∂λ at x ± h v̂.
         let vn = v.norm();
         if !(vn.is_finite() && vn > 0.0) {
@@ -231,23 +264,30 @@ impl Hbm {
         self.assemble(&shifted(-1.0), at, Some(param));
         let gx = -((&jp - &self.jac).transpose() * &w) / (2.0 * h);
         let gl = -scale * w.dot(&(&rlp - &self.gp)) / (2.0 * h);
+        let (v, w) = (vb, wb);
         Ok(Augmented { r, j, rl, g, gx, gl, v, w })
     }
 
     /// The start of a walk in `kind` at x and `at`: borders from the singular vectors of J's
     /// smallest singular value, and ∂R̂/∂s, which depends on neither x nor the other parameters
     /// (s multiplies the excitation).
-    fn walk(&mut self, kind: FoldPlane, x: &[f64], at: &At) -> Walk {
+    fn walk(&mut self, kind: FoldPlane, test: Singularity, x: &[f64], at: &At) -> Walk {
         let plane = self.plane(kind);
         self.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
         let rs = self.gp.clone();
-        let svd = self.jac.clone().svd(true, true);
-        let k = svd.singular_values.imin();
         let m = self.unknowns();
-        let unit = DVector::from_element(m, 1.0 / (m as f64).sqrt());
+        let block: Vec<usize> = match test {
+            Singularity::Jacobian => (0..m).collect(),
+            Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
+        };
+        let mb = block.len();
+        let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
+        let svd = jb.svd(true, true);
+        let k = svd.singular_values.imin();
+        let unit = DVector::from_element(mb, 1.0 / (mb as f64).sqrt());
         let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
         let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
-        Walk { plane, b, c, rs }
+        Walk { plane, b, c, rs, block }
     }
 
     /// Newton's method on `R̂ = 0, g = 0` with one of (λ, s) free: λ when `free_lambda`, else s.
@@ -298,12 +338,23 @@ impl Hbm {
     /// branch in the plane's first parameter, e.g. the branch point before one of its
     /// [`Fold`](super::Fold)s): Newton's method on `R̂ = 0, g = 0` in (x, n) or (x, Ω).
     pub fn fold_at(&mut self, plane: FoldPlane, scale: f64, guess: &HbmSolution) -> Result<FoldCurvePoint, HbmError> {
+        self.singular_at(plane, Singularity::Jacobian, scale, guess)
+    }
+
+    /// [`Hbm::fold_at`] for the singularity `test` (a loss of unison with [`Singularity::Block`]).
+    pub fn singular_at(
+        &mut self,
+        plane: FoldPlane,
+        test: Singularity,
+        scale: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
         let mut at = At { order: guess.order, omega: guess.omega, scale };
         if let FoldPlane::Speed { order } = plane {
             at.order = order;
         }
-        let mut walk = self.walk(plane, &x, &at);
+        let mut walk = self.walk(plane, test, &x, &at);
         let it = self.fold_solve(&mut walk, &mut x, &mut at, true)?;
         let solution = self.solution_from(&x, &at, it);
         Ok(walk.plane.point(&at, 0.0, solution))
@@ -322,7 +373,7 @@ impl Hbm {
             FoldPlane::Order => At { order: value, omega: guess.omega, scale: guess.torque_scale },
             FoldPlane::Speed { order } => At { order, omega: value, scale: guess.torque_scale },
         };
-        let mut walk = self.walk(plane, &x, &at);
+        let mut walk = self.walk(plane, Singularity::Jacobian, &x, &at);
         let it = self.fold_solve(&mut walk, &mut x, &mut at, false)?;
         let solution = self.solution_from(&x, &at, it);
         Ok(walk.plane.point(&at, 0.0, solution))
@@ -340,7 +391,7 @@ impl Hbm {
         let m = self.unknowns();
         let x0 = self.unknowns_from(Some(&start.solution));
         let at0 = At { order: start.order, omega: start.omega, scale: start.scale };
-        let mut walk = self.walk(plane, &x0, &at0);
+        let mut walk = self.walk(plane, opts.test, &x0, &at0);
         walk.plane.p_ref = start.omega;
         let pl = walk.plane;
         let at_of = |y: &DVector<f64>| pl.at(y[m], y[m + 1]);

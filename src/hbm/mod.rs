@@ -115,7 +115,7 @@ pub use branch::{
 };
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
-pub use fold2::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint};
+pub use fold2::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, Singularity};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};

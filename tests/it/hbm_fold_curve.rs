@@ -141,3 +141,63 @@ fn the_speed_torque_fold_curve_passes_through_the_600_rpm_fold() {
     // Both are the same fold solved two ways at 1e-10 on the coefficients.
     assert!((at600.scale - s_fold).abs() <= 1e-7, "{} against {s_fold}", at600.scale);
 }
+
+/// Two identical pendulums at 500 N·m lose unison between the +1 points n = 3.0813663 and
+/// 3.0946058 (the general route's located crossings, `tests/it/hbm_cyclic.rs`: 3.08137, 3.09461).
+/// Their unison motion is the one-pendulum rotor's, and a non-unison motion's Jacobian is the
+/// pendulum's own block: the curve where that block is singular, followed on the one-pendulum
+/// problem, is the unison-loss boundary in (n, T).
+#[test]
+fn the_unison_loss_curve_of_two_pendulums() {
+    use kanedyn::hbm::Singularity;
+    let mut hbm = cpva_hbm(&single(T_REF), HbmOptions { stability_samples: 0, ..HbmOptions::default() });
+    let b =
+        hbm.continue_in_order(3.0, 3.2, None, &ContinuationOptions { stability: false, ..Default::default() }).unwrap();
+    let test = Singularity::Block { first: 1, count: 1 };
+    let guess = b.guesses_at(3.0814)[0].clone();
+    let start = hbm.singular_at(FoldPlane::Order, test, 1.0, &guess).unwrap();
+    println!("start {:.10}", start.order);
+    let fopts = FoldCurveOptions { range: (2.85, 3.35), scales: (0.002, 1.05), test, ..FoldCurveOptions::default() };
+    let curve = hbm.continue_fold(FoldPlane::Order, &start, false, &fopts).unwrap();
+    println!(
+        "{} points, end {:?}, cusps {:?}, extrema {:?}",
+        curve.points.len(),
+        curve.end,
+        curve.cusps,
+        curve.scale_extrema
+    );
+    // The curve turns at its least torque (below it the two pendulums keep unison at every
+    // order) and crosses 500 N·m again at the other +1 point.
+    assert_eq!(curve.scale_extrema.len(), 1, "{:?}", curve.scale_extrema);
+    assert!(curve.cusps.is_empty());
+    let least = curve.scale_extrema[0].scale * T_REF;
+    let back = curve.points.windows(2).find(|w| w[0].scale < 1.0 && w[1].scale >= 1.0).expect("back at 500 N·m");
+    let other = hbm.singular_at(FoldPlane::Order, test, 1.0, &back[0].solution).unwrap();
+    println!("unison lost from {least:.4} N·m; at 500 N·m between {:.10} and {:.10}", start.order, other.order);
+    // The general route on the two pendulums locates its +1 points by bisection on the Floquet
+    // multipliers and the root of det ∂R̂/∂x (3.0813662811512907, 3.0946057552055217 measured):
+    // the same truncated problem, so to 1e-8.
+    assert!((start.order - 3.0813662811512907).abs() < 1e-8, "{}", start.order);
+    assert!((other.order - 3.0946057552055217).abs() < 1e-8, "{}", other.order);
+    // And on either side of the least torque: the two pendulums' branch (general route) has no
+    // +1 point off its folds 1 % below it, two at 1.5 times it (where the curve is 6e-3 wide in
+    // n; just above the least torque it is a tongue narrower than 1e-3, which the one-parameter
+    // branch at the default step does not see: noted on issue 26).
+    use kanedyn::cpva::CpvaParams;
+    use kanedyn::hbm::BifurcationKind;
+    use kanedyn::kane::Kane;
+    let mech = CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap();
+    let kane = Kane::new(&mech).unwrap();
+    let omega = crate::support::cpva_hbm::omega();
+    for (torque, expected) in [(0.99 * least, 0), (1.5 * least, 2)] {
+        let mut two = Hbm::new(&kane, 0, omega, &single(torque), HbmOptions::default()).unwrap();
+        let b = two.continue_in_order(3.0, 3.2, None, &ContinuationOptions::default()).unwrap();
+        let plus = b
+            .bifurcations
+            .iter()
+            .filter(|x| x.kind == BifurcationKind::PlusOne && !b.folds.iter().any(|f| f.after == x.after))
+            .count();
+        println!("two pendulums at {torque:.3} N·m: {plus} +1 points");
+        assert_eq!(plus, expected, "{torque} N·m: {:?}", b.bifurcations);
+    }
+}
