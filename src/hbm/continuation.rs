@@ -185,17 +185,14 @@ impl Hbm {
         iterations: &mut usize,
     ) -> Option<DVector<f64>> {
         let m = self.unknowns();
-        let (mut s0, mut f0) = (0.0, a.t[m]);
-        let (mut s1, mut f1) = (chord, slope_b);
+        let mut ill = Illinois::new((0.0, a.t[m]), (chord, slope_b));
         let mut best = None;
         let mut lu: Option<Chord> = None;
-        // Which end was replaced last (−1: s0, +1: s1), for the Illinois halving.
-        let mut side = 0;
         for _ in 0..20 {
-            if f1 == f0 {
+            if ill.f1 == ill.f0 {
                 break;
             }
-            let s = s1 - f1 * (s1 - s0) / (f1 - f0);
+            let s = ill.secant();
             let pred = &a.y + &a.t * s;
             let (y, it) = match &lu {
                 Some(c) => {
@@ -214,21 +211,7 @@ impl Hbm {
             if f.abs() < 1e-6 {
                 break;
             }
-            if f.signum() == f0.signum() {
-                s0 = s;
-                f0 = f;
-                if side == -1 {
-                    f1 *= 0.5;
-                }
-                side = -1;
-            } else {
-                s1 = s;
-                f1 = f;
-                if side == 1 {
-                    f0 *= 0.5;
-                }
-                side = 1;
-            }
+            ill.update(s, f);
         }
         best
     }
@@ -723,34 +706,20 @@ impl Hbm {
                 continue;
             }
             let reference = la.max(lb);
-            let (mut s0, mut f0) = (0.0f64, sa * (la - reference).exp());
-            let (mut s1, mut f1) = (1.0, sb * (lb - reference).exp());
-            let mut side = 0;
+            let mut ill = Illinois::new((0.0, sa * (la - reference).exp()), (1.0, sb * (lb - reference).exp()));
             let mut best = None;
             for _ in 0..40 {
-                if (s1 - s0).abs() <= 1e-12 || f1 == f0 {
+                if (ill.s1 - ill.s0).abs() <= 1e-12 || ill.f1 == ill.f0 {
                     break;
                 }
-                let s = (s1 - f1 * (s1 - s0) / (f1 - f0)).clamp(s0.min(s1), s0.max(s1));
+                let s = ill.secant().clamp(ill.s0.min(ill.s1), ill.s0.max(ill.s1));
                 let (sol, sg, lg) = self.determinant_at(su, branch, i, s, Some(k))?;
                 best = Some((sol.order, su.param.value(&sol)));
                 let f = sg * (lg - reference).exp();
                 if f == 0.0 {
                     break;
                 }
-                if f.signum() == f0.signum() {
-                    (s0, f0) = (s, f);
-                    if side == -1 {
-                        f1 *= 0.5;
-                    }
-                    side = -1;
-                } else {
-                    (s1, f1) = (s, f);
-                    if side == 1 {
-                        f0 *= 0.5;
-                    }
-                    side = 1;
-                }
+                ill.update(s, f);
             }
             if best.is_some() {
                 return best;
@@ -897,6 +866,47 @@ pub fn continue_in_order(
     copts: &ContinuationOptions,
 ) -> Result<Branch, HbmError> {
     Hbm::new(kane, spin_joint, omega, harmonics, options)?.continue_in_order(n_from, n_to, None, copts)
+}
+
+/// The Illinois variant of the secant method on a bracket `[s0, s1]` with values `f0`, `f1` of
+/// opposite sign: the new point replaces the end whose value has its sign, and when the same end
+/// is replaced twice running the other end's value is halved, so the bracket keeps shrinking from
+/// both sides (used for folds, branch points and cusps alike).
+pub(super) struct Illinois {
+    pub(super) s0: f64,
+    pub(super) f0: f64,
+    pub(super) s1: f64,
+    pub(super) f1: f64,
+    /// Which end was replaced last (−1: s0, +1: s1, 0: none yet).
+    side: i8,
+}
+
+impl Illinois {
+    pub(super) fn new((s0, f0): (f64, f64), (s1, f1): (f64, f64)) -> Self {
+        Self { s0, f0, s1, f1, side: 0 }
+    }
+
+    /// The secant's zero through both ends.
+    pub(super) fn secant(&self) -> f64 {
+        self.s1 - self.f1 * (self.s1 - self.s0) / (self.f1 - self.f0)
+    }
+
+    /// Takes the value f at s into the bracket.
+    pub(super) fn update(&mut self, s: f64, f: f64) {
+        if f.signum() == self.f0.signum() {
+            (self.s0, self.f0) = (s, f);
+            if self.side == -1 {
+                self.f1 *= 0.5;
+            }
+            self.side = -1;
+        } else {
+            (self.s1, self.f1) = (s, f);
+            if self.side == 1 {
+                self.f0 *= 0.5;
+            }
+            self.side = 1;
+        }
+    }
 }
 
 #[cfg(test)]

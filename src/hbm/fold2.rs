@@ -23,6 +23,7 @@
 //! `s = 3x², n = −2x³`): a sign change of ds/dσ between points, located by a secant search
 //! on ds/dσ to |ds/dσ| ≤ 1e-10; a cusp when dn/dσ vanishes with it.
 
+use super::continuation::Illinois;
 use super::{At, Hbm, HbmError, HbmSolution, Parameter};
 use nalgebra::{DMatrix, DVector};
 
@@ -562,35 +563,22 @@ impl Hbm {
             }
             Some((tc, yc))
         };
-        let (mut s0, mut f0) = (0.0, t[m + 1]);
-        let (mut s1, mut f1) = (chord, slope(self, chord)?.0[m + 1]);
+        let f1 = slope(self, chord)?.0[m + 1];
+        let mut ill = Illinois::new((0.0, t[m + 1]), (chord, f1));
         let mut best = None;
-        let mut side = 0;
         for _ in 0..60 {
-            if f1 == f0 {
+            if ill.f1 == ill.f0 {
                 break;
             }
-            let s = s1 - f1 * (s1 - s0) / (f1 - f0);
+            let s = ill.secant();
             let (tc, yc) = slope(self, s)?;
             let f = tc[m + 1];
             let at = walk.plane.at(yc[m], yc[m + 1]);
             best = Some((ParameterPoint { order: at.order, omega: at.omega, scale: at.scale }, tc[m]));
-            if f.abs() < 1e-10 || (s1 - s0).abs() < 1e-12 * chord.max(1e-300) {
+            if f.abs() < 1e-10 || (ill.s1 - ill.s0).abs() < 1e-12 * chord.max(1e-300) {
                 break;
             }
-            if f.signum() == f0.signum() {
-                (s0, f0) = (s, f);
-                if side == -1 {
-                    f1 *= 0.5;
-                }
-                side = -1;
-            } else {
-                (s1, f1) = (s, f);
-                if side == 1 {
-                    f0 *= 0.5;
-                }
-                side = 1;
-            }
+            ill.update(s, f);
         }
         best
     }
