@@ -30,6 +30,9 @@ pub enum LineStyle {
     Dotted,
     /// A filled circle at each point and no line (cases of a design study drawn at random).
     Points,
+    /// The points as a closed polygon, filled in a light tint of the colour and not outlined (a
+    /// region of a parameter plane, drawn under the curves that bound it).
+    Region,
 }
 
 /// One curve: points `(x[i], y[i])`, a legend label, a colour index into a fixed palette and a
@@ -549,6 +552,7 @@ where
             LineStyle::Dashed => chart.draw_series(DashedLineSeries::new(pts, px(8), px(5), style))?,
             LineStyle::Dotted => chart.draw_series(DashedLineSeries::new(pts, px(2), px(4), style))?,
             LineStyle::Points => chart.draw_series(pts.into_iter().map(|p| Circle::new(p, px(3), c.filled())))?,
+            LineStyle::Region => chart.draw_series(std::iter::once(Polygon::new(pts, c.mix(0.15).filled())))?,
         };
         if !s.label.is_empty() {
             // NOTE: a legend sample is one path; a short stub for dashed/dotted lines reads well
@@ -557,6 +561,7 @@ where
                 LineStyle::Solid => 20,
                 LineStyle::Dashed => 8,
                 LineStyle::Dotted | LineStyle::Points => 3,
+                LineStyle::Region => 12,
             }) as i32;
             anno.label(&s.label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + len, y)], c.stroke_width(px(2))));

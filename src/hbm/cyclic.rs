@@ -533,6 +533,13 @@ impl RoutedHbm {
         &self.hbm
     }
 
+    /// The problem actually solved, to continue or analyse it further (fold and unison-loss
+    /// curves in two parameters, `hbm::fold2`): its states are the reduced mechanism's on the
+    /// cyclic route.
+    pub fn hbm_mut(&mut self) -> &mut Hbm {
+        &mut self.hbm
+    }
+
     /// Sets the torque scale s of the fixed-parameter solves ([`Hbm::set_torque_scale`]).
     pub fn set_torque_scale(&mut self, scale: f64) -> Result<(), HbmError> {
         self.hbm.set_torque_scale(scale)

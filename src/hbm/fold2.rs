@@ -342,6 +342,43 @@ impl Hbm {
         self.singular_at(plane, Singularity::Jacobian, scale, guess)
     }
 
+    /// The singularity tests of the problem's non-unison motions: on the unison problem of
+    /// identical absorbers ([`RoutedHbm::hbm_mut`](super::RoutedHbm::hbm_mut)), one
+    /// [`Singularity::Block`] per identical set, with the set's label; empty on any other
+    /// problem, or where a representative's coordinates are not consecutive.
+    pub fn unison_loss_tests(&self) -> Vec<(String, Singularity)> {
+        self.non_unison
+            .iter()
+            .filter_map(|nu| {
+                let (&first, count) = (nu.coordinates.first()?, nu.coordinates.len());
+                let consecutive = nu.coordinates.iter().enumerate().all(|(k, &c)| c == first + k);
+                consecutive.then(|| (nu.label.clone(), Singularity::Block { first, count }))
+            })
+            .collect()
+    }
+
+    /// The sign (±1) of the determinant of the matrix `test` keeps singular, at `sol`: between
+    /// two states of a branch where it changes, that matrix is singular (for a
+    /// [`Singularity::Block`] of the unison problem: unison is lost or regained there). The
+    /// sign from J's LU factors (the product of U's diagonal signs and the permutation's), which
+    /// neither overflows nor underflows whatever the size; 0 when a pivot is exactly zero.
+    pub fn singularity_sign(&mut self, sol: &HbmSolution, test: Singularity) -> f64 {
+        let x = self.unknowns_from(Some(sol));
+        let at = At { order: sol.order, omega: sol.omega, scale: sol.torque_scale };
+        self.assemble(&x, &at, Some(Parameter::Order));
+        let m = self.unknowns();
+        let block: Vec<usize> = match test {
+            Singularity::Jacobian => (0..m).collect(),
+            Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
+        };
+        let mb = block.len();
+        let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
+        let lu = jb.lu();
+        let u = lu.u();
+        let diag: f64 = (0..mb).map(|i| u[(i, i)].signum() * f64::from(u[(i, i)] != 0.0)).product();
+        diag * lu.p().determinant::<f64>()
+    }
+
     /// [`Hbm::fold_at`] for the singularity `test` (a loss of unison with [`Singularity::Block`]).
     pub fn singular_at(
         &mut self,

@@ -27,6 +27,7 @@ mod compare;
 pub mod design;
 mod digest;
 mod elements;
+mod envelope;
 mod hbm;
 pub mod json;
 mod linear;
@@ -53,6 +54,7 @@ pub use campbell::CampbellSpec;
 pub use compare::{CompareMechanism, CompareSpec};
 pub use design::{DesignParameter, DesignSpec, Quantity, Sampling};
 pub use digest::{MAX_LINES as DIGEST_MAX_LINES, digest};
+pub use envelope::{EnvelopeResult, EnvelopeSpec};
 pub use hbm::{HbmParameter, HbmRoute, HbmSpec};
 pub use linear::{LinearResponseSpec, Variant};
 pub use load::LoadOptions;
@@ -188,6 +190,9 @@ analyses! {
     /// The free oscillation of one joint at held spin, undamped, against its release amplitude:
     /// the absorber's backbone curve (the study's `backbone` room).
     FreeOscillation(FreeOscillationSpec),
+    /// The operating envelope in (excitation order, torque): the jump boundary with its cusp and,
+    /// for identical absorbers, the unison-loss boundary, each by two-parameter continuation.
+    Envelope(EnvelopeSpec),
     /// The same analyses run on several mechanisms (e.g. absorber paths), their results overlaid
     /// per analysis in one figure and compared in one table (the study's `compare` room).
     Compare(CompareSpec),
@@ -248,6 +253,8 @@ pub struct StudyReport {
     pub transient: Vec<transient::TransientResult>,
     /// Free oscillations (backbone curves).
     pub free: Vec<backbone::FreeOscillationResult>,
+    /// Operating envelopes.
+    pub envelopes: Vec<envelope::EnvelopeResult>,
     /// Comparisons: which of their analyses ran to the end on each mechanism (their results are
     /// in the fields above, under the names `<comparison>_<label>_<analysis>`).
     pub compares: Vec<compare::CompareResult>,

@@ -256,6 +256,12 @@ fn caption(a: &AnalysisSpec, stem: &str) -> String {
              of the spin speed, against its release amplitude; the linear order dotted."
                 .into()
         }
+        (AnalysisSpec::Envelope(_), _) => {
+            "Operating envelope: the boundaries in the (excitation order, torque) plane where the steady response \
+             jumps (fold curves, the region of several states tinted) and where identical absorbers lose unison \
+             (dashed), with the cusps and onsets marked; torque on a log scale."
+                .into()
+        }
         #[cfg(test)]
         (AnalysisSpec::Toy(_), _) => "A toy analysis's figure.".into(),
     }

@@ -58,7 +58,7 @@ fn the_schema_names_every_kind_and_describes_every_field() {
     let kinds: Vec<&str> =
         entry["properties"]["kind"]["enum"].as_array().unwrap().iter().map(|k| k.as_str().unwrap()).collect();
     assert_eq!(kinds, kanedyn::study::AnalysisSpec::kinds());
-    assert_eq!(kinds.len(), 9, "{kinds:?}");
+    assert_eq!(kinds.len(), 10, "{kinds:?}");
     // One layout of result and findings per kind, and the failed-status rule.
     let conditions = entry["allOf"].as_array().unwrap();
     assert_eq!(conditions.len(), kinds.len() + 1);

@@ -1,0 +1,696 @@
+//! The operating envelope (issue 28, item 2): the boundaries of a single-order excitation's
+//! steady response in the (excitation order n, torque amplitude T) plane at a mean speed, each a
+//! curve of codimension-one points followed by two-parameter continuation (`hbm::fold2`, the
+//! minimally augmented systems of Govaerts 2000, §4.3.2), with the codimension-two points where
+//! they end or turn.
+//!
+//! - **Jump boundary**: the fold curve. Inside its wedge three periodic states coexist at each
+//!   (n, T) and the response jumps at the wedge's edges; its cusp is the least torque at which a
+//!   jump exists (the normal form `x³ − s x − n = 0` has folds `s = 3x², n = −2x³`).
+//! - **Unison-loss boundary** of each set of identical absorbers: on the unison problem (one
+//!   representative, `hbm::cyclic`), the curve where the representative's own block of the
+//!   Jacobian is singular: a +1 branch point of the full set, where a non-unison motion branches
+//!   off. Its least torque is the onset: below it the absorbers stay in unison at every order.
+//!
+//! The curves start from the folds and the block's determinant sign changes on a few
+//! one-parameter order branches (the seeds, at torques spread evenly in log T); each seed not
+//! already on a curve is localised (Newton's method on the augmented system at its torque) and
+//! followed both ways until the curve leaves the map. A region is the curve closed along the map's
+//! edge, on the side that holds the points just above its cusp or onset.
+
+mod analysis;
+mod spec;
+
+pub use spec::EnvelopeSpec;
+
+use super::analysis::Output;
+use super::hbm::hbm_error;
+use super::table::Table;
+use super::{Study, StudyReport};
+use crate::error::Result;
+use crate::hbm::{
+    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldCurvePoint, FoldPlane, Hbm, HbmOptions, HbmSolution,
+    Parameter, RoutedHbm, Singularity,
+};
+use crate::model::excitation::{Harmonic, rpm_to_rad_s};
+use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
+use schemars::JsonSchema;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Default number of seed branches (torques evenly spaced in log T, both ends included).
+const SEEDS: usize = 5;
+
+/// A seed closer than this (in n, at its torque) to a curve already followed is on it: both are
+/// solved to the corrector's 1e-10, so only the same curve comes this close.
+const SAME_CURVE: f64 = 1e-6;
+
+/// What a boundary separates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+pub enum BoundaryKind {
+    /// A fold curve: the response jumps across it (several steady states inside).
+    Jump,
+    /// A unison-loss curve: an identical set's unison motion is unstable against non-unison
+    /// motion inside it (a +1 branch point on its edge).
+    UnisonLoss,
+}
+
+impl BoundaryKind {
+    /// Its code in the CSV's `kind` column.
+    fn code(self) -> f64 {
+        match self {
+            BoundaryKind::Jump => 1.0,
+            BoundaryKind::UnisonLoss => 2.0,
+        }
+    }
+
+    fn words(self) -> &'static str {
+        match self {
+            BoundaryKind::Jump => "jump (folds)",
+            BoundaryKind::UnisonLoss => "unison lost",
+        }
+    }
+}
+
+/// What a codimension-two point of the map is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, JsonSchema)]
+pub enum MapPointKind {
+    /// Two folds meet: below its torque the response has no jump there.
+    Cusp,
+    /// The least torque of a jump boundary without a cusp (where an isola is born, say).
+    JumpOnset,
+    /// The least torque of a unison-loss boundary: below it the set keeps unison at every order.
+    UnisonLossOnset,
+}
+
+impl MapPointKind {
+    /// Its code in the CSV's `kind` column.
+    fn code(self) -> f64 {
+        match self {
+            MapPointKind::Cusp => 10.0,
+            MapPointKind::JumpOnset => 11.0,
+            MapPointKind::UnisonLossOnset => 12.0,
+        }
+    }
+
+    fn words(self) -> &'static str {
+        match self {
+            MapPointKind::Cusp => "cusp",
+            MapPointKind::JumpOnset => "jump onset",
+            MapPointKind::UnisonLossOnset => "unison-loss onset",
+        }
+    }
+
+    fn meaning(self) -> &'static str {
+        match self {
+            MapPointKind::Cusp => "the two folds of the jump meet: below this torque the response does not jump",
+            MapPointKind::JumpOnset => "the least torque of this jump region (it has no cusp)",
+            MapPointKind::UnisonLossOnset => "below this torque the set keeps unison at every order of the map",
+        }
+    }
+}
+
+/// One boundary of the map, as followed.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct Boundary {
+    /// What it separates.
+    pub kind: BoundaryKind,
+    /// For a unison-loss boundary, the identical set it belongs to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub set: Option<String>,
+    /// Excitation orders n of its points, in the order followed.
+    pub orders: Vec<f64>,
+    /// Torque amplitudes of its points, N·m.
+    pub torques_nm: Vec<f64>,
+    /// Orders where it crosses the map's largest torque, solved there.
+    pub at_torque_max: Vec<f64>,
+    /// Why each end stopped (`left the map`, `most points`, `step too small`).
+    pub ends: [String; 2],
+}
+
+/// A codimension-two point of the map.
+#[derive(Debug, Clone, Copy, Serialize, JsonSchema)]
+pub struct MapPoint {
+    /// What it is.
+    pub kind: MapPointKind,
+    /// The boundary it lies on (index into the result's boundaries).
+    pub boundary: usize,
+    /// Excitation order n.
+    pub order: f64,
+    /// Torque amplitude, N·m.
+    pub torque_nm: f64,
+}
+
+/// An operating envelope's result.
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct EnvelopeResult {
+    /// The analysis's name.
+    pub name: String,
+    /// Mean speed, rpm.
+    pub rpm: f64,
+    /// The map's order range.
+    pub orders: [f64; 2],
+    /// The map's torque range, N·m.
+    pub torques_nm: [f64; 2],
+    /// The harmonic-balance route (`cyclic (…)` with the identical sets, or `general (why)`).
+    pub route: String,
+    /// The seed branches' torques, N·m.
+    pub seeds_nm: Vec<f64>,
+    /// The boundaries.
+    pub boundaries: Vec<Boundary>,
+    /// The codimension-two points.
+    pub points: Vec<MapPoint>,
+    /// Wall time of the whole map, s.
+    pub time_s: f64,
+}
+
+impl EnvelopeResult {
+    /// Its CSV table: one row per boundary point, then one per codimension-two point.
+    pub fn table(&self) -> Table {
+        let (mut curve, mut kind, mut order, mut torque) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (i, b) in self.boundaries.iter().enumerate() {
+            for (&n, &t) in b.orders.iter().zip(&b.torques_nm) {
+                curve.push((i + 1) as f64);
+                kind.push(b.kind.code());
+                order.push(n);
+                torque.push(t);
+            }
+        }
+        for p in &self.points {
+            curve.push((p.boundary + 1) as f64);
+            kind.push(p.kind.code());
+            order.push(p.order);
+            torque.push(p.torque_nm);
+        }
+        let mut t = Table::new(self.name.clone());
+        t.push("boundary", "1", curve);
+        t.push("kind", "1", kind);
+        t.push("order", "1", order);
+        t.push("torque_N_m", "N·m", torque);
+        t
+    }
+}
+
+/// The orders where boundary `b`'s polyline crosses the torque `t` (linear in log T between
+/// points), ascending.
+fn crossings(b: &Boundary, t: f64) -> Vec<f64> {
+    let lt = t.ln();
+    let mut out: Vec<f64> = b
+        .orders
+        .windows(2)
+        .zip(b.torques_nm.windows(2))
+        .filter_map(|(n, tq)| {
+            let (a, c) = (tq[0].ln() - lt, tq[1].ln() - lt);
+            if a * c > 0.0 || a == c {
+                return None;
+            }
+            let w = a / (a - c);
+            Some(n[0] + w * (n[1] - n[0]))
+        })
+        .collect();
+    out.sort_by(f64::total_cmp);
+    out.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    out
+}
+
+/// The seed torques, N·m: as given, or [`SEEDS`] from the top down, evenly in log T.
+fn seed_torques(spec: &EnvelopeSpec) -> Vec<f64> {
+    if !spec.seed_torques.is_empty() {
+        return spec.seed_torques.clone();
+    }
+    let (lo, hi) = (spec.torque_min.ln(), spec.torque_max.ln());
+    (0..SEEDS).map(|k| (hi - (hi - lo) * k as f64 / (SEEDS - 1) as f64).exp()).collect()
+}
+
+/// A curve being mapped: its kind, its test, and the walks from its start both ways.
+struct Walked {
+    kind: BoundaryKind,
+    set: Option<String>,
+    test: Singularity,
+    /// The down walk reversed, then the up walk (its start dropped).
+    points: Vec<FoldCurvePoint>,
+    curves: Vec<FoldCurve>,
+    ends: [String; 2],
+}
+
+/// The singular points of `test` on `branch` (torque scale s): folds for the Jacobian, sign
+/// changes of the block's determinant otherwise; each localised at s from the nearer state.
+fn seeds_on(hbm: &mut Hbm, test: Singularity, branch: &crate::hbm::Branch, s: f64) -> Vec<FoldCurvePoint> {
+    let guesses: Vec<HbmSolution> = match test {
+        Singularity::Jacobian => branch.folds.iter().map(|f| branch.points[f.after].solution.clone()).collect(),
+        Singularity::Block { .. } => {
+            let signs: Vec<f64> = branch.points.iter().map(|p| hbm.singularity_sign(&p.solution, test)).collect();
+            signs
+                .windows(2)
+                .enumerate()
+                .filter(|(_, w)| w[0] * w[1] < 0.0)
+                .map(|(i, _)| branch.points[i].solution.clone())
+                .collect()
+        }
+    };
+    guesses.iter().filter_map(|g| hbm.singular_at(FoldPlane::Order, test, s, g).ok()).collect()
+}
+
+/// Whether `seed` lies on one of `walked` (same test, solved at the seed's torque from the
+/// curve's nearer point on each crossing).
+fn covered(hbm: &mut Hbm, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
+    let s = seed.scale;
+    for w in walked.iter().filter(|w| w.test == test) {
+        for pair in w.points.windows(2) {
+            if (pair[0].scale - s) * (pair[1].scale - s) > 0.0 {
+                continue;
+            }
+            let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
+            if let Ok(p) = hbm.singular_at(FoldPlane::Order, test, s, &near.solution)
+                && (p.order - seed.order).abs() <= SAME_CURVE
+            {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+fn end_words(c: &FoldCurve) -> String {
+    match c.end {
+        crate::hbm::FoldCurveEnd::LeftBox => "left the map",
+        crate::hbm::FoldCurveEnd::MaxPoints => "most points",
+        crate::hbm::FoldCurveEnd::StepTooSmall => "step too small",
+    }
+    .into()
+}
+
+/// The map: every boundary its seeds reach, with its codimension-two points; a seed branch or a
+/// walk that fails is listed and the rest kept.
+pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeResult, Vec<String>)> {
+    let start = std::time::Instant::now();
+    let kane = study.kane(false)?;
+    let inputs = study.excited_joints(&study.mechanism, &spec.excite);
+    let t_ref = spec.torque_max;
+    let h = [Harmonic { multiple: 1.0, amplitude: t_ref, phase: 0.0 }];
+    let opts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
+    let mut routed = RoutedHbm::new(&kane, study.spin, rpm_to_rad_s(spec.rpm), (&h, &[]), &inputs, opts)
+        .map_err(hbm_error(study))?;
+    let route = routed.route().to_string();
+    let hbm = routed.hbm_mut();
+    let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
+    tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
+    let s_min = spec.torque_min / t_ref;
+    let fopts = FoldCurveOptions {
+        range: (spec.order_min, spec.order_max),
+        scales: (s_min, 1.0),
+        ..FoldCurveOptions::default()
+    };
+    let copts = ContinuationOptions {
+        stability: false,
+        deadline: study.spec.integration.deadline,
+        ..ContinuationOptions::default()
+    };
+    let seeds = seed_torques(spec);
+    let mut failures = Vec::new();
+    let mut walked: Vec<Walked> = Vec::new();
+    for &torque in &seeds {
+        let s = torque / t_ref;
+        let branch = hbm
+            .set_torque_scale(s)
+            .and_then(|()| hbm.continue_in(Parameter::Order, spec.order_min, spec.order_max, None, &copts));
+        let branch = match branch {
+            Ok(b) => b,
+            Err(e) => {
+                failures.push(format!("{}: seed branch at {} N·m: {e}", spec.name, num(torque, 6)));
+                continue;
+            }
+        };
+        for (kind, set, test) in &tests {
+            for seed in seeds_on(hbm, *test, &branch, s) {
+                if covered(hbm, &walked, *test, &seed) {
+                    continue;
+                }
+                let fo = FoldCurveOptions { test: *test, ..fopts };
+                let mut w = Walked {
+                    kind: *kind,
+                    set: set.clone(),
+                    test: *test,
+                    points: Vec::new(),
+                    curves: Vec::new(),
+                    ends: [String::new(), String::new()],
+                };
+                for (k, up) in [false, true].into_iter().enumerate() {
+                    match hbm.continue_fold(FoldPlane::Order, &seed, up, &fo) {
+                        Ok(c) => {
+                            w.ends[k] = end_words(&c);
+                            if up {
+                                w.points.extend(c.points.iter().skip(1).cloned());
+                            } else {
+                                w.points.extend(c.points.iter().rev().cloned());
+                            }
+                            w.curves.push(c);
+                        }
+                        Err(e) => {
+                            w.ends[k] = format!("failed: {e}");
+                            if !up {
+                                w.points.push(seed.clone());
+                            }
+                            failures.push(format!(
+                                "{}: {} boundary from n = {} at {} N·m, {} in torque: {e}",
+                                spec.name,
+                                kind.words(),
+                                num(seed.order, 8),
+                                num(torque, 6),
+                                if up { "up" } else { "down" }
+                            ));
+                        }
+                    }
+                }
+                walked.push(w);
+            }
+        }
+    }
+    let mut boundaries = Vec::new();
+    let mut points = Vec::new();
+    for (i, w) in walked.iter().enumerate() {
+        // Its crossings of the largest torque, solved there from the nearer point.
+        let mut at_top = Vec::new();
+        for pair in w.points.windows(2) {
+            if (pair[0].scale - 1.0) * (pair[1].scale - 1.0) > 0.0 {
+                continue;
+            }
+            let near = if (pair[0].scale - 1.0).abs() < (pair[1].scale - 1.0).abs() { &pair[0] } else { &pair[1] };
+            if let Ok(p) = hbm.singular_at(FoldPlane::Order, w.test, 1.0, &near.solution)
+                && !at_top.iter().any(|&n: &f64| (n - p.order).abs() <= SAME_CURVE)
+            {
+                at_top.push(p.order);
+            }
+        }
+        at_top.sort_by(f64::total_cmp);
+        for c in &w.curves {
+            for p in &c.cusps {
+                points.push(MapPoint {
+                    kind: MapPointKind::Cusp,
+                    boundary: i,
+                    order: p.order,
+                    torque_nm: p.scale * t_ref,
+                });
+            }
+            for p in &c.scale_extrema {
+                let kind = match w.kind {
+                    BoundaryKind::Jump => MapPointKind::JumpOnset,
+                    BoundaryKind::UnisonLoss => MapPointKind::UnisonLossOnset,
+                };
+                points.push(MapPoint { kind, boundary: i, order: p.order, torque_nm: p.scale * t_ref });
+            }
+        }
+        boundaries.push(Boundary {
+            kind: w.kind,
+            set: w.set.clone(),
+            orders: w.points.iter().map(|p| p.order).collect(),
+            torques_nm: w.points.iter().map(|p| p.scale * t_ref).collect(),
+            at_torque_max: at_top,
+            ends: w.ends.clone(),
+        });
+    }
+    let result = EnvelopeResult {
+        name: spec.name.clone(),
+        rpm: spec.rpm,
+        orders: [spec.order_min, spec.order_max],
+        torques_nm: [spec.torque_min, spec.torque_max],
+        route,
+        seeds_nm: seeds,
+        boundaries,
+        points,
+        time_s: start.elapsed().as_secs_f64(),
+    };
+    Ok((result, failures))
+}
+
+/// Runs the map, writes its CSV and SVG and returns its summary section.
+pub(crate) fn run(study: &Study, spec: &EnvelopeSpec, dir: &Path) -> Result<Output> {
+    let (r, failures) = compute(study, spec)?;
+    let csv = r.table().write_csv(dir)?;
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &[panel(&r)], 720, 520)?;
+    Ok(Output { markdown: markdown(&r), files: vec![csv, svg], failures, results: Box::new(r) })
+}
+
+/// A point of the map in unit coordinates: u along the orders, v along log T.
+type Unit = (f64, f64);
+
+/// The map's unit coordinates of (n, T), and back.
+struct Frame {
+    n: (f64, f64),
+    lt: (f64, f64),
+}
+
+impl Frame {
+    fn of(r: &EnvelopeResult) -> Self {
+        Self { n: (r.orders[0], r.orders[1]), lt: (r.torques_nm[0].ln(), r.torques_nm[1].ln()) }
+    }
+    fn unit(&self, n: f64, t: f64) -> Unit {
+        ((n - self.n.0) / (self.n.1 - self.n.0), (t.ln() - self.lt.0) / (self.lt.1 - self.lt.0))
+    }
+    fn back(&self, (u, v): Unit) -> (f64, f64) {
+        (self.n.0 + u * (self.n.1 - self.n.0), (self.lt.0 + v * (self.lt.1 - self.lt.0)).exp())
+    }
+}
+
+/// The position of a point of the unit square's edge along its perimeter, counter-clockwise
+/// from the lower-left corner (bottom 0–1, right 1–2, top 2–3, left 3–4), from the nearest edge.
+fn perimeter((u, v): Unit) -> f64 {
+    let d = [v, 1.0 - u, 1.0 - v, u];
+    let edge = (0..4).min_by(|&a, &b| d[a].total_cmp(&d[b])).unwrap_or(0);
+    match edge {
+        0 => u,
+        1 => 1.0 + v,
+        2 => 3.0 - u,
+        _ => 4.0 - v,
+    }
+}
+
+/// The curve (unit coordinates, clamped into the square) closed along the square's edge from
+/// its last point back to its first, counter-clockwise when `ccw`, through the corners between.
+fn closed(curve: &[Unit], ccw: bool) -> Vec<Unit> {
+    const CORNERS: [(f64, Unit); 4] = [(0.0, (0.0, 0.0)), (1.0, (1.0, 0.0)), (2.0, (1.0, 1.0)), (3.0, (0.0, 1.0))];
+    let mut out = curve.to_vec();
+    let (Some(&last), Some(&first)) = (curve.last(), curve.first()) else { return out };
+    let (a, b) = (perimeter(last), perimeter(first));
+    // Distance travelled along the perimeter from a, in the walk's direction.
+    let along = |t: f64| if ccw { (t - a).rem_euclid(4.0) } else { (a - t).rem_euclid(4.0) };
+    let mut corners: Vec<(f64, Unit)> =
+        CORNERS.iter().map(|&(t, p)| (along(t), p)).filter(|&(d, _)| d > 0.0 && d < along(b)).collect();
+    corners.sort_by(|x, y| x.0.total_cmp(&y.0));
+    out.extend(corners.into_iter().map(|(_, p)| p));
+    out
+}
+
+/// Even–odd point-in-polygon test.
+fn contains(poly: &[Unit], (x, y): Unit) -> bool {
+    let mut inside = false;
+    for (i, &(xa, ya)) in poly.iter().enumerate() {
+        let (xb, yb) = poly[(i + 1) % poly.len()];
+        if (ya > y) != (yb > y) && x < xa + (y - ya) / (yb - ya) * (xb - xa) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The widest interval of the polygon along the line v = `v` (even–odd), as its midpoint.
+fn widest_inside(poly: &[Unit], v: f64) -> Option<Unit> {
+    let mut xs: Vec<f64> = (0..poly.len())
+        .filter_map(|i| {
+            let ((xa, ya), (xb, yb)) = (poly[i], poly[(i + 1) % poly.len()]);
+            ((ya > v) != (yb > v)).then(|| xa + (v - ya) / (yb - ya) * (xb - xa))
+        })
+        .collect();
+    xs.sort_by(f64::total_cmp);
+    xs.chunks_exact(2).max_by(|a, b| (a[1] - a[0]).total_cmp(&(b[1] - b[0]))).map(|w| (0.5 * (w[0] + w[1]), v))
+}
+
+/// A boundary's region as a closed polygon in unit coordinates: the curve closed along the
+/// map's edge on the side that holds the region just above its lowest codimension-two point
+/// (between the two crossings nearest its order: inside a jump wedge above its cusp, inside a
+/// unison-loss tongue above its onset). None for a boundary without such a point, whose inside
+/// the map alone cannot tell.
+fn region(r: &EnvelopeResult, frame: &Frame, i: usize) -> Option<Vec<Unit>> {
+    let b = &r.boundaries[i];
+    let p = r.points.iter().filter(|p| p.boundary == i).min_by(|a, c| a.torque_nm.total_cmp(&c.torque_nm))?;
+    let curve: Vec<Unit> = b
+        .orders
+        .iter()
+        .zip(&b.torques_nm)
+        .map(|(&n, &t)| {
+            let (u, v) = frame.unit(n, t);
+            (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
+        })
+        .collect();
+    // Just above the point (a hundredth of the way to the top in log T), between the two
+    // crossings nearest its order (both lie on one side of a cusp, which is a spike).
+    let (_, vp) = frame.unit(p.order, p.torque_nm);
+    let t = frame.back((0.0, vp + 0.01 * (1.0 - vp))).1;
+    let mut x = crossings(b, t);
+    x.sort_by(|a, c| (a - p.order).abs().total_cmp(&(c - p.order).abs()));
+    let (&a, &c) = (x.first()?, x.get(1)?);
+    let q = frame.unit(0.5 * (a + c), t);
+    [true, false].into_iter().map(|ccw| closed(&curve, ccw)).find(|poly| contains(poly, q))
+}
+
+/// The chart: each boundary's region tinted and named, the boundaries drawn, the
+/// codimension-two points marked.
+fn panel(r: &EnvelopeResult) -> Panel {
+    let frame = Frame::of(r);
+    let mut series = Vec::new();
+    let mut labels = Vec::new();
+    let color = |k: BoundaryKind| match k {
+        BoundaryKind::Jump => 1,
+        BoundaryKind::UnisonLoss => 3,
+    };
+    let mut legend = [true, true];
+    let mut jump_regions = Vec::new();
+    for (i, b) in r.boundaries.iter().enumerate() {
+        let c = color(b.kind);
+        if let Some(poly) = region(r, &frame, i) {
+            let (x, y): (Vec<f64>, Vec<f64>) = poly.iter().map(|&p| frame.back(p)).unzip();
+            series.push(Series { label: String::new(), x, y, color: c, style: LineStyle::Region });
+            // The region's name three quarters of the way up from its lowest point, in its
+            // widest part there.
+            let low = poly.iter().map(|p| p.1).fold(1.0, f64::min);
+            if let Some(at) = widest_inside(&poly, low + 0.75 * (1.0 - low)) {
+                let (x, y) = frame.back(at);
+                let text = match b.kind {
+                    BoundaryKind::Jump => "several states: jump possible",
+                    BoundaryKind::UnisonLoss => "unison lost",
+                };
+                labels.push(PointLabel { x, y, text: text.into(), marker: false });
+            }
+            if b.kind == BoundaryKind::Jump {
+                jump_regions.push(poly);
+            }
+        }
+        let k = usize::from(b.kind == BoundaryKind::UnisonLoss);
+        let label = if std::mem::take(&mut legend[k]) {
+            match b.kind {
+                BoundaryKind::Jump => "jump boundary (folds)".to_string(),
+                BoundaryKind::UnisonLoss => "unison-loss boundary (+1 branch points)".to_string(),
+            }
+        } else {
+            String::new()
+        };
+        let style = if b.kind == BoundaryKind::Jump { LineStyle::Solid } else { LineStyle::Dashed };
+        series.push(Series { label, x: b.orders.clone(), y: b.torques_nm.clone(), color: c, style });
+    }
+    for p in &r.points {
+        labels.push(PointLabel {
+            x: p.order,
+            y: p.torque_nm,
+            text: format!("{} {}, {} N·m", p.kind.words(), num(p.order, 6), num(p.torque_nm, 4)),
+            marker: true,
+        });
+    }
+    // "One steady state" where no jump region reaches: the first free one of a few places.
+    for at in [(0.2, 0.15), (0.8, 0.15), (0.5, 0.05), (0.15, 0.85), (0.85, 0.85)] {
+        if jump_regions.iter().all(|poly| !contains(poly, at)) {
+            let (x, y) = frame.back(at);
+            labels.push(PointLabel { x, y, text: "one steady state".into(), marker: false });
+            break;
+        }
+    }
+    Panel {
+        title: format!("Operating envelope at {} rpm", num(r.rpm, 6)),
+        x_label: "excitation order n".into(),
+        y_label: "torque amplitude T, N·m".into(),
+        log_y: true,
+        x_range: Some((r.orders[0], r.orders[1])),
+        y_range: Some((r.torques_nm[0], r.torques_nm[1])),
+        series,
+        labels,
+        ..Panel::default()
+    }
+}
+
+/// Its summary section.
+fn markdown(r: &EnvelopeResult) -> String {
+    let mut md = format!("## Operating envelope `{}`\n\n", r.name);
+    let _ = writeln!(
+        md,
+        "At {} rpm over orders {}–{} and torques {}–{} N·m, route {}: {} from {} seed branches ({} N·m) in {} s. \
+         Each boundary is a curve of folds or of +1 branch points followed in (n, T) by two-parameter \
+         continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, 2: unison-loss boundary, \
+         10: cusp, 11: jump onset, 12: unison-loss onset).\n",
+        num(r.rpm, 6),
+        num(r.orders[0], 6),
+        num(r.orders[1], 6),
+        num(r.torques_nm[0], 6),
+        num(r.torques_nm[1], 6),
+        r.route,
+        super::digest::count(r.boundaries.len(), "boundary", "boundaries"),
+        r.seeds_nm.len(),
+        r.seeds_nm.iter().map(|t| num(*t, 4)).collect::<Vec<_>>().join(", "),
+        num(r.time_s, 2),
+        r.name,
+        r.name
+    );
+    if r.boundaries.is_empty() {
+        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison at the seeds' \
+               torques).\n\n";
+        return md;
+    }
+    md += "| boundary | kind | points | torque range (N·m) | orders at the largest torque | ends |\n|---|---|---|---|---|---|\n";
+    for (i, b) in r.boundaries.iter().enumerate() {
+        let lo = b
+            .torques_nm
+            .iter()
+            .copied()
+            .chain(r.points.iter().filter(|p| p.boundary == i).map(|p| p.torque_nm))
+            .fold(f64::INFINITY, f64::min)
+            .max(r.torques_nm[0]);
+        let hi = b.torques_nm.iter().copied().fold(0.0, f64::max).min(r.torques_nm[1]);
+        let kind = match &b.set {
+            Some(set) => format!("{} ({set})", b.kind.words()),
+            None => b.kind.words().to_string(),
+        };
+        let top: Vec<String> = b.at_torque_max.iter().map(|n| num(*n, 8)).collect();
+        let _ = writeln!(
+            md,
+            "| {} | {kind} | {} | {}–{} | {} | {}; {} |",
+            i + 1,
+            b.orders.len(),
+            num(lo, 5),
+            num(hi, 5),
+            if top.is_empty() { "none".into() } else { top.join(", ") },
+            b.ends[0],
+            b.ends[1]
+        );
+    }
+    md.push('\n');
+    if !r.points.is_empty() {
+        md +=
+            "Codimension-two points:\n\n| point | boundary | order | torque (N·m) | meaning |\n|---|---|---|---|---|\n";
+        for p in &r.points {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} |",
+                p.kind.words(),
+                p.boundary + 1,
+                num(p.order, 8),
+                num(p.torque_nm, 7),
+                p.kind.meaning()
+            );
+        }
+        md.push('\n');
+    }
+    md += "Regions: one steady state outside the jump boundaries; inside one, three steady states coexist and the \
+           response jumps at its edges";
+    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::UnisonLoss) {
+        md += "; inside a unison-loss boundary the identical absorbers' unison motion is unstable (a non-unison \
+               motion takes over)";
+    }
+    md += ". Period-doubling boundaries are not mapped yet.\n\n";
+    md
+}
+
+impl super::analysis::Kept for EnvelopeResult {
+    fn keep(self: Box<Self>, report: &mut StudyReport) {
+        report.envelopes.push(*self);
+    }
+}
