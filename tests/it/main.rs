@@ -20,6 +20,7 @@ mod elements;
 mod engine;
 mod engine_excitation;
 mod engine_study;
+mod envelope;
 mod excite_at;
 mod figures;
 mod gear_reactions;
