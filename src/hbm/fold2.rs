@@ -196,6 +196,17 @@ struct Walk {
     block: Vec<usize>,
 }
 
+/// x with `Aᵀ x = e` from A's LU factors: `PA = LU` gives `Aᵀ = Uᵀ Lᵀ P` (P orthogonal), so
+/// two triangular solves with the transposed factors and the inverse permutation.
+fn solve_transposed(lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>, e: &DVector<f64>) -> Option<DVector<f64>> {
+    let mut x = e.clone();
+    if !(lu.u().tr_solve_upper_triangular_mut(&mut x) && lu.l().tr_solve_lower_triangular_mut(&mut x)) {
+        return None;
+    }
+    lu.p().inv_permute_rows(&mut x);
+    Some(x)
+}
+
 /// Which matrix a curve keeps singular.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Singularity {
@@ -244,8 +255,10 @@ impl Hbm {
         let jb = DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]);
         let mut e = DVector::zeros(mb + 1);
         e[mb] = 1.0;
-        let sv = Self::border(&jb, &walk.b, &walk.c).lu().solve(&e).ok_or(HbmError::Singular { order })?;
-        let sw = Self::border(&jb.transpose(), &walk.c, &walk.b).lu().solve(&e).ok_or(HbmError::Singular { order })?;
+        // The bordered matrix of Jᵀ (borders swapped) is the transpose of J's: one LU for both.
+        let lu = Self::border(&jb, &walk.b, &walk.c).lu();
+        let sv = lu.solve(&e).ok_or(HbmError::Singular { order })?;
+        let sw = solve_transposed(&lu, &e).ok_or(HbmError::Singular { order })?;
         let (vb, g) = (sv.rows(0, mb).clone_owned(), sv[mb]);
         let wb = sw.rows(0, mb).clone_owned();
         // v and w in the whole space (zero off the block).

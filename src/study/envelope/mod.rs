@@ -302,8 +302,13 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         scales: (s_min, 1.0),
         ..FoldCurveOptions::default()
     };
+    // The seed branches only supply starting points (each seed is solved exactly on its curve
+    // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
+    // the multi-order analysis's order branches (`study::hbm::branch`).
     let copts = ContinuationOptions {
         stability: false,
+        refine_folds: false,
+        one_sided: true,
         deadline: study.spec.integration.deadline,
         ..ContinuationOptions::default()
     };

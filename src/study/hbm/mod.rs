@@ -21,12 +21,12 @@ use crate::signal::OrderTrace;
 
 /// The corrector's tolerance on a branch whose points only serve as starting guesses (max norm
 /// of the Newton step, rad): each guess is solved again at the full tolerance where it is used.
-const GUESS_TOL: f64 = 1e-6;
+pub(crate) const GUESS_TOL: f64 = 1e-6;
 
 /// The smallest cosine between successive tangents on a branch of guesses (25.8°; 11.5° on an
 /// analysed branch): the quadratic predictor and the chord's check against another sheet keep
 /// such steps on the branch, and the truck study's order branches take half the points.
-const GUESS_MIN_COS: f64 = 0.9;
+pub(crate) const GUESS_MIN_COS: f64 = 0.9;
 use crate::signal::findings::jump_order;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
