@@ -60,12 +60,12 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     // to 1e-6 in n (both solved to 1e-10; the branch's folds are refined by bisection).
     let mut one = cpva_hbm(&single(500.0), HbmOptions { stability_samples: 0, ..HbmOptions::default() });
     for target in [40.0, 10.0, 5.0] {
-        let i = (0..jump.orders.len())
+        let i = (0..jump.values.len())
             .min_by(|&a, &b| {
                 (jump.torques_nm[a] / target).ln().abs().total_cmp(&(jump.torques_nm[b] / target).ln().abs())
             })
             .unwrap();
-        let (n, t) = (jump.orders[i], jump.torques_nm[i]);
+        let (n, t) = (jump.values[i], jump.torques_nm[i]);
         let folds = folds_at(&mut one, t, (2.9, 3.3), 0.02);
         let nearest = folds.iter().map(|f| (f - n).abs()).fold(f64::INFINITY, f64::min);
         println!("boundary point n {n:.8} at {t:.4} N·m; branch folds {folds:?}");
@@ -76,7 +76,7 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     // `hbm_fold_curve`).
     let cusps: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "Cusp").collect();
     assert_eq!(cusps.len(), 1, "{:?}", r.points);
-    let (nc, tc) = (cusps[0].order, cusps[0].torque_nm);
+    let (nc, tc) = (cusps[0].value, cusps[0].torque_nm);
     println!("cusp n {nc:.8} T {tc:.7} N·m");
     let window = (nc - 0.03, nc + 0.03);
     assert!(folds_at(&mut one, 0.99 * tc, window, 0.001).is_empty());
@@ -111,9 +111,9 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     // least torques.
     let rows: Vec<Vec<f64>> = csv.lines().skip(1).map(|l| l.split(',').map(|c| c.parse().unwrap()).collect()).collect();
     assert_eq!(csv.lines().next(), Some("boundary,kind,order,torque_N_m"));
-    assert_eq!(rows.len(), jump.orders.len() + unison.orders.len() + 2);
+    assert_eq!(rows.len(), jump.values.len() + unison.values.len() + 2);
     let count = |code: f64| rows.iter().filter(|r| r[1] == code).count();
-    assert_eq!((count(1.0), count(2.0), count(10.0), count(12.0)), (jump.orders.len(), unison.orders.len(), 1, 1));
+    assert_eq!((count(1.0), count(2.0), count(10.0), count(12.0)), (jump.values.len(), unison.values.len(), 1, 1));
     let cusp_row = rows.iter().find(|r| r[1] == 10.0).unwrap();
     assert_eq!((cusp_row[2], cusp_row[3]), (nc, tc));
     for text in ["several states: jump possible", "unison lost", "one steady state", "cusp 3.18817", "<polygon"] {
@@ -137,7 +137,7 @@ fn one_pendulum_has_the_same_jump_boundary_and_no_unison_loss() {
     assert!((a.boundaries[0].at_torque_max[0] - b.boundaries[0].at_torque_max[0]).abs() <= 1e-8);
     let cusp = |r: &EnvelopeResult| *r.points.iter().find(|p| format!("{:?}", p.kind) == "Cusp").unwrap();
     let (ca, cb) = (cusp(a), cusp(b));
-    assert!((ca.order - cb.order).abs() <= 1e-8 && (ca.torque_nm / cb.torque_nm - 1.0).abs() <= 1e-8, "{ca:?} {cb:?}");
+    assert!((ca.value - cb.value).abs() <= 1e-8 && (ca.torque_nm / cb.torque_nm - 1.0).abs() <= 1e-8, "{ca:?} {cb:?}");
 }
 
 #[test]
@@ -148,6 +148,7 @@ fn a_bad_envelope_is_refused_with_its_field() {
         ("order_min: 2.9", "order_min: 3.4", "analyses[0].order_min"),
         ("torque_max: 500.0", "torque_max: 500.0, seed_torques: [700.0]", "analyses[0].seed_torques[0]"),
         ("torque_max: 500.0", "torque_max: 500.0, harmonics: 0", "analyses[0].harmonics"),
+        ("rpm: 1000.0,", "rpm: 1000.0, plane: Speed(order: 3.0, rpm_min: 300.0, rpm_max: 900.0),", "analyses[0].rpm"),
     ] {
         let text = base.replace(from, to);
         assert_ne!(text, base);
@@ -155,4 +156,43 @@ fn a_bad_envelope_is_refused_with_its_field() {
         let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();
         assert!(e.contains(field) && e.contains("bad_maps.ron:"), "{to}: {e}");
     }
+}
+
+/// The (speed, torque) plane at order 3 (below the tuning order 3.11, so the response folds where
+/// the torque is large against the centrifugal stiffness ∝ Ω²): three points of the jump
+/// boundary are folds of one-parameter speed branches at their own torques, to 1e-7 relative in
+/// speed (both solved to 1e-10), and along it the fold torque grows about as Ω² (the
+/// undamped problem depends on T/Ω² alone; damping makes it inexact, so ±25 %).
+#[test]
+fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
+    use kanedyn::hbm::Parameter;
+    use kanedyn::model::excitation::rpm_to_rad_s;
+    let text = r#"Study(name: "speedmap", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", plane: Speed(order: 3.0, rpm_min: 300.0, rpm_max: 1500.0),
+                            torque_min: 1.0, torque_max: 1000.0)])"#;
+    let (report, csv, _svg, _json) = run_study("speedmap", text, "speed");
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    assert_eq!((r.parameter.as_str(), r.boundaries.len()), ("speed_rpm", 1));
+    assert_eq!(csv.lines().next(), Some("boundary,kind,speed_rpm,torque_N_m"));
+    let b = &r.boundaries[0];
+    let mech = kanedyn::cpva::CpvaParams::canonical().mechanism(None).unwrap();
+    let kane = kanedyn::kane::Kane::new(&mech).unwrap();
+    let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+    let copts = ContinuationOptions { stability: false, ..Default::default() };
+    let k = b.values.len();
+    for i in [k / 5, k / 2, 4 * k / 5] {
+        let (rpm, t) = (b.values[i], b.torques_nm[i]);
+        let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1500.0), &single(t), opts.clone()).unwrap();
+        let br = hbm
+            .continue_in(Parameter::Speed { order: 3.0 }, rpm_to_rad_s(1500.0), rpm_to_rad_s(250.0), None, &copts)
+            .unwrap();
+        let folds: Vec<f64> = br.folds.iter().map(|f| f.parameter / rpm_to_rad_s(1.0)).collect();
+        let nearest = folds.iter().map(|f| (f / rpm - 1.0).abs()).fold(f64::INFINITY, f64::min);
+        println!("boundary point {rpm:.6} rpm at {t:.3} N·m; speed branch folds {folds:?}");
+        assert!(nearest <= 1e-7, "({rpm} rpm, {t} N·m) is {nearest} from the branch's folds {folds:?}");
+    }
+    let (first, last) = (0, k - 1);
+    let ratio = (b.torques_nm[last] / b.torques_nm[first]) / (b.values[last] / b.values[first]).powi(2);
+    assert!((ratio - 1.0).abs() < 0.25, "T/Ω² along the fold curve changes by {ratio}");
 }

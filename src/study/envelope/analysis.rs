@@ -1,7 +1,7 @@
 //! Envelope through the analysis interface (`study/analysis.rs`): its checks, the files it
 //! writes, its plan, its run and its entry in `results.json`.
 
-use super::{EnvelopeResult, EnvelopeSpec, MapPointKind, run};
+use super::{EnvelopePlane, EnvelopeResult, EnvelopeSpec, MapPointKind, run};
 use crate::error::Result;
 use crate::study::Study;
 use crate::study::StudyReport;
@@ -9,7 +9,9 @@ use crate::study::analysis::{Analysis, Bench, Checks, Output};
 use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::{AnalysisPlan, CSV_CELL_BYTES, hbm_branch_s};
-use crate::study::validate::{MAX_LIST, MAX_TORQUE_NM, check_excite, order_range, pos, require_steady_spin, rpm};
+use crate::study::validate::{
+    MAX_LIST, MAX_TORQUE_NM, check_excite, order, order_range, pos, require_steady_spin, rpm,
+};
 use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
 
@@ -47,8 +49,31 @@ impl Analysis for EnvelopeSpec {
     fn check(&self, c: &Checks<'_>) -> Result<()> {
         let (src, e) = (c.src, self);
         require_steady_spin(c, "Envelope", &e.name, false)?;
-        rpm(src, &c.at("rpm"), e.rpm)?;
-        order_range(src, &c.at("order_min"), e.order_min, e.order_max)?;
+        match e.plane {
+            EnvelopePlane::Order => {
+                rpm(src, &c.at("rpm"), e.rpm)?;
+                order_range(src, &c.at("order_min"), e.order_min, e.order_max)?;
+            }
+            EnvelopePlane::Speed { order: n, rpm_min, rpm_max } => {
+                for (field, v) in [("rpm", e.rpm), ("order_min", e.order_min), ("order_max", e.order_max)] {
+                    if v != 0.0 {
+                        return Err(src.error(
+                            &c.at(field),
+                            "a `Speed` plane takes its order and speeds in `plane: Speed(order, rpm_min, rpm_max)`",
+                        ));
+                    }
+                }
+                order(src, &c.at("plane.order"), n)?;
+                rpm(src, &c.at("plane.rpm_min"), rpm_min)?;
+                rpm(src, &c.at("plane.rpm_max"), rpm_max)?;
+                if rpm_min >= rpm_max {
+                    return Err(src.error(
+                        &c.at("plane.rpm_min"),
+                        format!("need rpm_min < rpm_max, got {rpm_min} and {rpm_max}"),
+                    ));
+                }
+            }
+        }
         if !(pos(e.torque_min) && e.torque_min < e.torque_max && e.torque_max <= MAX_TORQUE_NM) {
             return Err(src.error(
                 &c.at("torque_min"),

@@ -21,7 +21,7 @@
 mod analysis;
 mod spec;
 
-pub use spec::EnvelopeSpec;
+pub use spec::{EnvelopePlane, EnvelopeSpec};
 
 use super::analysis::Output;
 use super::hbm::hbm_error;
@@ -42,8 +42,9 @@ use std::path::Path;
 /// Default number of seed branches (torques evenly spaced in log T, both ends included).
 const SEEDS: usize = 5;
 
-/// A seed closer than this (in n, at its torque) to a curve already followed is on it: both are
-/// solved to the corrector's 1e-10, so only the same curve comes this close.
+/// A seed closer than this (relative to the range's upper end, at its torque) to a curve
+/// already followed is on it: both are solved to the corrector's 1e-10, so only the same curve
+/// comes this close.
 const SAME_CURVE: f64 = 1e-6;
 
 /// What a boundary separates.
@@ -119,11 +120,12 @@ pub struct Boundary {
     /// For a unison-loss boundary, the identical set it belongs to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub set: Option<String>,
-    /// Excitation orders n of its points, in the order followed.
-    pub orders: Vec<f64>,
+    /// The first parameter of its points (excitation order n, or mean speed in rpm), in the
+    /// order followed.
+    pub values: Vec<f64>,
     /// Torque amplitudes of its points, N·m.
     pub torques_nm: Vec<f64>,
-    /// Orders where it crosses the map's largest torque, solved there.
+    /// Where it crosses the map's largest torque (order, or rpm), solved there.
     pub at_torque_max: Vec<f64>,
     /// Why each end stopped (`left the map`, `most points`, `step too small`).
     pub ends: [String; 2],
@@ -136,8 +138,8 @@ pub struct MapPoint {
     pub kind: MapPointKind,
     /// The boundary it lies on (index into the result's boundaries).
     pub boundary: usize,
-    /// Excitation order n.
-    pub order: f64,
+    /// The first parameter: excitation order n, or mean speed in rpm.
+    pub value: f64,
     /// Torque amplitude, N·m.
     pub torque_nm: f64,
 }
@@ -147,10 +149,12 @@ pub struct MapPoint {
 pub struct EnvelopeResult {
     /// The analysis's name.
     pub name: String,
-    /// Mean speed, rpm.
-    pub rpm: f64,
-    /// The map's order range.
-    pub orders: [f64; 2],
+    /// The plane's first parameter: `order` (at `held` rpm) or `speed_rpm` (at order `held`).
+    pub parameter: String,
+    /// The other of mean speed (rpm) and order, held fixed.
+    pub held: f64,
+    /// The map's range of its first parameter (order, or rpm).
+    pub range: [f64; 2],
     /// The map's torque range, N·m.
     pub torques_nm: [f64; 2],
     /// The harmonic-balance route (`cyclic (…)` with the identical sets, or `general (why)`).
@@ -166,11 +170,26 @@ pub struct EnvelopeResult {
 }
 
 impl EnvelopeResult {
-    /// Its CSV table: one row per boundary point, then one per codimension-two point.
+    /// "at R rpm" or "at order n", what the plane holds fixed.
+    fn held_words(&self) -> String {
+        if self.parameter == "order" {
+            format!("at {} rpm", num(self.held, 6))
+        } else {
+            format!("at order {}", num(self.held, 6))
+        }
+    }
+
+    /// A value of the first parameter in words: `n = 3.1` or `812 rpm`.
+    fn value_words(&self, v: f64, sig: usize) -> String {
+        if self.parameter == "order" { num(v, sig) } else { format!("{} rpm", num(v, sig)) }
+    }
+
+    /// Its CSV table: one row per boundary point, then one per codimension-two point; columns
+    /// `boundary`, `kind`, the first parameter (`order` or `speed_rpm`) and `torque_N_m`.
     pub fn table(&self) -> Table {
         let (mut curve, mut kind, mut order, mut torque) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, b) in self.boundaries.iter().enumerate() {
-            for (&n, &t) in b.orders.iter().zip(&b.torques_nm) {
+            for (&n, &t) in b.values.iter().zip(&b.torques_nm) {
                 curve.push((i + 1) as f64);
                 kind.push(b.kind.code());
                 order.push(n);
@@ -180,13 +199,13 @@ impl EnvelopeResult {
         for p in &self.points {
             curve.push((p.boundary + 1) as f64);
             kind.push(p.kind.code());
-            order.push(p.order);
+            order.push(p.value);
             torque.push(p.torque_nm);
         }
         let mut t = Table::new(self.name.clone());
         t.push("boundary", "1", curve);
         t.push("kind", "1", kind);
-        t.push("order", "1", order);
+        t.push(self.parameter.clone(), if self.parameter == "order" { "1" } else { "rpm" }, order);
         t.push("torque_N_m", "N·m", torque);
         t
     }
@@ -197,7 +216,7 @@ impl EnvelopeResult {
 fn crossings(b: &Boundary, t: f64) -> Vec<f64> {
     let lt = t.ln();
     let mut out: Vec<f64> = b
-        .orders
+        .values
         .windows(2)
         .zip(b.torques_nm.windows(2))
         .filter_map(|(n, tq)| {
@@ -234,9 +253,52 @@ struct Walked {
     ends: [String; 2],
 }
 
+/// The plane's first parameter as the continuation sees it (n, or Ω in rad/s) and as the
+/// results give it (n, or rpm).
+#[derive(Debug, Clone, Copy)]
+struct Axis {
+    fold: FoldPlane,
+    param: Parameter,
+    /// Its range, n or rad/s.
+    range: (f64, f64),
+    /// The mean speed the problem is built at, rad/s.
+    omega: f64,
+    /// Results' unit per continuation unit (1, or rpm per rad/s).
+    to_unit: f64,
+}
+
+impl Axis {
+    fn of(spec: &EnvelopeSpec) -> Self {
+        match spec.plane {
+            EnvelopePlane::Order => Axis {
+                fold: FoldPlane::Order,
+                param: Parameter::Order,
+                range: (spec.order_min, spec.order_max),
+                omega: rpm_to_rad_s(spec.rpm),
+                to_unit: 1.0,
+            },
+            EnvelopePlane::Speed { order, rpm_min, rpm_max } => Axis {
+                fold: FoldPlane::Speed { order },
+                param: Parameter::Speed { order },
+                range: (rpm_to_rad_s(rpm_min), rpm_to_rad_s(rpm_max)),
+                omega: rpm_to_rad_s(rpm_min),
+                to_unit: 1.0 / rpm_to_rad_s(1.0),
+            },
+        }
+    }
+
+    /// A point's first parameter in the results' unit.
+    fn value(&self, order: f64, omega: f64) -> f64 {
+        match self.fold {
+            FoldPlane::Order => order,
+            FoldPlane::Speed { .. } => omega * self.to_unit,
+        }
+    }
+}
+
 /// The singular points of `test` on `branch` (torque scale s): folds for the Jacobian, sign
 /// changes of the block's determinant otherwise; each localised at s from the nearer state.
-fn seeds_on(hbm: &mut Hbm, test: Singularity, branch: &crate::hbm::Branch, s: f64) -> Vec<FoldCurvePoint> {
+fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Branch, s: f64) -> Vec<FoldCurvePoint> {
     let guesses: Vec<HbmSolution> = match test {
         Singularity::Jacobian => branch.folds.iter().map(|f| branch.points[f.after].solution.clone()).collect(),
         Singularity::Block { .. } => {
@@ -249,12 +311,12 @@ fn seeds_on(hbm: &mut Hbm, test: Singularity, branch: &crate::hbm::Branch, s: f6
                 .collect()
         }
     };
-    guesses.iter().filter_map(|g| hbm.singular_at(FoldPlane::Order, test, s, g).ok()).collect()
+    guesses.iter().filter_map(|g| hbm.singular_at(ax.fold, test, s, g).ok()).collect()
 }
 
 /// Whether `seed` lies on one of `walked` (same test, solved at the seed's torque from the
 /// curve's nearer point on each crossing).
-fn covered(hbm: &mut Hbm, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
+fn covered(hbm: &mut Hbm, ax: &Axis, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
     let s = seed.scale;
     for w in walked.iter().filter(|w| w.test == test) {
         for pair in w.points.windows(2) {
@@ -262,8 +324,9 @@ fn covered(hbm: &mut Hbm, walked: &[Walked], test: Singularity, seed: &FoldCurve
                 continue;
             }
             let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
-            if let Ok(p) = hbm.singular_at(FoldPlane::Order, test, s, &near.solution)
-                && (p.order - seed.order).abs() <= SAME_CURVE
+            if let Ok(p) = hbm.singular_at(ax.fold, test, s, &near.solution)
+                && (ax.value(p.order, p.omega) - ax.value(seed.order, seed.omega)).abs()
+                    <= SAME_CURVE * ax.range.1 * ax.to_unit
             {
                 return true;
             }
@@ -290,18 +353,14 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let t_ref = spec.torque_max;
     let h = [Harmonic { multiple: 1.0, amplitude: t_ref, phase: 0.0 }];
     let opts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
-    let mut routed = RoutedHbm::new(&kane, study.spin, rpm_to_rad_s(spec.rpm), (&h, &[]), &inputs, opts)
-        .map_err(hbm_error(study))?;
+    let ax = Axis::of(spec);
+    let mut routed = RoutedHbm::new(&kane, study.spin, ax.omega, (&h, &[]), &inputs, opts).map_err(hbm_error(study))?;
     let route = routed.route().to_string();
     let hbm = routed.hbm_mut();
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
     tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
     let s_min = spec.torque_min / t_ref;
-    let fopts = FoldCurveOptions {
-        range: (spec.order_min, spec.order_max),
-        scales: (s_min, 1.0),
-        ..FoldCurveOptions::default()
-    };
+    let fopts = FoldCurveOptions { range: ax.range, scales: (s_min, 1.0), ..FoldCurveOptions::default() };
     // The seed branches only supply starting points (each seed is solved exactly on its curve
     // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
     // the multi-order analysis's order branches (`study::hbm::branch`).
@@ -319,7 +378,10 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         let s = torque / t_ref;
         let branch = hbm
             .set_torque_scale(s)
-            .and_then(|()| hbm.continue_in(Parameter::Order, spec.order_min, spec.order_max, None, &copts));
+            .and_then(|()| hbm.continue_in(ax.param, ax.range.0, ax.range.1, None, &copts))
+            // A speed branch may not start at the lowest speed, where the torque is largest
+            // against the centrifugal stiffness (∝ Ω²): then from the other end.
+            .or_else(|e| hbm.continue_in(ax.param, ax.range.1, ax.range.0, None, &copts).map_err(|_| e));
         let branch = match branch {
             Ok(b) => b,
             Err(e) => {
@@ -328,8 +390,8 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             }
         };
         for (kind, set, test) in &tests {
-            for seed in seeds_on(hbm, *test, &branch, s) {
-                if covered(hbm, &walked, *test, &seed) {
+            for seed in seeds_on(hbm, &ax, *test, &branch, s) {
+                if covered(hbm, &ax, &walked, *test, &seed) {
                     continue;
                 }
                 let fo = FoldCurveOptions { test: *test, ..fopts };
@@ -342,7 +404,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     ends: [String::new(), String::new()],
                 };
                 for (k, up) in [false, true].into_iter().enumerate() {
-                    match hbm.continue_fold(FoldPlane::Order, &seed, up, &fo) {
+                    match hbm.continue_fold(ax.fold, &seed, up, &fo) {
                         Ok(c) => {
                             w.ends[k] = end_words(&c);
                             if up {
@@ -358,10 +420,10 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                                 w.points.push(seed.clone());
                             }
                             failures.push(format!(
-                                "{}: {} boundary from n = {} at {} N·m, {} in torque: {e}",
+                                "{}: {} boundary from {} at {} N·m, {} in torque: {e}",
                                 spec.name,
                                 kind.words(),
-                                num(seed.order, 8),
+                                num(ax.value(seed.order, seed.omega), 8),
                                 num(torque, 6),
                                 if up { "up" } else { "down" }
                             ));
@@ -382,10 +444,11 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 continue;
             }
             let near = if (pair[0].scale - 1.0).abs() < (pair[1].scale - 1.0).abs() { &pair[0] } else { &pair[1] };
-            if let Ok(p) = hbm.singular_at(FoldPlane::Order, w.test, 1.0, &near.solution)
-                && !at_top.iter().any(|&n: &f64| (n - p.order).abs() <= SAME_CURVE)
-            {
-                at_top.push(p.order);
+            if let Ok(p) = hbm.singular_at(ax.fold, w.test, 1.0, &near.solution) {
+                let v = ax.value(p.order, p.omega);
+                if !at_top.iter().any(|&n: &f64| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
+                    at_top.push(v);
+                }
             }
         }
         at_top.sort_by(f64::total_cmp);
@@ -394,7 +457,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 points.push(MapPoint {
                     kind: MapPointKind::Cusp,
                     boundary: i,
-                    order: p.order,
+                    value: ax.value(p.order, p.omega),
                     torque_nm: p.scale * t_ref,
                 });
             }
@@ -403,13 +466,18 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     BoundaryKind::Jump => MapPointKind::JumpOnset,
                     BoundaryKind::UnisonLoss => MapPointKind::UnisonLossOnset,
                 };
-                points.push(MapPoint { kind, boundary: i, order: p.order, torque_nm: p.scale * t_ref });
+                points.push(MapPoint {
+                    kind,
+                    boundary: i,
+                    value: ax.value(p.order, p.omega),
+                    torque_nm: p.scale * t_ref,
+                });
             }
         }
         boundaries.push(Boundary {
             kind: w.kind,
             set: w.set.clone(),
-            orders: w.points.iter().map(|p| p.order).collect(),
+            values: w.points.iter().map(|p| ax.value(p.order, p.omega)).collect(),
             torques_nm: w.points.iter().map(|p| p.scale * t_ref).collect(),
             at_torque_max: at_top,
             ends: w.ends.clone(),
@@ -417,8 +485,15 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     }
     let result = EnvelopeResult {
         name: spec.name.clone(),
-        rpm: spec.rpm,
-        orders: [spec.order_min, spec.order_max],
+        parameter: match spec.plane {
+            EnvelopePlane::Order => "order".into(),
+            EnvelopePlane::Speed { .. } => "speed_rpm".into(),
+        },
+        held: match spec.plane {
+            EnvelopePlane::Order => spec.rpm,
+            EnvelopePlane::Speed { order, .. } => order,
+        },
+        range: [ax.range.0 * ax.to_unit, ax.range.1 * ax.to_unit],
         torques_nm: [spec.torque_min, spec.torque_max],
         route,
         seeds_nm: seeds,
@@ -449,7 +524,7 @@ struct Frame {
 
 impl Frame {
     fn of(r: &EnvelopeResult) -> Self {
-        Self { n: (r.orders[0], r.orders[1]), lt: (r.torques_nm[0].ln(), r.torques_nm[1].ln()) }
+        Self { n: (r.range[0], r.range[1]), lt: (r.torques_nm[0].ln(), r.torques_nm[1].ln()) }
     }
     fn unit(&self, n: f64, t: f64) -> Unit {
         ((n - self.n.0) / (self.n.1 - self.n.0), (t.ln() - self.lt.0) / (self.lt.1 - self.lt.0))
@@ -521,7 +596,7 @@ fn region(r: &EnvelopeResult, frame: &Frame, i: usize) -> Option<Vec<Unit>> {
     let b = &r.boundaries[i];
     let p = r.points.iter().filter(|p| p.boundary == i).min_by(|a, c| a.torque_nm.total_cmp(&c.torque_nm))?;
     let curve: Vec<Unit> = b
-        .orders
+        .values
         .iter()
         .zip(&b.torques_nm)
         .map(|(&n, &t)| {
@@ -531,10 +606,10 @@ fn region(r: &EnvelopeResult, frame: &Frame, i: usize) -> Option<Vec<Unit>> {
         .collect();
     // Just above the point (a hundredth of the way to the top in log T), between the two
     // crossings nearest its order (both lie on one side of a cusp, which is a spike).
-    let (_, vp) = frame.unit(p.order, p.torque_nm);
+    let (_, vp) = frame.unit(p.value, p.torque_nm);
     let t = frame.back((0.0, vp + 0.01 * (1.0 - vp))).1;
     let mut x = crossings(b, t);
-    x.sort_by(|a, c| (a - p.order).abs().total_cmp(&(c - p.order).abs()));
+    x.sort_by(|a, c| (a - p.value).abs().total_cmp(&(c - p.value).abs()));
     let (&a, &c) = (x.first()?, x.get(1)?);
     let q = frame.unit(0.5 * (a + c), t);
     [true, false].into_iter().map(|ccw| closed(&curve, ccw)).find(|poly| contains(poly, q))
@@ -582,13 +657,13 @@ fn panel(r: &EnvelopeResult) -> Panel {
             String::new()
         };
         let style = if b.kind == BoundaryKind::Jump { LineStyle::Solid } else { LineStyle::Dashed };
-        series.push(Series { label, x: b.orders.clone(), y: b.torques_nm.clone(), color: c, style });
+        series.push(Series { label, x: b.values.clone(), y: b.torques_nm.clone(), color: c, style });
     }
     for p in &r.points {
         labels.push(PointLabel {
-            x: p.order,
+            x: p.value,
             y: p.torque_nm,
-            text: format!("{} {}, {} N·m", p.kind.words(), num(p.order, 6), num(p.torque_nm, 4)),
+            text: format!("{} {}, {} N·m", p.kind.words(), r.value_words(p.value, 6), num(p.torque_nm, 4)),
             marker: true,
         });
     }
@@ -601,11 +676,11 @@ fn panel(r: &EnvelopeResult) -> Panel {
         }
     }
     Panel {
-        title: format!("Operating envelope at {} rpm", num(r.rpm, 6)),
-        x_label: "excitation order n".into(),
+        title: format!("Operating envelope {}", r.held_words()),
+        x_label: if r.parameter == "order" { "excitation order n" } else { "mean speed, rpm" }.into(),
         y_label: "torque amplitude T, N·m".into(),
         log_y: true,
-        x_range: Some((r.orders[0], r.orders[1])),
+        x_range: Some((r.range[0], r.range[1])),
         y_range: Some((r.torques_nm[0], r.torques_nm[1])),
         series,
         labels,
@@ -618,13 +693,19 @@ fn markdown(r: &EnvelopeResult) -> String {
     let mut md = format!("## Operating envelope `{}`\n\n", r.name);
     let _ = writeln!(
         md,
-        "At {} rpm over orders {}–{} and torques {}–{} N·m, route {}: {} from {} seed branches ({} N·m) in {} s. \
-         Each boundary is a curve of folds or of +1 branch points followed in (n, T) by two-parameter \
+        "{} over {} {}–{}{} and torques {}–{} N·m, route {}: {} from {} seed branches ({} N·m) in {} s. \
+         Each boundary is a curve of folds or of +1 branch points followed in the plane by two-parameter \
          continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, 2: unison-loss boundary, \
          10: cusp, 11: jump onset, 12: unison-loss onset).\n",
-        num(r.rpm, 6),
-        num(r.orders[0], 6),
-        num(r.orders[1], 6),
+        if r.parameter == "order" {
+            format!("At {} rpm", num(r.held, 6))
+        } else {
+            format!("At order {}", num(r.held, 6))
+        },
+        if r.parameter == "order" { "orders" } else { "speeds" },
+        num(r.range[0], 6),
+        num(r.range[1], 6),
+        if r.parameter == "order" { "" } else { " rpm" },
         num(r.torques_nm[0], 6),
         num(r.torques_nm[1], 6),
         r.route,
@@ -640,7 +721,11 @@ fn markdown(r: &EnvelopeResult) -> String {
                torques).\n\n";
         return md;
     }
-    md += "| boundary | kind | points | torque range (N·m) | orders at the largest torque | ends |\n|---|---|---|---|---|---|\n";
+    let _ = writeln!(
+        md,
+        "| boundary | kind | points | torque range (N·m) | {} at the largest torque | ends |\n|---|---|---|---|---|---|",
+        if r.parameter == "order" { "orders" } else { "speeds (rpm)" }
+    );
     for (i, b) in r.boundaries.iter().enumerate() {
         let lo = b
             .torques_nm
@@ -659,7 +744,7 @@ fn markdown(r: &EnvelopeResult) -> String {
             md,
             "| {} | {kind} | {} | {}–{} | {} | {}; {} |",
             i + 1,
-            b.orders.len(),
+            b.values.len(),
             num(lo, 5),
             num(hi, 5),
             if top.is_empty() { "none".into() } else { top.join(", ") },
@@ -677,7 +762,7 @@ fn markdown(r: &EnvelopeResult) -> String {
                 "| {} | {} | {} | {} | {} |",
                 p.kind.words(),
                 p.boundary + 1,
-                num(p.order, 8),
+                num(p.value, 8),
                 num(p.torque_nm, 7),
                 p.kind.meaning()
             );

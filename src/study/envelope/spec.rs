@@ -1,4 +1,5 @@
-//! The operating envelope as written in the study file: the (order, torque) plane it maps.
+//! The operating envelope as written in the study file: the (order, torque) or (speed, torque)
+//! plane it maps.
 
 use crate::study::ExciteAt;
 use serde::{Deserialize, Serialize};
@@ -12,11 +13,18 @@ use serde::{Deserialize, Serialize};
 pub struct EnvelopeSpec {
     /// Name (file prefix).
     pub name: String,
-    /// Mean speed, rpm.
+    /// The plane's first parameter (default `Order`: the excitation order over
+    /// `order_min`..`order_max` at `rpm`).
+    #[serde(default)]
+    pub plane: EnvelopePlane,
+    /// Mean speed, rpm (an `Order` plane only).
+    #[serde(default)]
     pub rpm: f64,
-    /// Lower end of the order range.
+    /// Lower end of the order range (an `Order` plane only).
+    #[serde(default)]
     pub order_min: f64,
-    /// Upper end of the order range.
+    /// Upper end of the order range (an `Order` plane only).
+    #[serde(default)]
     pub order_max: f64,
     /// Smallest torque amplitude mapped, N·m.
     pub torque_min: f64,
@@ -34,6 +42,23 @@ pub struct EnvelopeSpec {
     /// the spin joint alone).
     #[serde(default)]
     pub excite: Vec<ExciteAt>,
+}
+
+/// The first parameter of an envelope's plane (the second is the torque amplitude).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum EnvelopePlane {
+    /// The excitation order, over `order_min`..`order_max` at `rpm`.
+    #[default]
+    Order,
+    /// The mean speed over `rpm_min`..`rpm_max` (rpm) at the excitation order `order`.
+    Speed {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Lower end of the speed range, rpm.
+        rpm_min: f64,
+        /// Upper end of the speed range, rpm.
+        rpm_max: f64,
+    },
 }
 
 fn default_harmonics() -> usize {
