@@ -183,7 +183,7 @@ fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
     let k = b.values.len();
     for i in [k / 5, k / 2, 4 * k / 5] {
         let (rpm, t) = (b.values[i], b.torques_nm[i]);
-        let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1500.0), &single(t), opts.clone()).unwrap();
+        let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1500.0), &single(t), opts).unwrap();
         let br = hbm
             .continue_in(Parameter::Speed { order: 3.0 }, rpm_to_rad_s(1500.0), rpm_to_rad_s(250.0), None, &copts)
             .unwrap();
