@@ -448,3 +448,38 @@ fn order_and_speed_substitute_into_a_torque_continuation_bit_for_bit() {
         assert_eq!(row.results[0].to_bits(), peak.to_bits(), "order {order}");
     }
 }
+
+/// A pendulum's tuning order as a design quantity (issue 28, item 5): each case's n_t from the
+/// linearisation at held spin (eigen-orders solved numerically, independent of the quadratic
+/// in L that sets it) equals the requested order to 1e-10; an order beyond what the pendulum's
+/// mass, inertia and pivot radius allow (n_t ≤ √(R / (2√(I/m))): 3.7639 here) fails its case with
+/// the reason; the spin joint is refused at load.
+#[test]
+fn a_tuning_order_is_set_case_by_case() {
+    let text = study_text(
+        r#"        DesignStudy(
+            name: "tuned",
+            parameters: [(name: "n_t", quantity: TuningOrder("pivot"), values: [2.9, 3.0, 3.11, 3.3, 3.6, 3.8])],
+            analysis: LinearResponse(name: "lin", rpm: 1000.0, from: 0.8, to: 1.3, points: 11),
+        ),"#,
+    );
+    let study = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let spec = design(&study);
+    let rows = design::run_cases(&study, spec, None, true, &|| {}).unwrap();
+    let cols = design::result_columns(&study, spec);
+    let c_nt = cols.iter().position(|c| c.name == "n_t").unwrap();
+    for r in &rows[..5] {
+        assert_eq!(r.status, CaseStatus::Ok, "case {}: {}", r.index, r.error);
+        let want = r.values[0];
+        assert!(
+            (r.results[c_nt] / want - 1.0).abs() <= 1e-10,
+            "case {}: n_t {} against {want}",
+            r.index,
+            r.results[c_nt]
+        );
+    }
+    assert_ne!(rows[5].status, CaseStatus::Ok);
+    assert!(rows[5].error.contains("out of reach") && rows[5].error.contains("at most 3.7639"), "{}", rows[5].error);
+    let bad = load(&text.replace("TuningOrder(\"pivot\")", "TuningOrder(\"spin\")")).expect_err("the spin joint");
+    assert!(bad.to_string().contains("not a revolute pendulum"), "{bad}");
+}

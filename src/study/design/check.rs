@@ -122,6 +122,20 @@ fn check_quantity(
         if matches!(q, Quantity::JointStiffness(_)) && j == spin {
             return Err(src.error(path, format!("`{jn}` is the spin joint: a spinning rotor cannot wind a spring")));
         }
+        if matches!(q, Quantity::TuningOrder(_)) {
+            let pendulum =
+                crate::model::absorber::absorbers(mech).iter().any(|a| a.joint == *jn && a.kind == "Revolute pendulum");
+            let leaf = !mech.joints.iter().any(|k| k.parent == Some(j));
+            if !(pendulum && leaf) {
+                return Err(src.error(
+                    path,
+                    format!(
+                        "joint `{jn}` is not a revolute pendulum on a rotor carrying one body: its tuning order \
+                         cannot be set through the centre-of-mass distance (vary the path's or body's own quantities)"
+                    ),
+                ));
+            }
+        }
         if matches!(q, Quantity::JointRadius(_)) && joint.at.norm() == 0.0 {
             return Err(
                 src.error(path, format!("joint `{jn}` sits at its parent's origin: no direction to move it along"))
@@ -172,7 +186,9 @@ fn value_ok(q: &Quantity, inner: &AnalysisSpec, v: f64) -> std::result::Result<(
             (within(0.0, MAX_MECHANISM_VALUE, true), format!("0 < value ≤ {MAX_MECHANISM_VALUE:e} m"))
         }
         Quantity::Rpm => (within(0.0, MAX_RPM, true), format!("0 < rpm ≤ {MAX_RPM:e}")),
-        Quantity::Order => (within(0.0, MAX_ORDER, true), format!("0 < order ≤ {MAX_ORDER}")),
+        Quantity::Order | Quantity::TuningOrder(_) => {
+            (within(0.0, MAX_ORDER, true), format!("0 < order ≤ {MAX_ORDER}"))
+        }
         Quantity::TorqueAmplitude => {
             // Harmonic balance has no periodic response to continue at zero torque.
             let zero_ok = !matches!(inner, AnalysisSpec::HarmonicBalance(_));

@@ -241,6 +241,24 @@ pub fn result_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
     }
 }
 
+/// The distance L of a revolute pendulum's centre of mass from its pivot that gives it the
+/// tuning order `n_t` (mass m, centroidal inertia I, pivot radius R): the root of
+/// `n_t² m L² − m R L + n_t² I = 0` on the side of `√(I/m)` (where n_t is largest) that the
+/// current distance `l_now` is on.
+fn tuned_com_distance(m: f64, i: f64, r: f64, l_now: f64, n_t: f64) -> std::result::Result<f64, String> {
+    let n2 = n_t * n_t;
+    let disc = (m * r).powi(2) - 4.0 * n2 * n2 * m * i;
+    if !(disc >= 0.0 && m > 0.0) {
+        let most = crate::plot::num((r / (2.0 * (i / m).sqrt())).sqrt(), 5);
+        return Err(format!(
+            "a tuning order of {n_t} is out of reach with this mass, inertia and pivot radius (at most {most})"
+        ));
+    }
+    let sq = disc.sqrt();
+    let (near, far) = ((m * r - sq) / (2.0 * n2 * m), (m * r + sq) / (2.0 * n2 * m));
+    Ok(if l_now * l_now >= i / m { far } else { near })
+}
+
 /// The mechanism and analysis of one case: `values` substituted.
 fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study, AnalysisSpec)> {
     let mut mech = study.mechanism.clone();
@@ -265,6 +283,13 @@ fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study
             (Quantity::JointRadius(_), _, Some(j)) => {
                 let at = mech.joints[j].at;
                 mech.joints[j].at = at * (v / at.norm());
+            }
+            (Quantity::TuningOrder(name), _, Some(j)) => {
+                let b = j;
+                let inertia = mech.bodies[b].inertia;
+                let (m, i, r, com) = (inertia.mass, inertia.i_com, mech.joints[j].at.norm(), inertia.com);
+                let l = tuned_com_distance(m, i, r, com.norm(), v).map_err(|why| err(format!("`{name}`: {why}")))?;
+                mech.bodies[b].inertia.com = com * (l / com.norm());
             }
             (Quantity::Rpm, ..) => match &mut analysis {
                 AnalysisSpec::HarmonicBalance(h) => h.rpm = v,

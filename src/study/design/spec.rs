@@ -62,6 +62,12 @@ pub enum Quantity {
     /// The distance of a joint's point from its parent's origin, m, in the direction it has in
     /// the file (the CPVA's pivot radius R).
     JointRadius(String),
+    /// The linear tuning order n_t of a revolute pendulum on a rotor (a joint whose child
+    /// body carries nothing further), set through the distance L of the child's centre of mass
+    /// from the pivot along its direction in the file, its mass, centroidal inertia I and the
+    /// pivot radius R kept: `n_t² = m R L / (I + m L²)` solved for the root on the file's side
+    /// of `√(I/m)`.
+    TuningOrder(String),
     /// The analysis's mean speed, rpm.
     Rpm,
     /// The analysis's torque amplitude T_n, N·m (harmonic balance in order or speed).
@@ -84,7 +90,7 @@ impl Quantity {
             Quantity::JointDamping(_) => "Nms_per_rad",
             Quantity::Rpm => "rpm",
             Quantity::TorqueAmplitude => "Nm",
-            Quantity::Order => "",
+            Quantity::Order | Quantity::TuningOrder(_) => "",
         }
     }
 
@@ -100,14 +106,17 @@ impl Quantity {
             Quantity::JointDamping(_) => "N·m·s/rad",
             Quantity::Rpm => "rpm",
             Quantity::TorqueAmplitude => "N·m",
-            Quantity::Order => "1",
+            Quantity::Order | Quantity::TuningOrder(_) => "1",
         }
     }
 
     /// The joint it names, if any.
     pub(super) fn joint(&self) -> Option<&str> {
         match self {
-            Quantity::JointStiffness(j) | Quantity::JointDamping(j) | Quantity::JointRadius(j) => Some(j),
+            Quantity::JointStiffness(j)
+            | Quantity::JointDamping(j)
+            | Quantity::JointRadius(j)
+            | Quantity::TuningOrder(j) => Some(j),
             _ => None,
         }
     }
@@ -129,6 +138,7 @@ impl Quantity {
             Quantity::JointStiffness(j) => format!("stiffness of `{j}`"),
             Quantity::JointDamping(j) => format!("damping of `{j}`"),
             Quantity::JointRadius(j) => format!("radius of joint `{j}`"),
+            Quantity::TuningOrder(j) => format!("tuning order of `{j}`"),
             Quantity::Rpm => "speed".into(),
             Quantity::TorqueAmplitude => "torque amplitude T_n".into(),
             Quantity::Order => "excitation order".into(),
