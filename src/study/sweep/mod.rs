@@ -5,7 +5,7 @@ mod analysis;
 mod spec;
 pub use spec::*;
 
-use super::elements::{self, ElementTraces};
+use super::elements::ElementTraces;
 use super::sim::{self, Progress};
 use super::table::Table;
 use super::{Output, Study};
@@ -14,7 +14,7 @@ use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use crate::signal::findings::{at_order, branch_differences, exceeds, skip_ramp, trace_minimum};
-use crate::time::probe::{Outcome, simulate};
+use crate::time::probe::{Outcome, simulate_streamed};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -316,33 +316,36 @@ fn run_one(
     // The elements are the mechanism's joints; the locked twin reports none.
     let elements: &[usize] = if job.locked { &[] } else { &study.elements };
     let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, elements)?;
+    // The analysis runs on the samples as they come; the record is kept only for the time
+    // series, when it is asked for (its columns, not the elements' or the analysis's own).
+    let series = if spec.write_time_series { rec.columns.len() - 2 * elements.len() } else { 0 };
+    rec.store_only(|c| c == sim::ACCEL || (sim::SERIES..series).contains(&c));
     let opts = sim::options(&study.spec.integration);
-    let info =
-        simulate(&mut kane, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| bar.set_position((t * 1000.0) as u64));
-    bar.finish_and_clear();
-    let order = excitation.order;
-    let traces = sim::track(
-        &mech.name,
-        &rec.columns[sim::ACCEL],
-        study.spec.integration.sample_hz,
-        omega,
-        &move |t| order.at(t),
-        &spec.multiples,
-        &study.spec.order_tracking,
-    )?;
     let fs = study.spec.integration.sample_hz;
-    let cols = sim::element_columns(&rec, elements.len());
+    let order = excitation.order;
+    let order_at = move |t: f64| order.at(t);
     let skip = (spec.ramp_s * fs).ceil() as usize;
-    let tracking = &study.spec.order_tracking;
-    let element_traces =
-        elements::traces(mech, elements, &cols, fs, omega, &move |t| order.at(t), &spec.multiples, tracking, skip)?;
+    let mut stream =
+        sim::RunStream::new(mech, elements, fs, omega, &order_at, &spec.multiples, &study.spec.order_tracking, skip);
+    let info = simulate_streamed(
+        &mut kane,
+        &x0,
+        0.0,
+        spec.duration_s,
+        &opts,
+        &mut rec,
+        &mut |_, row| stream.push(row),
+        &mut |t| bar.set_position((t * 1000.0) as u64),
+    );
+    bar.finish_and_clear();
+    let (traces, max_relative_angle, element_traces) = stream.finish(&mech.name)?;
     Ok(SweepRun {
         analysis: spec.name.clone(),
         amplitude: job.amplitude,
         direction: job.direction,
         locked: job.locked,
         traces,
-        max_relative_angle: rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max),
+        max_relative_angle,
         sim: info,
         time_series: sim::time_series(mech, body, rec, elements.len()),
         elements: element_traces,
