@@ -274,3 +274,142 @@ impl PeakStream {
         super::findings::refine_peak_at(&y, self.slopes.then_some(&dy[..]), self.dt, self.mean, self.at, best)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::findings::refined_peak;
+    use crate::signal::stft_order_traces;
+
+    /// A deterministic broadband test signal: a swept line, its double and a pseudo-random
+    /// part (an LCG), so that every bin of every window carries something.
+    fn signal(len: usize, fs: f64, seed: u64) -> Vec<f64> {
+        let mut state = seed;
+        (0..len)
+            .map(|i| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let noise = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+                let t = i as f64 / fs;
+                3.0 * (2.0 * PI * (40.0 * t + 0.5 * t * t)).sin() + 0.7 * (2.0 * PI * (80.0 * t + t * t)).cos() + noise
+            })
+            .collect()
+    }
+
+    /// Streamed and batch traces are the same numbers, not close ones: both transform the same
+    /// samples with the same arithmetic (one `HannSpectrum`), so any difference at all would be a
+    /// window taken at the wrong samples. Covered: hops shorter than, equal to and longer than
+    /// the window, records ending inside a window, several channels.
+    #[test]
+    fn streamed_traces_are_the_batch_traces() {
+        let fs = 400.0;
+        let omega = 2.0 * PI * 10.0;
+        let order_at = |t: f64| 4.0 + 0.1 * t;
+        for (window_s, hop_s, len) in
+            [(2.0, 0.25, 4000), (1.0, 1.0, 2999), (0.5, 0.8, 3001), (2.0, 0.0001, 900), (2.0, 50.0, 2000)]
+        {
+            let opts = StftOptions { window_s, hop_s, half_width_bins: 2 };
+            let channels: Vec<Vec<f64>> = (0..3).map(|c| signal(len, fs, 7 + c)).collect();
+            let mut stream = StftStream::new(3, fs, omega, &order_at, &[1.0, 2.0], &opts);
+            for i in 0..len {
+                let row: Vec<f64> = channels.iter().map(|c| c[i]).collect();
+                stream.push(&row);
+            }
+            assert_eq!(stream.len(), len);
+            for (c, got) in stream.finish().into_iter().enumerate() {
+                let want = stft_order_traces(&channels[c], fs, omega, &order_at, &[1.0, 2.0], &opts);
+                assert!(want.as_ref().is_ok_and(|t| !t[0].is_empty()), "{window_s} {hop_s}: {want:?}");
+                assert_eq!(got, want, "window {window_s} s, hop {hop_s} s, {len} samples, channel {c}");
+            }
+        }
+    }
+
+    /// A sinusoid on a bin reads its amplitude (the Parseval calibration of the module docs, an
+    /// independent closed form): 1e-12 is rounding over a 2000-point FFT.
+    #[test]
+    fn a_sinusoid_on_a_bin_reads_its_amplitude() {
+        let (fs, omega, n) = (1000.0, 2.0 * PI * 5.0, 3.0);
+        // 15 Hz on 2 s windows: bin 30.
+        let opts = StftOptions::default();
+        let order_at = |_: f64| n;
+        let mut stream = StftStream::new(1, fs, omega, &order_at, &[1.0], &opts);
+        for i in 0..6000 {
+            stream.push(&[2.5 + 1.75 * (2.0 * PI * 15.0 * i as f64 / fs + 0.3).sin()]);
+        }
+        let traces = stream.finish().remove(0).unwrap();
+        assert_eq!(traces[0].len(), (6000 - 2000) / 250 + 1);
+        for a in &traces[0].amplitude {
+            assert!((a - 1.75).abs() < 1e-12, "{a}");
+        }
+    }
+
+    /// Each channel fails as the batch function fails on its own samples, in the batch's order of
+    /// checks: a non-finite sample (only in its channel), a record shorter than a window, a
+    /// refused parameter, a band off the spectrum.
+    #[test]
+    fn errors_are_the_batch_errors() {
+        let fs = 200.0;
+        let omega = 2.0 * PI;
+        let run = |values: &[Vec<f64>], order: f64, opts: &StftOptions, multiples: &[f64]| {
+            let order_at = move |_: f64| order;
+            let mut stream = StftStream::new(values.len(), fs, omega, &order_at, multiples, opts);
+            for i in 0..values[0].len() {
+                let row: Vec<f64> = values.iter().map(|c| c[i]).collect();
+                stream.push(&row);
+            }
+            let batch: Vec<_> =
+                values.iter().map(|v| stft_order_traces(v, fs, omega, &order_at, multiples, opts)).collect();
+            (stream.finish(), batch)
+        };
+        let opts = StftOptions::default();
+        // 400-sample windows every 50: the last of 1020 samples ends at sample 999.
+        let good = signal(1020, fs, 1);
+        let mut bad = good.clone();
+        bad[1010] = f64::NAN; // after the last window: the batch refuses it all the same
+        let (got, want) = run(&[good.clone(), bad], 10.0, &opts, &[1.0]);
+        assert!(got[0].is_ok() && matches!(got[1], Err(SignalError::NonFinite { index: 1010, .. })));
+        // NaN is not equal to itself: the errors are compared as printed.
+        assert_eq!(format!("{got:?}"), format!("{want:?}"));
+        for (values, order, opts, multiples) in [
+            (vec![good[..300].to_vec()], 10.0, opts, vec![1.0]),
+            (vec![good.clone()], 10.0, StftOptions { hop_s: -1.0, ..opts }, vec![1.0]),
+            (vec![good.clone()], 10.0, StftOptions { window_s: 0.01, ..opts }, vec![1.0]),
+            (vec![good.clone()], 10.0, opts, vec![]),
+            (vec![good.clone()], 99.0, opts, vec![1.0]),
+            (vec![good.clone()], f64::NAN, opts, vec![1.0]),
+        ] {
+            let (got, want) = run(&values, order, &opts, &multiples);
+            assert!(want[0].is_err(), "{opts:?} {order}");
+            assert_eq!(format!("{got:?}"), format!("{want:?}"), "{opts:?} {order} {multiples:?}");
+        }
+    }
+
+    /// The streamed peak is `refined_peak` of the whole record, bit for bit, wherever the largest
+    /// sample falls (first, second, middle, last but one, last; ties; records of 1 to 5 samples),
+    /// with slopes and without.
+    #[test]
+    fn streamed_peak_is_the_refined_peak() {
+        let base = signal(64, 100.0, 3);
+        let slopes = signal(64, 100.0, 4);
+        let mut cases: Vec<Vec<f64>> = (1..=6).map(|n| base[..n].to_vec()).collect();
+        for at in [0, 1, 2, 31, 61, 62, 63] {
+            let mut y = base.clone();
+            y[at] = 9.0;
+            cases.push(y.clone());
+            // A tie later on: the first of equals is the peak.
+            y[(at + 5) % 64] = 9.0;
+            cases.push(y);
+        }
+        for y in &cases {
+            let dy = &slopes[..y.len()];
+            for (with_slopes, mean) in [(true, 0.0), (false, 0.0), (true, 0.4), (false, -0.3)] {
+                let mut p = PeakStream::new(0.01, mean, with_slopes);
+                for (v, d) in y.iter().zip(dy) {
+                    p.push(*v, *d);
+                }
+                let want = refined_peak(y, with_slopes.then_some(dy), 0.01, mean);
+                assert_eq!(p.finish().to_bits(), want.to_bits(), "{} samples, slopes {with_slopes}", y.len());
+            }
+        }
+        assert!(PeakStream::new(0.01, 0.0, true).finish().is_nan());
+    }
+}

@@ -288,6 +288,20 @@ fn run_one(
     job: &Job,
     progress: &Progress,
 ) -> Result<SweepRun> {
+    Ok(run_recorded(study, shared, spec, omega, job, progress, false)?.0)
+}
+
+/// [`run_one`], and with `whole_record` the recorder with every column of the run kept (the
+/// tests' reference for the analysis made as the run goes).
+fn run_recorded(
+    study: &Study,
+    shared: &sim::SharedModels,
+    spec: &SweepSpec,
+    omega: f64,
+    job: &Job,
+    progress: &Progress,
+    whole_record: bool,
+) -> Result<(SweepRun, Option<crate::time::probe::Recorder>)> {
     let (from, to) = match job.direction {
         Direction::Up => (spec.order_min, spec.order_max),
         Direction::Down => (spec.order_max, spec.order_min),
@@ -318,8 +332,9 @@ fn run_one(
     let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, elements)?;
     // The analysis runs on the samples as they come; the record is kept only for the time
     // series, when it is asked for (its columns, not the elements' or the analysis's own).
-    let series = if spec.write_time_series { rec.columns.len() - 2 * elements.len() } else { 0 };
-    rec.store_only(|c| c == sim::ACCEL || (sim::SERIES..series).contains(&c));
+    let series = rec.columns.len() - 2 * elements.len();
+    let asked = spec.write_time_series;
+    rec.store_only(|c| whole_record || (asked && (c == sim::ACCEL || (sim::SERIES..series).contains(&c))));
     let opts = sim::options(&study.spec.integration);
     let fs = study.spec.integration.sample_hz;
     let order = excitation.order;
@@ -339,7 +354,8 @@ fn run_one(
     );
     bar.finish_and_clear();
     let (traces, max_relative_angle, element_traces) = stream.finish(&mech.name)?;
-    Ok(SweepRun {
+    let whole = whole_record.then(|| rec.clone());
+    let run = SweepRun {
         analysis: spec.name.clone(),
         amplitude: job.amplitude,
         direction: job.direction,
@@ -349,7 +365,8 @@ fn run_one(
         sim: info,
         time_series: sim::time_series(mech, body, rec, elements.len()),
         elements: element_traces,
-    })
+    };
+    Ok((run, whole))
 }
 
 fn fmt_intervals(iv: &[(f64, f64)]) -> String {
@@ -501,4 +518,76 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
         let _ = writeln!(md, "| run | joint | largest amplitude | peak | torque |\n|---|---|---|---|---|\n{rows}");
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::Source;
+    use crate::study::LoadOptions;
+
+    /// The analysis made as the run goes equals the analysis of the whole record of the same run
+    /// (the independent route: the batch STFT, [`super::super::elements::traces`] and the
+    /// column's maximum), on a shaft with springs, dampers and a pendulum, so every element has a
+    /// torque: the same numbers, bit for bit, since both routes do the same arithmetic on the
+    /// same samples. Up and down, one with the ramp-in longer than a window.
+    #[test]
+    fn the_streamed_analysis_is_the_whole_record_analysis() {
+        let text = r#"Study(name: "s", mechanism: "shaft_cpva.ron", spin_joint: "spin", response_body: "rotor",
+            integration: (sample_hz: 1000.0),
+            analyses: [OrderSweep(name: "sweep", rpm: 1000.0, order_min: 2.9, order_max: 3.3, duration_s: 12.0,
+                                  amplitudes: [300.0])])"#;
+        let study = Study::from_source(Source::from_text("examples/s.ron", text), &LoadOptions::default()).unwrap();
+        assert!(study.elements.len() >= 2, "{:?}", study.elements);
+        let fs = study.spec.integration.sample_hz;
+        let omega = rpm_to_rad_s(1000.0);
+        for (direction, ramp_s) in [(Direction::Up, 2.0), (Direction::Down, 2.5)] {
+            let spec = SweepSpec {
+                name: "sweep".into(),
+                rpm: 1000.0,
+                order_min: 2.9,
+                order_max: 3.3,
+                duration_s: 12.0,
+                amplitudes: vec![300.0],
+                directions: vec![direction],
+                multiples: vec![1.0, 2.0],
+                ramp_s,
+                mean_torque: None,
+                write_time_series: false,
+                excite: Vec::new(),
+            };
+            let job = Job { amplitude: 300.0, direction, locked: false };
+            let shared = study.shared_models(false);
+            let progress = Progress::new(false);
+            let (run, rec) = run_recorded(&study, &shared, &spec, omega, &job, &progress, true).unwrap();
+            let rec = rec.unwrap();
+            assert!(run.sim.error.is_none() && rec.time.len() == 12001, "{} samples", rec.time.len());
+            let (from, to) = if direction == Direction::Up { (2.9, 3.3) } else { (3.3, 2.9) };
+            let order = Order::Sweep { from, to, duration_s: 12.0 };
+            let order_at = move |t: f64| order.at(t);
+            let tracking = &study.spec.order_tracking;
+            let accel = &rec.columns[sim::ACCEL];
+            let want = sim::track("s", accel, fs, omega, &order_at, &spec.multiples, tracking).unwrap();
+            assert_eq!(run.traces, want);
+            assert_eq!(run.traces[0].len(), (12000 - 2000) / 250 + 1);
+            let relative = rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max);
+            assert_eq!(run.max_relative_angle, relative);
+            let cols = sim::element_columns(&rec, study.elements.len());
+            let skip = (ramp_s * fs).ceil() as usize;
+            let want = super::super::elements::traces(
+                &study.mechanism,
+                &study.elements,
+                &cols,
+                fs,
+                omega,
+                &order_at,
+                &spec.multiples,
+                tracking,
+                skip,
+            )
+            .unwrap();
+            assert!(want.iter().all(|e| e.torque.is_some() && e.peak > 0.0), "{want:?}");
+            assert_eq!(run.elements, want);
+        }
+    }
 }
