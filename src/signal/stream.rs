@@ -5,9 +5,10 @@
 //! window, real FFT and band summation as the batch function (both go through one
 //! `HannSpectrum`), so every amplitude is the batch's to the last bit. Each channel holds the
 //! samples from the next window's start on; when N have arrived the window is transformed and the
-//! first `hop` samples are dropped (with a hop longer than N the samples between windows are never
-//! kept). Several channels sampled at the same instants (a response and the elements of one run)
-//! share the clock, the order function and one FFT plan with its buffers: memory is N samples per
+//! next one starts `hop` samples later; the samples before it are dropped once N of them have
+//! gathered (with a hop longer than N the samples between windows are never kept). Several
+//! channels sampled at the same instants (a response and the elements of one run) share the
+//! clock, the order function and one FFT plan with its buffers: memory is under 2N samples per
 //! channel plus one plan, whatever the run's length.
 //!
 //! Errors are those of the batch function on the same samples, reported in the same order of
@@ -60,7 +61,7 @@ fn window_samples(
 
 /// One signal of an [`StftStream`].
 struct Channel {
-    /// Samples from the next window's start on (at most N).
+    /// Samples from `offset` samples before the next window's start on (fewer than 2N).
     held: Vec<f64>,
     /// The first non-finite sample, `(index, value)`.
     nonfinite: Option<(usize, f64)>,
@@ -68,9 +69,17 @@ struct Channel {
     traces: Vec<OrderTrace>,
 }
 
-/// [`super::stft_order_traces`] of several signals sampled together, fed sample by sample (see the
-/// [module docs](self)): `push` one value per channel at each sample, then `finish` for each
-/// channel's traces, equal to the batch function's on the same samples.
+/// [`super::stft_order_traces`] of several signals sampled together, fed sample by sample:
+/// [`StftStream::push`] one value per channel at each sample, then [`StftStream::finish`] for each
+/// channel's traces, equal to the batch function's on the same samples to the last bit.
+///
+/// The same windows (N samples, starts `k·hop`), mean removal, periodic Hann window, real FFT and
+/// band summation as the batch function (one shared implementation). Each channel holds the
+/// samples from the next window's start on; when N have arrived the window is transformed and the
+/// next one starts `hop` samples later. The channels share the clock, the order function and one
+/// FFT plan with its buffers: memory is under 2N samples per channel plus one plan, whatever the
+/// run's length. Errors are the batch function's on the same samples, in its order of checks (see
+/// [`StftStream::finish`]).
 pub struct StftStream<'a> {
     fs: f64,
     omega: f64,
@@ -84,6 +93,10 @@ pub struct StftStream<'a> {
     count: usize,
     /// Index of the next window's first sample.
     next_start: usize,
+    /// Where the next window starts in every channel's `held`: the samples before it are dropped
+    /// once it reaches N, so each sample is moved less than once on average (dropping them
+    /// after every window moved each one N/hop times, 3 % of a sweep's instructions).
+    offset: usize,
     channels: Vec<Channel>,
     /// The first window that failed; no window is transformed after it.
     window_error: Option<SignalError>,
@@ -115,9 +128,10 @@ impl<'a> StftStream<'a> {
             hop,
             count: 0,
             next_start: 0,
+            offset: 0,
             channels: (0..channels)
                 .map(|_| Channel {
-                    held: Vec::with_capacity(n.unwrap_or(0)),
+                    held: Vec::with_capacity(2 * n.unwrap_or(0)),
                     nonfinite: None,
                     traces: multiples.iter().map(|&m| OrderTrace::new(m, 0)).collect(),
                 })
@@ -142,13 +156,14 @@ impl<'a> StftStream<'a> {
     }
 
     /// Adds one sample of every channel (`values[c]` for channel c; missing values count as NaN).
+    #[inline]
     pub fn push(&mut self, values: &[f64]) {
         let i = self.count;
         self.count += 1;
-        let Some(spec) = self.spectrum.as_mut() else { return };
-        let keep = i >= self.next_start && self.window_error.is_none();
-        for (c, ch) in self.channels.iter_mut().enumerate() {
-            let v = values.get(c).copied().unwrap_or(f64::NAN);
+        let keep = i >= self.next_start && self.window_error.is_none() && self.spectrum.is_some();
+        let mut values = values.iter();
+        for ch in &mut self.channels {
+            let v = values.next().copied().unwrap_or(f64::NAN);
             if !v.is_finite() && ch.nonfinite.is_none() {
                 ch.nonfinite = Some((i, v));
             }
@@ -156,19 +171,25 @@ impl<'a> StftStream<'a> {
                 ch.held.push(v);
             }
         }
-        if !keep || self.channels.first().is_none_or(|ch| ch.held.len() < spec.n) {
-            return;
+        if keep && self.channels.first().is_some_and(|ch| ch.held.len() == self.offset + self.window_len()) {
+            self.window();
         }
+    }
+
+    /// Transforms the window that has just filled up in every channel and moves to the next.
+    fn window(&mut self) {
+        let Some(spec) = self.spectrum.as_mut() else { return };
         // A full window: the batch's arithmetic, channel by channel.
         let n = spec.n;
         let time_s = (self.next_start as f64 + 0.5 * n as f64) / self.fs;
         let bin_hz = self.fs / n as f64;
         let half = self.opts.half_width_bins;
+        let window = self.offset..self.offset + n;
         match order_checked(self.order_at, time_s) {
             Err(e) => self.window_error = Some(e),
             Ok(order) => {
                 'channels: for ch in &mut self.channels {
-                    spec.transform(&ch.held);
+                    spec.transform(&ch.held[window.clone()]);
                     for trace in &mut ch.traces {
                         let freq_hz = trace.multiple * order * self.omega / (2.0 * PI);
                         match spec.band(freq_hz / bin_hz, half) {
@@ -195,12 +216,19 @@ impl<'a> StftStream<'a> {
             }
         }
         self.next_start = self.next_start.saturating_add(self.hop);
-        for ch in &mut self.channels {
-            ch.held.drain(..self.hop.min(n));
+        self.offset = self.offset.saturating_add(self.hop);
+        if self.offset >= n {
+            for ch in &mut self.channels {
+                ch.held.drain(..self.offset.min(ch.held.len()));
+            }
+            self.offset = 0;
         }
     }
 
-    /// Each channel's traces, or the error [`super::stft_order_traces`] gives on its samples.
+    /// Each channel's traces, or the error [`super::stft_order_traces`] gives on its samples: a
+    /// parameter error, then the channel's first non-finite sample, then a record shorter than
+    /// one window, then the first window whose order or band failed (no later window was
+    /// transformed).
     pub fn finish(self) -> Vec<Result<Vec<OrderTrace>, SignalError>> {
         let (count, window_error) = (self.count, self.window_error);
         let (fs, omega, multiples, opts) = (self.fs, self.omega, self.multiples, self.opts);
@@ -248,11 +276,14 @@ impl PeakStream {
     }
 
     /// Adds one sample `y` with its slope `dy` (ignored without slopes).
+    #[inline]
     pub fn push(&mut self, y: f64, dy: f64) {
         let i = self.count;
         let v = (y - self.mean).abs();
-        // The fold of `refined_peak`: a sample replaces the best unless the best is ≥ it.
-        if self.best.is_none_or(|(_, m)| !(m >= v)) {
+        // The fold of `refined_peak`: a sample replaces the best unless the best is ≥ it (so a
+        // NaN replaces, and is replaced, as there).
+        let keeps = |m: f64| matches!(m.partial_cmp(&v), Some(std::cmp::Ordering::Greater | std::cmp::Ordering::Equal));
+        if self.best.is_none_or(|(_, m)| !keeps(m)) {
             self.best = Some((i, v));
             self.around.clear();
             let before = i.min(2);
@@ -397,6 +428,9 @@ mod tests {
             cases.push(y.clone());
             // A tie later on: the first of equals is the peak.
             y[(at + 5) % 64] = 9.0;
+            cases.push(y.clone());
+            // A NaN takes the place of the best in `refined_peak`'s fold, and loses it again.
+            y[(at + 9) % 64] = f64::NAN;
             cases.push(y);
         }
         for y in &cases {

@@ -196,8 +196,8 @@ fn tracked(
 /// What an order sweep reads off one run, computed as the run goes from the rows of a
 /// [`recorder`] (so no column needs to be kept): the response's order traces, the largest
 /// relative excursion and the elements' traces and peaks, each equal to the same analysis of the
-/// whole record ([`track`], [`super::elements::ElementStreams`]). It holds one tracking window
-/// per channel.
+/// whole record ([`track`], [`super::elements::ElementStreams`]). It holds under two tracking
+/// windows per channel.
 pub(crate) struct RunStream<'a> {
     stft: StftStream<'a>,
     elements: ElementStreams<'a>,

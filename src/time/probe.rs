@@ -286,6 +286,8 @@ pub struct Recorder {
     last_t: f64,
     /// Per probe: whether its column is kept (all by default, see [`Recorder::store_only`]).
     stored: Vec<bool>,
+    /// Whether any column is kept (then the time column is).
+    any_stored: bool,
     /// The last sample's values, one per probe.
     row: Vec<f64>,
     /// Sample times, s (empty when no column is kept).
@@ -371,6 +373,7 @@ impl Recorder {
             min_gap_s: 0.0,
             last_t: f64::NEG_INFINITY,
             stored: vec![true; probes.len()],
+            any_stored: true,
             row: vec![0.0; probes.len()],
             time: Vec::new(),
             columns: vec![Vec::new(); probes.len()],
@@ -387,11 +390,10 @@ impl Recorder {
                 self.columns[i] = Vec::new();
             }
         }
-    }
-
-    /// Whether any column is kept.
-    fn stores(&self) -> bool {
-        self.stored.iter().any(|&s| s)
+        self.any_stored = self.stored.iter().any(|&s| s);
+        if !self.any_stored {
+            self.time = Vec::new();
+        }
     }
 
     /// Takes the joint torques of `kane` (an engine of the recorder's mechanism, as the run
@@ -439,7 +441,7 @@ impl Recorder {
 
     /// Reserves room for `samples` more samples (a 240 s run at 2 kHz: 480,001).
     pub fn reserve(&mut self, samples: usize) {
-        if self.stores() {
+        if self.any_stored {
             self.time.reserve(samples);
         }
         self.columns.iter_mut().zip(&self.stored).filter(|(_, s)| **s).for_each(|(c, _)| c.reserve(samples));
@@ -525,9 +527,13 @@ impl Recorder {
             return None;
         }
         self.last_t = t;
-        if self.stores() {
-            self.time.push(t);
+        if !self.any_stored {
+            for i in 0..self.probes.len() {
+                self.row[i] = self.value(i, t, x, xdot);
+            }
+            return Some(&self.row);
         }
+        self.time.push(t);
         for i in 0..self.probes.len() {
             let v = self.value(i, t, x, xdot);
             self.row[i] = v;

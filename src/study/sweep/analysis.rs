@@ -103,7 +103,7 @@ impl Analysis for SweepSpec {
         let f = s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * s.rpm / 60.0;
         let r = runs as f64;
         // The analysis streams (`sim::RunStream`): per channel (the response, each element's
-        // coordinate and torque) one tracking window and its traces; the record itself only
+        // coordinate and torque) under two tracking windows and its traces; the record itself only
         // when the time series is asked for.
         let channels = 1.0 + 2.0 * study.elements.len() as f64;
         let window = spec.order_tracking.window_s * fs * 8.0;
@@ -111,7 +111,7 @@ impl Analysis for SweepSpec {
         AnalysisPlan {
             runs,
             samples_per_run: samples,
-            memory_bytes: r * (samples * 8.0 * series_cols + channels * (window + traces) + 4.0 * window),
+            memory_bytes: r * (samples * 8.0 * series_cols + channels * (2.0 * window + traces) + 4.0 * window),
             output_bytes: r * samples * series_cols * CSV_CELL_BYTES
                 + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
             cpu_s: r * (time_run_s(study, s.duration_s, f) + stft_s(windows, spec.order_tracking.window_s * fs)),
