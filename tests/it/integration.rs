@@ -421,12 +421,12 @@ fn a_streamed_run_hands_on_what_a_recorder_keeps() {
     for (i, (t, row)) in rows.iter().enumerate() {
         assert_eq!(*t, rec.time[i]);
         assert_eq!(row[1], rec.columns[1][i]);
-        for c in 0..3 {
-            let (a, b) = (row[c], whole.columns[c][i]);
+        for (c, (&a, column)) in row.iter().zip(&whole.columns).enumerate() {
+            let b = column[i];
             if *t < 0.5 {
                 assert_eq!(a, b, "column {c} at {t} s");
             } else {
-                let peak = whole.columns[c].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let peak = column.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 assert!((a - b).abs() < 1e-9 * peak, "column {c} at {t} s: {a} vs {b}");
             }
         }
