@@ -314,6 +314,31 @@ impl HannSpectrum {
         2.0 * (energy / self.norm).sqrt()
     }
 
+    /// The time-domain trace point of multiple `multiple` in the last transform, the window
+    /// centred at `time_s` with excitation order `order` at the speed `omega` (rad/s), bins
+    /// `bin_hz` wide: the band around `multiple·order·Ω/2π` and its amplitude, or the
+    /// out-of-band error naming the line.
+    fn trace_point(
+        &self,
+        (multiple, order, omega): (f64, f64, f64),
+        time_s: f64,
+        bin_hz: f64,
+        half: usize,
+    ) -> Result<TracePoint, SignalError> {
+        let freq_hz = multiple * order * omega / (2.0 * PI);
+        let centre = self.band(freq_hz / bin_hz, half).map_err(|(lo, hi)| SignalError::OutOfBand {
+            multiple,
+            time_s,
+            value: freq_hz,
+            unit: "Hz",
+            lo,
+            hi,
+            last: self.last_bin(),
+            resolution: bin_hz,
+        })?;
+        Ok(TracePoint { time_s, order, freq_hz, amplitude: self.band_amplitude(centre, half) })
+    }
+
     /// The band's centre bin for a line at `bins` (fractional bin position), or the out-of-band
     /// bounds `(lo, hi)` if it does not fit in 1..=last_bin.
     ///

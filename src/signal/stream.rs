@@ -16,15 +16,12 @@
 //! non-finite sample of the channel, then a record shorter than one window, then the first
 //! window whose order or band fails (no later window is transformed after that).
 
-use super::{
-    HannSpectrum, MAX_POINTS, OrderTrace, SignalError, StftOptions, TracePoint, check_common, order_checked, positive,
-};
-use std::f64::consts::PI;
+use super::{HannSpectrum, MAX_POINTS, OrderTrace, SignalError, StftOptions, check_common, order_checked, positive};
 
-/// The window length in samples of [`super::stft_order_traces`], or the error it gives for these
-/// parameters before it looks at the samples (`nonfinite`: the first non-finite sample, which the
-/// batch checks between the parameters and the window length).
-fn window_samples(
+/// The window length in samples of [`super::stft_order_traces`] and of the stream, or the error
+/// for these parameters and `nonfinite` (the first non-finite sample, checked between the
+/// parameters and the window length), in that order.
+pub(super) fn window_samples(
     fs_hz: f64,
     omega_rad_s: f64,
     multiples: &[f64],
@@ -191,23 +188,10 @@ impl<'a> StftStream<'a> {
                 'channels: for ch in &mut self.channels {
                     spec.transform(&ch.held[window.clone()]);
                     for trace in &mut ch.traces {
-                        let freq_hz = trace.multiple * order * self.omega / (2.0 * PI);
-                        match spec.band(freq_hz / bin_hz, half) {
-                            Ok(centre) => {
-                                let amplitude = spec.band_amplitude(centre, half);
-                                trace.push(TracePoint { time_s, order, freq_hz, amplitude });
-                            }
-                            Err((lo, hi)) => {
-                                self.window_error = Some(SignalError::OutOfBand {
-                                    multiple: trace.multiple,
-                                    time_s,
-                                    value: freq_hz,
-                                    unit: "Hz",
-                                    lo,
-                                    hi,
-                                    last: spec.last_bin(),
-                                    resolution: bin_hz,
-                                });
+                        match spec.trace_point((trace.multiple, order, self.omega), time_s, bin_hz, half) {
+                            Ok(point) => trace.push(point),
+                            Err(e) => {
+                                self.window_error = Some(e);
                                 break 'channels;
                             }
                         }
@@ -311,6 +295,7 @@ mod tests {
     use super::*;
     use crate::signal::findings::refined_peak;
     use crate::signal::stft_order_traces;
+    use std::f64::consts::PI;
 
     /// A deterministic broadband test signal: a swept line, its double and a pseudo-random
     /// part (an LCG), so that every bin of every window carries something.

@@ -168,12 +168,8 @@ pub(crate) fn track(
     t: &TrackingSpec,
 ) -> Result<Vec<OrderTrace>> {
     let opts = StftOptions { window_s: t.window_s, hop_s: t.hop_s, half_width_bins: t.half_width_bins };
-    if signal.len() < (t.window_s * fs).round() as usize {
-        // A run that failed before one full window has no trace; its failure is reported.
-        return Ok(multiples.iter().map(|&m| OrderTrace { multiple: m, ..OrderTrace::default() }).collect());
-    }
-    stft_order_traces(signal, fs, omega, order_at, multiples, &opts)
-        .map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
+    let traces = stft_order_traces(signal, fs, omega, order_at, multiples, &opts);
+    tracked(mechanism, traces, signal.len(), fs, multiples, t)
 }
 
 /// The study's reading of one channel of a run's [`StftStream`]: [`track`] of its whole record
@@ -188,6 +184,7 @@ fn tracked(
     t: &TrackingSpec,
 ) -> Result<Vec<OrderTrace>> {
     if len < (t.window_s * fs).round() as usize {
+        // A run that failed before one full window has no trace; its failure is reported.
         return Ok(multiples.iter().map(|&m| OrderTrace { multiple: m, ..OrderTrace::default() }).collect());
     }
     result.map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })

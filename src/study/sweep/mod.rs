@@ -96,7 +96,7 @@ pub(crate) fn compute(study: &Study, spec: &SweepSpec, progress: &Progress) -> (
     }
     let shared = study.shared_models(study.locked.is_some());
     let results: Vec<Result<SweepRun>> =
-        jobs.par_iter().map(|job| run_one(study, &shared, spec, omega, job, progress)).collect();
+        jobs.par_iter().map(|job| Ok(run_recorded(study, &shared, spec, omega, job, progress, false)?.0)).collect();
     let mut runs = Vec::with_capacity(results.len());
     let mut failures = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -280,19 +280,8 @@ pub(crate) fn order_name(m: f64) -> String {
     }
 }
 
-fn run_one(
-    study: &Study,
-    shared: &sim::SharedModels,
-    spec: &SweepSpec,
-    omega: f64,
-    job: &Job,
-    progress: &Progress,
-) -> Result<SweepRun> {
-    Ok(run_recorded(study, shared, spec, omega, job, progress, false)?.0)
-}
-
-/// [`run_one`], and with `whole_record` the recorder with every column of the run kept (the
-/// tests' reference for the analysis made as the run goes).
+/// One run of the sweep, analysed as it goes; with `whole_record` the recorder keeps every column
+/// of the run too, and is returned (the tests' reference for the streamed analysis).
 fn run_recorded(
     study: &Study,
     shared: &sim::SharedModels,
