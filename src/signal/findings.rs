@@ -181,7 +181,7 @@ mod tests {
 /// misses a line at ω by up to `1 − cos(ωh/2)`: 2.7 % for 150 Hz at 2 kHz; the refined one by
 /// ~(ωh)⁴/400.
 pub fn refined_peak(y: &[f64], dy: Option<&[f64]>, dt: f64, mean: f64) -> f64 {
-    let Some((k, mut best)) =
+    let Some((k, best)) =
         y.iter().map(|v| (v - mean).abs()).enumerate().fold(None, |b: Option<(usize, f64)>, (i, v)| match b {
             Some((_, m)) if m >= v => b,
             _ => Some((i, v)),
@@ -189,6 +189,13 @@ pub fn refined_peak(y: &[f64], dy: Option<&[f64]>, dt: f64, mean: f64) -> f64 {
     else {
         return f64::NAN;
     };
+    refine_peak_at(y, dy, dt, mean, k, best)
+}
+
+/// The refinement of [`refined_peak`] about its largest sample `k`, whose `|y − mean|` is `best`:
+/// it reads `y` and `dy` at `k − 2 ..= k + 2` only, and where they end, so the five samples around
+/// the peak give the whole record's answer (the streamed peak, [`super::PeakStream`]).
+pub(crate) fn refine_peak_at(y: &[f64], dy: Option<&[f64]>, dt: f64, mean: f64, k: usize, mut best: f64) -> f64 {
     let n = y.len();
     // Slopes in sample-index units at i.
     let slope = |i: usize| match dy {

@@ -25,6 +25,11 @@
 //! `calibration_of_a_pure_sinusoid`). The negative-frequency image is ignored, so the band must sit
 //! well away from DC and Nyquist (enforced: it must lie within bins 1..N/2−1).
 //!
+//! [`StftStream`] is the STFT fed sample by sample (several signals sharing one clock and one
+//! FFT plan), with the batch function's amplitudes to the last bit; with [`PeakStream`] (the
+//! refined peak of [`findings::refined_peak`], streamed) it lets a long run keep one analysis
+//! window per signal instead of its whole record.
+//!
 //! [`findings`] reads the traces: minima after the ramp-in, where the up and the down sweep
 //! differ, and where a sweep jumps.
 
@@ -32,10 +37,12 @@ mod angle;
 pub mod findings;
 mod order_map;
 mod stft;
+mod stream;
 
 pub use angle::{AngleOptions, AngleSamples, angle_domain_order_traces, resample_at_constant_angle};
 pub use order_map::{OrderMap, order_rpm_map};
 pub use stft::{StftOptions, stft_order_traces};
+pub use stream::{PeakStream, StftStream};
 
 /// The most points one analysis window (STFT window, angle-domain block) or one angle-resampled
 /// signal may have: 2²⁶ = 67 108 864 (a 2²⁶-point window costs ~1.5 GB of FFT buffers; a
@@ -305,6 +312,31 @@ impl HannSpectrum {
     fn band_amplitude(&self, centre: usize, half: usize) -> f64 {
         let energy: f64 = self.output[centre - half..=centre + half].iter().map(|c| c.norm_sqr()).sum();
         2.0 * (energy / self.norm).sqrt()
+    }
+
+    /// The time-domain trace point of multiple `multiple` in the last transform, the window
+    /// centred at `time_s` with excitation order `order` at the speed `omega` (rad/s), bins
+    /// `bin_hz` wide: the band around `multiple·order·Ω/2π` and its amplitude, or the
+    /// out-of-band error naming the line.
+    fn trace_point(
+        &self,
+        (multiple, order, omega): (f64, f64, f64),
+        time_s: f64,
+        bin_hz: f64,
+        half: usize,
+    ) -> Result<TracePoint, SignalError> {
+        let freq_hz = multiple * order * omega / (2.0 * PI);
+        let centre = self.band(freq_hz / bin_hz, half).map_err(|(lo, hi)| SignalError::OutOfBand {
+            multiple,
+            time_s,
+            value: freq_hz,
+            unit: "Hz",
+            lo,
+            hi,
+            last: self.last_bin(),
+            resolution: bin_hz,
+        })?;
+        Ok(TracePoint { time_s, order, freq_hz, amplitude: self.band_amplitude(centre, half) })
     }
 
     /// The band's centre bin for a line at `bins` (fractional bin position), or the out-of-band

@@ -1,7 +1,6 @@
 //! Time-domain order tracking by short-time Fourier transform (the study convention of docs/design.md).
 
-use super::{HannSpectrum, MAX_POINTS, OrderTrace, SignalError, TracePoint, check_common, order_checked, positive};
-use std::f64::consts::PI;
+use super::{HannSpectrum, OrderTrace, SignalError, order_checked};
 
 /// Options of [`stft_order_traces`]. The defaults are the study convention of docs/design.md.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,29 +54,10 @@ pub fn stft_order_traces(
     multiples: &[f64],
     opts: &StftOptions,
 ) -> Result<Vec<OrderTrace>, SignalError> {
-    let fs = positive("fs_hz", fs_hz)?;
-    let omega = positive("omega_rad_s", omega_rad_s)?;
-    let window_s = positive("window_s", opts.window_s)?;
-    let hop_s = positive("hop_s", opts.hop_s)?;
-    check_common(signal, multiples, opts.half_width_bins)?;
-    // NOTE: sample counts are compared in f64 before the conversion (see [`MAX_POINTS`]).
-    let n_f = (window_s * fs).round();
-    if n_f > MAX_POINTS as f64 {
-        return Err(SignalError::InvalidParameter {
-            name: "window_s",
-            value: window_s,
-            reason: "times fs_hz exceeds the cap of 2^26 samples per window (MAX_POINTS)",
-        });
-    }
-    let n = n_f as usize;
-    let min_n = 4 * opts.half_width_bins + 8;
-    if n < min_n {
-        return Err(SignalError::InvalidParameter {
-            name: "window_s",
-            value: window_s,
-            reason: "is too short for the band: it must span at least 4·half_width_bins + 8 samples",
-        });
-    }
+    // The parameters and the samples' finiteness, checked as the streamed STFT checks them.
+    let nonfinite = signal.iter().enumerate().find(|(_, x)| !x.is_finite()).map(|(i, &x)| (i, x));
+    let n = super::stream::window_samples(fs_hz, omega_rad_s, multiples, opts, nonfinite)?;
+    let (fs, omega, hop_s) = (fs_hz, omega_rad_s, opts.hop_s);
     if signal.len() < n {
         return Err(SignalError::TooShort { what: "signal", got: signal.len(), needed: n });
     }
@@ -94,20 +74,7 @@ pub fn stft_order_traces(
         let order = order_checked(order_at, time_s)?;
         spec.transform(&signal[start..start + n]);
         for trace in &mut traces {
-            let freq_hz = trace.multiple * order * omega / (2.0 * PI);
-            let centre =
-                spec.band(freq_hz / bin_hz, opts.half_width_bins).map_err(|(lo, hi)| SignalError::OutOfBand {
-                    multiple: trace.multiple,
-                    time_s,
-                    value: freq_hz,
-                    unit: "Hz",
-                    lo,
-                    hi,
-                    last: spec.last_bin(),
-                    resolution: bin_hz,
-                })?;
-            let amplitude = spec.band_amplitude(centre, opts.half_width_bins);
-            trace.push(TracePoint { time_s, order, freq_hz, amplitude });
+            trace.push(spec.trace_point((trace.multiple, order, omega), time_s, bin_hz, opts.half_width_bins)?);
         }
     }
     Ok(traces)

@@ -14,6 +14,7 @@ use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
 use crate::plot::num;
 use crate::signal::OrderTrace;
+use crate::signal::PeakStream;
 use crate::signal::findings::refined_peak;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -100,13 +101,25 @@ fn stiffness_damping(mech: &Mechanism, j: usize) -> (f64, f64) {
 
 /// The torque an element transmits at (q, q̇), N·m (N for a slide): its linear spring and
 /// damper, `k q + c q̇`, and its nonlinear couplings (stages, friction, stops), whose
-/// generalized force on the child is the reverse of what they transmit; None when the joint has
-/// none of these.
-fn element_torque(mech: &Mechanism, j: usize) -> Option<impl Fn(f64, f64) -> f64 + '_> {
+/// generalized force on the child is the reverse of what they transmit.
+struct TorqueLaw<'m> {
+    stiff: f64,
+    damp: f64,
+    couplings: &'m crate::model::coupling::Couplings,
+}
+
+impl TorqueLaw<'_> {
+    /// The torque at (q, q̇).
+    fn at(&self, q: f64, qd: f64) -> f64 {
+        self.stiff * q + self.damp * qd - self.couplings.torque(q, qd)
+    }
+}
+
+/// Joint `j`'s [`TorqueLaw`]; None when the joint has no spring, damper or coupling.
+fn element_torque(mech: &Mechanism, j: usize) -> Option<TorqueLaw<'_>> {
     let (stiff, damp) = stiffness_damping(mech, j);
     let couplings = &mech.joints[j].couplings;
-    (stiff != 0.0 || damp != 0.0 || !couplings.is_empty())
-        .then_some(move |q: f64, qd: f64| stiff * q + damp * qd - couplings.torque(q, qd))
+    (stiff != 0.0 || damp != 0.0 || !couplings.is_empty()).then_some(TorqueLaw { stiff, damp, couplings })
 }
 
 /// Per-element results of a harmonic-balance solution at the orders `multiples`·n.
@@ -201,7 +214,7 @@ pub(crate) fn from_window(
         let last = |signal: &[f64]| signal.len().saturating_sub(window);
         let preload = mech.joints[j].spring.map_or(0.0, |sp| -sp.stiffness * sp.free_angle);
         let torque = if let Some(f) = element_torque(mech, j) {
-            let t: Vec<f64> = q2.iter().zip(qd2).map(|(&q, &qd)| f(q, qd)).collect();
+            let t: Vec<f64> = q2.iter().zip(qd2).map(|(&q, &qd)| f.at(q, qd)).collect();
             let range = Range::of_samples(&t[last(&t)..], None, 1.0 / fs).shifted(preload);
             Some(ElementTorque { amplitude: amplitudes(&t)?, peak: peak(&t, None), range })
         } else {
@@ -239,6 +252,9 @@ pub struct ElementTraces {
 
 /// Per-element order traces of a sweep run, from its recorded (q, q̇) columns; `order_at` is the
 /// excitation order over time and samples before `skip` (the ramp-in) do not count for peaks.
+/// The sweep computes them as it goes ([`ElementStreams`]); this whole-record route is the
+/// tests' reference.
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn traces(
     mech: &Mechanism,
@@ -259,7 +275,7 @@ pub(crate) fn traces(
             refined_peak(&v[from..], slope.map(|d| &d[from..]), 1.0 / fs, 0.0)
         };
         let (torque, torque_peak) = if let Some(f) = element_torque(mech, j) {
-            let t: Vec<f64> = q.iter().zip(qd).map(|(&q, &qd)| f(q, qd)).collect();
+            let t: Vec<f64> = q.iter().zip(qd).map(|(&q, &qd)| f.at(q, qd)).collect();
             (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t, None))
         } else {
             (None, 0.0)
@@ -274,6 +290,99 @@ pub(crate) fn traces(
         });
     }
     Ok(out)
+}
+
+/// Per-element order traces of a sweep run computed as the run goes: [`traces`] of the whole
+/// record to the last bit, from one sample of each element's (q, q̇) at a time. The coordinate's
+/// and the torque's traces are channels of the run's [`crate::signal::StftStream`] (laid out per
+/// element: q, then the torque when the joint has one); the peaks after the ramp-in are
+/// [`PeakStream`]s.
+pub(crate) struct ElementStreams<'m> {
+    mech: &'m Mechanism,
+    elements: Vec<usize>,
+    laws: Vec<Option<TorqueLaw<'m>>>,
+    /// Per element: the coordinate's peak (Hermite with q̇) and the torque's (Catmull–Rom).
+    peaks: Vec<(PeakStream, Option<PeakStream>)>,
+    /// Samples before this index (the ramp-in) do not count for the peaks.
+    skip: usize,
+    count: usize,
+}
+
+impl<'m> ElementStreams<'m> {
+    /// Streams for `elements` of `mech` sampled at `fs`, peaks from sample `skip` on.
+    pub(crate) fn new(mech: &'m Mechanism, elements: &[usize], fs: f64, skip: usize) -> Self {
+        let laws: Vec<Option<TorqueLaw<'m>>> = elements.iter().map(|&j| element_torque(mech, j)).collect();
+        let peaks = laws
+            .iter()
+            .map(|law| {
+                (PeakStream::new(1.0 / fs, 0.0, true), law.as_ref().map(|_| PeakStream::new(1.0 / fs, 0.0, false)))
+            })
+            .collect();
+        Self { mech, elements: elements.to_vec(), laws, peaks, skip, count: 0 }
+    }
+
+    /// The number of elements.
+    pub(crate) fn elements_len(&self) -> usize {
+        self.elements.len()
+    }
+
+    /// The STFT channels the elements take.
+    pub(crate) fn channels(&self) -> usize {
+        self.laws.iter().map(|l| 1 + usize::from(l.is_some())).sum()
+    }
+
+    /// One sample: `qs` holds each element's (q, q̇) in turn; writes the elements' channel values
+    /// into `out` (in [`ElementStreams::channels`]' layout).
+    pub(crate) fn push(&mut self, qs: &[f64], out: &mut [f64]) {
+        let counts = self.count >= self.skip;
+        self.count += 1;
+        let mut c = 0;
+        for ((law, (q_peak, t_peak)), pair) in self.laws.iter().zip(&mut self.peaks).zip(qs.chunks_exact(2)) {
+            let (q, qd) = (pair[0], pair[1]);
+            out[c] = q;
+            c += 1;
+            if counts {
+                q_peak.push(q, qd);
+            }
+            if let (Some(law), Some(t_peak)) = (law, t_peak.as_mut()) {
+                let t = law.at(q, qd);
+                out[c] = t;
+                c += 1;
+                if counts {
+                    t_peak.push(t, 0.0);
+                }
+            }
+        }
+    }
+
+    /// The elements' traces from their channels' results (in the layout of
+    /// [`ElementStreams::channels`]), each through `tracked` (the study's reading of a channel:
+    /// empty traces for a record shorter than a window, an order-tracking error as the model's);
+    /// errors come in [`traces`]' order: an element's torque before its coordinate.
+    pub(crate) fn finish(
+        self,
+        results: impl IntoIterator<Item = Result<Vec<OrderTrace>>>,
+    ) -> Result<Vec<ElementTraces>> {
+        let mut results = results.into_iter();
+        let mut next = || results.next().unwrap_or_else(|| Ok(Vec::new()));
+        let mut out = Vec::with_capacity(self.elements.len());
+        for ((&j, law), (q_peak, t_peak)) in self.elements.iter().zip(&self.laws).zip(&self.peaks) {
+            let q = next();
+            let (torque, torque_peak) = match (law, t_peak) {
+                (Some(_), Some(p)) => (Some(next()?), p.finish()),
+                _ => (None, 0.0),
+            };
+            out.push(ElementTraces {
+                joint: self.mech.joints[j].name.clone(),
+                unit: self.mech.joints[j].kind.coordinate_unit(),
+                traces: q?,
+                peak: q_peak.finish(),
+                torque,
+                torque_peak,
+            });
+        }
+        Ok(out)
+    }
 }
 
 /// A column of one element over the table's rows, from a read-out of one [`ElementResponse`].

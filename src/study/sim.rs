@@ -1,11 +1,12 @@
 //! The study's glue between the engine, the integrator and order tracking: one time-domain run
 //! streamed into the few signals a study needs, with progress bars.
 
+use super::elements::{ElementStreams, ElementTraces};
 use super::{Deadline, ExciteAt, IntegrationSpec, Study, TrackingSpec};
 use crate::error::{Error, Result};
 use crate::kane::{Kane, Model};
 use crate::model::mechanism::Mechanism;
-use crate::signal::{OrderTrace, StftOptions, stft_order_traces};
+use crate::signal::{OrderTrace, StftOptions, StftStream, stft_order_traces};
 use crate::time::integrate::IntegrateOptions;
 use crate::time::probe::{Probe, Recorder};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -78,7 +79,7 @@ pub(crate) const SPIN_RATE: usize = 1;
 pub(crate) const RELATIVE: usize = 2;
 /// Columns of the response body's angle and rate, then every coordinate, when the time series is
 /// asked for.
-const SERIES: usize = 3;
+pub(crate) const SERIES: usize = 3;
 
 /// The study's recorder: the response body's angular acceleration, the spin rate and the largest
 /// relative excursion (always); with `time_series`, the body's angle and rate and every joint
@@ -167,12 +168,100 @@ pub(crate) fn track(
     t: &TrackingSpec,
 ) -> Result<Vec<OrderTrace>> {
     let opts = StftOptions { window_s: t.window_s, hop_s: t.hop_s, half_width_bins: t.half_width_bins };
-    if signal.len() < (t.window_s * fs).round() as usize {
+    let traces = stft_order_traces(signal, fs, omega, order_at, multiples, &opts);
+    tracked(mechanism, traces, signal.len(), fs, multiples, t)
+}
+
+/// The study's reading of one channel of a run's [`StftStream`]: [`track`] of its whole record
+/// (`len` samples): no trace when the run failed before one window, an order-tracking error as the
+/// model's.
+fn tracked(
+    mechanism: &str,
+    result: std::result::Result<Vec<OrderTrace>, crate::signal::SignalError>,
+    len: usize,
+    fs: f64,
+    multiples: &[f64],
+    t: &TrackingSpec,
+) -> Result<Vec<OrderTrace>> {
+    if len < (t.window_s * fs).round() as usize {
         // A run that failed before one full window has no trace; its failure is reported.
         return Ok(multiples.iter().map(|&m| OrderTrace { multiple: m, ..OrderTrace::default() }).collect());
     }
-    stft_order_traces(signal, fs, omega, order_at, multiples, &opts)
-        .map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
+    result.map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
+}
+
+/// What an order sweep reads off one run, computed as the run goes from the rows of a
+/// [`recorder`] (so no column needs to be kept): the response's order traces, the largest
+/// relative excursion and the elements' traces and peaks, each equal to the same analysis of the
+/// whole record ([`track`], [`super::elements::ElementStreams`]). It holds under two tracking
+/// windows per channel.
+pub(crate) struct RunStream<'a> {
+    stft: StftStream<'a>,
+    elements: ElementStreams<'a>,
+    n_elements: usize,
+    relative: f64,
+    channels: Vec<f64>,
+    fs: f64,
+    multiples: Vec<f64>,
+    tracking: TrackingSpec,
+}
+
+/// A [`RunStream`]'s results: the response's order traces, the largest relative excursion (rad)
+/// and the elements' traces.
+pub(crate) type RunResults = (Vec<OrderTrace>, f64, Vec<ElementTraces>);
+
+impl<'a> RunStream<'a> {
+    /// The analysis of a run of `mech` sampled at `fs` with the elements `elements` (their
+    /// peaks from sample `skip` on), the excitation order `order_at` at the mean speed `omega`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        mech: &'a Mechanism,
+        elements: &[usize],
+        fs: f64,
+        omega: f64,
+        order_at: &'a dyn Fn(f64) -> f64,
+        multiples: &[f64],
+        tracking: &TrackingSpec,
+        skip: usize,
+    ) -> Self {
+        let elements = ElementStreams::new(mech, elements, fs, skip);
+        let channels = 1 + elements.channels();
+        let opts = StftOptions {
+            window_s: tracking.window_s,
+            hop_s: tracking.hop_s,
+            half_width_bins: tracking.half_width_bins,
+        };
+        Self {
+            stft: StftStream::new(channels, fs, omega, order_at, multiples, &opts),
+            n_elements: elements.elements_len(),
+            elements,
+            relative: 0.0,
+            channels: vec![0.0; channels],
+            fs,
+            multiples: multiples.to_vec(),
+            tracking: *tracking,
+        }
+    }
+
+    /// One sample: a row of the [`recorder`]'s values.
+    pub(crate) fn push(&mut self, row: &[f64]) {
+        // As `fold(0.0, f64::max)` over the column.
+        self.relative = self.relative.max(row[RELATIVE]);
+        self.channels[0] = row[ACCEL];
+        let base = row.len() - 2 * self.n_elements;
+        self.elements.push(&row[base..], &mut self.channels[1..]);
+        self.stft.push(&self.channels);
+    }
+
+    /// The results; `mechanism` names the model in an order-tracking error.
+    pub(crate) fn finish(self, mechanism: &str) -> Result<RunResults> {
+        let len = self.stft.len();
+        let (fs, multiples, tracking) = (self.fs, self.multiples, self.tracking);
+        let mut results = self.stft.finish().into_iter().map(|r| tracked(mechanism, r, len, fs, &multiples, &tracking));
+        let traces = results.next().unwrap_or_else(|| Ok(Vec::new()))?;
+        let elements = self.elements.finish(results)?;
+        Ok((traces, self.relative, elements))
+    }
 }
 
 impl Study {

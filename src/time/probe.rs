@@ -250,7 +250,10 @@ impl Probe {
     }
 }
 
-/// Turns sampled states into one column per probe (plus the time column), kept in memory.
+/// Turns sampled states into one row of values per sample, one per probe, kept in memory as
+/// columns (plus the time column), or only handed on as the run goes ([`simulate_streamed`]):
+/// [`Recorder::store_only`] names the columns kept, so a long run analysed as it goes does not
+/// grow with its duration.
 ///
 /// Times strictly increase: a sample closer than half a sample period to the last one is the
 /// boundary of consecutive runs (see [`simulate`]) and is dropped, so a run continued in chunks
@@ -281,9 +284,15 @@ pub struct Recorder {
     mesh_gear: Vec<usize>,
     min_gap_s: f64,
     last_t: f64,
-    /// Sample times, s.
+    /// Per probe: whether its column is kept (all by default, see [`Recorder::store_only`]).
+    stored: Vec<bool>,
+    /// Whether any column is kept (then the time column is).
+    any_stored: bool,
+    /// The last sample's values, one per probe.
+    row: Vec<f64>,
+    /// Sample times, s (empty when no column is kept).
     pub time: Vec<f64>,
-    /// One column per probe, in the order given.
+    /// One column per probe, in the order given (empty for a column not kept).
     pub columns: Vec<Vec<f64>>,
 }
 
@@ -363,9 +372,28 @@ impl Recorder {
             mesh_gear,
             min_gap_s: 0.0,
             last_t: f64::NEG_INFINITY,
+            stored: vec![true; probes.len()],
+            any_stored: true,
+            row: vec![0.0; probes.len()],
             time: Vec::new(),
             columns: vec![Vec::new(); probes.len()],
         })
+    }
+
+    /// Keeps only the columns `keep` says (by column index; the time column is kept when any
+    /// is): the others are computed at every sample and handed to [`simulate_streamed`]'s sink,
+    /// but their columns stay empty. All columns are kept by default.
+    pub fn store_only(&mut self, keep: impl Fn(usize) -> bool) {
+        for (i, s) in self.stored.iter_mut().enumerate() {
+            *s = keep(i);
+            if !*s {
+                self.columns[i] = Vec::new();
+            }
+        }
+        self.any_stored = self.stored.iter().any(|&s| s);
+        if !self.any_stored {
+            self.time = Vec::new();
+        }
     }
 
     /// Takes the joint torques of `kane` (an engine of the recorder's mechanism, as the run
@@ -413,8 +441,10 @@ impl Recorder {
 
     /// Reserves room for `samples` more samples (a 240 s run at 2 kHz: 480,001).
     pub fn reserve(&mut self, samples: usize) {
-        self.time.reserve(samples);
-        self.columns.iter_mut().for_each(|c| c.reserve(samples));
+        if self.any_stored {
+            self.time.reserve(samples);
+        }
+        self.columns.iter_mut().zip(&self.stored).filter(|(_, s)| **s).for_each(|(c, _)| c.reserve(samples));
     }
 
     /// The value of probe `i` at time `t` and state `x` (and `xdot`; accelerations, reactions
@@ -490,17 +520,28 @@ impl Recorder {
         }
     }
 
-    /// Appends one sample (dropped when it repeats the last one, see the type's doc).
-    pub fn record(&mut self, t: f64, x: &[f64], xdot: Option<&[f64]>) {
+    /// Appends one sample to the kept columns and returns its values, one per probe (`None`
+    /// when the sample repeats the last one and is dropped, see the type's doc).
+    pub fn record(&mut self, t: f64, x: &[f64], xdot: Option<&[f64]>) -> Option<&[f64]> {
         if t <= self.last_t + self.min_gap_s {
-            return;
+            return None;
         }
         self.last_t = t;
+        if !self.any_stored {
+            for i in 0..self.probes.len() {
+                self.row[i] = self.value(i, t, x, xdot);
+            }
+            return Some(&self.row);
+        }
         self.time.push(t);
         for i in 0..self.probes.len() {
             let v = self.value(i, t, x, xdot);
-            self.columns[i].push(v);
+            self.row[i] = v;
+            if self.stored[i] {
+                self.columns[i].push(v);
+            }
         }
+        Some(&self.row)
     }
 
     /// Drops all but the last `keep` samples (a long run analysed window by window stays
@@ -581,15 +622,48 @@ pub fn simulate(
     rec: &mut Recorder,
     progress: &mut dyn FnMut(f64),
 ) -> Outcome {
+    simulate_streamed(kane, x0, t0, t1, opts, rec, &mut |_, _| {}, progress)
+}
+
+/// [`simulate`] that also hands every recorded sample to `sink` as it is taken: its time and
+/// its values, one per probe (kept in `rec`'s columns or not, see [`Recorder::store_only`]). A
+/// caller that analyses the samples in `sink` keeps no column and its memory does not grow with
+/// the run's length.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_streamed(
+    kane: &mut Kane,
+    x0: &[f64],
+    t0: f64,
+    t1: f64,
+    opts: &IntegrateOptions,
+    rec: &mut Recorder,
+    sink: &mut dyn FnMut(f64, &[f64]),
+    progress: &mut dyn FnMut(f64),
+) -> Outcome {
     let n = kane.ndof();
     rec.use_torques_of(kane);
-    simulate_rhs(|t, x, dx| kane.rhs(t, x, dx), n, x0, t0, t1, opts, rec, progress)
+    simulate_rhs_streamed(|t, x, dx| kane.rhs(t, x, dx), n, x0, t0, t1, opts, rec, sink, progress)
 }
 
 /// [`simulate`] for any right-hand side of a mechanism with `n` degrees of freedom, such as a
 /// [`crate::time::drive_laws::Drive`]'s.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_rhs(
+    rhs: impl FnMut(f64, &[f64], &mut [f64]) -> std::result::Result<(), crate::error::EngineError>,
+    n: usize,
+    x0: &[f64],
+    t0: f64,
+    t1: f64,
+    opts: &IntegrateOptions,
+    rec: &mut Recorder,
+    progress: &mut dyn FnMut(f64),
+) -> Outcome {
+    simulate_rhs_streamed(rhs, n, x0, t0, t1, opts, rec, &mut |_, _| {}, progress)
+}
+
+/// [`simulate_rhs`] with a sink for every recorded sample, as [`simulate_streamed`].
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_rhs_streamed(
     mut rhs: impl FnMut(f64, &[f64], &mut [f64]) -> std::result::Result<(), crate::error::EngineError>,
     n: usize,
     x0: &[f64],
@@ -597,6 +671,7 @@ pub fn simulate_rhs(
     t1: f64,
     opts: &IntegrateOptions,
     rec: &mut Recorder,
+    sink: &mut dyn FnMut(f64, &[f64]),
     progress: &mut dyn FnMut(f64),
 ) -> Outcome {
     let start = std::time::Instant::now();
@@ -618,7 +693,9 @@ pub fn simulate_rhs(
         }
     }
     let run = integrate(&mut rhs, x0, t0, t1, &opts, |s| {
-        rec.record(s.t, s.x, s.xdot);
+        if let Some(row) = rec.record(s.t, s.x, s.xdot) {
+            sink(s.t, row);
+        }
         if s.k.is_multiple_of(tick) {
             progress(s.t);
         }

@@ -8,7 +8,7 @@ use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use kanedyn::model::mechanism::Mechanism;
 use kanedyn::time::integrate::{IntegrateError, IntegrateOptions, Sample, integrate};
-use kanedyn::time::probe::{Outcome, Probe, ProbeKind, Recorder, simulate};
+use kanedyn::time::probe::{Outcome, Probe, ProbeKind, Recorder, simulate, simulate_streamed};
 use std::path::Path;
 
 /// 1000 rpm, the speed of the paper's order sweeps (section 4.1).
@@ -375,6 +375,62 @@ fn probes_resolve_by_name_and_read_the_state() {
     });
     println!("triple pendulum lower.accel: finite-difference mismatch {:.2e} of peak {peak:.1}", worst / peak);
     assert!(worst < 1e-6 * peak);
+}
+
+/// A streamed run hands its sink every sample a recorder keeps, value for value, and keeps only
+/// the columns asked for: the reference is the same run recorded whole (identical steps, so
+/// identical numbers), and a run continued in chunks streams the boundary sample once.
+#[test]
+fn a_streamed_run_hands_on_what_a_recorder_keeps() {
+    let p = CpvaParams::canonical().with_pendulums(2);
+    let mech = p.mechanism(Some(excitation(&p, 500.0, 3.0))).unwrap();
+    let probes = [
+        Probe::resolve(&mech, ProbeKind::JointRate, "spin").unwrap(),
+        Probe::resolve(&mech, ProbeKind::JointAngle, "pivot_1").unwrap(),
+        Probe::resolve(&mech, ProbeKind::BodyAccel, "rotor").unwrap(),
+    ];
+    let mut kane = Kane::new(&mech).unwrap();
+    let w = omega();
+    let x0 = [0.0, 0.2, -0.3, w, w + 1.5, w - 2.0];
+    let opts = tight();
+    let (whole, _) = run(&mut kane, &x0, 0.0, 1.0, &opts, &probes);
+    let mut rec = Recorder::new(&mech, &probes).unwrap();
+    rec.store_only(|c| c == 1);
+    let mut rows: Vec<(f64, Vec<f64>)> = Vec::new();
+    let mut x = x0.to_vec();
+    for k in 0..2 {
+        let t0 = 0.5 * k as f64;
+        let chunk = simulate_streamed(
+            &mut kane,
+            &x,
+            t0,
+            t0 + 0.5,
+            &opts,
+            &mut rec,
+            &mut |t, row| rows.push((t, row.to_vec())),
+            &mut |_| {},
+        );
+        x = chunk.x_end.expect("chunk completes");
+    }
+    assert_eq!(rows.len(), whole.time.len(), "the boundary sample is streamed once");
+    assert!(rec.columns[0].is_empty() && rec.columns[2].is_empty());
+    assert_eq!((rec.time.len(), rec.columns[1].len()), (rows.len(), rows.len()));
+    // The first chunk is the whole run's first half to the bit; the second starts from the
+    // chunk's end state, so it agrees to the integration's accuracy (the bound of
+    // `joint_rate_and_excursion_probes_and_chunked_runs`).
+    for (i, (t, row)) in rows.iter().enumerate() {
+        assert_eq!(*t, rec.time[i]);
+        assert_eq!(row[1], rec.columns[1][i]);
+        for (c, (&a, column)) in row.iter().zip(&whole.columns).enumerate() {
+            let b = column[i];
+            if *t < 0.5 {
+                assert_eq!(a, b, "column {c} at {t} s");
+            } else {
+                let peak = column.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                assert!((a - b).abs() < 1e-9 * peak, "column {c} at {t} s: {a} vs {b}");
+            }
+        }
+    }
 }
 
 /// The joint-rate and largest-excursion probes read the state as their definitions say, and a

@@ -102,10 +102,16 @@ impl Analysis for SweepSpec {
         let series_cols = if s.write_time_series { 4.0 + n } else { 0.0 };
         let f = s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * s.rpm / 60.0;
         let r = runs as f64;
+        // The analysis streams (`sim::RunStream`): per channel (the response, each element's
+        // coordinate and torque) under two tracking windows and its traces; the record itself only
+        // when the time series is asked for.
+        let channels = 1.0 + 2.0 * study.elements.len() as f64;
+        let window = spec.order_tracking.window_s * fs * 8.0;
+        let traces = windows * 32.0 * s.multiples.len() as f64;
         AnalysisPlan {
             runs,
             samples_per_run: samples,
-            memory_bytes: r * samples * 8.0 * (3.0 + series_cols) + r * windows * 32.0 * s.multiples.len() as f64,
+            memory_bytes: r * (samples * 8.0 * series_cols + channels * (2.0 * window + traces) + 4.0 * window),
             output_bytes: r * samples * series_cols * CSV_CELL_BYTES
                 + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
             cpu_s: r * (time_run_s(study, s.duration_s, f) + stft_s(windows, spec.order_tracking.window_s * fs)),

@@ -5,7 +5,7 @@ mod analysis;
 mod spec;
 pub use spec::*;
 
-use super::elements::{self, ElementTraces};
+use super::elements::ElementTraces;
 use super::sim::{self, Progress};
 use super::table::Table;
 use super::{Output, Study};
@@ -14,7 +14,7 @@ use crate::model::excitation::{Excitation, Harmonic, Order, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, Series};
 use crate::signal::OrderTrace;
 use crate::signal::findings::{at_order, branch_differences, exceeds, skip_ramp, trace_minimum};
-use crate::time::probe::{Outcome, simulate};
+use crate::time::probe::{Outcome, simulate_streamed};
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -96,7 +96,7 @@ pub(crate) fn compute(study: &Study, spec: &SweepSpec, progress: &Progress) -> (
     }
     let shared = study.shared_models(study.locked.is_some());
     let results: Vec<Result<SweepRun>> =
-        jobs.par_iter().map(|job| run_one(study, &shared, spec, omega, job, progress)).collect();
+        jobs.par_iter().map(|job| Ok(run_recorded(study, &shared, spec, omega, job, progress, false)?.0)).collect();
     let mut runs = Vec::with_capacity(results.len());
     let mut failures = Vec::new();
     for (job, r) in jobs.iter().zip(results) {
@@ -280,14 +280,17 @@ pub(crate) fn order_name(m: f64) -> String {
     }
 }
 
-fn run_one(
+/// One run of the sweep, analysed as it goes; with `whole_record` the recorder keeps every column
+/// of the run too, and is returned (the tests' reference for the streamed analysis).
+fn run_recorded(
     study: &Study,
     shared: &sim::SharedModels,
     spec: &SweepSpec,
     omega: f64,
     job: &Job,
     progress: &Progress,
-) -> Result<SweepRun> {
+    whole_record: bool,
+) -> Result<(SweepRun, Option<crate::time::probe::Recorder>)> {
     let (from, to) = match job.direction {
         Direction::Up => (spec.order_min, spec.order_max),
         Direction::Down => (spec.order_max, spec.order_min),
@@ -316,37 +319,43 @@ fn run_one(
     // The elements are the mechanism's joints; the locked twin reports none.
     let elements: &[usize] = if job.locked { &[] } else { &study.elements };
     let mut rec = sim::recorder(mech, spin, body, spec.write_time_series, elements)?;
+    // The analysis runs on the samples as they come; the record is kept only for the time
+    // series, when it is asked for (its columns, not the elements' or the analysis's own).
+    let series = rec.columns.len() - 2 * elements.len();
+    let asked = spec.write_time_series;
+    rec.store_only(|c| whole_record || (asked && (c == sim::ACCEL || (sim::SERIES..series).contains(&c))));
     let opts = sim::options(&study.spec.integration);
-    let info =
-        simulate(&mut kane, &x0, 0.0, spec.duration_s, &opts, &mut rec, &mut |t| bar.set_position((t * 1000.0) as u64));
-    bar.finish_and_clear();
-    let order = excitation.order;
-    let traces = sim::track(
-        &mech.name,
-        &rec.columns[sim::ACCEL],
-        study.spec.integration.sample_hz,
-        omega,
-        &move |t| order.at(t),
-        &spec.multiples,
-        &study.spec.order_tracking,
-    )?;
     let fs = study.spec.integration.sample_hz;
-    let cols = sim::element_columns(&rec, elements.len());
+    let order = excitation.order;
+    let order_at = move |t: f64| order.at(t);
     let skip = (spec.ramp_s * fs).ceil() as usize;
-    let tracking = &study.spec.order_tracking;
-    let element_traces =
-        elements::traces(mech, elements, &cols, fs, omega, &move |t| order.at(t), &spec.multiples, tracking, skip)?;
-    Ok(SweepRun {
+    let mut stream =
+        sim::RunStream::new(mech, elements, fs, omega, &order_at, &spec.multiples, &study.spec.order_tracking, skip);
+    let info = simulate_streamed(
+        &mut kane,
+        &x0,
+        0.0,
+        spec.duration_s,
+        &opts,
+        &mut rec,
+        &mut |_, row| stream.push(row),
+        &mut |t| bar.set_position((t * 1000.0) as u64),
+    );
+    bar.finish_and_clear();
+    let (traces, max_relative_angle, element_traces) = stream.finish(&mech.name)?;
+    let whole = whole_record.then(|| rec.clone());
+    let run = SweepRun {
         analysis: spec.name.clone(),
         amplitude: job.amplitude,
         direction: job.direction,
         locked: job.locked,
         traces,
-        max_relative_angle: rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max),
+        max_relative_angle,
         sim: info,
         time_series: sim::time_series(mech, body, rec, elements.len()),
         elements: element_traces,
-    })
+    };
+    Ok((run, whole))
 }
 
 fn fmt_intervals(iv: &[(f64, f64)]) -> String {
@@ -498,4 +507,76 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
         let _ = writeln!(md, "| run | joint | largest amplitude | peak | torque |\n|---|---|---|---|---|\n{rows}");
     }
     md
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::Source;
+    use crate::study::LoadOptions;
+
+    /// The analysis made as the run goes equals the analysis of the whole record of the same run
+    /// (the independent route: the batch STFT, [`super::super::elements::traces`] and the
+    /// column's maximum), on a shaft with springs, dampers and a pendulum, so every element has a
+    /// torque: the same numbers, bit for bit, since both routes do the same arithmetic on the
+    /// same samples. Up and down, one with the ramp-in longer than a window.
+    #[test]
+    fn the_streamed_analysis_is_the_whole_record_analysis() {
+        let text = r#"Study(name: "s", mechanism: "shaft_cpva.ron", spin_joint: "spin", response_body: "rotor",
+            integration: (sample_hz: 1000.0),
+            analyses: [OrderSweep(name: "sweep", rpm: 1000.0, order_min: 2.9, order_max: 3.3, duration_s: 12.0,
+                                  amplitudes: [300.0])])"#;
+        let study = Study::from_source(Source::from_text("examples/s.ron", text), &LoadOptions::default()).unwrap();
+        assert!(study.elements.len() >= 2, "{:?}", study.elements);
+        let fs = study.spec.integration.sample_hz;
+        let omega = rpm_to_rad_s(1000.0);
+        for (direction, ramp_s) in [(Direction::Up, 2.0), (Direction::Down, 2.5)] {
+            let spec = SweepSpec {
+                name: "sweep".into(),
+                rpm: 1000.0,
+                order_min: 2.9,
+                order_max: 3.3,
+                duration_s: 12.0,
+                amplitudes: vec![300.0],
+                directions: vec![direction],
+                multiples: vec![1.0, 2.0],
+                ramp_s,
+                mean_torque: None,
+                write_time_series: false,
+                excite: Vec::new(),
+            };
+            let job = Job { amplitude: 300.0, direction, locked: false };
+            let shared = study.shared_models(false);
+            let progress = Progress::new(false);
+            let (run, rec) = run_recorded(&study, &shared, &spec, omega, &job, &progress, true).unwrap();
+            let rec = rec.unwrap();
+            assert!(run.sim.error.is_none() && rec.time.len() == 12001, "{} samples", rec.time.len());
+            let (from, to) = if direction == Direction::Up { (2.9, 3.3) } else { (3.3, 2.9) };
+            let order = Order::Sweep { from, to, duration_s: 12.0 };
+            let order_at = move |t: f64| order.at(t);
+            let tracking = &study.spec.order_tracking;
+            let accel = &rec.columns[sim::ACCEL];
+            let want = sim::track("s", accel, fs, omega, &order_at, &spec.multiples, tracking).unwrap();
+            assert_eq!(run.traces, want);
+            assert_eq!(run.traces[0].len(), (12000 - 2000) / 250 + 1);
+            let relative = rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max);
+            assert_eq!(run.max_relative_angle, relative);
+            let cols = sim::element_columns(&rec, study.elements.len());
+            let skip = (ramp_s * fs).ceil() as usize;
+            let want = super::super::elements::traces(
+                &study.mechanism,
+                &study.elements,
+                &cols,
+                fs,
+                omega,
+                &order_at,
+                &spec.multiples,
+                tracking,
+                skip,
+            )
+            .unwrap();
+            assert!(want.iter().all(|e| e.torque.is_some() && e.peak > 0.0), "{want:?}");
+            assert_eq!(run.elements, want);
+        }
+    }
 }
