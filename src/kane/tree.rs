@@ -21,20 +21,11 @@ impl Model {
         if n <= 6 || self.form == Form::Geared {
             return None;
         }
-        let mut above = vec![NONE; n];
-        let mut cost = 0.0;
-        for (k, up) in above.iter_mut().enumerate() {
-            let mut b = self.nodes[self.joint_of[k]].parent;
-            while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
-                b = self.nodes[b].parent;
-            }
-            if b != GROUND_PARENT {
-                *up = self.nodes[b].coord;
-                if *up >= k {
-                    return None;
-                }
-            }
+        let above = self.speed_tree();
+        if above.iter().enumerate().any(|(k, &a)| a != NONE && a >= k) {
+            return None;
         }
+        let mut cost = 0.0;
         for k in 0..n {
             let (mut depth, mut a) = (1.0, above[k]);
             while a != NONE {
@@ -45,6 +36,20 @@ impl Model {
         }
         let dense = (n * n * n) as f64 / 6.0;
         (2.0 * cost < dense).then_some(above)
+    }
+
+    /// Per speed, the nearest speed above it in the tree (`NONE` for none): the parent in the
+    /// tree of M's sparsity.
+    pub(super) fn speed_tree(&self) -> Vec<usize> {
+        (0..self.n)
+            .map(|k| {
+                let mut b = self.nodes[self.joint_of[k]].parent;
+                while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
+                    b = self.nodes[b].parent;
+                }
+                if b == GROUND_PARENT { NONE } else { self.nodes[b].coord }
+            })
+            .collect()
     }
 
     /// Solves `M x = F` by the leaves-first factorisation `M = Lᵀ D L` along the speeds' tree
