@@ -30,8 +30,12 @@
 //! rate, as in the joint-rate form.
 //!
 //! A geared mechanism's reduced M couples joints across branches (`Tᵀ M T`, [`super::reduce`]):
-//! no tree recursion applies, and it keeps the dense route. Below [`super::SMALL`] + 1 speeds
-//! the fixed-size and literal-n forms are faster and the route is not taken (BENCHMARKS.md).
+//! no tree recursion applies, and it keeps the formed M (dense LDLᵀ). The route costs a constant
+//! per body, more than forming M for a shallow tree (the pair form's few ancestors per speed,
+//! the tree's factorisation linear in n): it is chosen at build only for more than six speeds
+//! and where the factorisation's work per speed exceeds a threshold measured on chains and on a
+//! rotor carrying pendulums (`Model::articulated_choice`, BENCHMARKS.md), so chains and deep
+//! trees take it and a rotor carrying many absorbers keeps the formed M along its tree.
 
 use super::{GROUND_PARENT, Model, NO_COORD, NONE, PIVOT_TOL, Workspace};
 use crate::error::EngineError;

@@ -21,7 +21,9 @@
 //! chosen when the model is built) with the same results, and a rotor carrying one path absorber
 //! a pair form of its own (`path_pair`, equal to rounding).
 //!
-//! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches; [`mapped`]
+//! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches;
+//! [`articulated`] solves for u̇ without forming M (Featherstone's articulated-body algorithm,
+//! O(n), chosen at build for deep trees); [`mapped`]
 //! takes the composite-body form to absolute speeds, [`couplings`] adds the joints' nonlinear
 //! couplings, [`reduce`](mod@reduce) reduces a geared tree to its independent speeds, [`reactions`]
 //! gives the joint reactions and [`kinematics`] world-frame poses, velocities and energies for
@@ -406,8 +408,9 @@ impl Kane {
     }
 
     /// Makes the right-hand side take the articulated-body route ([`crate::kane::articulated`])
-    /// wherever it applies (no geared couplings), whatever the size and depth of the tree (for
-    /// checks and benchmarks of the routes against each other). Returns whether it applies.
+    /// wherever it applies (no geared couplings, at most one roller set per path joint),
+    /// whatever the size and depth of the tree (for checks and benchmarks of the routes against
+    /// each other). Returns whether it applies.
     pub fn use_articulated_bodies(&mut self) -> bool {
         if !self.model.articulated_applies() {
             return false;
