@@ -2,8 +2,10 @@
 //! against the hand-written closed form of eq. (7) at the same state and time (both
 //! allocation-free, both evaluating the same excitation torque), the same rotor with its absorber
 //! on a path joint (the epicycloid of examples/cpva_epicycloid.ron, and the circle that is the
-//! paper's pendulum in s = Lφ), planar chains of N links, and the paper's rotor carrying N
-//! pendulums with M solved along the tree (the default from 7 speeds on) and densely.
+//! paper's pendulum in s = Lφ), planar chains of N links (the route chosen at build, and beside
+//! it the formed M and the articulated-body route), and the paper's rotor carrying N pendulums
+//! by the articulated-body route, with M formed and solved along the tree (chosen at build), and
+//! densely.
 
 #[path = "support/cpva_rhs.rs"]
 mod cpva_rhs;
@@ -86,15 +88,26 @@ fn rhs(c: &mut Criterion) {
     });
     for n in [2, 4, 8, 16, 32, 64] {
         let m = chain(n);
-        let mut k = Kane::new(&m).unwrap();
+        let chosen = Kane::new(&m).unwrap();
+        let mut formed = chosen.clone();
+        formed.use_mass_matrix();
+        let mut articulated = chosen.clone();
+        articulated.use_articulated_bodies();
         let x: Vec<f64> = (0..2 * n).map(|i| 0.1 + 0.05 * i as f64).collect();
         let mut xd = vec![0.0; 2 * n];
-        g.bench_with_input(BenchmarkId::new("chain", n), &n, |b, _| {
-            b.iter(|| {
-                k.rhs(black_box(0.5), black_box(&x), &mut xd).unwrap();
-                black_box(xd[n])
-            })
-        });
+        // The route chosen at build, and beside it the formed M and the articulated-body route.
+        let mut routes = vec![("chain", chosen), ("chain_formed", formed)];
+        if n > 6 {
+            routes.push(("chain_aba", articulated));
+        }
+        for (route, mut k) in routes {
+            g.bench_with_input(BenchmarkId::new(route, n), &n, |b, _| {
+                b.iter(|| {
+                    k.rhs(black_box(0.5), black_box(&x), &mut xd).unwrap();
+                    black_box(xd[n])
+                })
+            });
+        }
     }
     // A rotor with N identical pendulums: M is an arrowhead, which the tree's factorisation
     // solves in O(N) and the dense LDLᵀ in O(N³).
@@ -103,10 +116,13 @@ fn rhs(c: &mut Criterion) {
         let n = mech.ndof();
         let x: Vec<f64> = (0..2 * n).map(|i| 0.1 + 0.05 * i as f64).collect();
         let mut xd = vec![0.0; 2 * n];
-        let tree = Kane::new(&mech).unwrap();
+        let mut tree = Kane::new(&mech).unwrap();
+        tree.use_mass_matrix();
+        let mut articulated = tree.clone();
+        articulated.use_articulated_bodies();
         let mut dense = tree.clone();
         dense.use_dense_factorisation();
-        for (route, mut k) in [("pendulums_tree", tree), ("pendulums_dense", dense)] {
+        for (route, mut k) in [("pendulums_aba", articulated), ("pendulums_tree", tree), ("pendulums_dense", dense)] {
             g.bench_with_input(BenchmarkId::new(route, pendulums), &pendulums, |b, _| {
                 b.iter(|| {
                     k.rhs(black_box(0.5), black_box(&x), &mut xd).unwrap();

@@ -59,22 +59,28 @@ fn evaluating_does_not_allocate() {
         });
         assert_eq!(count, 0, "{file}: {count} heap allocations in 1000 evaluations");
     }
-    // Issue 30: the rotor with 8, 32 and 64 pendulums (n = 9, 33, 65), whose M is solved along
-    // the tree, besides the paper's n = 2 above.
-    for pendulums in [8, 32, 64] {
+    // Issue 30: the rotor with 1, 8, 32 and 64 pendulums (n = 2, 9, 33, 65), by the
+    // articulated-body route and by the formed M (solved along the tree above n = 6).
+    for pendulums in [1, 8, 32, 64] {
         let mech = kanedyn::cpva::CpvaParams::canonical().with_pendulums(pendulums).mechanism(None).unwrap();
-        let mut kane = Kane::new(&mech).unwrap();
-        assert!(kane.factorises_along_tree(), "{pendulums} pendulums");
-        let n = mech.ndof();
-        let mut x: Vec<f64> = (0..2 * n).map(|i| 0.01 * i as f64 + 0.3).collect();
-        let mut xdot = vec![0.0; 2 * n];
-        let count = allocations_during(|| {
-            for _ in 0..200 {
-                kane.rhs(0.1, &x, &mut xdot).unwrap();
-                x[1] += 1e-3 * xdot[1];
-            }
-        });
-        assert_eq!(count, 0, "{pendulums} pendulums: {count} heap allocations in 200 evaluations");
+        let mut tree = Kane::new(&mech).unwrap();
+        tree.use_mass_matrix();
+        let mut articulated = tree.clone();
+        assert!(articulated.use_articulated_bodies());
+        assert_eq!(tree.factorises_along_tree(), pendulums > 1, "{pendulums} pendulums");
+        assert!(articulated.solves_articulated() && !tree.solves_articulated());
+        for (route, mut kane) in [("articulated", articulated), ("tree", tree)] {
+            let n = mech.ndof();
+            let mut x: Vec<f64> = (0..2 * n).map(|i| 0.01 * i as f64 + 0.3).collect();
+            let mut xdot = vec![0.0; 2 * n];
+            let count = allocations_during(|| {
+                for _ in 0..200 {
+                    kane.rhs(0.1, &x, &mut xdot).unwrap();
+                    x[1] += 1e-3 * xdot[1];
+                }
+            });
+            assert_eq!(count, 0, "{pendulums} pendulums, {route}: {count} heap allocations in 200 evaluations");
+        }
     }
     // The counter does see allocations (a test that cannot fail is worthless).
     assert!(allocations_during(|| drop(std::hint::black_box(vec![1.0; 8]))) >= 1);

@@ -41,14 +41,13 @@ impl Model {
         // Point forces grouped by body so each body's iteration finds its own.
         let mut point_forces = mech.loads.point_forces.clone();
         point_forces.sort_by_key(|p| p.body);
+        // NOTE: without the rollers: the composite-body form adds their terms apart, body by
+        // body (`Model::add_rollers`); counted here too, their mass entered the composite sums of
+        // every joint above their parent a second time (seen on deep random trees with rollers
+        // against `reference`; a rotor carrying them, the parent being the root, never shifts its
+        // sums, so no example moved).
         let mut subtree_mass: Vec<f64> = mech.bodies.iter().map(|b| b.inertia.mass).collect();
-        // The rollers belong to the subtree of their path joint's parent (not of the absorber).
         let rollers = mech.roller_sets();
-        for set in &rollers {
-            if let Some(p) = set.parent {
-                subtree_mass[p] += set.rollers.total_mass();
-            }
-        }
         for j in (0..nb).rev() {
             if let Some(p) = parent[j] {
                 subtree_mass[p] += subtree_mass[j];
@@ -144,6 +143,8 @@ impl Model {
             small: None,
             geared: None,
             tree: None,
+            articulated: false,
+            roller_of: None,
             n,
             nb,
             speed_parent,
@@ -168,6 +169,8 @@ impl Model {
         }
         k.small = k.small_form();
         k.tree = k.tree_order();
+        k.roller_of = k.rollers_by_body();
+        k.articulated = k.articulated_choice();
         Ok((k, ws))
     }
 

@@ -21,7 +21,9 @@
 //! chosen when the model is built) with the same results, and a rotor carrying one path absorber
 //! a pair form of its own (`path_pair`, equal to rounding).
 //!
-//! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches; [`mapped`]
+//! [`ldlt`] factors M and solves for u̇ (dense), [`tree`] along the tree's branches;
+//! [`articulated`] solves for u̇ without forming M (Featherstone's articulated-body algorithm,
+//! O(n), chosen at build for deep trees); [`mapped`]
 //! takes the composite-body form to absolute speeds, [`couplings`] adds the joints' nonlinear
 //! couplings, [`reduce`](mod@reduce) reduces a geared tree to its independent speeds, [`reactions`]
 //! gives the joint reactions and [`kinematics`] world-frame poses, velocities and energies for
@@ -103,6 +105,7 @@ macro_rules! with_literal_n {
 
 // The forms live in their own files; declared after the macro above so they can use it.
 pub mod absolute;
+pub mod articulated;
 mod build;
 pub mod couplings;
 pub mod kinematics;
@@ -278,6 +281,13 @@ pub struct Model {
     /// right-hand side solves `M u̇ = F` by the tree's own factorisation ([`tree`]); `None`: the
     /// dense LDLᵀ.
     tree: Option<Vec<usize>>,
+    /// True when the right-hand side takes the articulated-body route ([`articulated`]),
+    /// which never forms M; it then ignores `tree`.
+    articulated: bool,
+    /// Per body, the index in `rollers` of the rollers its path joint moves (`NONE`: none), for
+    /// the articulated-body route; `None` when some path joint had two sets (that route is then
+    /// not taken).
+    roller_of: Option<Vec<usize>>,
 }
 
 /// The buffers one evaluation of a [`Model`] writes, sized from it once ([`Workspace::new`]):
@@ -300,6 +310,8 @@ pub struct Workspace {
     geared: Option<Box<reduce::GearedWork>>,
     /// F without the couplings' forces ([`Kane::suspend_couplings`]).
     couplings_suspended: bool,
+    /// The articulated-body route's records, one per body ([`articulated`]).
+    aba: Vec<articulated::Articulated>,
 }
 
 impl Workspace {
@@ -319,6 +331,7 @@ impl Workspace {
             f_out: DVector::zeros(n),
             geared: model.geared.as_deref().map(|g| Box::new(g.workspace())),
             couplings_suspended: false,
+            aba: vec![articulated::Articulated::default(); nb],
         }
     }
 }
@@ -382,7 +395,34 @@ impl Kane {
     /// Makes the right-hand side use the dense LDLᵀ whatever the tree (for checks and benchmarks
     /// of the two routes against each other).
     pub fn use_dense_factorisation(&mut self) {
-        self.model_mut().tree = None;
+        let model = self.model_mut();
+        model.tree = None;
+        model.articulated = false;
+    }
+
+    /// Makes the right-hand side form M and solve it along the tree ([`crate::kane::tree`])
+    /// where it would take the articulated-body route (for checks and benchmarks of the routes
+    /// against each other); the dense LDLᵀ where the tree's factorisation does not pay.
+    pub fn use_mass_matrix(&mut self) {
+        self.model_mut().articulated = false;
+    }
+
+    /// Makes the right-hand side take the articulated-body route ([`crate::kane::articulated`])
+    /// wherever it applies (no geared couplings, at most one roller set per path joint),
+    /// whatever the size and depth of the tree (for checks and benchmarks of the routes against
+    /// each other). Returns whether it applies.
+    pub fn use_articulated_bodies(&mut self) -> bool {
+        if !self.model.articulated_applies() {
+            return false;
+        }
+        self.model_mut().articulated = true;
+        true
+    }
+
+    /// True when the right-hand side solves by the articulated-body algorithm
+    /// ([`crate::kane::articulated`]), never forming M; chosen at build.
+    pub fn solves_articulated(&self) -> bool {
+        self.model.articulated
     }
 
     /// True when some joint has nonlinear couplings ([`crate::model::coupling`]) and they are not
@@ -604,8 +644,13 @@ impl Model {
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        let out =
-            if self.nb == n { with_literal_n!(n, self.rhs_n(ws, t, x, xdot)) } else { self.rhs_n::<0>(ws, t, x, xdot) };
+        let out = if self.articulated {
+            self.rhs_articulated(ws, t, x, xdot)
+        } else if self.nb == n {
+            with_literal_n!(n, self.rhs_n(ws, t, x, xdot))
+        } else {
+            self.rhs_n::<0>(ws, t, x, xdot)
+        };
         // NOTE: a path evaluated beyond its end gives NaN (`PathShape::at`); only on that failure
         // is the state searched for the joint to name, so a successful call pays nothing. The
         // fixed-size composite-body path (`small_rates`) maps its failures the same way.

@@ -23,7 +23,7 @@
 //! `M_ab += m v_a·v_b + I ω_a ω_b` and `F_a += (f − m a⁰)·v_a + (T − I α⁰) ω_a`. The bodies' passes
 //! stay the code they were.
 
-use super::{GROUND_PARENT, Model, NO_COORD, Workspace};
+use super::{BodyState, GROUND_PARENT, Model, NO_COORD, Satellite, Workspace};
 use crate::model::joint::JointMotion;
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, perp, rotate_cs};
@@ -42,11 +42,81 @@ impl Model {
     ) {
         let n = if N == 0 { self.n } else { N };
         let nb = if N == 0 { self.nb } else { N };
-        let (world, g) = (self.world, self.gravity);
+        self.forward_rates::<N>(ws, t, q, u, forcing);
         let nodes = &self.nodes[..nb];
         let st = &mut ws.state[..nb];
         let m = &mut ws.m[..n * n];
         let f = &mut ws.f[..n];
+        // Backward pass, children first: composite sums, rows of M and entries of F.
+        for j in (0..nb).rev() {
+            let (nd, b) = (&nodes[j], st[j]);
+            if nd.coord != NO_COORD {
+                let k = nd.coord;
+                let mass = nd.subtree_mass;
+                let revolute = nd.kind.rotates();
+                if forcing {
+                    f[k] = if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau;
+                }
+                m[k * n + k] = if revolute {
+                    b.inertia
+                } else {
+                    mass * b.col_v.norm_squared()
+                        + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
+                        + b.col_w * b.col_w * b.inertia
+                };
+                let mut l = nd.parent;
+                while l != GROUND_PARENT {
+                    let a = &st[l];
+                    let lc = nodes[l].coord;
+                    if lc != NO_COORD {
+                        let d = b.origin - a.origin;
+                        let v = if revolute && nodes[l].kind.rotates() {
+                            b.inertia + b.first.dot(&d)
+                        } else {
+                            mass * b.col_v.dot(&a.col_v)
+                                + a.col_w * b.col_v.dot(&perp(b.first + mass * d))
+                                + b.col_w * perp(b.first).dot(&a.col_v)
+                                + b.col_w * a.col_w * (b.inertia + b.first.dot(&d))
+                        };
+                        m[k * n + lc] = v;
+                        m[lc * n + k] = v;
+                    }
+                    l = nodes[l].parent;
+                }
+            }
+            let p = nd.parent;
+            if p != GROUND_PARENT {
+                let d = b.d;
+                let bp = &mut st[p];
+                bp.force += b.force;
+                bp.moment += b.moment + cross2(d, b.force);
+                let mass = nd.subtree_mass;
+                bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
+                bp.first += b.first + mass * d;
+            }
+        }
+    }
+}
+
+impl Model {
+    /// The forward pass of [`Model::evaluate_rates`], parents first, shared with the
+    /// articulated-body route ([`super::articulated`]): every body's pose, rates, bias
+    /// accelerations (q̈ = 0 at u̇ = 0), its joint's columns, its own first moment and inertia about
+    /// its joint point, and (when `forcing`) its applied-minus-inertial force and moment about
+    /// that point and its joint's generalized force with the excitations.
+    #[inline(always)]
+    pub(super) fn forward_rates<const N: usize>(
+        &self,
+        ws: &mut Workspace,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        forcing: bool,
+    ) {
+        let nb = if N == 0 { self.nb } else { N };
+        let (world, g) = (self.world, self.gravity);
+        let nodes = &self.nodes[..nb];
+        let st = &mut ws.state[..nb];
         // Forward pass, parents first: poses, rates, bias accelerations (q̈ = 0 at u̇ = 0), the
         // joints' columns, and each body's own contribution to its composite sums about o_j.
         for j in 0..nb {
@@ -119,54 +189,6 @@ impl Model {
                 st[jt.joint].tau += jt.excitation.torque(t);
             }
         }
-        // Backward pass, children first: composite sums, rows of M and entries of F.
-        for j in (0..nb).rev() {
-            let (nd, b) = (&nodes[j], st[j]);
-            if nd.coord != NO_COORD {
-                let k = nd.coord;
-                let mass = nd.subtree_mass;
-                let revolute = nd.kind.rotates();
-                if forcing {
-                    f[k] = if revolute { b.moment } else { b.col_w * b.moment + b.col_v.dot(&b.force) } + b.tau;
-                }
-                m[k * n + k] = if revolute {
-                    b.inertia
-                } else {
-                    mass * b.col_v.norm_squared()
-                        + 2.0 * b.col_w * b.col_v.dot(&perp(b.first))
-                        + b.col_w * b.col_w * b.inertia
-                };
-                let mut l = nd.parent;
-                while l != GROUND_PARENT {
-                    let a = &st[l];
-                    let lc = nodes[l].coord;
-                    if lc != NO_COORD {
-                        let d = b.origin - a.origin;
-                        let v = if revolute && nodes[l].kind.rotates() {
-                            b.inertia + b.first.dot(&d)
-                        } else {
-                            mass * b.col_v.dot(&a.col_v)
-                                + a.col_w * b.col_v.dot(&perp(b.first + mass * d))
-                                + b.col_w * perp(b.first).dot(&a.col_v)
-                                + b.col_w * a.col_w * (b.inertia + b.first.dot(&d))
-                        };
-                        m[k * n + lc] = v;
-                        m[lc * n + k] = v;
-                    }
-                    l = nodes[l].parent;
-                }
-            }
-            let p = nd.parent;
-            if p != GROUND_PARENT {
-                let d = b.d;
-                let bp = &mut st[p];
-                bp.force += b.force;
-                bp.moment += b.moment + cross2(d, b.force);
-                let mass = nd.subtree_mass;
-                bp.inertia += b.inertia + 2.0 * d.dot(&b.first) + mass * d.norm_squared();
-                bp.first += b.first + mass * d;
-            }
-        }
     }
 }
 
@@ -182,34 +204,12 @@ impl Model {
     #[inline(never)]
     pub(super) fn add_rollers(&self, ws: &mut Workspace, q: &[f64], u: &[f64], forcing: bool) {
         let n = self.n;
-        let g = self.gravity;
         let (rollers, nodes) = (&self.rollers, &self.nodes);
         let Workspace { state, m, f, walk, .. } = ws;
         let (m, f) = (&mut m[..n * n], &mut f[..n]);
         for sat in rollers.iter() {
             let k = sat.coord;
-            let mo = sat.kind.roller_motion(sat.at, q[k], sat.centre, sat.turn_rate);
-            let (pc, ps, w_p, alpha_p, acc_p, o_p) = if sat.parent == GROUND_PARENT {
-                (1.0, 0.0, 0.0, 0.0, Vec2::zeros(), Vec2::zeros())
-            } else {
-                let p = &state[sat.parent];
-                (p.c, p.s, p.omega, p.alpha, p.acc_o, p.origin)
-            };
-            let d = rotate_cs(pc, ps, mo.origin);
-            let r = o_p + d;
-            let (col_w, col_v) = (mo.omega, rotate_cs(pc, ps, mo.velocity));
-            // Applied minus inertial at u̇ = 0 (gravity, the transport, Coriolis and bias terms
-            // as for a body's joint point; the centre of mass is the node's origin).
-            let (force, moment) = if forcing {
-                let qd = u[k];
-                let alpha = alpha_p + mo.bias_alpha * qd * qd;
-                let acc = acc_p + alpha_p * perp(d) - w_p * w_p * d
-                    + 2.0 * w_p * perp(col_v * qd)
-                    + rotate_cs(pc, ps, mo.bias_acc) * (qd * qd);
-                (sat.mass * (g - acc), -sat.i_com * alpha)
-            } else {
-                (Vec2::zeros(), 0.0)
-            };
+            let RollerTerms { r, col_w, col_v, force, moment } = self.roller_terms(sat, state, q, u, forcing);
             // The ancestors with a coordinate, nearest first.
             walk.clear();
             let mut l = sat.parent;
@@ -242,5 +242,58 @@ impl Model {
                 }
             }
         }
+    }
+}
+
+/// One path joint's rollers at the present state (after the forward pass), for
+/// [`Model::add_rollers`] and the articulated-body route.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct RollerTerms {
+    /// Their centroid (the basis' coordinates), m.
+    pub(super) r: Vec2,
+    /// Their columns for the path's coordinate: angular velocity and centroid velocity per unit rate.
+    pub(super) col_w: f64,
+    pub(super) col_v: Vec2,
+    /// Applied minus inertial force at u̇ = 0 (N) and moment about the centroid (N·m); zero
+    /// unless `forcing`.
+    pub(super) force: Vec2,
+    pub(super) moment: f64,
+}
+
+impl Model {
+    /// The rollers `sat`'s centroid, columns and bias force from their parent's record in
+    /// `state` (see [`Model::add_rollers`]); `u` holds the joint rates.
+    #[inline(always)]
+    pub(super) fn roller_terms(
+        &self,
+        sat: &Satellite,
+        state: &[BodyState],
+        q: &[f64],
+        u: &[f64],
+        forcing: bool,
+    ) -> RollerTerms {
+        let k = sat.coord;
+        let mo = sat.kind.roller_motion(sat.at, q[k], sat.centre, sat.turn_rate);
+        let (pc, ps, w_p, alpha_p, acc_p, o_p) = if sat.parent == GROUND_PARENT {
+            (1.0, 0.0, 0.0, 0.0, Vec2::zeros(), Vec2::zeros())
+        } else {
+            let p = &state[sat.parent];
+            (p.c, p.s, p.omega, p.alpha, p.acc_o, p.origin)
+        };
+        let d = rotate_cs(pc, ps, mo.origin);
+        let (col_w, col_v) = (mo.omega, rotate_cs(pc, ps, mo.velocity));
+        // Applied minus inertial at u̇ = 0 (gravity, the transport, Coriolis and bias terms
+        // as for a body's joint point; the centre of mass is the node's origin).
+        let (force, moment) = if forcing {
+            let qd = u[k];
+            let alpha = alpha_p + mo.bias_alpha * qd * qd;
+            let acc = acc_p + alpha_p * perp(d) - w_p * w_p * d
+                + 2.0 * w_p * perp(col_v * qd)
+                + rotate_cs(pc, ps, mo.bias_acc) * (qd * qd);
+            (sat.mass * (self.gravity - acc), -sat.i_com * alpha)
+        } else {
+            (Vec2::zeros(), 0.0)
+        };
+        RollerTerms { r: o_p + d, col_w, col_v, force, moment }
     }
 }

@@ -21,20 +21,11 @@ impl Model {
         if n <= 6 || self.form == Form::Geared {
             return None;
         }
-        let mut above = vec![NONE; n];
-        let mut cost = 0.0;
-        for (k, up) in above.iter_mut().enumerate() {
-            let mut b = self.nodes[self.joint_of[k]].parent;
-            while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
-                b = self.nodes[b].parent;
-            }
-            if b != GROUND_PARENT {
-                *up = self.nodes[b].coord;
-                if *up >= k {
-                    return None;
-                }
-            }
+        let above = self.speed_tree();
+        if above.iter().enumerate().any(|(k, &a)| a != NONE && a >= k) {
+            return None;
         }
+        let mut cost = 0.0;
         for k in 0..n {
             let (mut depth, mut a) = (1.0, above[k]);
             while a != NONE {
@@ -45,6 +36,20 @@ impl Model {
         }
         let dense = (n * n * n) as f64 / 6.0;
         (2.0 * cost < dense).then_some(above)
+    }
+
+    /// Per speed, the nearest speed above it in the tree (`NONE` for none): the parent in the
+    /// tree of M's sparsity.
+    pub(super) fn speed_tree(&self) -> Vec<usize> {
+        (0..self.n)
+            .map(|k| {
+                let mut b = self.nodes[self.joint_of[k]].parent;
+                while b != GROUND_PARENT && self.nodes[b].coord == NO_COORD {
+                    b = self.nodes[b].parent;
+                }
+                if b == GROUND_PARENT { NONE } else { self.nodes[b].coord }
+            })
+            .collect()
     }
 
     /// Solves `M x = F` by the leaves-first factorisation `M = Lᵀ D L` along the speeds' tree
@@ -67,7 +72,21 @@ impl Model {
         }
         // Leaves first: eliminating speed k updates the rows of its ancestors i (their entries
         // with their own ancestors j, still unscaled in row k), then row k becomes L's.
+        // NOTE: a speed whose only ancestor is a root p (a rotor's pendulums) updates h_pp alone;
+        // over a run of such speeds with the same p, h_pp is kept in a register (`run`): the
+        // same subtractions in the same order, without a store and a reload per speed on the
+        // chain of dependent updates (measured, BENCHMARKS.md). Flushed before anything else
+        // reads or writes h_pp.
+        let star = |k: usize| above[k] != NONE && above[above[k]] == NONE;
+        let mut run: Option<(usize, f64)> = None;
         for k in (0..n).rev() {
+            let p = above[k];
+            if let Some((rp, v)) = run
+                && (rp != p || !star(k))
+            {
+                h[rp * n + rp] = v;
+                run = None;
+            }
             let d = h[k * n + k];
             // NaN must fail too, so test for "not greater" rather than "less or equal".
             if d.is_nan() || d <= PIVOT_TOL * scale {
@@ -75,6 +94,13 @@ impl Model {
             }
             let dk_inv = 1.0 / d;
             d_inv[k] = dk_inv;
+            if star(k) {
+                let v = run.map_or(h[p * n + p], |r| r.1);
+                let lkp = h[k * n + p] * dk_inv;
+                run = Some((p, v - lkp * h[k * n + p]));
+                h[k * n + p] = lkp;
+                continue;
+            }
             let mut i = above[k];
             while i != NONE {
                 let lki = h[k * n + i] * dk_inv;
@@ -87,15 +113,35 @@ impl Model {
                 i = above[i];
             }
         }
-        // Lᵀ z = F (leaves first: z_k is final once its descendants are done), D, then L x = z.
+        if let Some((rp, v)) = run {
+            h[rp * n + rp] = v;
+        }
+        // Lᵀ z = F (leaves first: z_k is final once its descendants are done), D, then L x = z;
+        // the first with the same register run as the factorisation.
         x.copy_from_slice(f);
+        let mut run: Option<(usize, f64)> = None;
         for k in (0..n).rev() {
+            let p = above[k];
+            if let Some((rp, v)) = run
+                && (rp != p || !star(k))
+            {
+                x[rp] = v;
+                run = None;
+            }
             let xk = x[k];
+            if star(k) {
+                let v = run.map_or(x[p], |r| r.1);
+                run = Some((p, v - h[k * n + p] * xk));
+                continue;
+            }
             let mut i = above[k];
             while i != NONE {
                 x[i] -= h[k * n + i] * xk;
                 i = above[i];
             }
+        }
+        if let Some((rp, v)) = run {
+            x[rp] = v;
         }
         for (xk, d) in x.iter_mut().zip(d_inv.iter()) {
             *xk *= d;
