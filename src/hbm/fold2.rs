@@ -282,6 +282,15 @@ impl Hbm {
         Ok(Augmented { r, j, rl, g, gx, gl, v, w })
     }
 
+    /// The unknowns whose rows and columns of J form the matrix `test` keeps singular.
+    fn tested(&self, test: Singularity) -> Vec<usize> {
+        let m = self.unknowns();
+        match test {
+            Singularity::Jacobian => (0..m).collect(),
+            Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
+        }
+    }
+
     /// The start of a walk in `kind` at x and `at`: borders from the singular vectors of J's
     /// smallest singular value, and ∂R̂/∂s, which depends on neither x nor the other parameters
     /// (s multiplies the excitation).
@@ -289,11 +298,7 @@ impl Hbm {
         let plane = self.plane(kind);
         self.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
         let rs = self.gp.clone();
-        let m = self.unknowns();
-        let block: Vec<usize> = match test {
-            Singularity::Jacobian => (0..m).collect(),
-            Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
-        };
+        let block = self.tested(test);
         let mb = block.len();
         let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
         let svd = jb.svd(true, true);
@@ -379,11 +384,7 @@ impl Hbm {
         let x = self.unknowns_from(Some(sol));
         let at = At { order: sol.order, omega: sol.omega, scale: sol.torque_scale };
         self.assemble(&x, &at, Some(Parameter::Order));
-        let m = self.unknowns();
-        let block: Vec<usize> = match test {
-            Singularity::Jacobian => (0..m).collect(),
-            Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
-        };
+        let block = self.tested(test);
         let mb = block.len();
         let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
         let lu = jb.lu();
