@@ -188,14 +188,43 @@ pub fn parameter_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
         .collect()
 }
 
+/// How many folds and how many branch points a harmonic-balance case lists by position.
+const EVENTS_LISTED: usize = 2;
+
+/// The localisation index of a case's absorbers: the largest of their peak amplitudes (each the
+/// largest over every solved point) over their mean; 1 when they move alike, NaN with fewer
+/// than two absorbers among the reported elements.
+fn localisation(case: &Study, branches: &[crate::study::HbmBranch]) -> f64 {
+    let absorbers: Vec<String> =
+        crate::model::absorber::absorbers(&case.mechanism).into_iter().map(|a| a.joint).collect();
+    let peaks: Vec<f64> = case
+        .elements
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| absorbers.contains(&case.mechanism.joints[**j].name))
+        .map(|(e, _)| {
+            finite_max(branches.iter().flat_map(|b| b.elements.iter().filter_map(move |pt| pt.get(e)).map(|r| r.peak)))
+        })
+        .collect();
+    if peaks.len() < 2 {
+        return f64::NAN;
+    }
+    let mean = peaks.iter().sum::<f64>() / peaks.len() as f64;
+    peaks.iter().copied().fold(f64::NEG_INFINITY, f64::max) / mean
+}
+
 /// The result columns of each case, by analysis:
 /// - harmonic balance: `peak_accel_<m>x_rad_s2` per reported multiple m (the largest response
 ///   acceleration amplitude at order m·n over every solved point of every branch, stable or
 ///   not), `max_relative_angle_rad` (the largest peak relative angle), per reported element
 ///   `<joint>_peak_rad` (`_m` for a slide; the largest peak of its coordinate) and
 ///   `<joint>_torque_peak_Nm` (`_N`; its spring-and-damper torque's, NaN without either),
-///   `folds` (distinct folds over the branches, merged within [`FOLD_MERGE_TOL`]), `unstable`
-///   (1 when some point is unstable, else 0) and `points` (solved points);
+///   `folds` (distinct folds over the branches, merged within [`FOLD_MERGE_TOL`]), `fold_1`,
+///   `fold_2` and `branch_point_1`, `branch_point_2` (the lowest distinct folds and branch
+///   points, where absorbers leave unison, in the continued parameter's unit, NaN where fewer;
+///   suffixed `_rpm` or `_Nm` for a speed or torque continuation), `localisation_index` (the
+///   absorbers' largest peak over their mean, NaN with fewer than two), `unstable` (1 when some
+///   point is unstable, else 0) and `points` (solved points);
 /// - linear response: `n_t` (tuning order: the first locked joint's eigen-order, spin held,
 ///   undamped), `n_r` (the free undamped eigen-order nearest n_t), `min_ratio`,
 ///   `min_ratio_order`, `max_ratio` (the peak of the response over the locked twin's),
@@ -221,6 +250,17 @@ pub fn result_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
                 ));
             }
             out.push(c("folds".into(), "1"));
+            let (suffix, unit) = match h.parameter {
+                HbmParameter::Order => ("", "1"),
+                HbmParameter::Speed { .. } => ("_rpm", "rpm"),
+                HbmParameter::Torque { .. } => ("_Nm", "N·m"),
+            };
+            for what in ["fold", "branch_point"] {
+                for k in 1..=EVENTS_LISTED {
+                    out.push(c(format!("{what}_{k}{suffix}"), unit));
+                }
+            }
+            out.push(c("localisation_index".into(), "1"));
             out.push(c("unstable".into(), "1"));
             out.push(c("points".into(), "1"));
             out
@@ -289,7 +329,11 @@ fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study
                 let inertia = mech.bodies[b].inertia;
                 let (m, i, r, com) = (inertia.mass, inertia.i_com, mech.joints[j].at.norm(), inertia.com);
                 let l = tuned_com_distance(m, i, r, com.norm(), v).map_err(|why| err(format!("`{name}`: {why}")))?;
-                mech.bodies[b].inertia.com = com * (l / com.norm());
+                // A request equal to the file's own tuning (to rounding) keeps the file's
+                // distance, so that a zero spread is the unmistuned mechanism bit for bit.
+                if (l / com.norm() - 1.0).abs() > 1e-13 {
+                    mech.bodies[b].inertia.com = com * (l / com.norm());
+                }
             }
             (Quantity::Rpm, ..) => match &mut analysis {
                 AnalysisSpec::HarmonicBalance(h) => h.rpm = v,
@@ -417,6 +461,18 @@ fn case_results(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Vec
             folds.sort_by(f64::total_cmp);
             folds.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
             out.push(folds.len() as f64);
+            // The first folds and branch points (+1 off a fold: where identical or mistuned
+            // absorbers leave unison), distinct, lowest first, NaN where fewer exist.
+            let mut points: Vec<f64> = branches
+                .iter()
+                .flat_map(|b| b.bifurcations.iter().filter(|x| x.1 == "branch point").map(|x| x.0))
+                .collect();
+            points.sort_by(f64::total_cmp);
+            points.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+            for list in [&folds, &points] {
+                out.extend((0..EVENTS_LISTED).map(|k| list.get(k).copied().unwrap_or(f64::NAN)));
+            }
+            out.push(localisation(&case, &branches));
             let stability: Vec<Option<bool>> = branches.iter().flat_map(|b| b.stable.iter().copied()).collect();
             out.push(if stability.iter().all(Option::is_none) {
                 f64::NAN
