@@ -5,8 +5,8 @@
 //! pendulums, and the single-pendulum rotor (whose response the two pendulums' unison motion
 //! is exactly).
 
-use crate::support::cpva_hbm::{cpva_hbm, omega, single};
-use kanedyn::hbm::{BifurcationKind, ContinuationOptions, Hbm, HbmOptions};
+use crate::support::cpva_hbm::{cpva_hbm, single};
+use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::study::{EnvelopeResult, LoadOptions, RunOptions, Study, StudyReport, run};
 use std::path::Path;
 
@@ -93,17 +93,9 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     let onsets: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "UnisonLossOnset").collect();
     assert_eq!(onsets.len(), 1, "{:?}", r.points);
     let onset = onsets[0].torque_nm;
-    let mech = kanedyn::cpva::CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap();
-    let kane = kanedyn::kane::Kane::new(&mech).unwrap();
     for (torque, expected) in [(0.99 * onset, 0), (1.5 * onset, 2)] {
-        let mut two = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
-        let b = two.continue_in_order(3.0, 3.2, None, &ContinuationOptions::default()).unwrap();
-        let plus = b
-            .bifurcations
-            .iter()
-            .filter(|x| x.kind == BifurcationKind::PlusOne && !b.folds.iter().any(|f| f.after == x.after))
-            .count();
-        assert_eq!(plus, expected, "{torque} N·m: {:?}", b.bifurcations);
+        let (plus, found) = crate::support::two_pendulums::plus_one_points(torque);
+        assert_eq!(plus, expected, "{torque} N·m: {found}");
     }
 
     // The CSV: one row per boundary point, then the two codimension-two points, with their

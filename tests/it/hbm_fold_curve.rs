@@ -183,21 +183,9 @@ fn the_unison_loss_curve_of_two_pendulums() {
     // +1 point off its folds 1 % below it, two at 1.5 times it (where the curve is 6e-3 wide in
     // n; just above the least torque it is a tongue narrower than 1e-3, which the one-parameter
     // branch at the default step does not see: noted on issue 26).
-    use kanedyn::cpva::CpvaParams;
-    use kanedyn::hbm::BifurcationKind;
-    use kanedyn::kane::Kane;
-    let mech = CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap();
-    let kane = Kane::new(&mech).unwrap();
-    let omega = crate::support::cpva_hbm::omega();
     for (torque, expected) in [(0.99 * least, 0), (1.5 * least, 2)] {
-        let mut two = Hbm::new(&kane, 0, omega, &single(torque), HbmOptions::default()).unwrap();
-        let b = two.continue_in_order(3.0, 3.2, None, &ContinuationOptions::default()).unwrap();
-        let plus = b
-            .bifurcations
-            .iter()
-            .filter(|x| x.kind == BifurcationKind::PlusOne && !b.folds.iter().any(|f| f.after == x.after))
-            .count();
+        let (plus, found) = crate::support::two_pendulums::plus_one_points(torque);
         println!("two pendulums at {torque:.3} N·m: {plus} +1 points");
-        assert_eq!(plus, expected, "{torque} N·m: {:?}", b.bifurcations);
+        assert_eq!(plus, expected, "{torque} N·m: {found}");
     }
 }

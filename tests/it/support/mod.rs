@@ -10,4 +10,5 @@ pub mod cpva_hbm;
 pub mod examples;
 pub mod shooting;
 pub mod swept_signal;
+pub mod two_pendulums;
 pub mod wound_shaft;
