@@ -104,6 +104,11 @@ pub struct Fold {
     pub accel_main: f64,
     /// Pendulum peak amplitude at the fold, rad.
     pub pendulum_amplitude: f64,
+    /// The motion the branch takes through the fold: its tangent there in the layout of
+    /// [`HbmSolution::coefficients`](super::HbmSolution::coefficients) (the gauge slot zero), which at
+    /// a turning point spans the Jacobian's null space, i.e. the critical mode (whether the
+    /// absorbers turn together or apart). Empty when the fold was not refined.
+    pub critical: Vec<f64>,
 }
 
 /// How a branch loses or gains stability (by the critical Floquet multiplier).
@@ -423,6 +428,7 @@ mod tests {
             after: 0,
             accel_main: 0.0,
             pendulum_amplitude: 0.0,
+            critical: Vec::new(),
         };
         assert_eq!(bifurcations(&points, &[fold])[0].order, 3.0071);
     }

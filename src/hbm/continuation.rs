@@ -183,7 +183,7 @@ impl Hbm {
         chord: f64,
         slope_b: f64,
         iterations: &mut usize,
-    ) -> Option<DVector<f64>> {
+    ) -> Option<(DVector<f64>, DVector<f64>)> {
         let m = self.unknowns();
         let mut ill = Illinois::new((0.0, a.t[m]), (chord, slope_b));
         let mut best = None;
@@ -207,7 +207,7 @@ impl Hbm {
             let (t, c) = self.tangent_chord(su, &a.t, order).ok()?;
             lu = Some(Chord { lu: c.lu, update: None });
             let f = t[m];
-            best = Some(y);
+            best = Some((y, t));
             if f.abs() < 1e-6 {
                 break;
             }
@@ -458,8 +458,10 @@ impl Hbm {
                 let refined =
                     if copts.refine_folds { self.refine_fold(&su, &cur, chord, t[m], &mut newton) } else { None };
                 let fold = match refined {
-                    Some(yf) => {
+                    Some((yf, tf)) => {
                         let p = self.branch_point(&su, &yf, None, 0.0, 0, false)?;
+                        let mut critical = su.x_of(tf.as_slice(), m);
+                        critical[self.spin * self.nb] = 0.0;
                         Fold {
                             order: p.order,
                             parameter: p.parameter,
@@ -467,6 +469,7 @@ impl Hbm {
                             after: points.len() - 1,
                             accel_main: p.accel_main,
                             pendulum_amplitude: p.pendulum_amplitude,
+                            critical,
                         }
                     }
                     None => {
@@ -481,6 +484,7 @@ impl Hbm {
                             after: points.len() - 1,
                             accel_main: last.map_or(0.0, |p| p.accel_main),
                             pendulum_amplitude: last.map_or(0.0, |p| p.pendulum_amplitude),
+                            critical: Vec::new(),
                         }
                     }
                 };

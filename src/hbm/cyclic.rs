@@ -603,6 +603,12 @@ impl RoutedHbm {
                     p.d_coefficients = self.expand_coefficients(&p.d_coefficients, p.solution.harmonics);
                 }
             }
+            let harmonics = b.points.first().map_or(0, |p| p.solution.harmonics);
+            for f in &mut b.folds {
+                if !f.critical.is_empty() {
+                    f.critical = self.expand_coefficients(&f.critical, harmonics);
+                }
+            }
         }
         Ok(b)
     }

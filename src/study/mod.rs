@@ -266,7 +266,7 @@ pub struct StudyReport {
 pub use backbone::FreeOscillationResult;
 pub use compare::CompareResult;
 pub use elements::{ElementResponse, ElementTorque, Range};
-pub use hbm::{HbmBranch, body_accel, jump_orders};
+pub use hbm::{HbmBranch, body_accel, jump_orders, parts_absorbers};
 pub use linear::{GravityResponse, LinearResult, ResponseVariant};
 pub use multi::{MultiOrderResult, SpeedResult};
 pub use sweep::SweepRun;

@@ -217,10 +217,13 @@ fn a_failed_case_is_reported_and_the_others_keep_their_results() {
         };
         if why.is_empty() {
             assert_eq!(c.status, CaseStatus::Ok, "case {}: {}", c.index, c.error);
-            // Every result is finite but the listed folds and branch points and the localisation
+            // Every result is finite but the listed folds, branch points, losses of unison and the localisation
             // index, which are NaN where a case has none (one pendulum; 20 N·m has no fold).
             let optional = |name: &str| {
-                name.starts_with("fold_") || name.starts_with("branch_point_") || name == "localisation_index"
+                name.starts_with("fold_")
+                    || name.starts_with("branch_point_")
+                    || name.starts_with("unison_lost_")
+                    || name == "localisation_index"
             };
             let cols = design::result_columns(&study, design(&study));
             assert!(

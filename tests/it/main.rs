@@ -40,6 +40,7 @@ mod integration;
 mod joint_kinds;
 mod linear;
 mod marine_gearbox;
+mod mistuning;
 mod modal_damping;
 mod multi_order_states;
 mod no_nan_outputs;

@@ -3,7 +3,7 @@
 //! located at its field.
 
 use super::sampling::case_count;
-use super::{DesignParameter, DesignSpec, Quantity, Sampling};
+use super::{DesignParameter, DesignSpec, Distribution, Quantity, Sampling};
 use super::{MAX_CASES, MAX_MECHANISM_VALUE, MAX_PARAMETERS, MAX_VALUES};
 use crate::error::Result;
 use crate::io::Source;
@@ -18,6 +18,14 @@ pub(crate) fn check(src: &Source, spec: &StudySpec, mech: &Mechanism, k: usize, 
     let _ = mech;
     let at = |field: &str| format!("analyses[{k}].{field}");
     let inner = d.analysis.as_ref();
+    if let Some((a, b)) = d.operating {
+        if !matches!(inner, AnalysisSpec::HarmonicBalance(_)) {
+            return Err(src.error(&at("operating"), "an operating range counts a harmonic balance's jumps"));
+        }
+        if !(a.is_finite() && b.is_finite() && a < b) {
+            return Err(src.error(&at("operating"), format!("need finite from < to, got ({a}, {b})")));
+        }
+    }
     match inner {
         AnalysisSpec::HarmonicBalance(h) if h.overlay.is_some() => {
             return Err(src.error(&at("analysis.overlay"), "a design study's cases draw no figure to overlay"));
@@ -238,6 +246,26 @@ fn check_values(
     }
     if p.log && a <= 0.0 {
         return Err(src.error(&field("log"), "log spacing needs from > 0"));
+    }
+    if let Distribution::Normal { mean, sd } = p.distribution {
+        if grid {
+            return Err(src.error(
+                &field("distribution"),
+                "a grid takes its values as written: draw from a distribution with LatinHypercube or MonteCarlo",
+            ));
+        }
+        if p.log {
+            return Err(src.error(&field("log"), "a Normal distribution is spread in the value, not its logarithm"));
+        }
+        if !(sd.is_finite() && sd > 0.0) {
+            return Err(src.error(&field("distribution.sd"), format!("need a finite sd > 0, got {sd}")));
+        }
+        if !(mean.is_finite() && (a..=b).contains(&mean)) {
+            return Err(src.error(
+                &field("distribution.mean"),
+                format!("the mean {mean} lies outside `from`..`to` ({a} to {b}), which truncate the distribution"),
+            ));
+        }
     }
     match (grid, p.points) {
         (true, Some(n)) if (2..=MAX_VALUES).contains(&n) => Ok(()),

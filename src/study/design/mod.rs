@@ -122,6 +122,9 @@ pub struct DesignResult {
     pub results: Vec<ColumnInfo>,
     /// One row per case, in case order.
     pub cases: Vec<CaseRow>,
+    /// The operating range counted by `jumps_in_range` and `unison_losses_in_range` (a harmonic
+    /// balance's; None otherwise), in its continued parameter's unit.
+    pub operating: Option<(f64, f64)>,
 }
 
 impl DesignResult {
@@ -157,12 +160,94 @@ pub struct DesignFindings {
     pub partial: usize,
     /// Cases without results.
     pub failed: usize,
+    /// Each result column's spread over the cases that have a value.
+    pub quantiles: Vec<ColumnQuantiles>,
+    /// A harmonic balance's: the fraction of the cases with results that jump (a fold in
+    /// unison) inside the operating range (None for a linear response or without results).
+    pub jump_fraction: Option<f64>,
+    /// The same for a loss of unison (absorbers parting) inside the operating range.
+    pub unison_loss_fraction: Option<f64>,
+    /// The same for either.
+    pub jump_or_unison_loss_fraction: Option<f64>,
+}
+
+/// The spread of one result column over the cases: the sample quantiles by linear interpolation
+/// between order statistics (Hyndman and Fan's definition 7, numpy's default): with the n
+/// values sorted, the p-quantile is at position `(n − 1) p` counted from 0.
+#[derive(Debug, Clone, PartialEq, Serialize, schemars::JsonSchema)]
+pub struct ColumnQuantiles {
+    /// The CSV header.
+    pub name: String,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Cases with a (finite) value.
+    pub values: usize,
+    /// Smallest value.
+    pub min: f64,
+    /// 5 % quantile.
+    pub p05: f64,
+    /// Median.
+    pub p50: f64,
+    /// 95 % quantile.
+    pub p95: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+/// The p-quantile (definition 7) of sorted finite values; NaN when there are none.
+fn quantile(sorted: &[f64], p: f64) -> f64 {
+    let Some(last) = sorted.len().checked_sub(1) else { return f64::NAN };
+    let h = last as f64 * p;
+    let k = (h.floor() as usize).min(last);
+    let above = sorted[(k + 1).min(last)];
+    sorted[k] + (h - k as f64) * (above - sorted[k])
 }
 
 /// The findings of `r`.
 pub fn findings(r: &DesignResult) -> DesignFindings {
     let (ok, partial, failed) = r.counts();
-    DesignFindings { cases: r.cases.len(), ok, partial, failed }
+    let quantiles = r
+        .results
+        .iter()
+        .enumerate()
+        .map(|(k, col)| {
+            let mut v: Vec<f64> = r.cases.iter().map(|c| c.results[k]).filter(|x| x.is_finite()).collect();
+            v.sort_by(f64::total_cmp);
+            ColumnQuantiles {
+                name: col.name.clone(),
+                unit: col.unit,
+                values: v.len(),
+                min: quantile(&v, 0.0),
+                p05: quantile(&v, 0.05),
+                p50: quantile(&v, 0.5),
+                p95: quantile(&v, 0.95),
+                max: quantile(&v, 1.0),
+            }
+        })
+        .collect();
+    let column = |name: &str| r.results.iter().position(|c| c.name == name);
+    let counted: Vec<(f64, f64)> = match (column("jumps_in_range"), column("unison_losses_in_range")) {
+        (Some(j), Some(u)) => r
+            .cases
+            .iter()
+            .map(|c| (c.results[j], c.results[u]))
+            .filter(|(a, b)| a.is_finite() && b.is_finite())
+            .collect(),
+        _ => Vec::new(),
+    };
+    let fraction = |hit: &dyn Fn(&(f64, f64)) -> bool| {
+        (!counted.is_empty()).then(|| counted.iter().filter(|c| hit(c)).count() as f64 / counted.len() as f64)
+    };
+    DesignFindings {
+        cases: r.cases.len(),
+        ok,
+        partial,
+        failed,
+        quantiles,
+        jump_fraction: fraction(&|c| c.0 > 0.0),
+        unison_loss_fraction: fraction(&|c| c.1 > 0.0),
+        jump_or_unison_loss_fraction: fraction(&|c| c.0 > 0.0 || c.1 > 0.0),
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -221,8 +306,13 @@ fn localisation(case: &Study, branches: &[crate::study::HbmBranch]) -> f64 {
 ///   `<joint>_torque_peak_Nm` (`_N`; its spring-and-damper torque's, NaN without either),
 ///   `folds` (distinct folds over the branches, merged within [`FOLD_MERGE_TOL`]), `fold_1`,
 ///   `fold_2` and `branch_point_1`, `branch_point_2` (the lowest distinct folds and branch
-///   points, where absorbers leave unison, in the continued parameter's unit, NaN where fewer;
-///   suffixed `_rpm` or `_Nm` for a speed or torque continuation), `localisation_index` (the
+///   points, where identical absorbers leave unison, in the continued parameter's unit, NaN
+///   where fewer; suffixed `_rpm` or `_Nm` for a speed or torque continuation),
+///   `unison_lost_1`, `unison_lost_2` (the lowest distinct values where absorbers leave unison:
+///   branch points, and the folds whose critical motion moves them apart, as a mistuned set's
+///   do; [`crate::study::parts_absorbers`]), `jumps_in_range` and `unison_losses_in_range`
+///   (how many distinct folds in unison, and places where absorbers part, lie inside the
+///   [`operating_range`]), `localisation_index` (the
 ///   absorbers' largest peak over their mean, NaN with fewer than two), `unstable` (1 when some
 ///   point is unstable, else 0) and `points` (solved points);
 /// - linear response: `n_t` (tuning order: the first locked joint's eigen-order, spin held,
@@ -255,11 +345,13 @@ pub fn result_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
                 HbmParameter::Speed { .. } => ("_rpm", "rpm"),
                 HbmParameter::Torque { .. } => ("_Nm", "N·m"),
             };
-            for what in ["fold", "branch_point"] {
+            for what in ["fold", "branch_point", "unison_lost"] {
                 for k in 1..=EVENTS_LISTED {
                     out.push(c(format!("{what}_{k}{suffix}"), unit));
                 }
             }
+            out.push(c("jumps_in_range".into(), "1"));
+            out.push(c("unison_losses_in_range".into(), "1"));
             out.push(c("localisation_index".into(), "1"));
             out.push(c("unstable".into(), "1"));
             out.push(c("points".into(), "1"));
@@ -279,6 +371,16 @@ pub fn result_columns(study: &Study, spec: &DesignSpec) -> Vec<ColumnInfo> {
         .map(|n| c(n.into(), "1"))
         .collect(),
     }
+}
+
+/// The operating range of a design study's harmonic balance, in its continued parameter's unit:
+/// the study's `operating`, else the analysis's whole range.
+pub fn operating_range(spec: &DesignSpec, h: &crate::study::HbmSpec) -> (f64, f64) {
+    spec.operating.unwrap_or(match h.parameter {
+        HbmParameter::Order => (h.order_min, h.order_max),
+        HbmParameter::Speed { rpm_min, rpm_max, .. } => (rpm_min, rpm_max),
+        HbmParameter::Torque { min, max, .. } => (min, max),
+    })
 }
 
 /// The distance L of a revolute pendulum's centre of mass from its pivot that gives it the
@@ -469,9 +571,19 @@ fn case_results(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Vec
                 .collect();
             points.sort_by(f64::total_cmp);
             points.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
-            for list in [&folds, &points] {
+            let mut lost: Vec<f64> = branches.iter().flat_map(|b| b.unison_lost.iter().copied()).collect();
+            lost.sort_by(f64::total_cmp);
+            lost.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+            for list in [&folds, &points, &lost] {
                 out.extend((0..EVENTS_LISTED).map(|k| list.get(k).copied().unwrap_or(f64::NAN)));
             }
+            // A fold that is not where absorbers part is a jump in unison.
+            let near = |a: f64, b: f64| (a - b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs());
+            let (lo, hi) = operating_range(spec, h);
+            let inside = |v: &&f64| (lo..=hi).contains(*v);
+            let jumps = folds.iter().filter(|f| !lost.iter().any(|l| near(**f, *l))).filter(inside).count();
+            out.push(jumps as f64);
+            out.push(lost.iter().filter(inside).count() as f64);
             out.push(localisation(&case, &branches));
             let stability: Vec<Option<bool>> = branches.iter().flat_map(|b| b.stable.iter().copied()).collect();
             out.push(if stability.iter().all(Option::is_none) {
@@ -562,6 +674,10 @@ pub fn result(study: &Study, spec: &DesignSpec, cases: Vec<CaseRow>) -> DesignRe
         parameters: parameter_columns(study, spec),
         results: result_columns(study, spec),
         cases,
+        operating: match spec.analysis.as_ref() {
+            AnalysisSpec::HarmonicBalance(h) => Some(operating_range(spec, h)),
+            _ => None,
+        },
     }
 }
 

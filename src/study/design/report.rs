@@ -104,8 +104,9 @@ pub(super) fn write_csv(r: &DesignResult, dir: &Path) -> Result<PathBuf> {
     Ok(path)
 }
 
-/// The summary section: what was varied and how, the case counts, and per result column its
-/// smallest and largest value with the case.
+/// The summary section: what was varied and how, the case counts, the fractions of cases that
+/// jump or lose unison in the operating range, and per result column its smallest and largest
+/// value with the case and its 5 %, 50 % and 95 % quantiles.
 pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> String {
     let mut md = String::new();
     let sampling = match spec.sampling {
@@ -140,8 +141,25 @@ pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> Str
         r.cases.len(),
         r.name
     );
-    let _ = writeln!(md, "| result | unit | smallest | case | largest | case |\n|---|---|---|---|---|---|");
-    for (k, col) in r.results.iter().enumerate() {
+    let f = super::findings(r);
+    if let (Some((lo, hi)), Some(j), Some(u), Some(e)) =
+        (r.operating, f.jump_fraction, f.unison_loss_fraction, f.jump_or_unison_loss_fraction)
+    {
+        let pc = |x: f64| format!("{:.1} %", 100.0 * x);
+        let _ = writeln!(
+            md,
+            "Inside the operating range {lo} to {hi}: {} of the cases with results jump (a fold in unison), {} \
+             lose the absorbers' unison, {} do either.\n",
+            pc(j),
+            pc(u),
+            pc(e)
+        );
+    }
+    let _ = writeln!(
+        md,
+        "| result | unit | smallest | case | 5 % | median | 95 % | largest | case |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for (k, (col, q)) in r.results.iter().zip(&f.quantiles).enumerate() {
         let pick = |better: fn(f64, f64) -> bool| {
             r.cases.iter().filter(|c| c.results[k].is_finite()).fold(None, |best: Option<&CaseRow>, c| match best {
                 Some(b) if !better(c.results[k], b.results[k]) => Some(b),
@@ -153,7 +171,16 @@ pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> Str
         };
         let (lo, lo_case) = show(pick(|a, b| a < b));
         let (hi, hi_case) = show(pick(|a, b| a > b));
-        let _ = writeln!(md, "| `{}` | {} | {lo} | {lo_case} | {hi} | {hi_case} |", col.name, col.unit);
+        let quant = |v: f64| if v.is_finite() { num(v) } else { "–".to_string() };
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {lo} | {lo_case} | {} | {} | {} | {hi} | {hi_case} |",
+            col.name,
+            col.unit,
+            quant(q.p05),
+            quant(q.p50),
+            quant(q.p95)
+        );
     }
     md.push('\n');
     md

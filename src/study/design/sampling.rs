@@ -1,7 +1,7 @@
 //! The cases a design study draws: a grid's combinations, a Latin hypercube or Monte Carlo from a
 //! seeded ChaCha8 stream (the recipe is in the module docs of `design`).
 
-use super::{DesignParameter, DesignSpec, Sampling};
+use super::{DesignParameter, DesignSpec, Distribution, Sampling};
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{RngCore, SeedableRng};
 
@@ -20,10 +20,22 @@ fn grid_len(p: &DesignParameter) -> usize {
     }
 }
 
-/// The point at fraction `t` ∈ [0, 1] of a parameter's range (geometric with `log`).
+/// The point at fraction `t` ∈ [0, 1] of a parameter's range: uniform (geometric with `log`),
+/// or the quantile of the truncated normal (see [`Distribution::Normal`]).
 fn at_fraction(p: &DesignParameter, t: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
     let (a, b) = (p.from.unwrap_or(0.0), p.to.unwrap_or(0.0));
-    if p.log { a * (b / a).powf(t) } else { a + (b - a) * t }
+    match p.distribution {
+        Distribution::Uniform if p.log => a * (b / a).powf(t),
+        Distribution::Uniform => a + (b - a) * t,
+        Distribution::Normal { mean, sd } => {
+            // Checked at load: sd > 0 and finite, so the standard normal is valid.
+            let Ok(z) = Normal::new(0.0, 1.0) else { return f64::NAN };
+            let (pa, pb) = (z.cdf((a - mean) / sd), z.cdf((b - mean) / sd));
+            // Rounding may put the quantile a hair outside the limits; the limits hold.
+            (mean + sd * z.inverse_cdf(pa + t * (pb - pa))).clamp(a, b)
+        }
+    }
 }
 
 /// The `k`-th of a grid parameter's values.

@@ -17,6 +17,11 @@ pub struct DesignSpec {
     /// The analysis run per case: `HarmonicBalance(…)` or `LinearResponse(…)`, written as in
     /// `analyses`; the parameters replace its fields and the mechanism's values case by case.
     pub analysis: Box<AnalysisSpec>,
+    /// The operating range `(from, to)` of a harmonic balance's continued parameter (order, rpm
+    /// or N·m) inside which a case's jumps and losses of unison are counted (default: the
+    /// analysis's whole range).
+    #[serde(default)]
+    pub operating: Option<(f64, f64)>,
 }
 
 /// One varied quantity and its values.
@@ -42,6 +47,28 @@ pub struct DesignParameter {
     /// Space the values (or strata) evenly in the logarithm (needs `from > 0`; default false).
     #[serde(default)]
     pub log: bool,
+    /// How random sampling spreads the values over `from`..`to` (default `Uniform`).
+    #[serde(default)]
+    pub distribution: Distribution,
+}
+
+/// The distribution a random sampling draws a parameter from, on `from`..`to`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub enum Distribution {
+    /// Uniform on `from`..`to` (in the logarithm with `log: true`).
+    #[default]
+    Uniform,
+    /// A normal distribution of this mean and standard deviation (the parameter's unit)
+    /// truncated to `from`..`to`: a production spread, with the tolerance band as the limits.
+    /// A case at fraction t ∈ [0, 1) of the sampling's unit interval takes the value
+    /// `mean + sd Φ⁻¹(Φ(α) + t (Φ(β) − Φ(α)))`, α and β the limits in standard deviations, so a
+    /// Latin hypercube's strata are equally probable.
+    Normal {
+        /// Mean, in the parameter's unit.
+        mean: f64,
+        /// Standard deviation, in the parameter's unit (> 0).
+        sd: f64,
+    },
 }
 
 /// A quantity a design study can vary, with its SI unit.

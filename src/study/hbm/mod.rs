@@ -12,7 +12,8 @@ use super::table::Table;
 use super::{Direction, Output, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{
-    Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook, RoutedHbm,
+    BifurcationClass, Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook,
+    RoutedHbm,
 };
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
@@ -81,6 +82,11 @@ pub struct HbmBranch {
     pub folds: Vec<f64>,
     /// Other bifurcations: (order, kind) in words.
     pub bifurcations: Vec<(f64, String)>,
+    /// Where the absorbers leave unison on this branch, ascending, in the continued parameter's
+    /// unit: its branch points (identical absorbers) and the folds whose critical motion moves
+    /// the absorbers of one rotor apart ([`parts_absorbers`]: a mistuned set, where the branch
+    /// point of the identical set has become a fold). The other folds are jumps in unison.
+    pub unison_lost: Vec<f64>,
     /// Wall time of the continuation, s.
     pub wall_s: f64,
     /// How the branch was solved: `general` (every coordinate an unknown) or `cyclic` (identical
@@ -544,6 +550,7 @@ fn compute_with(
                     .map(|x| x.solution.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus))
                     .collect(),
                 folds: b.folds.iter().map(|f| f.parameter * ax.to_unit).collect(),
+                unison_lost: unison_lost(&study.mechanism, &b, ax.to_unit),
                 bifurcations: b
                     .bifurcations
                     .iter()
@@ -567,6 +574,52 @@ fn compute_with(
         }
     }
     (branches, failures)
+}
+
+/// The values of branch `b`'s continued parameter (times `to_unit`) where absorbers leave
+/// unison: its branch points and its folds that [`parts_absorbers`], ascending.
+fn unison_lost(mech: &Mechanism, b: &crate::hbm::Branch, to_unit: f64) -> Vec<f64> {
+    let nb = b.points.first().map_or(0, |p| 2 * p.solution.harmonics + 1);
+    let points = b.bifurcations.iter().filter(|x| x.class == BifurcationClass::BranchPoint).map(|x| x.parameter);
+    let folds = b.folds.iter().filter(|f| parts_absorbers(mech, &f.critical, nb)).map(|f| f.parameter);
+    let mut out: Vec<f64> = points.chain(folds).map(|v| v * to_unit).collect();
+    out.sort_by(f64::total_cmp);
+    out
+}
+
+/// Whether a critical motion (Fourier coefficients, `nb` per coordinate, in the layout of
+/// [`HbmSolution::coefficients`]) moves the absorbers of some rotor apart rather than together:
+/// for the absorbers hung on one body (two or more), the energy of their deviations from their
+/// mean motion, `Σ_k ‖v_k − v̄‖²`, exceeds half their total `Σ_k ‖v_k‖²`. In unison every v_k is
+/// the same (ratio 0); in a pure out-of-unison mode of identical absorbers the mean is zero
+/// (ratio 1). A mistuned set sits near one or the other, which is why half separates them.
+pub fn parts_absorbers(mech: &Mechanism, critical: &[f64], nb: usize) -> bool {
+    if critical.is_empty() || nb == 0 {
+        return false;
+    }
+    let absorbers = crate::model::absorber::absorbers(mech);
+    let mut parents: Vec<Option<usize>> = Vec::new();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for a in &absorbers {
+        let Some(j) = mech.joint_index(&a.joint) else { continue };
+        let Some(k) = mech.coordinate(j).filter(|&k| (k + 1) * nb <= critical.len()) else { continue };
+        let parent = mech.joints[j].parent;
+        match parents.iter().position(|p| *p == parent) {
+            Some(g) => groups[g].push(k),
+            None => {
+                parents.push(parent);
+                groups.push(vec![k]);
+            }
+        }
+    }
+    groups.iter().filter(|g| g.len() >= 2).any(|g| {
+        let slice = |k: usize| &critical[k * nb..(k + 1) * nb];
+        let mean: Vec<f64> = (0..nb).map(|i| g.iter().map(|&k| slice(k)[i]).sum::<f64>() / g.len() as f64).collect();
+        let total: f64 = g.iter().map(|&k| slice(k).iter().map(|v| v * v).sum::<f64>()).sum();
+        let apart: f64 =
+            g.iter().map(|&k| slice(k).iter().zip(&mean).map(|(v, m)| (v - m) * (v - m)).sum::<f64>()).sum();
+        total > 0.0 && apart > 0.5 * total
+    })
 }
 
 /// The states branch `b` crosses at each of `spec.orbits_at` (in the axis unit; `scale` takes it
