@@ -12,8 +12,9 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-/// The design study `name` of `study`, or an `ArgumentError` naming the ones there are.
-pub fn spec<'a>(py: Python<'_>, study: &'a LibStudy, name: &str) -> PyResult<&'a DesignSpec> {
+/// The design study `name` of `study` with the study its cases run on (the study itself, or the
+/// study of the design study's own `mechanism`), or an `ArgumentError` naming the ones there are.
+pub fn spec<'a>(py: Python<'_>, study: &'a LibStudy, name: &str) -> PyResult<(&'a LibStudy, &'a DesignSpec)> {
     design::find(study, name).ok_or_else(|| {
         let names = names(study);
         argument_error(

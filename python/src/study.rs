@@ -240,12 +240,15 @@ impl Study {
     ///     ``parameters`` and ``results``: lists of ``(column, unit)`` in the table's order
     ///     (after ``case``; ``status`` and ``error`` follow).
     fn design_columns<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyDict>> {
-        guard(|| crate::design::columns(py, &self.study, crate::design::spec(py, &self.study, name)?))
+        guard(|| {
+            let (study, spec) = crate::design::spec(py, &self.study, name)?;
+            crate::design::columns(py, study, spec)
+        })
     }
 
     /// The number of cases of a design study.
     fn case_count(&self, py: Python<'_>, name: &str) -> PyResult<usize> {
-        guard(|| Ok(kanedyn::study::design::case_count(crate::design::spec(py, &self.study, name)?)))
+        guard(|| Ok(kanedyn::study::design::case_count(crate::design::spec(py, &self.study, name)?.1)))
     }
 
     /// Every case's parameter values, in the parameters' units: an array of shape (cases,
@@ -253,7 +256,7 @@ impl Study {
     /// draws of a Latin hypercube or Monte Carlo).
     fn case_values<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         guard(|| {
-            let spec = crate::design::spec(py, &self.study, name)?;
+            let spec = crate::design::spec(py, &self.study, name)?.1;
             let rows = kanedyn::study::design::case_values(spec);
             let d = spec.parameters.len();
             crate::arrays::matrix(py, rows.len(), d, rows.into_iter().flatten().collect())
@@ -294,8 +297,8 @@ impl Study {
         indices: Option<Vec<usize>>,
         parallel: bool,
     ) -> PyResult<Bound<'py, PyList>> {
-        let spec = guard(|| crate::design::spec(py, &self.study, name))?;
-        crate::design::run_cases(py, &self.study, spec, indices, parallel)
+        let (study, spec) = guard(|| crate::design::spec(py, &self.study, name))?;
+        crate::design::run_cases(py, study, spec, indices, parallel)
     }
 
     /// The study's name (its output folder).

@@ -80,7 +80,22 @@ def test_the_case_table_equals_the_csv_file(local):
             given = ~np.isnan(parsed)
             assert np.array_equal(bits(column[given]), bits(parsed[given])), name
     assert result.units["torques"]["T_n_Nm"] == "N·m"
-    assert result.analysis("torques")["findings"] == {"cases": 50, "ok": 49, "partial": 0, "failed": 1}
+    findings = result.analysis("torques")["findings"]
+    assert {k: findings[k] for k in ("cases", "ok", "partial", "failed")} == {
+        "cases": 50,
+        "ok": 49,
+        "partial": 0,
+        "failed": 1,
+    }
+    # The quantiles are numpy's (its default method is the same definition 7, computed apart).
+    for q in findings["quantiles"]:
+        column = table[q["name"]]
+        values = column[np.isfinite(column)]
+        assert q["values"] == len(values)
+        if len(values):
+            expected = np.quantile(values, [0.0, 0.05, 0.5, 0.95, 1.0])
+            got = [q[k] for k in ("min", "p05", "p50", "p95", "max")]
+            assert np.allclose(got, expected, rtol=1e-15, atol=0.0), q["name"]
 
 
 def test_fifty_cases_on_two_dask_workers_equal_the_local_run_bit_for_bit(study, local, client):
@@ -216,3 +231,44 @@ def test_a_scheduler_address_takes_the_cases_to_that_cluster(client):
         if column.dtype.kind == "f":
             assert np.array_equal(bits(remote[name]), bits(column)), name
     assert len(client.scheduler_info()["workers"]) == 2
+
+
+MISTUNED = """Study(
+    name: "mistuned_py",
+    mechanism: "cpva4.ron",
+    analyses: [
+        DesignStudy(
+            name: "spread",
+            parameters: [%s],
+            sampling: MonteCarlo(n: 24, seed: 2026),
+            operating: (2.95, 3.25),
+            analysis: HarmonicBalance(name: "h", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [500.0]),
+        ),
+    ],
+)
+""" % ", ".join(
+    f'(name: "n_t{i}", quantity: TuningOrder("pivot_{i}"), from: 3.0789, to: 3.1411, '
+    "distribution: Normal(mean: 3.11, sd: 0.010367))"
+    for i in range(1, 5)
+)
+
+
+def test_a_mistuning_spread_on_two_dask_workers_equals_the_local_run_bit_for_bit(client, tmp_path):
+    from kanedyn import dask as kdask
+
+    study = kanedyn.Study.from_str(MISTUNED, str(EXAMPLES / "mistuned_py.ron"))
+    here = study.run(out=tmp_path)
+    local = here.designs["spread"]
+    remote = kdask.run(study, client, progress=False)["spread"]
+    for name, column in local.items():
+        if column.dtype.kind == "f":
+            assert np.array_equal(bits(remote[name]), bits(column)), name
+        else:
+            assert list(remote[name]) == list(column), name
+    # Every draw lies in the band; the fractions count the rows that jump or part in range.
+    for i in range(1, 5):
+        assert ((local[f"n_t{i}"] >= 3.0789) & (local[f"n_t{i}"] <= 3.1411)).all()
+    findings = here.analysis("spread")["findings"]
+    parted = local["unison_losses_in_range"] > 0
+    assert findings["unison_loss_fraction"] == parted.mean()
+    assert findings["jump_fraction"] == (local["jumps_in_range"] > 0).mean()

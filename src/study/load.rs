@@ -175,10 +175,11 @@ impl Study {
             out
         };
         validate::check(&spec, &mechanism, spin, &src)?;
-        let comparisons = compare::load(&spec, &src, opts)?;
+        let mut sub_studies = compare::load(&spec, &src, opts)?;
+        sub_studies.extend(super::design::load_mechanisms(&spec, &src, opts)?);
         let file = src.file.clone();
         let study =
-            Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src, comparisons };
+            Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src, sub_studies };
         if let Some((k, driver, message)) = study.plan().exceeds(&opts.limits) {
             return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
         }

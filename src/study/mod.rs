@@ -223,9 +223,11 @@ pub struct Study {
     pub locked_body: Option<usize>,
     /// The study file's text, to name the line of an analysis that fails at run time.
     pub source: Source,
-    /// The mechanisms of each `Compare` analysis, by the analysis's index: per mechanism its
-    /// label and the study that runs the comparison's analyses on it (the study's `compare` room).
-    pub comparisons: Vec<(usize, compare::Compared)>,
+    /// The studies of other mechanisms that an analysis runs on, by the analysis's index: per
+    /// mechanism its label and the study that runs the analysis on it. A `Compare` analysis has
+    /// one per mechanism compared (the `compare` room); a design study with its own `mechanism`
+    /// has one, labelled by its file, holding the design study alone (the `design` room).
+    pub sub_studies: Vec<(usize, compare::Compared)>,
 }
 
 /// What a study produced: the Markdown summary and the files written.

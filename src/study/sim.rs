@@ -270,7 +270,7 @@ impl Study {
         let mut s = self.clone();
         let deadline = Some(Deadline::after(budget_s));
         s.spec.integration.deadline = deadline;
-        for (_, subs) in &mut s.comparisons {
+        for (_, subs) in &mut s.sub_studies {
             for (_, sub) in subs {
                 sub.spec.integration.deadline = deadline;
             }

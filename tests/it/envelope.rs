@@ -142,7 +142,7 @@ fn a_bad_envelope_is_refused_with_its_field() {
         ("torque_max: 500.0", "torque_max: 500.0, harmonics: 0", "analyses[0].harmonics"),
         ("rpm: 1000.0,", "rpm: 1000.0, plane: Speed(order: 3.0, rpm_min: 300.0, rpm_max: 900.0),", "analyses[0].rpm"),
     ] {
-        let text = base.replace(from, to);
+        let text = base.replacen(from, to, 1);
         assert_ne!(text, base);
         let src = kanedyn::io::Source::from_text("examples/bad_maps.ron", &text);
         let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();

@@ -86,16 +86,17 @@ fn a_mistuned_pair_parts_at_a_fold_that_tends_to_the_identical_pairs_branch_poin
         })
         .collect();
     assert!(shift[0] < 1e-4 && shift[0] * 5.0 < shift[1], "shifts {shift:?} for δ = 1e-6, 1e-4");
-    // At δ = 1e-4 the pair parts at a fold (no exact branch point is left), and its only fold.
+    // At δ = 1e-4 the pair parts at a fold (no exact branch point is left), its only fold: a
+    // jump and a loss of unison at once.
     let r = &rows[2];
     assert!(col(r, "branch_point_1").is_nan());
     assert_eq!(col(r, "fold_1"), col(r, "unison_lost_1"));
-    assert_eq!(col(r, "jumps_in_range"), 0.0);
+    assert_eq!((col(r, "jumps_in_range"), col(r, "unison_losses_in_range")), (1.0, 1.0));
 }
 
 /// At 40 N·m, well below the identical pair's unison-loss onset (163.2 N·m,
 /// `examples/cpva_maps.ron`), a pair mistuned by 0.3 % jumps at two folds in unison and never
-/// parts; the folds lie near the one pendulum's (2.9403761 and 3.1740911, shooting) moved by
+/// parts (every fold's critical motion keeps them together); the folds lie near the one pendulum's (2.9403761 and 3.1740911, shooting) moved by
 /// about half the mistuning.
 #[test]
 fn at_40_nm_a_mistuned_pair_jumps_in_unison() {
@@ -251,4 +252,40 @@ fn bad_spreads_are_located() {
         );
         assert!(err.contains(words), "expected {words:?}: {err}");
     }
+}
+
+/// A design study of another mechanism than the study's (`mechanism:`) gives the rows the same
+/// design study gives in a study of that mechanism, bit for bit; its errors are located in the
+/// study file at the design study's fields.
+#[test]
+fn a_design_study_of_its_own_mechanism_equals_one_in_that_mechanisms_study() {
+    let design = |own: &str| {
+        format!(
+            r#"DesignStudy(name: "d", {own}sampling: MonteCarlo(n: 3, seed: 9),
+            parameters: [(name: "n1", quantity: TuningOrder("pivot_1"), from: 3.0789, to: 3.1411)],
+            analysis: HarmonicBalance(name: "hbm", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [100.0]))"#
+        )
+    };
+    let study_of = |mech: &str, own: &str| {
+        load(&format!(r#"Study(name: "own", mechanism: "{mech}", lock: ["pivot"], analyses: [{}])"#, design(own)))
+    };
+    let home = load(&format!(r#"Study(name: "home", mechanism: "cpva4.ron", analyses: [{}])"#, design("")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let away = study_of("cpva.ron", r#"mechanism: "cpva4.ron", "#).unwrap_or_else(|e| panic!("{e}"));
+    let rows = |s: &Study| {
+        let (s, d) = design::find(s, "d").unwrap();
+        design::run_cases(s, d, None, false, &|| {}).unwrap()
+    };
+    let bits = |rows: &[CaseRow]| rows.iter().flat_map(|r| r.results.iter().map(|v| v.to_bits())).collect::<Vec<_>>();
+    let (a, b) = (rows(&home), rows(&away));
+    assert_eq!(a.len(), 3);
+    assert_eq!(bits(&a), bits(&b));
+    // pivot_1 is not a joint of the study's own mechanism: refused without `mechanism`, and a
+    // joint the other mechanism lacks is located at the parameter's field.
+    let err = study_of("cpva.ron", "").err().unwrap().to_string();
+    assert!(err.contains("analyses[0].parameters[0].quantity") && err.contains("unknown joint `pivot_1`"), "{err}");
+    let err = study_of("cpva.ron", r#"mechanism: "cpva2.ron", lock: ["pivot_3"], "#).err().unwrap().to_string();
+    assert!(err.contains("(field `analyses[0].lock[0]`)") && err.contains("unknown joint `pivot_3`"), "{err}");
+    let err = study_of("cpva.ron", r#"lock: ["pivot"], "#).err().unwrap().to_string();
+    assert!(err.contains("(field `analyses[0].lock`)") && err.contains("own `mechanism`"), "{err}");
 }

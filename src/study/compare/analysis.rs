@@ -56,7 +56,7 @@ impl Analysis for CompareSpec {
     fn plan(&self, study: &Study, base: AnalysisPlan) -> AnalysisPlan {
         let (_spec, _fs, _n, _locked) = crate::study::plan::basics(study);
         let c = self;
-        let subs = study.comparisons.iter().find(|(k, _)| *k == base.index).map(|(_, s)| s.as_slice());
+        let subs = study.sub_studies.iter().find(|(k, _)| *k == base.index).map(|(_, s)| s.as_slice());
         let plans: Vec<AnalysisPlan> = subs.unwrap_or(&[]).iter().flat_map(|(_, s)| s.plan().analyses).collect();
         let sum = |f: &dyn Fn(&AnalysisPlan) -> f64| plans.iter().map(f).sum::<f64>();
         AnalysisPlan {
@@ -78,7 +78,7 @@ impl Analysis for CompareSpec {
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
         let r = report.compares.iter().find(|r| r.name == self.name)?;
-        let subs = &study.comparisons.iter().find(|(k, _)| study.spec.analyses[*k].name() == self.name)?.1;
+        let subs = &study.sub_studies.iter().find(|(k, _)| study.spec.analyses[*k].name() == self.name)?.1;
         let mechanisms: Vec<ComparedEntry> = subs
             .iter()
             .zip(&r.mechanisms)

@@ -128,7 +128,7 @@ pub(crate) fn run(
     report: &mut StudyReport,
 ) -> Result<Output> {
     let studies = study
-        .comparisons
+        .sub_studies
         .iter()
         .find(|(k, _)| study.spec.analyses.get(*k).is_some_and(|a| a.name() == spec.name))
         .map(|(_, s)| s)

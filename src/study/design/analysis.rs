@@ -34,6 +34,17 @@ impl Analysis for DesignSpec {
         let Checks { spec, mech, spin, src, k } = *c;
         let _at = |field: &str| c.at(field);
         let d = self;
+        if d.mechanism.is_some() {
+            // Checked as a study of that mechanism when it is read (`load_mechanisms`).
+            return Ok(());
+        }
+        if !d.lock.is_empty() || !d.elements.is_empty() {
+            let field = if d.lock.is_empty() { "elements" } else { "lock" };
+            return Err(src.error(
+                &c.at(field),
+                format!("`{field}` here names joints of the design study's own `mechanism`; the study's `{field}` applies otherwise"),
+            ));
+        }
         require_steady_spin(c, "DesignStudy", &d.name, false)?;
         super::check(src, spec, mech, k, d)?;
         // The analysis a design study runs must be valid by itself: checked by these rules
@@ -96,6 +107,7 @@ impl Kept for DesignResult {
 /// not depend on the varied values: a harmonic-balance branch is bounded by its points, a linear
 /// response by its order grid), its memory once per case running at a time, and the table.
 fn design_plan(study: &Study, spec: &DesignSpec, base: AnalysisPlan) -> AnalysisPlan {
+    let (study, spec) = super::resolve(study, spec);
     let mut alone = study.clone();
     alone.spec.analyses = vec![spec.analysis.as_ref().clone()];
     let inner = alone.plan().analyses.into_iter().next();

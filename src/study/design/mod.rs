@@ -162,8 +162,8 @@ pub struct DesignFindings {
     pub failed: usize,
     /// Each result column's spread over the cases that have a value.
     pub quantiles: Vec<ColumnQuantiles>,
-    /// A harmonic balance's: the fraction of the cases with results that jump (a fold in
-    /// unison) inside the operating range (None for a linear response or without results).
+    /// A harmonic balance's: the fraction of the cases with results that jump (have a fold)
+    /// inside the operating range (None for a linear response or without results).
     pub jump_fraction: Option<f64>,
     /// The same for a loss of unison (absorbers parting) inside the operating range.
     pub unison_loss_fraction: Option<f64>,
@@ -311,8 +311,8 @@ fn localisation(case: &Study, branches: &[crate::study::HbmBranch]) -> f64 {
 ///   `unison_lost_1`, `unison_lost_2` (the lowest distinct values where absorbers leave unison:
 ///   branch points, and the folds whose critical motion moves them apart, as a mistuned set's
 ///   do; [`crate::study::parts_absorbers`]), `jumps_in_range` and `unison_losses_in_range`
-///   (how many distinct folds in unison, and places where absorbers part, lie inside the
-///   [`operating_range`]), `localisation_index` (the
+///   (how many distinct folds, where a sweep jumps, and places where absorbers part, lie inside
+///   the [`operating_range`]), `localisation_index` (the
 ///   absorbers' largest peak over their mean, NaN with fewer than two), `unstable` (1 when some
 ///   point is unstable, else 0) and `points` (solved points);
 /// - linear response: `n_t` (tuning order: the first locked joint's eigen-order, spin held,
@@ -490,7 +490,7 @@ fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study
         body: study.body,
         locked_body,
         source: study.source.clone(),
-        comparisons: Vec::new(),
+        sub_studies: Vec::new(),
     };
     Ok((case, analysis))
 }
@@ -577,12 +577,10 @@ fn case_results(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Vec
             for list in [&folds, &points, &lost] {
                 out.extend((0..EVENTS_LISTED).map(|k| list.get(k).copied().unwrap_or(f64::NAN)));
             }
-            // A fold that is not where absorbers part is a jump in unison.
-            let near = |a: f64, b: f64| (a - b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs());
+            // Every fold is a jump of a sweep, whether the absorbers turn together or apart.
             let (lo, hi) = operating_range(spec, h);
             let inside = |v: &&f64| (lo..=hi).contains(*v);
-            let jumps = folds.iter().filter(|f| !lost.iter().any(|l| near(**f, *l))).filter(inside).count();
-            out.push(jumps as f64);
+            out.push(folds.iter().filter(inside).count() as f64);
             out.push(lost.iter().filter(inside).count() as f64);
             out.push(localisation(&case, &branches));
             let stability: Vec<Option<bool>> = branches.iter().flat_map(|b| b.stable.iter().copied()).collect();
@@ -659,12 +657,74 @@ pub fn run_cases(
     Ok(if parallel { indices.par_iter().map(one).collect() } else { indices.iter().map(one).collect() })
 }
 
-/// The design study named `name` of the study, if there is one.
-pub fn find<'a>(study: &'a Study, name: &str) -> Option<&'a DesignSpec> {
+/// The design study named `name` of the study, if there is one, with the study its cases run
+/// on (see [`resolve`]).
+pub fn find<'a>(study: &'a Study, name: &str) -> Option<(&'a Study, &'a DesignSpec)> {
     study.spec.analyses.iter().find_map(|a| match a {
-        AnalysisSpec::DesignStudy(d) if d.name == name => Some(d),
+        AnalysisSpec::DesignStudy(d) if d.name == name => Some(resolve(study, d)),
         _ => None,
     })
+}
+
+/// The study a design study's cases run on, and the design study as that study holds it: the
+/// study itself, or for a design study with its own `mechanism` the study of that mechanism
+/// read at load (`Study::sub_studies`). Falls back to the study itself if none was read.
+pub fn resolve<'a>(study: &'a Study, spec: &'a DesignSpec) -> (&'a Study, &'a DesignSpec) {
+    if spec.mechanism.is_none() {
+        return (study, spec);
+    }
+    let sub = study
+        .sub_studies
+        .iter()
+        .find(|(k, _)| study.spec.analyses.get(*k).is_some_and(|a| a.name() == spec.name))
+        .and_then(|(_, subs)| subs.first())
+        .map(|(_, s)| s);
+    match sub.and_then(|s| s.spec.analyses.first().map(|a| (s, a))) {
+        Some((s, AnalysisSpec::DesignStudy(d))) => (s, d),
+        _ => (study, spec),
+    }
+}
+
+/// Reads the mechanism of each design study that names its own (see
+/// [`DesignSpec::mechanism`]) as a study holding that design study alone, checked as the study
+/// file is read; its errors are moved to their place in the study file.
+pub(crate) fn load_mechanisms(
+    spec: &StudySpec,
+    src: &crate::io::Source,
+    opts: &crate::study::LoadOptions,
+) -> Result<Vec<(usize, crate::study::compare::Compared)>> {
+    let mut out = Vec::new();
+    for (k, a) in spec.analyses.iter().enumerate() {
+        let AnalysisSpec::DesignStudy(d) = a else { continue };
+        let Some(file) = &d.mechanism else { continue };
+        let alone = DesignSpec { mechanism: None, lock: Vec::new(), elements: Vec::new(), ..d.clone() };
+        let sub = StudySpec {
+            mechanism: file.clone(),
+            analyses: vec![AnalysisSpec::DesignStudy(alone)],
+            lock: d.lock.clone(),
+            elements: d.elements.clone(),
+            ..spec.clone()
+        };
+        let study = Study::from_spec(sub, src.clone(), opts).map_err(|e| match e {
+            Error::Input { location, message } if location.file == src.file => {
+                let path = &location.path;
+                match path.strip_prefix("analyses[0]") {
+                    Some(rest) => src.error(&format!("analyses[{k}]{rest}"), message),
+                    // The design study's own `lock` and `elements` were the sub-study's.
+                    None if path.starts_with("lock") || path.starts_with("elements") => {
+                        src.error(&format!("analyses[{k}].{path}"), message)
+                    }
+                    None if path == "mechanism" => src.error(&format!("analyses[{k}].mechanism"), message),
+                    None => {
+                        src.error(&format!("analyses[{k}].mechanism"), format!("mechanism `{file}`: {path}: {message}"))
+                    }
+                }
+            }
+            other => other,
+        })?;
+        out.push((k, vec![(file.clone(), study)]));
+    }
+    Ok(out)
 }
 
 /// Assembles the result of a design study from its rows (in case order).
@@ -691,6 +751,7 @@ pub(crate) fn run(
     dir: &Path,
     progress: &crate::study::sim::Progress,
 ) -> Result<Output> {
+    let (study, spec) = resolve(study, spec);
     let n = case_count(spec);
     let bar = progress.bar(n as f64 / 1000.0, &format!("{} ({n} cases)", spec.name));
     let rows = run_cases(study, spec, None, true, &|| bar.inc(1))?;

@@ -114,9 +114,10 @@ pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> Str
         Sampling::LatinHypercube { n, seed } => format!("Latin hypercube, {n} cases, seed {seed}"),
         Sampling::MonteCarlo { n, seed } => format!("Monte Carlo, {n} cases, seed {seed}"),
     };
+    let on = format!(" of mechanism `{}`", study.mechanism.name);
     let _ = writeln!(
         md,
-        "## Design study `{}`: {} `{}` per case, {sampling}\n",
+        "## Design study `{}`{on}: {} `{}` per case, {sampling}\n",
         spec.name,
         spec.analysis.kind(),
         spec.analysis.name()
@@ -126,9 +127,13 @@ pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> Str
         let values = match (&p.values, p.from, p.to) {
             (Some(v), ..) => v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(", "),
             (None, Some(a), Some(b)) => format!(
-                "{a} to {b}{}{}",
+                "{a} to {b}{}{}{}",
                 p.points.map_or(String::new(), |n| format!(", {n} points")),
-                if p.log { ", logarithmic" } else { "" }
+                if p.log { ", logarithmic" } else { "" },
+                match p.distribution {
+                    super::Distribution::Uniform => String::new(),
+                    super::Distribution::Normal { mean, sd } => format!(", normal: mean {mean}, sd {sd}, truncated"),
+                }
             ),
             _ => String::new(),
         };
@@ -148,8 +153,8 @@ pub(super) fn summary(study: &Study, spec: &DesignSpec, r: &DesignResult) -> Str
         let pc = |x: f64| format!("{:.1} %", 100.0 * x);
         let _ = writeln!(
             md,
-            "Inside the operating range {lo} to {hi}: {} of the cases with results jump (a fold in unison), {} \
-             lose the absorbers' unison, {} do either.\n",
+            "Inside the operating range {lo} to {hi}: {} of the cases with results jump (have a fold), {} \
+             lose the absorbers' unison (a branch point, or a fold that parts them), {} do either.\n",
             pc(j),
             pc(u),
             pc(e)

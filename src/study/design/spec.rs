@@ -17,6 +17,19 @@ pub struct DesignSpec {
     /// The analysis run per case: `HarmonicBalance(…)` or `LinearResponse(…)`, written as in
     /// `analyses`; the parameters replace its fields and the mechanism's values case by case.
     pub analysis: Box<AnalysisSpec>,
+    /// Mechanism file the cases vary, relative to the study file (default: the study's own): a
+    /// design study of another mechanism than the study's other analyses (a set of four
+    /// absorbers next to maps of two). It must have the study's spin joint and response body.
+    #[serde(default)]
+    pub mechanism: Option<String>,
+    /// With `mechanism`: its joints locked for the reference twin (the study's `lock` names the
+    /// study's own mechanism; default none).
+    #[serde(default)]
+    pub lock: Vec<String>,
+    /// With `mechanism`: its joints reported element by element (default: every joint with a
+    /// coordinate other than the spin joint).
+    #[serde(default)]
+    pub elements: Vec<String>,
     /// The operating range `(from, to)` of a harmonic balance's continued parameter (order, rpm
     /// or N·m) inside which a case's jumps and losses of unison are counted (default: the
     /// analysis's whole range).
