@@ -1,7 +1,7 @@
 //! FreeOscillation through the analysis interface (`study/analysis.rs`): its checks, the files it may
 //! write, its plan, its run and its entry in `results.json`.
 
-use super::{FreeOscillationResult, FreeOscillationSpec, run, table};
+use super::{FreeOscillationResult, FreeOscillationSpec, FreeSpin, run, table};
 use crate::error::Result;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
@@ -122,14 +122,34 @@ pub(super) fn check_free(
     let kind = mech.joints[j].kind;
     let travel = kind.travel();
     for (i, &a) in f.amplitudes.iter().enumerate() {
-        if !(a.is_finite() && a != 0.0 && a.abs() < travel) {
+        if !(a.is_finite() && a > 0.0 && a < travel) {
             return Err(src.error(
                 &format!("analyses[{k}].amplitudes[{i}]"),
                 format!(
-                    "amplitude must be finite, non-zero and inside the joint's travel (|a| < {} {}), got {a}",
+                    "amplitude must be finite, positive and inside the joint's travel (0 < a < {} {}), got {a}",
                     g(travel),
                     kind.coordinate_unit()
                 ),
+            ));
+        }
+    }
+    crate::study::validate::check_harmonics(f.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
+    if f.spin == FreeSpin::Free {
+        // A free rotor conserves its angular momentum only when nothing acts on it from the world.
+        if mech.loads.needs_world_orientation() {
+            return Err(src.error(
+                &at("spin"),
+                "`spin: Free` needs a rotor free to turn: gravity or a world-frame force acts on it here \
+                 (use `spin: Held`)",
+            ));
+        }
+        let omega = crate::model::excitation::rpm_to_rad_s(f.rpm);
+        let spin_name = &mech.joints[spin].name;
+        let cpva = super::conservative(mech);
+        if let Err(m) = super::linear_mode(&cpva, spin_name, FreeSpin::Free, mech.coordinate(j).unwrap_or(0), omega) {
+            return Err(src.error(
+                &at("spin"),
+                format!("`spin: Free`: joint `{}` and the spin joint `{spin_name}`: {m}", f.joint),
             ));
         }
     }
