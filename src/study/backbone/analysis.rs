@@ -120,14 +120,15 @@ pub(super) fn check_free(
         return Err(src.error(&at("amplitudes"), format!("need 1 to {MAX_LIST} amplitudes")));
     }
     let kind = mech.joints[j].kind;
-    let travel = kind.travel();
+    let top = super::top(kind);
     for (i, &a) in f.amplitudes.iter().enumerate() {
-        if !(a.is_finite() && a > 0.0 && a < travel) {
+        if !(a.is_finite() && a > 0.0 && a < top) {
             return Err(src.error(
                 &format!("analyses[{k}].amplitudes[{i}]"),
                 format!(
-                    "amplitude must be finite, positive and inside the joint's travel (0 < a < {} {}), got {a}",
-                    g(travel),
+                    "amplitude must be finite, positive and below the top of the joint's swing or its travel \
+                     (0 < a < {} {}), got {a}",
+                    g(top),
                     kind.coordinate_unit()
                 ),
             ));
@@ -135,12 +136,17 @@ pub(super) fn check_free(
     }
     crate::study::validate::check_harmonics(f.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
     if f.spin == FreeSpin::Free {
-        // A free rotor conserves its angular momentum only when nothing acts on it from the world.
-        if mech.loads.needs_world_orientation() {
+        // A free rotor conserves its angular momentum only when nothing acts on the mechanism
+        // from outside: gravity and world-frame forces are refused above (no steady spin), the
+        // dampers and joint torques are removed, a point force would remain.
+        if !mech.loads.point_forces.is_empty() {
             return Err(src.error(
                 &at("spin"),
-                "`spin: Free` needs a rotor free to turn: gravity or a world-frame force acts on it here \
-                 (use `spin: Held`)",
+                format!(
+                    "`spin: Free` needs a rotor free to turn: mechanism `{}` has a point force acting from outside \
+                     (use `spin: Held`)",
+                    mech.name
+                ),
             ));
         }
         let omega = crate::model::excitation::rpm_to_rad_s(f.rpm);

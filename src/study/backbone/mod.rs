@@ -294,6 +294,12 @@ fn linear_mode(
     Ok((mode.order, shape))
 }
 
+/// The largest release amplitude of a joint of kind `kind`: π for a pivot (the top, where the
+/// pendulum stands still), the travel of a path; none for a slide.
+pub(crate) fn top(kind: crate::model::joint::JointKind) -> f64 {
+    if kind.rotates() { PI } else { kind.travel() }
+}
+
 /// The undamped, unforced mechanism of the free oscillation.
 fn conservative(mech: &Mechanism) -> Mechanism {
     let mut mech = mech.clone();
@@ -315,13 +321,11 @@ pub(crate) fn compute(study: &Study, spec: &FreeOscillationSpec) -> Result<FreeO
     let omega = rpm_to_rad_s(spec.rpm);
     let (linear_order, shape) = linear_mode(&mech, &study.spec.spin_joint, spec.spin, coord, omega)
         .map_err(|m| model_err(format!("joint `{}`: {m}", spec.joint)))?;
-    // Continuation: steps of at most a thirtieth of the joint's travel (6° for a pivot).
-    let travel = mech.joints[joint].kind.travel();
-    let bopts = crate::hbm::BackboneOptions {
-        max_step: travel / 30.0,
-        start: travel / 300.0,
-        ..crate::hbm::BackboneOptions::default()
-    };
+    // Continuation: steps of at most a thirtieth of the way to the top (6° for a pivot), or of
+    // a tenth of the coordinate's scale where it has no top (a slide).
+    let kind = mech.joints[joint].kind;
+    let max_step = if top(kind).is_finite() { top(kind) / 30.0 } else { 0.1 * kind.coordinate_scale() };
+    let bopts = crate::hbm::BackboneOptions { max_step, start: max_step / 10.0, ..Default::default() };
     let kane = Kane::new(&mech)?;
     let hopts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
     let orbits: Vec<Option<crate::hbm::FreeOrbit>> = match Hbm::new(&kane, study.spin, omega, &[], hopts) {

@@ -711,10 +711,11 @@ fn backbone_figure(
                     style: if b == 0 { LineStyle::Solid } else { LineStyle::Dashed },
                 });
             }
+            // The backbone leaves the axis at the linear order.
             series.push(Series {
                 label: format!("backbone `{}` ({spin}, {})", bb.name, bb.joint),
-                x: bb.orders.clone(),
-                y: bb.amplitudes.clone(),
+                x: std::iter::once(bb.linear_order).chain(bb.orders.iter().copied()).collect(),
+                y: std::iter::once(0.0).chain(bb.amplitudes.iter().copied()).collect(),
                 color: 1,
                 style: LineStyle::Dashed,
             });
