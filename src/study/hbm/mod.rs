@@ -684,9 +684,10 @@ pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&Sweep
 }
 
 /// `<name>_backbone.svg`: per amplitude, each branch's largest peak relative angle of the
-/// non-spin joints (the absorber's amplitude, rad) against the order, stable points solid and
-/// unstable dashed, with the backbone `bb` (its order against release amplitude, the peak
-/// angle of the free orbit) over them: the forced response leans along it.
+/// non-spin joints (the absorber's amplitude, rad) against the order, the branch from each end
+/// of the range solid and dashed, with the backbone `bb` (its order against release amplitude,
+/// the peak angle of the free orbit, from the linear order at zero) over them: the forced
+/// response leans along it.
 fn backbone_figure(
     spec: &HbmSpec,
     branches: &[HbmBranch],
