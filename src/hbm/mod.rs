@@ -105,6 +105,7 @@ mod continuation;
 mod corrector;
 mod cyclic;
 mod fold2;
+mod free;
 mod reaction;
 mod sample;
 mod solution;
@@ -116,6 +117,7 @@ pub use branch::{
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
 pub use fold2::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, Singularity};
+pub use free::{BackboneOptions, FreeOrbit, FreeSpin, FreeStart};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};

@@ -230,6 +230,12 @@ fn caption(a: &AnalysisSpec, stem: &str) -> String {
              stable solid and unstable dashed, one panel per torque amplitude."
                 .into()
         }
+        (AnalysisSpec::HarmonicBalance(_), "_backbone") => {
+            "Harmonic balance with the backbone: the largest peak joint angle along the periodic branches (from \
+             each end of the range, solid and dashed) against the order, with the free oscillation's backbone \
+             (order against release amplitude, from the linear order at zero) drawn over them."
+                .into()
+        }
         (AnalysisSpec::HarmonicBalance(_), _) => {
             "Harmonic balance: the amplitude of the periodic steady states along the continued parameter, \
              stable solid and unstable dashed, folds (where the response jumps) as vertical lines, and the \
@@ -252,8 +258,9 @@ fn caption(a: &AnalysisSpec, stem: &str) -> String {
                 .into()
         }
         (AnalysisSpec::FreeOscillation(_), _) => {
-            "Backbone curve: the frequency of the joint's free, undamped oscillation at held spin, as an order \
-             of the spin speed, against its release amplitude; the linear order dotted."
+            "Backbone curve: the frequency of the joint's free, undamped oscillation, the spin held or the rotor \
+             free, as an order of the (mean) spin speed, against its release amplitude: continuation of free \
+             periodic orbits (line) and time integration (points); the linear order dotted."
                 .into()
         }
         (AnalysisSpec::Envelope(_), _) => {

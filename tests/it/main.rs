@@ -6,6 +6,7 @@
 
 mod support;
 
+mod backbone;
 mod campbell_crossings;
 mod catalog;
 mod cli;

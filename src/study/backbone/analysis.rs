@@ -1,7 +1,7 @@
 //! FreeOscillation through the analysis interface (`study/analysis.rs`): its checks, the files it may
 //! write, its plan, its run and its entry in `results.json`.
 
-use super::{FreeOscillationResult, FreeOscillationSpec, run, table};
+use super::{FreeOscillationResult, FreeOscillationSpec, FreeSpin, run, table};
 use crate::error::Result;
 use crate::io::Source;
 use crate::model::mechanism::Mechanism;
@@ -120,16 +120,42 @@ pub(super) fn check_free(
         return Err(src.error(&at("amplitudes"), format!("need 1 to {MAX_LIST} amplitudes")));
     }
     let kind = mech.joints[j].kind;
-    let travel = kind.travel();
+    let top = super::top(kind);
     for (i, &a) in f.amplitudes.iter().enumerate() {
-        if !(a.is_finite() && a != 0.0 && a.abs() < travel) {
+        if !(a.is_finite() && a > 0.0 && a < top) {
             return Err(src.error(
                 &format!("analyses[{k}].amplitudes[{i}]"),
                 format!(
-                    "amplitude must be finite, non-zero and inside the joint's travel (|a| < {} {}), got {a}",
-                    g(travel),
+                    "amplitude must be finite, positive and below the top of the joint's swing or its travel \
+                     (0 < a < {} {}), got {a}",
+                    g(top),
                     kind.coordinate_unit()
                 ),
+            ));
+        }
+    }
+    crate::study::validate::check_harmonics(f.harmonics).map_err(|m| src.error(&at("harmonics"), m))?;
+    if f.spin == FreeSpin::Free {
+        // A free rotor conserves its angular momentum only when nothing acts on the mechanism
+        // from outside: gravity and world-frame forces are refused above (no steady spin), the
+        // dampers and joint torques are removed, a point force would remain.
+        if !mech.loads.point_forces.is_empty() {
+            return Err(src.error(
+                &at("spin"),
+                format!(
+                    "`spin: Free` needs a rotor free to turn: mechanism `{}` has a point force acting from outside \
+                     (use `spin: Held`)",
+                    mech.name
+                ),
+            ));
+        }
+        let omega = crate::model::excitation::rpm_to_rad_s(f.rpm);
+        let spin_name = &mech.joints[spin].name;
+        let cpva = super::conservative(mech);
+        if let Err(m) = super::linear_mode(&cpva, spin_name, FreeSpin::Free, mech.coordinate(j).unwrap_or(0), omega) {
+            return Err(src.error(
+                &at("spin"),
+                format!("`spin: Free`: joint `{}` and the spin joint `{spin_name}`: {m}", f.joint),
             ));
         }
     }

@@ -42,6 +42,9 @@ impl Analysis for HbmSpec {
         if let Some(o) = &mut self.overlay {
             *o = rename(o);
         }
+        if let Some(b) = &mut self.backbone {
+            *b = rename(b);
+        }
     }
 
     fn comparable() -> bool {
@@ -127,6 +130,9 @@ impl Analysis for HbmSpec {
             }
         }
         out.extend([format!("{n}.svg"), format!("{n}_elements.svg")]);
+        if self.backbone.is_some() {
+            out.push(format!("{n}_backbone.svg"));
+        }
         out
     }
 
@@ -155,7 +161,8 @@ impl Analysis for HbmSpec {
     fn run(&self, study: &Study, bench: &mut Bench<'_>) -> Result<Output> {
         // The sweeps it draws over are its one input from the analyses before it.
         let overlay = overlay_of(self, &bench.report.sweeps);
-        run(study, self, &overlay, bench.dir, bench.progress)
+        let backbone = self.backbone.as_ref().and_then(|b| bench.report.free.iter().find(|r| &r.name == b));
+        run(study, self, &overlay, backbone, bench.dir, bench.progress)
     }
 
     fn json(&self, study: &Study, report: &StudyReport, _nth: usize) -> Option<Json> {
@@ -249,6 +256,17 @@ pub(super) fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::Hbm
                 &format!("analyses[{k}].multiples[{j}]"),
                 format!("reported multiples must be whole numbers from 1 to harmonics = {}, got {m}", h.harmonics),
             ));
+        }
+    }
+    if let Some(b) = &h.backbone {
+        if !needs_orders {
+            return Err(src.error(&at("backbone"), "a backbone can only be drawn over order branches"));
+        }
+        let earlier = spec.analyses[..k]
+            .iter()
+            .any(|a| matches!(a, crate::study::AnalysisSpec::FreeOscillation(f) if &f.name == b));
+        if !earlier {
+            return Err(src.error(&at("backbone"), format!("no FreeOscillation named `{b}` before this analysis")));
         }
     }
     if let Some(o) = &h.overlay {

@@ -371,16 +371,22 @@ fn forcing(spec: &HbmSpec, amp: f64) -> (Vec<Harmonic>, Vec<Harmonic>) {
 }
 
 /// Runs the branches ([`compute`]) and writes their outputs over `overlay`, the runs of the
-/// order sweep the spec names ([`overlay_of`]; empty when it names none), as [`render`] does.
+/// order sweep the spec names ([`overlay_of`]; empty when it names none), as [`render`] does,
+/// and with `backbone` (the free oscillation the spec names) the backbone figure
+/// ([`backbone_figure`]).
 pub(crate) fn run(
     study: &Study,
     spec: &HbmSpec,
     overlay: &[&SweepRun],
+    backbone: Option<&super::backbone::FreeOscillationResult>,
     dir: &Path,
     progress: &super::sim::Progress,
 ) -> Result<Output> {
     let (branches, failures) = compute_with(study, spec, Some(progress));
-    let (markdown, files) = render(study, spec, &branches, overlay, dir)?;
+    let (markdown, mut files) = render(study, spec, &branches, overlay, dir)?;
+    if let Some(bb) = backbone {
+        files.push(backbone_figure(spec, &branches, bb, dir)?);
+    }
     Ok(Output { markdown, files, failures, results: Box::new(branches) })
 }
 
@@ -728,6 +734,65 @@ pub(crate) fn findings(study: &Study, branches: &[&HbmBranch], overlay: &[&Sweep
             sweep_jumps: jump_orders(overlay, br.amplitude, lag),
         })
         .collect()
+}
+
+/// `<name>_backbone.svg`: per amplitude, each branch's largest peak relative angle of the
+/// non-spin joints (the absorber's amplitude, rad) against the order, the branch from each end
+/// of the range solid and dashed, with the backbone `bb` (its order against release amplitude,
+/// the peak angle of the free orbit, from the linear order at zero) over them: the forced
+/// response leans along it.
+fn backbone_figure(
+    spec: &HbmSpec,
+    branches: &[HbmBranch],
+    bb: &super::backbone::FreeOscillationResult,
+    dir: &Path,
+) -> Result<PathBuf> {
+    let same = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
+    let spin = match bb.spin {
+        crate::hbm::FreeSpin::Held => "held spin",
+        crate::hbm::FreeSpin::Free => "free rotor",
+    };
+    let panels: Vec<Panel> = cases(spec)
+        .into_iter()
+        .map(|amp| {
+            let mut series = Vec::new();
+            for (b, br) in branches.iter().filter(|b| same(b.amplitude, amp)).enumerate() {
+                series.push(Series {
+                    label: if b == 0 { format!("forced, T_n = {amp} N·m") } else { String::new() },
+                    x: br.parameter.clone(),
+                    y: br.relative_angle.clone(),
+                    color: 0,
+                    style: if b == 0 { LineStyle::Solid } else { LineStyle::Dashed },
+                });
+            }
+            // The backbone leaves the axis at the linear order.
+            series.push(Series {
+                label: format!("backbone `{}` ({spin}, {})", bb.name, bb.joint),
+                x: std::iter::once(bb.linear_order).chain(bb.orders.iter().copied()).collect(),
+                y: std::iter::once(0.0).chain(bb.amplitudes.iter().copied()).collect(),
+                color: 1,
+                style: LineStyle::Dashed,
+            });
+            series.push(Series {
+                label: String::new(),
+                x: bb.orders.clone(),
+                y: bb.amplitudes.clone(),
+                color: 1,
+                style: LineStyle::Points,
+            });
+            Panel {
+                title: format!("Forced branches and the backbone, T_n = {amp} N·m, {} rpm", spec.rpm),
+                x_label: "excitation order n".into(),
+                y_label: format!("largest peak joint angle, {}", bb.unit),
+                x_range: Some((spec.order_min, spec.order_max)),
+                series,
+                ..Panel::default()
+            }
+        })
+        .collect();
+    let svg = dir.join(format!("{}_backbone.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 640, 460)?;
+    Ok(svg)
 }
 
 /// The sweeps drawn under the branches, out of the runs of the analyses before it: the runs of

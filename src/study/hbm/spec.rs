@@ -34,6 +34,11 @@ pub struct HbmSpec {
     /// `Order` continuation only).
     #[serde(default)]
     pub overlay: Option<String>,
+    /// Name of a `FreeOscillation` of the same study (before this analysis) whose backbone,
+    /// order against release amplitude, is drawn over the branches' peak absorber angle
+    /// against order in `<name>_backbone.svg` (an `Order` continuation only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backbone: Option<String>,
     /// The continued parameter (default `Order`).
     #[serde(default)]
     pub parameter: HbmParameter,
