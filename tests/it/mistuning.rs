@@ -289,3 +289,36 @@ fn a_design_study_of_its_own_mechanism_equals_one_in_that_mechanisms_study() {
     let err = study_of("cpva.ron", r#"lock: ["pivot"], "#).err().unwrap().to_string();
     assert!(err.contains("(field `analyses[0].lock`)") && err.contains("own `mechanism`"), "{err}");
 }
+
+/// At held spin the absorbers do not couple (the rotor cannot move), so each eigen-order of a
+/// mistuned set is its own absorber's tuning order: the orders of the held-spin undamped modes
+/// equal the requested n_t,i to 1e-10.
+#[test]
+fn at_held_spin_each_eigen_order_is_its_absorbers_tuning_order() {
+    use kanedyn::linear::{Damping, LinearModel, Spin};
+    let params = (1..=4)
+        .map(|i| format!(r#"(name: "n{i}", quantity: TuningOrder("pivot_{i}"), from: 3.0789, to: 3.1411)"#))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let s = study("cpva4.ron", &params, "MonteCarlo(n: 5, seed: 21)", 500.0);
+    let spec = design(&s);
+    for values in case_values(spec) {
+        let (case, _) = design::substitute(&s, spec, &values).unwrap_or_else(|e| panic!("{e}"));
+        let lm = LinearModel::new(&case.mechanism, "spin", 1000.0 * std::f64::consts::PI / 30.0, None).unwrap();
+        let mut orders: Vec<f64> = lm
+            .modes(Spin::Held, Damping::Undamped)
+            .unwrap()
+            .modes
+            .iter()
+            .map(|m| m.order)
+            .filter(|o| o.is_finite() && *o > 0.0)
+            .collect();
+        orders.sort_by(f64::total_cmp);
+        let mut want = values.clone();
+        want.sort_by(f64::total_cmp);
+        assert_eq!(orders.len(), 4, "{orders:?}");
+        for (o, n) in orders.iter().zip(&want) {
+            assert!((o - n).abs() <= 1e-10, "eigen-order {o} against n_t {n}");
+        }
+    }
+}

@@ -401,8 +401,13 @@ fn tuned_com_distance(m: f64, i: f64, r: f64, l_now: f64, n_t: f64) -> std::resu
     Ok(if l_now * l_now >= i / m { far } else { near })
 }
 
-/// The mechanism and analysis of one case: `values` substituted.
-fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study, AnalysisSpec)> {
+/// The study and analysis of one case: `values` (a row of [`case_values`]) substituted into
+/// the mechanism (its locked twin rebuilt and checked) and the analysis.
+///
+/// # Errors
+/// A case whose mechanism is invalid (a tuning order out of reach, a body left with neither
+/// mass nor inertia, a mass matrix that is not positive definite).
+pub fn substitute(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Study, AnalysisSpec)> {
     let mut mech = study.mechanism.clone();
     let mut analysis = spec.analysis.as_ref().clone();
     let err = |m: String| Error::Model { mechanism: mech_name(study), message: m };
