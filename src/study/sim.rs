@@ -169,11 +169,13 @@ pub(crate) const EXPLICIT_STABLE_HLAMBDA: f64 = 5.0;
 /// step (measured: the one-pendulum 60 s sweep takes 29,599 steps up to 55 Hz, 9 a period).
 pub(crate) const EXPLICIT_STEPS_PER_PERIOD: f64 = 10.0;
 /// How many times more steps the stability limit must force on DOP853 than accuracy asks for
-/// before Radau IIA is cheaper. Measured on the 16-disk shaft at rtol = 1e-9 (BENCHMARKS.md,
-/// "Stiff shafts"): DOP853 4.55 s for 235,394 steps (8.0× its accuracy count), Radau IIA 12.0 s
-/// for 126,357 steps (order 5 needs 4.3× DOP853's accuracy count, and a step with its Newton
-/// iterations and LU factors costs 5× a DOP853 step), so the two break even near 8·12.0/4.55 = 21.
-pub(crate) const IMPLICIT_BREAK_EVEN: f64 = 21.0;
+/// before Radau IIA is cheaper. Measured on the 16-disk shaft's 60 s sweep at rtol = 1e-9
+/// (BENCHMARKS.md, "Stiff shafts"): DOP853 4.55 s for 235,394 steps (its stability limit, 8.0× the
+/// accuracy count), Radau IIA 17.95 s for 227,045 steps at the same trace accuracy (order 5 needs
+/// 7.7× DOP853's accuracy count there, and a step with its Newton iterations, Jacobians and the
+/// crate's LU factors costs 4× a DOP853 step). Radau's count does not grow with the top mode,
+/// DOP853's does in proportion, so they break even near 8.0·17.95/4.55 = 32.
+pub(crate) const IMPLICIT_BREAK_EVEN: f64 = 32.0;
 
 /// Which integrator a study's time-domain run at spin speed `omega` (rad/s) with its highest
 /// excitation line at `f_line_hz` uses, and why: the study's choice, or under `Auto` the rule of
