@@ -1,5 +1,5 @@
 //! The stiff driver loop behind [`crate::time::integrate::integrate`] with
-//! [`Method::Radau5`](crate::time::run::Method::Radau5): Radau IIA of order 5 (3 stages,
+//! [`Method::Radau5`](crate::time::integrate::Method::Radau5): Radau IIA of order 5 (3 stages,
 //! collocation; Hairer & Wanner, *Solving ODEs II*, §IV.8, their RADAU5), from the
 //! `differential-equations` crate, stepped by hand like the DOP853 loop (`dop853.rs`), with the
 //! same right-hand-side error and non-finite checks, counters and fixed-rate sampler.
@@ -149,7 +149,7 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
             return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: with_evals(stats) });
         }
         if let Some((at, budget_s)) = opts.deadline
-            && (stats.accepted + stats.rejected) % 64 == 0
+            && (stats.accepted + stats.rejected).is_multiple_of(64)
             && std::time::Instant::now() >= at
         {
             return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: with_evals(stats) });
