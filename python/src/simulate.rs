@@ -226,6 +226,7 @@ fn simulate(
             h0,
             h_max,
             deadline: None,
+            method: kanedyn::time::integrate::Method::Dop853,
         };
         // The run holds no Python object: other threads may run meanwhile.
         let (outcome, rec) = py.detach(move || {

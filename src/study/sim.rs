@@ -2,12 +2,13 @@
 //! streamed into the few signals a study needs, with progress bars.
 
 use super::elements::{ElementStreams, ElementTraces};
+use super::spec::Integrator;
 use super::{Deadline, ExciteAt, IntegrationSpec, Study, TrackingSpec};
 use crate::error::{Error, Result};
 use crate::kane::{Kane, Model};
 use crate::model::mechanism::Mechanism;
 use crate::signal::{OrderTrace, StftOptions, StftStream, stft_order_traces};
-use crate::time::integrate::IntegrateOptions;
+use crate::time::integrate::{IntegrateOptions, IntegratorChoice, Method};
 use crate::time::probe::{Probe, Recorder};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -142,7 +143,8 @@ pub(crate) fn time_series(mech: &Mechanism, body: usize, mut rec: Recorder, n_el
     Some(TimeSeries { names, units, columns })
 }
 
-/// The study's integration options: its tolerances and sample rate, with `ẋ` at the samples.
+/// The study's integration options: its tolerances and sample rate, with `ẋ` at the samples,
+/// and the integrator it names (`Auto` as explicit: [`options_for`] decides `Auto`).
 pub(crate) fn options(spec: &IntegrationSpec) -> IntegrateOptions {
     IntegrateOptions {
         rtol: spec.rtol,
@@ -151,7 +153,91 @@ pub(crate) fn options(spec: &IntegrationSpec) -> IntegrateOptions {
         sample_derivatives: true,
         max_steps: spec.max_steps,
         deadline: spec.deadline.map(|d| (d.at, d.budget_s)),
+        method: match spec.integrator {
+            Integrator::Implicit => Method::Radau5,
+            Integrator::Explicit | Integrator::Auto => Method::Dop853,
+        },
         ..IntegrateOptions::default()
+    }
+}
+
+/// DOP853's stability limit on the imaginary axis, `|hλ|` (Hairer's stability region reaches
+/// about 6 there; measured on the 16-disk shaft: 235,394 steps over 60 s at a top eigenvalue of
+/// |λ| = 1.9e4 1/s, |hλ| = 4.8).
+pub(crate) const EXPLICIT_STABLE_HLAMBDA: f64 = 5.0;
+/// DOP853 steps per period of the highest excitation line at rtol = 1e-9 when accuracy sets the
+/// step (measured: the one-pendulum 60 s sweep takes 29,599 steps up to 55 Hz, 9 a period).
+pub(crate) const EXPLICIT_STEPS_PER_PERIOD: f64 = 10.0;
+/// How many times more steps the stability limit must force on DOP853 than accuracy asks for
+/// before Radau IIA is cheaper. Measured on the 16-disk shaft's 60 s sweep at rtol = 1e-9
+/// (BENCHMARKS.md, "Stiff shafts"): DOP853 4.55 s for 235,394 steps (its stability limit, 8.0× the
+/// accuracy count), Radau IIA 17.95 s for 227,045 steps at the same trace accuracy (order 5 needs
+/// 7.7× DOP853's accuracy count there, and a step with its Newton iterations, Jacobians and the
+/// crate's LU factors costs 4× a DOP853 step). Radau's count does not grow with the top mode,
+/// DOP853's does in proportion, so they break even near 8.0·17.95/4.55 = 32.
+pub(crate) const IMPLICIT_BREAK_EVEN: f64 = 32.0;
+
+/// Which integrator a study's time-domain run at spin speed `omega` (rad/s) with its highest
+/// excitation line at `f_line_hz` uses, and why: the study's choice, or under `Auto` the rule of
+/// docs/design.md ("Stiff mechanisms: the integrator choice"): the fastest eigenvalue |λ|max of
+/// the mechanism linearised at `omega` (damped, spin free; [`crate::linear::LinearModel`]) bounds
+/// DOP853's step at `5/|λ|max`; accuracy asks for about `1/(10 f_line)·(rtol/1e-9)^(1/8)`;
+/// implicit Radau IIA when the first is more than [`IMPLICIT_BREAK_EVEN`] times shorter.
+pub(crate) fn options_for(
+    study: &Study,
+    mech: &Mechanism,
+    omega: f64,
+    f_line_hz: f64,
+) -> (IntegrateOptions, IntegratorChoice) {
+    let spec = &study.spec.integration;
+    let mut opts = options(spec);
+    let lambda = fastest_eigenvalue(mech, &study.spec.spin_joint, omega);
+    let h_stable = EXPLICIT_STABLE_HLAMBDA / lambda;
+    let h_accurate = (spec.rtol / 1e-9).powf(0.125) / (EXPLICIT_STEPS_PER_PERIOD * f_line_hz.max(1e-3));
+    let ratio = h_accurate / h_stable;
+    let top_hz = lambda / std::f64::consts::TAU;
+    let (method, reason) = match spec.integrator {
+        Integrator::Explicit => (Method::Dop853, "set by the study".to_string()),
+        Integrator::Implicit => (Method::Radau5, "set by the study".to_string()),
+        Integrator::Auto if !lambda.is_finite() || lambda <= 0.0 => {
+            (Method::Dop853, "auto: no linearised spectrum, explicit".to_string())
+        }
+        Integrator::Auto => {
+            let m = if ratio > IMPLICIT_BREAK_EVEN { Method::Radau5 } else { Method::Dop853 };
+            let reason = format!(
+                "auto: fastest mode {top_hz:.4} Hz holds an explicit step to {:.3e} s, accuracy asks {:.3e} s: \
+                 {ratio:.3}× (implicit above {IMPLICIT_BREAK_EVEN}×)",
+                h_stable, h_accurate
+            );
+            (m, reason)
+        }
+    };
+    opts.method = method;
+    (opts, IntegratorChoice { method, fastest_mode_hz: top_hz, stability_ratio: ratio, reason })
+}
+
+/// The fastest eigenvalue modulus |λ|max (1/s) of `mech` linearised about a steady spin at `omega`
+/// (damped, spin free), or NaN when it cannot be linearised; then the coarse time scales of the
+/// plan (fastest spring's natural frequency, fastest damper's decay rate) stand in.
+pub(crate) fn fastest_eigenvalue(mech: &Mechanism, spin_joint: &str, omega: f64) -> f64 {
+    use crate::linear::{Damping, LinearModel, Spin};
+    let linear = LinearModel::new(mech, spin_joint, omega, None)
+        .and_then(|m| m.modes(Spin::Free, Damping::Damped))
+        .map(|modal| {
+            modal
+                .rigid
+                .iter()
+                .chain(&modal.modes)
+                .map(|m| m.eigenvalue.norm().max(m.partner.norm()))
+                .fold(0.0, f64::max)
+        });
+    match linear {
+        Ok(l) if l.is_finite() && l > 0.0 => l,
+        _ => {
+            let (f, decay) = super::plan::time_scales(mech);
+            let l = (std::f64::consts::TAU * f).max(decay);
+            if l > 0.0 { l } else { f64::NAN }
+        }
     }
 }
 

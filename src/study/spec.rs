@@ -58,6 +58,9 @@ pub struct IntegrationSpec {
     pub sample_hz: f64,
     /// Step limit per run (default 50 million).
     pub max_steps: usize,
+    /// Which integrator the time-domain runs use (default `Auto`: chosen from the linearised
+    /// spectrum, see [`Integrator`]).
+    pub integrator: Integrator,
     /// How long the analysis running now may take, derived from its plan by the study runner
     /// (the watchdog of [`super::run`]); never read from a file.
     #[serde(skip)]
@@ -70,6 +73,20 @@ pub struct IntegrationSpec {
 
 pub use crate::deadline::Deadline;
 
+/// The integrator of a study's time-domain runs (order sweeps, multi-order runs, transients).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+pub enum Integrator {
+    /// Explicit DOP853 unless the linearised mechanism has a mode so fast that DOP853's
+    /// stability limit, not the tolerance, would set its step (docs/design.md, "Stiff
+    /// mechanisms: the integrator choice"); then implicit Radau IIA.
+    #[default]
+    Auto,
+    /// Explicit DOP853 (Dormand–Prince 8(5,3)).
+    Explicit,
+    /// Implicit Radau IIA of order 5 (L-stable; for stiff elastic shafts).
+    Implicit,
+}
+
 impl Default for IntegrationSpec {
     fn default() -> Self {
         Self {
@@ -77,6 +94,7 @@ impl Default for IntegrationSpec {
             atol: 1e-9,
             sample_hz: 2000.0,
             max_steps: 50_000_000,
+            integrator: Integrator::Auto,
             deadline: None,
             watchdog: super::plan::Watchdog::default(),
         }

@@ -57,7 +57,7 @@ impl Slab for Vec<f64> {
 }
 
 /// The first failure seen inside the right-hand side, kept until the driver looks.
-enum Fault {
+pub(super) enum Fault {
     Engine { t: f64, err: EngineError },
     NonFinite { t: f64 },
 }
@@ -66,11 +66,22 @@ enum Fault {
 /// interior mutability for the closure, a counter, and a fault slot the driver checks after every
 /// step (the crate cannot stop mid-step, so after a fault the remaining stages get NaN and the
 /// step's result is discarded).
-struct System<'a> {
-    f: RefCell<&'a mut DynRhs<'a>>,
-    evals: Cell<usize>,
-    fault: RefCell<Option<Fault>>,
+pub(super) struct System<'a> {
+    pub(super) f: RefCell<&'a mut DynRhs<'a>>,
+    pub(super) evals: Cell<usize>,
+    pub(super) fault: RefCell<Option<Fault>>,
     recent: RefCell<Recent>,
+}
+
+impl<'a> System<'a> {
+    pub(super) fn new(rhs: &'a mut DynRhs<'a>, n: usize) -> Self {
+        Self {
+            f: RefCell::new(rhs),
+            evals: Cell::new(0),
+            fault: RefCell::new(None),
+            recent: RefCell::new(Recent::new(n)),
+        }
+    }
 }
 
 /// The last four derivative evaluations `(t, ẋ)`, oldest overwritten first. An accepted DOP853
@@ -122,20 +133,25 @@ impl<Y: Slab> ODE<f64, Y> for System<'_> {
             self.recent.borrow_mut().push(t, out);
         }
     }
+
+    // Only the implicit method asks (DOP853 never does): see `radau::jacobian`.
+    fn jacobian(&self, t: f64, y: &Y, j: &mut differential_equations::linalg::Matrix<f64>) {
+        crate::time::radau::jacobian(self, t, y, j);
+    }
 }
 
 /// Sample clock: `t_k = t0 + k/fs` for `k = 0..count` (computed, not accumulated, so t_k has no
 /// drift over 480,000 samples).
-struct Clock {
+pub(super) struct Clock {
     t0: f64,
     fs: f64,
     t1: f64,
-    next: usize,
+    pub(super) next: usize,
     count: usize,
 }
 
 impl Clock {
-    fn new(t0: f64, t1: f64, fs: Option<f64>) -> Self {
+    pub(super) fn new(t0: f64, t1: f64, fs: Option<f64>) -> Self {
         let Some(fs) = fs else { return Self { t0, fs: 1.0, t1, next: 0, count: 0 } };
         // A few ulps of slack so that t1 on the grid (240 s at 2 kHz) counts despite rounding.
         let count = ((t1 - t0) * fs * (1.0 + 4.0 * f64::EPSILON)).floor() as usize + 1;
@@ -143,7 +159,7 @@ impl Clock {
     }
 
     /// The next sample time if it is not later than `t`.
-    fn due(&self, t: f64) -> Option<f64> {
+    pub(super) fn due(&self, t: f64) -> Option<f64> {
         if self.next >= self.count {
             return None;
         }
@@ -153,13 +169,13 @@ impl Clock {
 }
 
 /// Delivers sample `k` at `(t, x)`, first evaluating ẋ there when asked.
-struct Sampler<'a> {
-    on_sample: &'a mut dyn FnMut(&Sample<'_>),
-    xdot: Option<Vec<f64>>,
+pub(super) struct Sampler<'a> {
+    pub(super) on_sample: &'a mut dyn FnMut(&Sample<'_>),
+    pub(super) xdot: Option<Vec<f64>>,
 }
 
 impl Sampler<'_> {
-    fn deliver(
+    pub(super) fn deliver(
         &mut self,
         sys: &System<'_>,
         stats: &mut IntegrateStats,
@@ -225,12 +241,7 @@ pub(crate) fn run<Y: Slab>(
     on_sample: &mut dyn FnMut(&Sample<'_>),
 ) -> Result<Integrated, IntegrateError> {
     let n = x0.len();
-    let sys = System {
-        f: RefCell::new(rhs),
-        evals: Cell::new(0),
-        fault: RefCell::new(None),
-        recent: RefCell::new(Recent::new(n)),
-    };
+    let sys = System::new(rhs, n);
     let mut solver = Dop853::<Y>::dop853().rtol(opts.rtol).atol(opts.atol).max_steps(opts.max_steps);
     if let Some(h) = opts.h0 {
         solver = solver.h0(h.min(t1 - t0));

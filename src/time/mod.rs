@@ -9,5 +9,6 @@ mod dop853;
 pub mod drive_laws;
 pub mod integrate;
 pub mod probe;
+mod radau;
 mod run;
 pub mod steady;

@@ -572,6 +572,9 @@ pub struct Outcome {
     #[serde(serialize_with = "message_or_none")]
     #[schemars(with = "Option<String>")]
     pub error: Option<IntegrateError>,
+    /// Which integrator ran and why, when a study chose it (`None` outside studies).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub integrator: Option<crate::time::integrate::IntegratorChoice>,
 }
 
 /// An optional error as its message (`None` stays `None`).
@@ -596,6 +599,7 @@ impl Outcome {
         s.rhs_evals += c.rhs_evals;
         s.sample_rhs_evals += c.sample_rhs_evals;
         s.samples += c.samples;
+        s.method = c.method;
         self.wall_s += later.wall_s;
         self.t_end = later.t_end;
         self.x_end.clone_from(&later.x_end);
@@ -702,7 +706,16 @@ pub fn simulate_rhs_streamed(
     });
     let wall_s = start.elapsed().as_secs_f64();
     match run {
-        Ok(done) => Outcome { stats: done.stats, wall_s, t_end: done.t_end, x_end: Some(done.x_end), error: None },
-        Err(e) => Outcome { stats: e.stats(), wall_s, t_end: e.t_reached(), x_end: None, error: Some(e) },
+        Ok(done) => Outcome {
+            stats: done.stats,
+            wall_s,
+            t_end: done.t_end,
+            x_end: Some(done.x_end),
+            error: None,
+            integrator: None,
+        },
+        Err(e) => {
+            Outcome { stats: e.stats(), wall_s, t_end: e.t_reached(), x_end: None, error: Some(e), integrator: None }
+        }
     }
 }

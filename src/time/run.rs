@@ -31,6 +31,20 @@ pub struct IntegrateOptions {
     /// A wall-clock instant past which the run stops with [`IntegrateError::Deadline`], with
     /// the budget it came from in seconds (`None`: no deadline). The study's watchdog sets it.
     pub deadline: Option<(std::time::Instant, f64)>,
+    /// The integration method (default [`Method::Dop853`]).
+    pub method: Method,
+}
+
+/// The integration method of one run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+pub enum Method {
+    /// Explicit Dormand–Prince 8(5,3) (DOP853): the cheapest per step, its step bounded by the
+    /// stability limit `|hλ| ≲ 5` of the fastest mode as well as by the tolerance.
+    #[default]
+    Dop853,
+    /// Implicit Radau IIA of order 5 (RADAU5): L-stable, its step set by the tolerance alone,
+    /// for mechanisms with stiff modes far above the excitation (`src/time/radau.rs`).
+    Radau5,
 }
 
 impl Default for IntegrateOptions {
@@ -44,8 +58,23 @@ impl Default for IntegrateOptions {
             h0: None,
             h_max: None,
             deadline: None,
+            method: Method::Dop853,
         }
     }
+}
+
+/// Which integrator a study's run used and why (the study's `integration.integrator`, or the
+/// `Auto` rule of docs/design.md, "Stiff mechanisms: the integrator choice").
+#[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
+pub struct IntegratorChoice {
+    /// The method that ran.
+    pub method: Method,
+    /// The mechanism's fastest linearised mode, |λ|max/2π, Hz (NaN without a linear model).
+    pub fastest_mode_hz: f64,
+    /// The step accuracy asks of DOP853 over the step its stability allows (`5/|λ|max`).
+    pub stability_ratio: f64,
+    /// Why, in words.
+    pub reason: String,
 }
 
 /// One sample handed to the caller's callback.
@@ -75,6 +104,8 @@ pub struct IntegrateStats {
     pub sample_rhs_evals: usize,
     /// Samples delivered to the callback.
     pub samples: usize,
+    /// The method that ran.
+    pub method: Method,
 }
 
 impl fmt::Display for IntegrateStats {
@@ -83,7 +114,8 @@ impl fmt::Display for IntegrateStats {
             f,
             "{} steps accepted, {} rejected, {} rhs evaluations (+{} at samples), {} samples",
             self.accepted, self.rejected, self.rhs_evals, self.sample_rhs_evals, self.samples
-        )
+        )?;
+        if self.method == Method::Radau5 { write!(f, " (Radau IIA)") } else { Ok(()) }
     }
 }
 
@@ -161,6 +193,17 @@ pub enum IntegrateError {
         /// Counters.
         stats: IntegrateStats,
     },
+    /// The implicit method's Newton matrix `I/(γh) − J` was singular at five step sizes in a row
+    /// (a Jacobian with NaN, or a step that cannot be solved): the implicit run gives up.
+    #[error("implicit solver: singular Newton matrix at t = {t_reached} s (h = {h:e} s); {stats}")]
+    SingularNewton {
+        /// Time reached, s.
+        t_reached: f64,
+        /// The step size tried last, s.
+        h: f64,
+        /// Counters.
+        stats: IntegrateStats,
+    },
     /// The run went past [`IntegrateOptions::deadline`]: its analysis overran its time budget.
     #[error(
         "stopped by the watchdog at t = {t_reached} s: {} (a multiple of its planned CPU time, see `kanedyn \
@@ -197,6 +240,7 @@ impl IntegrateError {
             | Self::MaxSteps { t_reached, .. }
             | Self::Engine { t_reached, .. }
             | Self::Stiff { t_reached, .. }
+            | Self::SingularNewton { t_reached, .. }
             | Self::Deadline { t_reached, .. }
             | Self::Solver { t_reached, .. } => *t_reached,
         }
@@ -211,6 +255,7 @@ impl IntegrateError {
             | Self::MaxSteps { stats, .. }
             | Self::Engine { stats, .. }
             | Self::Stiff { stats, .. }
+            | Self::SingularNewton { stats, .. }
             | Self::Deadline { stats, .. }
             | Self::Solver { stats, .. } => *stats,
         }

@@ -61,6 +61,7 @@ mod results_schema;
 mod rollers;
 mod ron_errors;
 mod shapes;
+mod stiff;
 mod study;
 mod study_reliability;
 mod transient;

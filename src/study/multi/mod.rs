@@ -730,11 +730,13 @@ fn steady(
         max_time_s: spec.max_time_s,
         steady_tol: spec.steady_tol,
     };
-    let run = settle(
+    let top_multiple = spec.multiples.iter().fold(1.0_f64, |a, &m| a.max(m));
+    let (opts, choice) = sim::options_for(study, mech, omega, top_multiple * order * omega / std::f64::consts::TAU);
+    let mut run = settle(
         &mut kane,
         &x0,
         spin,
-        &sim::options(&study.spec.integration),
+        &opts,
         &options,
         &mut rec,
         (sim::SPIN_RATE, sim::ACCEL),
@@ -742,6 +744,7 @@ fn steady(
         &mut |t| bar.set_position((t * 1000.0) as u64),
     )?;
     bar.finish_and_clear();
+    run.outcome.integrator = Some(choice);
     let elements = if run.amplitudes.is_empty() || run.outcome.error.is_some() {
         Vec::new()
     } else {

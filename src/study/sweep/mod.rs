@@ -324,7 +324,8 @@ fn run_recorded(
     let series = rec.columns.len() - 2 * elements.len();
     let asked = spec.write_time_series;
     rec.store_only(|c| whole_record || (asked && (c == sim::ACCEL || (sim::SERIES..series).contains(&c))));
-    let opts = sim::options(&study.spec.integration);
+    let (opts, choice) =
+        sim::options_for(study, mech, omega, spec.order_min.max(spec.order_max) * omega / std::f64::consts::TAU);
     let fs = study.spec.integration.sample_hz;
     let order = excitation.order;
     let order_at = move |t: f64| order.at(t);
@@ -342,6 +343,8 @@ fn run_recorded(
         &mut |t| bar.set_position((t * 1000.0) as u64),
     );
     bar.finish_and_clear();
+    let mut info = info;
+    info.integrator = Some(choice);
     let (traces, max_relative_angle, element_traces) = stream.finish(&mech.name)?;
     let whole = whole_record.then(|| rec.clone());
     let run = SweepRun {
@@ -466,6 +469,9 @@ fn summary(spec: &SweepSpec, runs: &[SweepRun]) -> String {
         );
     }
     md.push('\n');
+    if let Some(c) = runs.first().and_then(|r| r.sim.integrator.as_ref()) {
+        let _ = writeln!(md, "Integrator: {:?} ({})\n", c.method, c.reason);
+    }
     for a in &found.amplitudes {
         let _ = writeln!(
             md,

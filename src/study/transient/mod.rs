@@ -297,7 +297,14 @@ pub(crate) fn compute(
         })?;
     }
 
-    let mut opts = super::sim::options(&study.spec.integration);
+    // The highest excitation line: the top of the speed range at the engine's highest order (the
+    // speed itself without an engine).
+    let top_omega = {
+        let (a, b) = spec.speed.rpm_range();
+        rpm_to_rad_s(a.max(b))
+    };
+    let top_order = spec.engine.as_ref().map_or(1.0, |e| e.max_order.max(e.order));
+    let (mut opts, choice) = super::sim::options_for(study, mech, omega0, top_order * top_omega / (2.0 * PI));
     // Reactions need the accelerations at the samples.
     opts.sample_derivatives |= rec.needs_derivatives();
     let bar = progress.bar(spec.duration_s, &spec.name);
@@ -305,6 +312,8 @@ pub(crate) fn compute(
         bar.set_position((t * 1000.0) as u64)
     });
     bar.finish_and_clear();
+    let mut sim = sim;
+    sim.integrator = Some(choice);
     let mut failures = Vec::new();
     if let Some(e) = &sim.error {
         failures.push(format!("{}: {e} (the samples up to there are kept)", spec.name));
