@@ -314,25 +314,34 @@ fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Br
     guesses.iter().filter_map(|g| hbm.singular_at(ax.fold, test, s, g).ok()).collect()
 }
 
-/// Whether `seed` lies on one of `walked` (same test, solved at the seed's torque from the
-/// curve's nearer point on each crossing).
-fn covered(hbm: &mut Hbm, ax: &Axis, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
-    let s = seed.scale;
-    for w in walked.iter().filter(|w| w.test == test) {
-        for pair in w.points.windows(2) {
-            if (pair[0].scale - s) * (pair[1].scale - s) > 0.0 {
-                continue;
-            }
-            let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
-            if let Ok(p) = hbm.singular_at(ax.fold, test, s, &near.solution)
-                && (ax.value(p.order, p.omega) - ax.value(seed.order, seed.omega)).abs()
-                    <= SAME_CURVE * ax.range.1 * ax.to_unit
-            {
-                return true;
+/// The values (axis unit) where the walked curve `w` crosses torque scale `s`: each solved at `s`
+/// from the curve's nearer point of the crossing pair, repeats (within [`SAME_CURVE`] of the
+/// range) dropped, ascending.
+fn crossings_at(hbm: &mut Hbm, ax: &Axis, w: &Walked, s: f64) -> Vec<f64> {
+    let mut out: Vec<f64> = Vec::new();
+    for pair in w.points.windows(2) {
+        if (pair[0].scale - s) * (pair[1].scale - s) > 0.0 {
+            continue;
+        }
+        let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
+        if let Ok(p) = hbm.singular_at(ax.fold, w.test, s, &near.solution) {
+            let v = ax.value(p.order, p.omega);
+            if !out.iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
+                out.push(v);
             }
         }
     }
-    false
+    out.sort_by(f64::total_cmp);
+    out
+}
+
+/// Whether `seed` lies on one of `walked` (same test): one of the curve's crossings of the
+/// seed's torque is the seed.
+fn covered(hbm: &mut Hbm, ax: &Axis, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
+    let v = ax.value(seed.order, seed.omega);
+    walked.iter().filter(|w| w.test == test).any(|w| {
+        crossings_at(hbm, ax, w, seed.scale).iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit)
+    })
 }
 
 fn end_words(c: &FoldCurve) -> String {
@@ -437,21 +446,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut boundaries = Vec::new();
     let mut points = Vec::new();
     for (i, w) in walked.iter().enumerate() {
-        // Its crossings of the largest torque, solved there from the nearer point.
-        let mut at_top = Vec::new();
-        for pair in w.points.windows(2) {
-            if (pair[0].scale - 1.0) * (pair[1].scale - 1.0) > 0.0 {
-                continue;
-            }
-            let near = if (pair[0].scale - 1.0).abs() < (pair[1].scale - 1.0).abs() { &pair[0] } else { &pair[1] };
-            if let Ok(p) = hbm.singular_at(ax.fold, w.test, 1.0, &near.solution) {
-                let v = ax.value(p.order, p.omega);
-                if !at_top.iter().any(|&n: &f64| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
-                    at_top.push(v);
-                }
-            }
-        }
-        at_top.sort_by(f64::total_cmp);
+        let at_top = crossings_at(hbm, &ax, w, 1.0);
         for c in &w.curves {
             for p in &c.cusps {
                 points.push(MapPoint {
