@@ -472,7 +472,7 @@ fn compute_with(
                 BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
                 BranchEnd::MaxPoints => Some("it reached the largest number of points"),
                 BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
-                BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
+                BranchEnd::ReachedTarget | BranchEnd::LeftRange | BranchEnd::Unison => None,
             };
             // Where the branch got to: ` at order = 3.1765350 after 669 points`.
             let reached = p.last().map_or(String::new(), |last| {
