@@ -121,3 +121,63 @@ fn switched_branches_start_at_the_branch_points_and_leave_unison() {
         assert_eq!(sw.points.last().unwrap().order, 2.9);
     }
 }
+
+/// The study of two pendulums with `switch: true` at `amplitudes` (N·m), run into a fresh folder
+/// (read as `examples/<name>.ron`, so `cpva2.ron` is found): the report and the summary.
+fn run_switch_study(name: &str, mechanism: &str, amplitudes: &str) -> Result<kanedyn::study::StudyReport, String> {
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = format!(
+        "Study(name: \"{name}\", mechanism: \"{mechanism}\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+         analyses: [\n    HarmonicBalance(name: \"hb\", rpm: 1000.0, order_min: 2.9, order_max: 3.3,\n\
+         amplitudes: {amplitudes}, switch: true),\n])\n"
+    );
+    let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), &text);
+    let study = Study::from_source(src, &LoadOptions::default()).map_err(|e| e.to_string())?;
+    let out = std::env::temp_dir().join(format!("kanedyn_switch_{name}_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).map_err(|e| e.to_string());
+    std::fs::remove_dir_all(&out).ok();
+    report
+}
+
+/// `switch: true` in a study: at 500 N·m two switched rows (route `general`) start at the
+/// unison branch's branch points, within 1e-4 of the shooting-confirmed 3.08137 and 3.09461,
+/// and the summary says where each goes; at 40 N·m the pair never leaves unison in 2.9–3.3, so
+/// there is nothing to switch at: a failure naming the analysis and the field.
+#[test]
+fn a_study_switches_at_its_branch_points_and_says_where_they_go() {
+    let report = run_switch_study("switch2", "cpva2.ron", "[500.0, 40.0]").unwrap();
+    let rows: Vec<_> = report.hbm.iter().filter(|b| b.switched_at.is_some()).collect();
+    assert_eq!(rows.len(), 2, "{:?}", report.failures);
+    for (row, quoted) in rows.iter().zip([3.08137, 3.09461]) {
+        let at = row.switched_at.unwrap();
+        assert!((at - quoted).abs() < 1e-4 && (row.parameter[0] - quoted).abs() < 1e-4, "{at} vs {quoted}");
+        assert_eq!((row.route.as_str(), row.amplitude), ("general", 500.0));
+        let goes = row.goes.as_deref().unwrap();
+        assert!(goes.starts_with("leaves the range at 2.9000000"), "{goes}");
+    }
+    println!("{}", report.summary);
+    assert!(
+        report.summary.contains("switched at the branch point 3.081")
+            && report.summary.contains("unstable points) leaves the range at 2.9000000"),
+        "{}",
+        report.summary
+    );
+    assert!(
+        report.failures.len() == 1
+            && report.failures[0].contains("hb 40 N·m: `switch`: the unison branch has no branch point"),
+        "{:?}",
+        report.failures
+    );
+}
+
+/// A branch switch where no crossing can exist is refused at load with the field's location:
+/// the one-pendulum rotor (`examples/cpva.ron`) has no identical absorbers to leave unison.
+#[test]
+fn a_switch_without_identical_absorbers_is_refused_with_its_field() {
+    let e = run_switch_study("switch1", "cpva.ron", "[500.0]").expect_err("one pendulum");
+    println!("{e}");
+    assert!(
+        e.contains("switch1.ron:") && e.contains("analyses[0].switch") && e.contains("no identical absorbers"),
+        "{e}"
+    );
+}
