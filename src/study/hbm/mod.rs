@@ -806,7 +806,12 @@ pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) 
     branches
         .iter()
         .map(|br| {
-            let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
+            // A switched branch is named by its branch point (`hb_500Nm_switched_3.08137`).
+            let dir_tag = match br.switched_at {
+                Some(at) => format!("switched_{at:.5}"),
+                None if br.from > ax.range.0 => "from_above".into(),
+                None => "from_below".into(),
+            };
             let mut table = if br.amplitude.is_nan() {
                 Table::new(format!("{}_{dir_tag}", spec.name))
             } else {
