@@ -1256,7 +1256,8 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
                 (false, true) => LineStyle::Dotted,
             },
         });
-        if legend {
+        // A switched branch has its own legend entry: the unison branches' stays to be drawn.
+        if legend && br.switched_at.is_none() {
             labelled[idx] = true;
         }
         i = j + 1;
