@@ -186,6 +186,10 @@ pub enum BranchEnd {
     /// Passed [`ContinuationOptions::deadline`](super::ContinuationOptions::deadline): the
     /// analysis overran its time budget (the last point is the last success).
     Watchdog,
+    /// A switched branch ([`Hbm::switch_at`](super::Hbm::switch_at)) returned to the symmetric
+    /// (unison) states: the last point is where it meets them, a branch point of the symmetric
+    /// branch.
+    Unison,
 }
 
 /// A solution branch.

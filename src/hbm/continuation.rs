@@ -116,9 +116,9 @@ impl Default for ContinuationOptions {
 }
 
 /// Unit tangent and state carried along the branch.
-struct Cursor {
-    y: DVector<f64>,
-    t: DVector<f64>,
+pub(super) struct Cursor {
+    pub(super) y: DVector<f64>,
+    pub(super) t: DVector<f64>,
 }
 
 impl Hbm {
@@ -162,7 +162,7 @@ impl Hbm {
         })
     }
 
-    fn y_of(&self, su: &Setup, sol: &HbmSolution) -> DVector<f64> {
+    pub(super) fn y_of(&self, su: &Setup, sol: &HbmSolution) -> DVector<f64> {
         let m = self.unknowns();
         let x = self.unknowns_from(Some(sol));
         let mut y = DVector::from_fn(m + 1, |i, _| if i < m { x[i] * su.w(i) } else { 0.0 });
@@ -305,9 +305,34 @@ impl Hbm {
         let mut e_l = DVector::zeros(m + 1);
         e_l[m] = 1.0;
         let t0 = self.tangent(&su, &e_l, order)? * dir;
-        let mut cur = Cursor { y: y0, t: t0 };
+        self.follow(&su, Cursor { y: y0, t: t0 }, sol0.iterations, (l_from, l_to), newton, copts, None)
+    }
+
+    /// The continuation proper from the point `cur` (on the branch, with its unit tangent
+    /// pointing the way to go; `iterations` its corrector's), inside the parameter range
+    /// `(l_from, l_to)` (scaled; the branch ends on leaving either end). With `watch` =
+    /// (c, mirror) it also ends where the branch returns to the symmetric (unison) states: where
+    /// cᵀx changes sign (c antisymmetric, so cᵀx = 0 on every symmetric state) at a state
+    /// the mirror permutation of the unknowns leaves unchanged (see `switch`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn follow(
+        &mut self,
+        su: &Setup,
+        cur: Cursor,
+        iterations: usize,
+        (l_from, l_to): (f64, f64),
+        mut newton: usize,
+        copts: &ContinuationOptions,
+        watch: Option<(&[f64], &[usize])>,
+    ) -> Result<Branch, HbmError> {
+        let su = *su;
+        let parameter = su.param;
+        let p_ref = su.p_ref;
+        let m = self.unknowns();
+        let dir = (l_to - l_from).signum();
+        let mut cur = cur;
         let mut chord_m = Chord { lu: self.factor(Some((&su, &cur.t))), update: None };
-        let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, sol0.iterations, copts.stability)?];
+        let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, iterations, copts.stability)?];
         // The accepted points' arclengths and test functions (each computed once).
         let mut tests = vec![(0.0, test_functions(&points[0]))];
         let mut folds = Vec::new();
@@ -453,6 +478,15 @@ impl Hbm {
             }
             aimed = None;
             jumped = false;
+            if let Some((c, mirror)) = watch
+                && let Some(y_r) = self.rejoin(&su, &cur, &y, c, mirror, &mut newton)
+            {
+                s += (&y_r - &cur.y).norm();
+                self.assemble(&su.x_of(y_r.as_slice(), m), &su.at(y_r[m]), Some(parameter));
+                let t_r = self.tangent(&su, &t, su.at(y_r[m]).order).unwrap_or_else(|_| t.clone());
+                points.push(self.branch_point(&su, &y_r, Some(&t_r), s, iters, copts.stability)?);
+                break BranchEnd::Unison;
+            }
             if t[m].signum() != cur.t[m].signum() && t[m] != 0.0 && cur.t[m] != 0.0 {
                 let kind = if cur.t[m] > 0.0 { FoldKind::Maximum } else { FoldKind::Minimum };
                 let refined =

@@ -110,6 +110,7 @@ mod reaction;
 mod sample;
 mod solution;
 mod stability;
+mod switch;
 
 pub use branch::{
     Bifurcation, BifurcationClass, BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter,

@@ -115,6 +115,9 @@ impl Analysis for HbmSpec {
         if h.route == super::HbmRoute::Cyclic {
             check_route(c, h)?;
         }
+        if h.switch {
+            check_switch(c, h)?;
+        }
         Ok(())
     }
 
@@ -301,4 +304,19 @@ fn check_route(c: &Checks<'_>, h: &super::HbmSpec) -> Result<()> {
             ),
         )),
     }
+}
+
+/// `switch: true` needs a symmetry to break: one set of exactly two identical one-coordinate
+/// absorbers (the mirror that swaps them is the permutation `Hbm::switch_at` takes).
+fn check_switch(c: &Checks<'_>, h: &super::HbmSpec) -> Result<()> {
+    let Checks { mech, spin, src, .. } = *c;
+    let inputs: Vec<usize> = if h.excite.is_empty() {
+        vec![spin]
+    } else {
+        h.excite.iter().filter_map(|e| mech.joint_index(&e.joint)).collect()
+    };
+    let kane = crate::kane::Kane::new(mech)?;
+    super::switch_mirror(mech, &crate::hbm::route_for(&kane, spin, &inputs))
+        .map(|_| ())
+        .map_err(|why| src.error(&c.at("switch"), format!("`switch: true`: no branch switch can exist here: {why}")))
 }

@@ -97,8 +97,18 @@ pub struct HbmBranch {
     pub route_detail: String,
     /// How the branch ended, in words.
     pub end: String,
-    /// The parameter value the continuation started from.
+    /// The parameter value the continuation started from (a switched branch: the branch
+    /// point).
     pub from: f64,
+    /// A switched (non-unison) branch: the unison branch point it was switched at, in the
+    /// continued parameter's unit (`switch: true`; None, and left out of `results.json`, for
+    /// the unison branches).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub switched_at: Option<f64>,
+    /// A switched branch: where it goes, in words (leaves the range at …, returns to unison at
+    /// …, stops because …).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub goes: Option<String>,
     /// The drawn curve: the branch points with `CURVE_SUBDIVISION` − 1 Hermite-interpolated
     /// states ([`Branch::interpolate`]) between each two, in the parameter's units.
     pub curve_parameter: Vec<f64>,
@@ -453,7 +463,7 @@ fn compute_with(
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
             }
-            let (mut hbm, b, wall_s) = match solved {
+            let (hbm, b, wall_s) = match solved {
                 Ok(x) => x,
                 Err(e) => {
                     let what = if amp.is_nan() { String::new() } else { format!(" at {amp} N·m") };
@@ -461,113 +471,128 @@ fn compute_with(
                     continue;
                 }
             };
-            let p = &b.points;
-            // A branch that could not go on says why and where in the summary (its points are
-            // kept). Where the last state takes an absorber to the end of its path (within
-            // `AT_TRAVEL_END`), the stall is the mechanism's own limit and stays a note; any other
-            // stall is also a failure (below).
-            let at_travel_end = p.last().and_then(|last| travel_end(&study.mechanism, &last.solution));
-            let stopped = match b.end {
-                BranchEnd::StepTooSmall if at_travel_end.is_some() => at_travel_end.as_deref(),
-                BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
-                BranchEnd::MaxPoints => Some("it reached the largest number of points"),
-                BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
-                BranchEnd::ReachedTarget | BranchEnd::LeftRange => None,
-            };
-            // Where the branch got to: ` at order = 3.1765350 after 669 points`.
-            let reached = p.last().map_or(String::new(), |last| {
-                format!(
-                    " at {} = {:.7}{} after {} points",
-                    ax.column,
-                    last.parameter * ax.to_unit,
-                    ax.suffix(),
-                    p.len()
-                )
-            });
-            if b.end == BranchEnd::Watchdog {
-                let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
-                let at = &reached;
-                failures.push(format!(
+            // The unison branch, then (`switch`, once per amplitude: on the upward
+            // continuation) the non-unison branches switched at its branch points.
+            let mut rows = Vec::new();
+            if spec.switch && from == lo {
+                let range = (lo * scale, hi * scale);
+                rows = switched(study, spec, (omega, &harmonics, &per_omega2), &b, range, &mut failures, &what);
+            }
+            rows.insert(0, (hbm, b, wall_s, None));
+            for (mut hbm, b, wall_s, switched_at) in rows {
+                let from = switched_at.map_or(from, |v: f64| v * ax.to_unit);
+                let p = &b.points;
+                // A branch that could not go on says why and where in the summary (its points are
+                // kept). Where the last state takes an absorber to the end of its path (within
+                // `AT_TRAVEL_END`), the stall is the mechanism's own limit and stays a note; any other
+                // stall is also a failure (below).
+                let at_travel_end = p.last().and_then(|last| travel_end(&study.mechanism, &last.solution));
+                let stopped = match b.end {
+                    BranchEnd::StepTooSmall if at_travel_end.is_some() => at_travel_end.as_deref(),
+                    BranchEnd::StepTooSmall => Some("the corrector failed at every step down to the smallest"),
+                    BranchEnd::MaxPoints => Some("it reached the largest number of points"),
+                    BranchEnd::Watchdog => Some("the analysis overran its time budget (stopped by the watchdog)"),
+                    BranchEnd::ReachedTarget | BranchEnd::LeftRange | BranchEnd::Unison => None,
+                };
+                // Where the branch got to: ` at order = 3.1765350 after 669 points`.
+                let reached = p.last().map_or(String::new(), |last| {
+                    format!(
+                        " at {} = {:.7}{} after {} points",
+                        ax.column,
+                        last.parameter * ax.to_unit,
+                        ax.suffix(),
+                        p.len()
+                    )
+                });
+                if b.end == BranchEnd::Watchdog {
+                    let budget = study.spec.integration.deadline.map_or(f64::NAN, |d| d.budget_s);
+                    let at = &reached;
+                    failures.push(format!(
                     "{}{what}, continued from {from}: stopped by the watchdog{at}: {} (the points reached are kept)",
                     spec.name,
                     crate::deadline::Deadline::overran(budget)
                 ));
-            }
-            let stopped_short = match (stopped, p.last()) {
-                (Some(reason), Some(_)) => Some(format!("stopped because {reason},{reached}")),
-                _ => None,
-            };
-            // A branch that stalled (or hit its point cap) short of its range is a failure of
-            // the analysis: the jump or fold the user asked about may lie beyond it. (The
-            // watchdog's stop is listed above.)
-            if matches!(b.end, BranchEnd::StepTooSmall | BranchEnd::MaxPoints)
-                && at_travel_end.is_none()
-                && let Some(why) = &stopped_short
-            {
-                failures
-                    .push(format!("{}{what}, continued from {from}: {why} (the points reached are kept)", spec.name));
-            }
-            let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
-            let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
-            let mut add = |sol: &HbmSolution, stable: Option<bool>| {
-                curve_parameter.push(parameter.value(sol) * ax.to_unit);
-                for (acc, &m) in curve_accel.iter_mut().zip(&spec.multiples) {
-                    acc.push(body_accel(sol, &path, m));
                 }
-                curve_stable.push(stable);
-            };
-            for i in 0..p.len() {
-                add(&p[i].solution, p[i].stable);
-                if i + 1 == p.len() {
-                    break;
+                let stopped_short = match (stopped, p.last()) {
+                    (Some(reason), Some(_)) => Some(format!("stopped because {reason},{reached}")),
+                    _ => None,
+                };
+                // A branch that stalled (or hit its point cap) short of its range is a failure of
+                // the analysis: the jump or fold the user asked about may lie beyond it. (The
+                // watchdog's stop is listed above.)
+                if matches!(b.end, BranchEnd::StepTooSmall | BranchEnd::MaxPoints)
+                    && at_travel_end.is_none()
+                    && let Some(why) = &stopped_short
+                {
+                    failures.push(format!(
+                        "{}{what}, continued from {from}: {why} (the points reached are kept)",
+                        spec.name
+                    ));
                 }
-                for j in 1..CURVE_SUBDIVISION {
-                    let sigma = j as f64 / CURVE_SUBDIVISION as f64;
-                    if let Some(sol) = b.interpolate(i, sigma) {
-                        add(&sol, if sigma < 0.5 { p[i].stable } else { p[i + 1].stable });
+                let (mut curve_parameter, mut curve_stable) = (Vec::new(), Vec::new());
+                let mut curve_accel = vec![Vec::new(); spec.multiples.len()];
+                let mut add = |sol: &HbmSolution, stable: Option<bool>| {
+                    curve_parameter.push(parameter.value(sol) * ax.to_unit);
+                    for (acc, &m) in curve_accel.iter_mut().zip(&spec.multiples) {
+                        acc.push(body_accel(sol, &path, m));
+                    }
+                    curve_stable.push(stable);
+                };
+                for i in 0..p.len() {
+                    add(&p[i].solution, p[i].stable);
+                    if i + 1 == p.len() {
+                        break;
+                    }
+                    for j in 1..CURVE_SUBDIVISION {
+                        let sigma = j as f64 / CURVE_SUBDIVISION as f64;
+                        if let Some(sol) = b.interpolate(i, sigma) {
+                            add(&sol, if sigma < 0.5 { p[i].stable } else { p[i + 1].stable });
+                        }
                     }
                 }
+                let orbits = orbits_on(study, spec, &mut hbm, &b, (&path, scale));
+                branches.push(HbmBranch {
+                    orbits,
+                    stopped_short,
+                    analysis: spec.name.clone(),
+                    curve_parameter,
+                    curve_accel,
+                    curve_stable,
+                    amplitude: amp,
+                    order: p.iter().map(|x| x.order).collect(),
+                    parameter: p.iter().map(|x| x.parameter * ax.to_unit).collect(),
+                    accel: spec
+                        .multiples
+                        .iter()
+                        .map(|&m| p.iter().map(|x| body_accel(&x.solution, &path, m)).collect())
+                        .collect(),
+                    relative_angle: p.iter().map(|x| x.solution.max_peak_amplitude()).collect(),
+                    elements: p
+                        .iter()
+                        .map(|x| from_hbm(&study.mechanism, &study.elements, &x.solution, &spec.multiples))
+                        .collect(),
+                    stable: p.iter().map(|x| x.stable).collect(),
+                    coupling_tail: p.iter().map(|x| x.solution.coupling_tail).collect(),
+                    max_multiplier: p
+                        .iter()
+                        .map(|x| x.solution.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus))
+                        .collect(),
+                    folds: b.folds.iter().map(|f| f.parameter * ax.to_unit).collect(),
+                    unison_lost: unison_lost(&study.mechanism, &b, ax.to_unit),
+                    bifurcations: b
+                        .bifurcations
+                        .iter()
+                        .map(|x| (x.parameter * ax.to_unit, x.class.words().to_string()))
+                        .collect(),
+                    wall_s,
+                    route: hbm.route().name().to_string(),
+                    route_detail: hbm.route().to_string(),
+                    end: format!("{:?}", b.end),
+                    from,
+                    switched_at: switched_at.map(|v| v * ax.to_unit),
+                    goes: switched_at.map(|_| goes(&b, ax.to_unit)),
+                });
             }
-            let orbits = orbits_on(study, spec, &mut hbm, &b, (&path, scale));
-            branches.push(HbmBranch {
-                orbits,
-                stopped_short,
-                analysis: spec.name.clone(),
-                curve_parameter,
-                curve_accel,
-                curve_stable,
-                amplitude: amp,
-                order: p.iter().map(|x| x.order).collect(),
-                parameter: p.iter().map(|x| x.parameter * ax.to_unit).collect(),
-                accel: spec
-                    .multiples
-                    .iter()
-                    .map(|&m| p.iter().map(|x| body_accel(&x.solution, &path, m)).collect())
-                    .collect(),
-                relative_angle: p.iter().map(|x| x.solution.max_peak_amplitude()).collect(),
-                elements: p
-                    .iter()
-                    .map(|x| from_hbm(&study.mechanism, &study.elements, &x.solution, &spec.multiples))
-                    .collect(),
-                stable: p.iter().map(|x| x.stable).collect(),
-                coupling_tail: p.iter().map(|x| x.solution.coupling_tail).collect(),
-                max_multiplier: p
-                    .iter()
-                    .map(|x| x.solution.stability.as_ref().map_or(f64::NAN, |st| st.max_modulus))
-                    .collect(),
-                folds: b.folds.iter().map(|f| f.parameter * ax.to_unit).collect(),
-                unison_lost: unison_lost(&study.mechanism, &b, ax.to_unit),
-                bifurcations: b
-                    .bifurcations
-                    .iter()
-                    .map(|x| (x.parameter * ax.to_unit, x.class.words().to_string()))
-                    .collect(),
-                wall_s,
-                route: hbm.route().name().to_string(),
-                route_detail: hbm.route().to_string(),
-                end: format!("{:?}", b.end),
-                from,
-            });
         }
     }
 
@@ -580,6 +605,115 @@ fn compute_with(
         }
     }
     (branches, failures)
+}
+
+/// The permutation of the coordinates that swaps the two identical absorbers of `route`'s one
+/// identical set (for [`crate::hbm::Hbm::switch_at`]), or why there is none.
+pub(crate) fn switch_mirror(mech: &Mechanism, route: &crate::hbm::Route) -> std::result::Result<Vec<usize>, String> {
+    let crate::hbm::Route::Cyclic { sets } = route else {
+        return Err(format!("the mechanism `{}` has no identical absorbers to leave unison ({route})", mech.name));
+    };
+    let [set] = &sets[..] else {
+        return Err(format!("switching takes one identical set, the mechanism has {}", sets.len()));
+    };
+    if set.members.len() != 2 || set.member_dof != 1 {
+        return Err(format!(
+            "switching takes two identical one-coordinate absorbers (a one-dimensional kernel), the set is {set} with {} coordinate(s) each",
+            set.member_dof
+        ));
+    }
+    let coord = |name: &str| mech.joint_index(name).and_then(|j| mech.joints[j].coordinate);
+    let (Some(a), Some(b)) = (coord(&set.members[0]), coord(&set.members[1])) else {
+        return Err(format!("the members of {set} have no coordinates"));
+    };
+    let mut mirror: Vec<usize> = (0..mech.ndof()).collect();
+    mirror.swap(a, b);
+    Ok(mirror)
+}
+
+/// The non-unison branches switched at the branch points of the unison branch `b` (in the
+/// solver's parameter `range`), each with its wall time and the branch point; a failure (naming
+/// the analysis and the field `switch`) for a branch without a branch point and for every
+/// switch that fails.
+fn switched(
+    study: &Study,
+    spec: &HbmSpec,
+    (omega, harmonics, per_omega2): (f64, &[Harmonic], &[Harmonic]),
+    b: &Branch,
+    range: (f64, f64),
+    failures: &mut Vec<String>,
+    what: &str,
+) -> Vec<(RoutedHbm, Branch, f64, Option<f64>)> {
+    let points: Vec<f64> =
+        b.bifurcations.iter().filter(|x| x.class == BifurcationClass::BranchPoint).map(|x| x.parameter).collect();
+    if points.is_empty() {
+        failures.push(format!(
+            "{}{what}: `switch`: the unison branch has no branch point (a multiplier through +1 that is not a fold) \
+             in the range: no branch switch exists here",
+            spec.name
+        ));
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    let fail = |e: String| format!("{}{what}: `switch`: {e}", spec.name);
+    let kane = match study.kane(false) {
+        Ok(k) => k,
+        Err(e) => {
+            failures.push(fail(e.to_string()));
+            return out;
+        }
+    };
+    let inputs = study.excited_joints(&study.mechanism, &spec.excite);
+    let input_joints: Vec<usize> = inputs.iter().map(|i| i.0).collect();
+    let mirror = match switch_mirror(&study.mechanism, &crate::hbm::route_for(&kane, study.spin, &input_joints)) {
+        Ok(m) => m,
+        Err(e) => {
+            failures.push(fail(e));
+            return out;
+        }
+    };
+    let opts = HbmOptions { harmonics: spec.harmonics, ..HbmOptions::default() };
+    let defaults = ContinuationOptions::default();
+    let ds_max = spec.max_step.unwrap_or(defaults.ds_max);
+    let copts = ContinuationOptions {
+        ds_max,
+        ds: defaults.ds.min(ds_max),
+        deadline: study.spec.integration.deadline,
+        ..defaults
+    };
+    for at in points {
+        let start = std::time::Instant::now();
+        let Some(guess) = b.guesses_at(at).first().map(|g| (*g).clone()) else { continue };
+        let solved = RoutedHbm::new_general(&kane, study.spin, omega, (harmonics, per_omega2), &inputs, opts).and_then(
+            |mut hbm| {
+                let sw = hbm.hbm_mut().switch_at(b.parameter, at, &guess, &mirror, range, &copts)?;
+                Ok((hbm, sw))
+            },
+        );
+        match solved {
+            Ok((hbm, sw)) => out.push((hbm, sw, start.elapsed().as_secs_f64(), Some(at))),
+            Err(e) => failures.push(fail(format!("the switch at {at}: {e}"))),
+        }
+    }
+    out
+}
+
+/// Where a switched branch goes, in words, in the continued parameter's unit (`to_unit`).
+fn goes(b: &Branch, to_unit: f64) -> String {
+    let Some(last) = b.points.last() else { return "no point".into() };
+    let at = last.parameter * to_unit;
+    let folds = if b.folds.is_empty() {
+        String::new()
+    } else {
+        format!(", after folds at {}", list(&b.folds.iter().map(|f| f.parameter * to_unit).collect::<Vec<_>>()))
+    };
+    match b.end {
+        BranchEnd::Unison => format!("returns to unison at {at:.7} (a branch point of the unison branch){folds}"),
+        BranchEnd::ReachedTarget | BranchEnd::LeftRange => format!("leaves the range at {at:.7}{folds}"),
+        BranchEnd::StepTooSmall => format!("stops at {at:.7}: the corrector failed at every step{folds}"),
+        BranchEnd::MaxPoints => format!("stops at {at:.7}: the largest number of points{folds}"),
+        BranchEnd::Watchdog => format!("stops at {at:.7}: the time budget{folds}"),
+    }
 }
 
 /// The values of branch `b`'s continued parameter (times `to_unit`) where absorbers leave
@@ -672,7 +806,12 @@ pub(crate) fn tables(mech: &Mechanism, spec: &HbmSpec, branches: &[&HbmBranch]) 
     branches
         .iter()
         .map(|br| {
-            let dir_tag = if br.from > ax.range.0 { "from_above" } else { "from_below" };
+            // A switched branch is named by its branch point (`hb_500Nm_switched_3.08137`).
+            let dir_tag = match br.switched_at {
+                Some(at) => format!("switched_{at:.5}"),
+                None if br.from > ax.range.0 => "from_above".into(),
+                None => "from_below".into(),
+            };
             let mut table = if br.amplitude.is_nan() {
                 Table::new(format!("{}_{dir_tag}", spec.name))
             } else {
@@ -1003,6 +1142,17 @@ pub(crate) fn render(
         if let Some(w) = coupling_warning(spec, br) {
             let _ = writeln!(md, "{w}");
         }
+        if let (Some(at), Some(goes)) = (br.switched_at, &br.goes) {
+            let what = if br.amplitude.is_nan() { String::new() } else { format!(" at {} N·m", br.amplitude) };
+            let (st, un) = (
+                br.stable.iter().filter(|s| **s == Some(true)).count(),
+                br.stable.iter().filter(|s| **s == Some(false)).count(),
+            );
+            let _ = writeln!(
+                md,
+                "- The non-unison branch{what} switched at the branch point {at:.7} ({st} stable, {un} unstable points) {goes}."
+            );
+        }
         if let Some(why) = &br.stopped_short {
             let what = if br.amplitude.is_nan() { String::new() } else { format!(" at {} N·m", br.amplitude) };
             let _ = writeln!(md, "- The branch{what} continued from {} {why}; its points are shown.", br.from);
@@ -1089,17 +1239,25 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
         let end = (j + 1).min(len - 1);
         let idx = usize::from(!s);
         series.push(Series {
-            label: if labelled[idx] || !legend {
+            label: if let (Some(at), true, 0) = (br.switched_at, legend, i) {
+                format!("non-unison, switched at {at:.5}")
+            } else if labelled[idx] || !legend || br.switched_at.is_some() {
                 String::new()
             } else {
                 format!("HBM, {}", if s { "stable" } else { "unstable" })
             },
             x: br.curve_parameter[i..=end].to_vec(),
             y: br.curve_accel[k][i..=end].to_vec(),
-            color: k,
-            style: if s { LineStyle::Solid } else { LineStyle::Dashed },
+            color: if br.switched_at.is_some() { k + 3 } else { k },
+            // A switched (non-unison) branch: dotted where unstable, in its own colour.
+            style: match (s, br.switched_at.is_some()) {
+                (true, _) => LineStyle::Solid,
+                (false, false) => LineStyle::Dashed,
+                (false, true) => LineStyle::Dotted,
+            },
         });
-        if legend {
+        // A switched branch has its own legend entry: the unison branches' stays to be drawn.
+        if legend && br.switched_at.is_none() {
             labelled[idx] = true;
         }
         i = j + 1;

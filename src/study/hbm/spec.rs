@@ -71,6 +71,15 @@ pub struct HbmSpec {
     /// (issue 29, item 7): coexisting orbits, such as a gravity-loaded rotor's at one speed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub orbits_at: Vec<f64>,
+    /// Switch at every branch point of the unison branch (a Floquet multiplier through +1 where
+    /// two identical absorbers leave unison) onto the non-unison branch and follow it with its
+    /// stability (default false; issue 28, item 3; `hbm::switch`). Each switched branch is an
+    /// extra row (route `general`, every coordinate an unknown), drawn dotted in the figure, with
+    /// where it goes in the summary. Needs one set of exactly two identical one-coordinate
+    /// absorbers (a located error otherwise); a unison branch without a branch point in the range
+    /// is a failure of the analysis naming this field.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub switch: bool,
     /// The engine's series, filled when the study is loaded (not part of the file).
     #[serde(skip)]
     pub engine_series: Option<crate::combustion::OscillatingSeries>,
