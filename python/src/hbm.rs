@@ -216,6 +216,7 @@ fn hbm_branch(
                 BranchEnd::MaxPoints => "MaxPoints",
                 BranchEnd::StepTooSmall => "StepTooSmall",
                 BranchEnd::Watchdog => "Watchdog",
+                BranchEnd::Unison => "Unison",
             }
             .to_string(),
             newton_iterations: branch.newton_iterations,
@@ -271,8 +272,8 @@ pub struct HbmBranch {
     /// ``gains_stability``, ``unstable_after`` (multipliers outside the circle after it).
     #[pyo3(get)]
     bifurcations: Py<PyList>,
-    /// How the continuation ended: ``"ReachedTarget"``, ``"LeftRange"``, ``"MaxPoints"`` or
-    /// ``"StepTooSmall"``.
+    /// How the continuation ended: ``"ReachedTarget"``, ``"LeftRange"``, ``"MaxPoints"``,
+    /// ``"StepTooSmall"``, ``"Watchdog"`` or ``"Unison"`` (a switched branch back in unison).
     #[pyo3(get)]
     end: String,
     /// Newton iterations in total.
