@@ -504,6 +504,15 @@ fn mech_name(study: &Study) -> String {
     study.mechanism.name.clone()
 }
 
+/// The values of `v` ascending, those within [`FOLD_MERGE_TOL`] (relative) of the previous kept
+/// one dropped: the same event found by the branches from both ends of a range counts once.
+fn distinct(v: impl IntoIterator<Item = f64>) -> Vec<f64> {
+    let mut v: Vec<f64> = v.into_iter().collect();
+    v.sort_by(f64::total_cmp);
+    v.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+    v
+}
+
 /// The largest finite value of `v`, NaN when there is none.
 fn finite_max(v: impl IntoIterator<Item = f64>) -> f64 {
     v.into_iter().filter(|x| x.is_finite()).fold(f64::NAN, f64::max)
@@ -564,21 +573,14 @@ fn case_results(study: &Study, spec: &DesignSpec, values: &[f64]) -> Result<(Vec
                 out.push(finite_max(points().map(|r| r.peak)));
                 out.push(finite_max(points().filter_map(|r| r.torque.as_ref().map(|t| t.peak))));
             }
-            let mut folds: Vec<f64> = branches.iter().flat_map(|b| b.folds.iter().copied()).collect();
-            folds.sort_by(f64::total_cmp);
-            folds.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+            let folds = distinct(branches.iter().flat_map(|b| b.folds.iter().copied()));
             out.push(folds.len() as f64);
             // The first folds and branch points (+1 off a fold: where identical or mistuned
             // absorbers leave unison), distinct, lowest first, NaN where fewer exist.
-            let mut points: Vec<f64> = branches
-                .iter()
-                .flat_map(|b| b.bifurcations.iter().filter(|x| x.1 == "branch point").map(|x| x.0))
-                .collect();
-            points.sort_by(f64::total_cmp);
-            points.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
-            let mut lost: Vec<f64> = branches.iter().flat_map(|b| b.unison_lost.iter().copied()).collect();
-            lost.sort_by(f64::total_cmp);
-            lost.dedup_by(|a, b| (*a - *b).abs() <= FOLD_MERGE_TOL * a.abs().max(b.abs()));
+            let points = distinct(
+                branches.iter().flat_map(|b| b.bifurcations.iter().filter(|x| x.1 == "branch point").map(|x| x.0)),
+            );
+            let lost = distinct(branches.iter().flat_map(|b| b.unison_lost.iter().copied()));
             for list in [&folds, &points, &lost] {
                 out.extend((0..EVENTS_LISTED).map(|k| list.get(k).copied().unwrap_or(f64::NAN)));
             }
