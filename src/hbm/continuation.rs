@@ -323,7 +323,7 @@ impl Hbm {
         (l_from, l_to): (f64, f64),
         mut newton: usize,
         copts: &ContinuationOptions,
-        watch: Option<(&[f64], &[usize])>,
+        watch: Option<(&[f64], &super::Symmetry)>,
     ) -> Result<Branch, HbmError> {
         let su = *su;
         let parameter = su.param;
@@ -478,8 +478,8 @@ impl Hbm {
             }
             aimed = None;
             jumped = false;
-            if let Some((c, mirror)) = watch
-                && let Some(y_r) = self.rejoin(&su, &cur, &y, c, mirror, &mut newton)
+            if let Some((c, symmetry)) = watch
+                && let Some(y_r) = self.rejoin(&su, &cur, &y, c, symmetry, &mut newton)
             {
                 s += (&y_r - &cur.y).norm();
                 self.assemble(&su.x_of(y_r.as_slice(), m), &su.at(y_r[m]), Some(parameter));

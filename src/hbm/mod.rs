@@ -122,6 +122,7 @@ pub use free::{BackboneOptions, FreeOrbit, FreeSpin, FreeStart};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;
 pub use stability::{FloquetBlock, Stability};
+pub use switch::Symmetry;
 
 use crate::kane::Kane;
 use crate::model::coupling::Couplings;

@@ -2,9 +2,20 @@
 //! symmetric, e.g. unison, branch that is not a fold): the start of the branch of non-symmetric
 //! solutions that crosses the symmetric one there, followed by the ordinary continuation.
 //!
-//! The method (a pitchfork of a problem equivariant under a permutation P of identical
-//! absorbers; Seydel, *Practical Bifurcation and Stability Analysis*, §5.6, "branch switching by
-//! the null vector"):
+//! Two symmetries S ([`Symmetry`]) are broken this way:
+//! - a permutation P of identical absorbers: the unison branch's +1 branch points, where the
+//!   non-unison branch starts;
+//! - the shift by half the base period on the problem of half the base frequency (twice the
+//!   period of the excitation): there the period-1 states are those with even harmonics only,
+//!   their odd harmonics decouple at linear order, and a period doubling of the period-1 branch
+//!   (a multiplier through −1) is a branch point whose null vector holds odd harmonics only. The
+//!   branch switched there is the period-doubled one (the subharmonic of order n/2), and its
+//!   return to the symmetric states is a return to the period-1 branch (at another period
+//!   doubling). A period-1 guess is carried to the doubled problem (harmonic h becomes 2h).
+//!
+//! The method (a pitchfork of a problem equivariant under S; Seydel, *Practical Bifurcation and
+//! Stability Analysis*, §5.6, "branch switching by the null vector"), written below for the
+//! permutation P; for the half-period shift read S for P:
 //!
 //! 1. The symmetric solution y* at the located branch point is solved by Newton at the fixed
 //!    parameter from the symmetric branch's point, each step projected on the symmetric states,
@@ -51,14 +62,69 @@ const KERNEL_RATIO: f64 = 1e-3;
 /// A state symmetric to this fraction of its size counts as back on the symmetric branch.
 const UNISON_DEFECT: f64 = 1e-3;
 
+/// The symmetry of a problem that a branch switch breaks.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Symmetry {
+    /// The permutation of the coordinates that swaps identical absorbers (`mirror[k]` is the
+    /// coordinate k is mapped to; the spin coordinate fixed): their unison branch's +1 branch
+    /// points.
+    Swap(Vec<usize>),
+    /// The shift by half the base period, τ → τ + π (harmonic h of ω₀ times (−1)^h), of a
+    /// problem whose base frequency is half that of the excitation (built with an extra multiple
+    /// of half the excitation's base, amplitude zero): on it a period doubling (a multiplier
+    /// through −1) of the period-1 branch is a symmetry-breaking branch point, and the branch
+    /// switched there is the period-doubled one.
+    HalfPeriod,
+}
+
+impl Symmetry {
+    /// The image of the unknowns `x` (`n` coordinates of `nb` coefficients each, in the layout
+    /// of [`HbmSolution::coefficients`]).
+    pub fn apply(&self, x: &[f64], n: usize, nb: usize) -> Vec<f64> {
+        let mut out = vec![0.0; x.len()];
+        match self {
+            Symmetry::Swap(mirror) => {
+                for (k, &j) in mirror.iter().enumerate().take(n) {
+                    out[j * nb..(j + 1) * nb].copy_from_slice(&x[k * nb..(k + 1) * nb]);
+                }
+            }
+            Symmetry::HalfPeriod => {
+                for (i, (o, v)) in out.iter_mut().zip(x).enumerate() {
+                    // Index i % nb: 0 the mean, 2h − 1 and 2h the cosine and sine of harmonic h.
+                    let h = (i % nb).div_ceil(2);
+                    *o = if h % 2 == 1 { -v } else { *v };
+                }
+            }
+        }
+        out
+    }
+
+    /// `(‖x − S x‖, ‖x‖)` over the coordinates that move (the spin coordinate left out of a
+    /// swap, which fixes it; its mean slot, the scaled mean torque, out of both).
+    fn defect(&self, x: &[f64], n: usize, nb: usize, spin: usize) -> (f64, f64) {
+        let image = self.apply(x, n, nb);
+        let (mut defect, mut size) = (0.0, 0.0);
+        for (i, (a, b)) in x.iter().zip(&image).enumerate() {
+            let in_spin = i / nb == spin;
+            if in_spin && (matches!(self, Symmetry::Swap(_)) || i % nb == 0) {
+                continue;
+            }
+            defect += (a - b) * (a - b);
+            size += a * a;
+        }
+        (defect.sqrt(), size.sqrt())
+    }
+}
+
 impl Hbm {
     /// Switches at a symmetry-breaking branch point onto the non-symmetric branch and continues
     /// it in `parameter` inside the range `range` = (from, to) (order n; Ω in rad/s; torque
     /// scale s), with stability when `copts.stability`: see the module docs of the `switch`
     /// submodule. `value` is the branch point's parameter (as located on the symmetric branch),
-    /// `guess` a solution of the symmetric branch near it (this problem's layout: every
-    /// coordinate an unknown), `mirror` the permutation of the coordinates that swaps identical
-    /// absorbers (mirror\[k\] the coordinate k is mapped to; the spin coordinate fixed).
+    /// `guess` a solution of the symmetric branch near it (every coordinate an unknown; for
+    /// [`Symmetry::HalfPeriod`] a state of the period-1 problem or of this one), `symmetry` the
+    /// symmetry broken there: identical absorbers swapped, or (on the problem of half the base
+    /// frequency) the half-period shift, at a period doubling.
     ///
     /// Errors name the failure: no branch point at `value` (the Jacobian is regular there, or
     /// its kernel is symmetric: a fold), a kernel of dimension two, a correction that did not
@@ -68,14 +134,14 @@ impl Hbm {
         parameter: Parameter,
         value: f64,
         guess: &HbmSolution,
-        mirror: &[usize],
+        symmetry: &Symmetry,
         range: (f64, f64),
         copts: &ContinuationOptions,
     ) -> Result<Branch, HbmError> {
         let (tol, one_sided) = (self.opts.tol, self.ev.one_sided);
         self.opts.tol = copts.corrector_tol.unwrap_or(tol);
         self.ev.one_sided = false;
-        let branch = self.switch_with_tol(parameter, value, guess, mirror, range, copts);
+        let branch = self.switch_with_tol(parameter, value, guess, symmetry, range, copts);
         (self.opts.tol, self.ev.one_sided) = (tol, one_sided);
         branch
     }
@@ -85,23 +151,14 @@ impl Hbm {
         parameter: Parameter,
         value: f64,
         guess: &HbmSolution,
-        mirror: &[usize],
+        symmetry: &Symmetry,
         (from, to): (f64, f64),
         copts: &ContinuationOptions,
     ) -> Result<Branch, HbmError> {
         let bad = |m: String| Err(HbmError::Invalid(format!("branch switch at {value}: {m}")));
         let (n, nb) = (self.n, self.nb);
-        let mut seen = vec![false; n];
-        for &k in mirror {
-            if k < n {
-                seen[k] = true;
-            }
-        }
-        if mirror.len() != n || seen.iter().any(|s| !s) || mirror[self.spin] != self.spin {
-            return bad(format!("the mirror {mirror:?} is not a permutation of the {n} coordinates fixing the spin"));
-        }
-        if mirror.iter().enumerate().all(|(i, &k)| i == k) {
-            return bad("the mirror permutation is the identity: no symmetry to break".into());
+        if let Err(why) = self.admits(symmetry) {
+            return bad(why);
         }
         if !(value.is_finite() && from.is_finite() && to.is_finite() && from != to) {
             return bad(format!("the range {from} → {to} must be finite and non-empty"));
@@ -118,17 +175,15 @@ impl Hbm {
         self.check_base(order)?;
         let su = Setup::new(self, parameter, p_ref, self.at(order));
         let m = self.unknowns();
-        let permute = |x: &[f64]| -> Vec<f64> {
-            let mut out = vec![0.0; x.len()];
-            for (k, &j) in mirror.iter().enumerate() {
-                out[j * nb..(j + 1) * nb].copy_from_slice(&x[k * nb..(k + 1) * nb]);
-            }
-            out
-        };
+        let permute = |x: &[f64]| symmetry.apply(x, n, nb);
         // 1. The symmetric solution at the branch point, symmetrised.
         let l_star = value / p_ref;
         let symmetric = |x: &[f64]| -> Vec<f64> { x.iter().zip(permute(x)).map(|(a, b)| 0.5 * (a + b)).collect() };
-        let mut x_star = symmetric(&self.unknowns_from(Some(guess)));
+        let guess = match symmetry {
+            Symmetry::HalfPeriod => self.on_doubled_period(guess, order)?,
+            Symmetry::Swap(_) => guess.clone(),
+        };
+        let mut x_star = symmetric(&self.unknowns_from(Some(&guess)));
         let mut converged = false;
         let mut step = f64::INFINITY;
         for _ in 0..self.opts.max_iter.max(20) {
@@ -198,7 +253,82 @@ impl Hbm {
         }
         self.assemble(&su.x_of(y1.as_slice(), m), &su.at(y1[m]), Some(parameter));
         let t1 = self.tangent(&su, &phi_y, su.at(y1[m]).order)?;
-        self.follow(&su, Cursor { y: y1, t: t1 }, it, (l_from, l_to), it, copts, Some((&phi, mirror)))
+        self.follow(&su, Cursor { y: y1, t: t1 }, it, (l_from, l_to), it, copts, Some((&phi, symmetry)))
+    }
+
+    /// Why this problem does not have `symmetry`, if it does not.
+    fn admits(&self, symmetry: &Symmetry) -> Result<(), String> {
+        let n = self.n;
+        match symmetry {
+            Symmetry::Swap(mirror) => {
+                let mut seen = vec![false; n];
+                for &k in mirror {
+                    if k < n {
+                        seen[k] = true;
+                    }
+                }
+                if mirror.len() != n || seen.iter().any(|s| !s) || mirror[self.spin] != self.spin {
+                    return Err(format!(
+                        "the mirror {mirror:?} is not a permutation of the {n} coordinates fixing the spin"
+                    ));
+                }
+                if mirror.iter().enumerate().all(|(i, &k)| i == k) {
+                    return Err("the mirror permutation is the identity: no symmetry to break".into());
+                }
+            }
+            Symmetry::HalfPeriod => {
+                // The forcing must repeat after half the base period: an even number of samples
+                // and every excitation series equal to itself shifted by half of them.
+                let nt = self.aft.nt;
+                let half_periodic = |e: &[f64]| {
+                    e.chunks(nt).all(|row| {
+                        (0..nt / 2).all(|j| (row[j] - row[j + nt / 2]).abs() <= 1e-12 * (1.0 + row[j].abs()))
+                    })
+                };
+                if !self.cyclic {
+                    return Err(
+                        "a period-doubled branch needs a cyclic spin angle (no gravity, no world-frame force)".into()
+                    );
+                }
+                if !nt.is_multiple_of(2) || !half_periodic(&self.exc) || !half_periodic(&self.exc2) {
+                    return Err("the problem's base frequency is not half the excitation's: build it with the extra \
+                                multiple of half the excitation's base (amplitude zero) to switch at a period doubling"
+                        .into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `guess` on this problem's base: as it is when both bases agree; a state of the
+    /// period-1 problem (base twice this one's) with its harmonic h moved to 2h.
+    fn on_doubled_period(&self, guess: &HbmSolution, order: f64) -> Result<HbmSolution, HbmError> {
+        let ratio = |s: &HbmSolution| s.base_frequency / (s.order * s.omega);
+        let r = ratio(guess) / self.ratio;
+        if (r - 1.0).abs() < 1e-9 {
+            return Ok(guess.clone());
+        }
+        if (r - 2.0).abs() > 1e-9 {
+            return Err(HbmError::Invalid(format!(
+                "branch switch at {order}: the guess's base frequency is {r} times this problem's (1 or 2 expected)"
+            )));
+        }
+        let (n, nb, h_max) = (guess.ndof(), self.nb, self.opts.harmonics);
+        let mut coefficients = vec![0.0; n * nb];
+        for k in 0..n {
+            coefficients[k * nb] = guess.coefficient(k, 0).0;
+            for h in 1..=guess.harmonics.min(h_max / 2) {
+                let (a, b) = guess.coefficient(k, h);
+                (coefficients[k * nb + 4 * h - 1], coefficients[k * nb + 4 * h]) = (a, b);
+            }
+        }
+        Ok(HbmSolution {
+            base_frequency: guess.base_frequency / 2.0,
+            harmonics: h_max,
+            coefficients,
+            stability: None,
+            ..guess.clone()
+        })
     }
 
     /// The return of a switched branch to the symmetric states inside the step from `cur` to
@@ -212,7 +342,7 @@ impl Hbm {
         cur: &Cursor,
         y: &DVector<f64>,
         c: &[f64],
-        mirror: &[usize],
+        symmetry: &Symmetry,
         newton: &mut usize,
     ) -> Option<DVector<f64>> {
         let m = self.unknowns();
@@ -243,18 +373,9 @@ impl Hbm {
             }
             ill.update(s, f);
         }
-        // Symmetric to UNISON_DEFECT of its size (the spin coordinate excluded)?
+        // Symmetric to UNISON_DEFECT of its size?
         let x = su.x_of(best.as_slice(), m);
-        let (mut defect, mut size) = (0.0, 0.0);
-        for (k, &j) in mirror.iter().enumerate() {
-            if k == self.spin {
-                continue;
-            }
-            for h in 0..nb {
-                defect += (x[k * nb + h] - x[j * nb + h]).powi(2);
-                size += x[k * nb + h].powi(2);
-            }
-        }
-        (defect.sqrt() <= UNISON_DEFECT * size.sqrt()).then_some(best)
+        let (defect, size) = symmetry.defect(&x, self.n, nb, self.spin);
+        (defect <= UNISON_DEFECT * size).then_some(best)
     }
 }

@@ -1,5 +1,6 @@
 //! Period doubling on a harmonic-balance branch (issue 26, item 2: a −1 crossing checked by an
-//! independent periodic-orbit solver).
+//! independent periodic-orbit solver), and the period-doubled branch switched there (issue 28,
+//! item 3, the −1 case).
 //!
 //! The example: the paper's rotor with its pendulum tuned to n_t = 1.55, half the excitation
 //! order's neighbourhood, at 1000 rpm under 400 N·m of order n. Near n = 2 n_t = 3.1 the rotor's
@@ -102,4 +103,154 @@ fn period_doublings_do_not_depend_on_the_step() {
             assert_abs_diff_eq!(a, b, epsilon = 1e-8);
         }
     }
+}
+
+/// Torque amplitude of the switching tests, N·m: the paper's largest single-order load.
+const SWITCH_TORQUE: f64 = 500.0;
+
+/// The canonical rotor's order branch over n 6.0–6.8 at [`SWITCH_TORQUE`] (its pendulum's
+/// parametric resonance near n = 2 × 3.19, the rotor-coupled eigen-order: a tongue of period
+/// doubling), and the period-doubled branch switched at its `which`-th period doubling: the
+/// problem of half the base frequency (the extra multiple 1/2 at zero amplitude) with H = 20,
+/// the period-1 problem's resolution of the order-n harmonics.
+fn switched_pd(which: usize) -> (Hbm, f64, Branch) {
+    use kanedyn::hbm::{Parameter, Symmetry};
+    use kanedyn::model::excitation::Harmonic;
+    let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+    let mut hbm = Hbm::new(&kane, 0, omega(), &single(SWITCH_TORQUE), HbmOptions::default()).unwrap();
+    let copts = ContinuationOptions::default();
+    let b = hbm.continue_in_order(6.0, 6.8, None, &copts).unwrap();
+    let pd = period_doublings(&b);
+    assert_eq!(pd.len(), 2, "{:?}", b.bifurcations);
+    let mut halved = single(SWITCH_TORQUE);
+    halved.push(Harmonic { multiple: 0.5, amplitude: 0.0, phase: 0.0 });
+    let mut doubled =
+        Hbm::new(&kane, 0, omega(), &halved, HbmOptions { harmonics: 20, ..HbmOptions::default() }).unwrap();
+    let guess = b.guesses_at(pd[which])[0].clone();
+    let sw = doubled.switch_at(Parameter::Order, pd[which], &guess, &Symmetry::HalfPeriod, (6.0, 6.8), &copts).unwrap();
+    (doubled, pd[which], sw)
+}
+
+/// The mechanism with the excitation of `sol` for a time integration (its mean torque, order
+/// and amplitude).
+fn excited_kane(sol: &kanedyn::hbm::HbmSolution) -> Kane {
+    let exc = Excitation {
+        mean: sol.mean_torque,
+        rpm: RPM,
+        order: Order::Fixed(sol.order),
+        harmonics: single(SWITCH_TORQUE),
+        ramp_s: 0.0,
+    };
+    Kane::new(&CpvaParams::canonical().mechanism(Some(exc)).unwrap()).unwrap()
+}
+
+/// Both period-doubled branches start at their period doubling (the first point within 1e-5 in
+/// n: the predictor's offset moves the order by its square) with a small subharmonic, the
+/// pendulum's order-n/2 amplitude, that grows along the branch, while the state after one
+/// excitation period differs from the start (the motion repeats only after two). Each branch's
+/// stability is that of shooting with period 2·(2π/nΩ) written in the test: at its ninth point
+/// the branch from the lower edge has a multiplier more than 1e-3 outside the unit circle (far
+/// beyond the differenced monodromy's ~1e-7), the one from the upper edge none (the largest
+/// there is the rotor speed's, just below 1: the mean torque is held in the time equations).
+#[test]
+fn period_doubled_branches_start_at_the_doublings_and_carry_the_half_order() {
+    for which in [0, 1] {
+        let (hbm, at, sw) = switched_pd(which);
+        let first = &sw.points[0];
+        let half = |p: &kanedyn::hbm::BranchPoint| p.solution.amplitude(1, 1);
+        println!(
+            "from {at:.8}: first n {:.8}, half-order amplitude {:.2e} → {:.3} rad at n {:.5}, end {:?}",
+            first.order,
+            half(first),
+            half(&sw.points[4]),
+            sw.points[4].order,
+            sw.end
+        );
+        assert!((first.order - at).abs() < 1e-5, "{} vs {at}", first.order);
+        assert!(half(first) > 0.0 && half(first) < 0.01, "{}", half(first));
+        assert!(half(&sw.points[4]) > 10.0 * half(first), "the subharmonic grows along the branch");
+        let sol = &sw.points[8].solution;
+        let period = 2.0 * PI / (sol.order * omega());
+        let (x0, x1) = (hbm.state_at(sol, 0.0), hbm.state_at(sol, period));
+        assert!((x0[1] - x1[1]).abs() > 0.05, "period 2: pendulum {} vs {}", x0[1], x1[1]);
+        let mut kane = excited_kane(sol);
+        let mu = shooting_multipliers(&mut kane, &x0, 2.0 * period);
+        let largest = mu.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        println!("  shooting multipliers at n {:.6}: {mu:?}; HBM stable {:?}", sol.order, sw.points[8].stable);
+        if which == 0 {
+            assert!(largest > 1.0 + 1e-3 && sw.points[8].stable == Some(false), "{mu:?}");
+        } else {
+            assert!(largest < 1.0 && sw.points[8].stable == Some(true), "{mu:?}");
+        }
+    }
+}
+
+/// The stable period-doubled branch agrees with a time integration started on it (the issue's
+/// bound for a switched branch): DOP853 at 1e-10 from its state at the point with the largest
+/// subharmonic below 0.5 rad, 100 doubled periods, then over one doubled period at 24 instants
+/// every state but the spin angle (a gauge) matches the harmonic balance to 5e-3 of its own
+/// largest magnitude (the rotor speed to 5e-3 of its oscillation).
+#[test]
+fn the_period_doubled_branch_agrees_with_time_integration() {
+    use kanedyn::time::integrate::{IntegrateOptions, integrate};
+    let (hbm, _, sw) = switched_pd(1);
+    let point = sw
+        .points
+        .iter()
+        .filter(|p| p.stable == Some(true) && p.solution.amplitude(1, 1) < 0.5)
+        .max_by(|a, b| a.solution.amplitude(1, 1).total_cmp(&b.solution.amplitude(1, 1)))
+        .expect("a stable point");
+    let sol = &point.solution;
+    println!("n = {:.7}: half-order amplitude {:.4} rad", sol.order, sol.amplitude(1, 1));
+    let mut kane = excited_kane(sol);
+    let opts = IntegrateOptions { rtol: 1e-10, atol: 1e-10, ..IntegrateOptions::default() };
+    let period = 2.0 * PI / sol.base_frequency;
+    let t0 = 100.0 * period;
+    let mut x = hbm.state_at(sol, 0.0);
+    x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, 0.0, t0, &opts, |_| {}).unwrap().x_end;
+    let samples = 24;
+    let (mut hb, mut td) = (Vec::new(), Vec::new());
+    for j in 0..samples {
+        let (a, b) = (t0 + period * j as f64 / samples as f64, t0 + period * (j + 1) as f64 / samples as f64);
+        hb.push(hbm.state_at(sol, a - t0));
+        td.push(x.clone());
+        x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, a, b, &opts, |_| {}).unwrap().x_end;
+    }
+    let dof = x.len() / 2;
+    let mut worst = vec![0.0f64; x.len()];
+    for i in 1..x.len() {
+        let mean = hb.iter().map(|h: &Vec<f64>| h[i]).sum::<f64>() / samples as f64;
+        let scale = if i == dof {
+            hb.iter().map(|h| (h[i] - mean).abs()).fold(0.0, f64::max)
+        } else {
+            hb.iter().map(|h| h[i].abs()).fold(0.0, f64::max)
+        };
+        worst[i] =
+            hb.iter().zip(&td).map(|(h, t): (&Vec<f64>, &Vec<f64>)| (h[i] - t[i]).abs()).fold(0.0, f64::max) / scale;
+    }
+    println!("relative differences per state (spin angle skipped): {worst:?}");
+    assert!(worst.iter().all(|w| *w <= 5e-3), "{worst:?}");
+}
+
+/// A half-period switch needs the problem of half the base frequency, and a period doubling
+/// where it is asked: on the period-1 problem it is refused (naming the extra multiple), and on
+/// the doubled problem at an order inside no tongue (6.2) the Jacobian is regular.
+#[test]
+fn a_half_period_switch_is_refused_without_its_problem_or_its_crossing() {
+    use kanedyn::hbm::{Parameter, Symmetry};
+    use kanedyn::model::excitation::Harmonic;
+    let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+    let mut hbm = Hbm::new(&kane, 0, omega(), &single(SWITCH_TORQUE), HbmOptions::default()).unwrap();
+    let copts = ContinuationOptions::default();
+    let guess = hbm.solve(6.2, None).unwrap();
+    let e = hbm.switch_at(Parameter::Order, 6.2, &guess, &Symmetry::HalfPeriod, (6.0, 6.8), &copts).unwrap_err();
+    println!("{e}");
+    assert!(e.to_string().contains("extra multiple"), "{e}");
+    let mut halved = single(SWITCH_TORQUE);
+    halved.push(Harmonic { multiple: 0.5, amplitude: 0.0, phase: 0.0 });
+    let mut doubled =
+        Hbm::new(&kane, 0, omega(), &halved, HbmOptions { harmonics: 20, ..HbmOptions::default() }).unwrap();
+    let e = doubled.switch_at(Parameter::Order, 6.2, &guess, &Symmetry::HalfPeriod, (6.0, 6.8), &copts).unwrap_err();
+    println!("{e}");
+    assert!(e.to_string().contains("regular"), "{e}");
 }

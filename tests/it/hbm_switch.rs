@@ -6,7 +6,7 @@
 
 use crate::support::cpva_hbm::{RPM, omega, single};
 use kanedyn::cpva::CpvaParams;
-use kanedyn::hbm::{BifurcationClass, Branch, BranchEnd, ContinuationOptions, Hbm, HbmOptions, Parameter};
+use kanedyn::hbm::{BifurcationClass, Branch, BranchEnd, ContinuationOptions, Hbm, HbmOptions, Parameter, Symmetry};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Order};
 use kanedyn::time::integrate::{IntegrateOptions, integrate};
@@ -26,7 +26,8 @@ fn switched(torque: f64, which: usize, range: (f64, f64)) -> (Hbm, Branch, Branc
     let bp: Vec<f64> =
         unison.bifurcations.iter().filter(|b| b.class == BifurcationClass::BranchPoint).map(|b| b.order).collect();
     let guess = unison.guesses_at(bp[which])[0].clone();
-    let sw = hbm.switch_at(Parameter::Order, bp[which], &guess, &MIRROR, range, &copts).unwrap();
+    let sw =
+        hbm.switch_at(Parameter::Order, bp[which], &guess, &Symmetry::Swap(MIRROR.to_vec()), range, &copts).unwrap();
     (hbm, unison, sw)
 }
 
@@ -125,10 +126,20 @@ fn switched_branches_start_at_the_branch_points_and_leave_unison() {
 /// The study of two pendulums with `switch: true` at `amplitudes` (N·m), run into a fresh folder
 /// (read as `examples/<name>.ron`, so `cpva2.ron` is found): the report and the summary.
 fn run_switch_study(name: &str, mechanism: &str, amplitudes: &str) -> Result<kanedyn::study::StudyReport, String> {
+    run_switch_study_in(name, mechanism, amplitudes, "order_min: 2.9, order_max: 3.3")
+}
+
+/// [`run_switch_study`] with the analysis's range and any further fields in `fields`.
+fn run_switch_study_in(
+    name: &str,
+    mechanism: &str,
+    amplitudes: &str,
+    fields: &str,
+) -> Result<kanedyn::study::StudyReport, String> {
     use kanedyn::study::{LoadOptions, RunOptions, Study, run};
     let text = format!(
         "Study(name: \"{name}\", mechanism: \"{mechanism}\", spin_joint: \"spin\", response_body: \"rotor\",\n\
-         analyses: [\n    HarmonicBalance(name: \"hb\", rpm: 1000.0, order_min: 2.9, order_max: 3.3,\n\
+         analyses: [\n    HarmonicBalance(name: \"hb\", rpm: 1000.0, {fields},\n\
          amplitudes: {amplitudes}, switch: true),\n])\n"
     );
     let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), &text);
@@ -142,7 +153,7 @@ fn run_switch_study(name: &str, mechanism: &str, amplitudes: &str) -> Result<kan
 /// `switch: true` in a study: at 500 N·m two switched rows (route `general`) start at the
 /// unison branch's branch points, within 1e-4 of the shooting-confirmed 3.08137 and 3.09461,
 /// and the summary says where each goes; at 40 N·m the pair never leaves unison in 2.9–3.3, so
-/// there is nothing to switch at: a failure naming the analysis and the field.
+/// there is nothing to switch at: a failure naming the analysis and the field at its line.
 #[test]
 fn a_study_switches_at_its_branch_points_and_says_where_they_go() {
     let report = run_switch_study("switch2", "cpva2.ron", "[500.0, 40.0]").unwrap();
@@ -164,20 +175,62 @@ fn a_study_switches_at_its_branch_points_and_says_where_they_go() {
     );
     assert!(
         report.failures.len() == 1
-            && report.failures[0].contains("hb 40 N·m: `switch`: the unison branch has no branch point"),
+            && report.failures[0]
+                .contains("hb 40 N·m: `switch` (examples/switch2.ron:4:36 (field `analyses[0].switch`)")
+            && report.failures[0].contains("no branch point"),
         "{:?}",
         report.failures
     );
 }
 
-/// A branch switch where no crossing can exist is refused at load with the field's location:
-/// the one-pendulum rotor (`examples/cpva.ron`) has no identical absorbers to leave unison.
+/// A branch switch where no crossing exists: the one-pendulum rotor (`examples/cpva.ron`) has no
+/// identical absorbers to leave unison and no period doubling between orders 2.9 and 3.3, so
+/// the analysis reports a failure naming the field `switch` at its line and column (the branch
+/// itself is kept).
 #[test]
-fn a_switch_without_identical_absorbers_is_refused_with_its_field() {
-    let e = run_switch_study("switch1", "cpva.ron", "[500.0]").expect_err("one pendulum");
-    println!("{e}");
+fn a_switch_without_a_crossing_is_a_failure_naming_its_field() {
+    let report = run_switch_study("switch1", "cpva.ron", "[500.0]").unwrap();
+    println!("{:?}", report.failures);
+    assert!(report.hbm.iter().all(|b| b.switched_at.is_none()) && !report.hbm.is_empty());
     assert!(
-        e.contains("switch1.ron:") && e.contains("analyses[0].switch") && e.contains("no identical absorbers"),
-        "{e}"
+        report.failures.len() == 1
+            && report.failures[0].contains("`switch` (examples/switch1.ron:4:30 (field `analyses[0].switch`)")
+            && report.failures[0].contains("no period doubling"),
+        "{:?}",
+        report.failures
+    );
+}
+
+/// `switch: true` at period doublings: the one-pendulum rotor at 500 N·m over orders 6.0–6.8
+/// has the two period doublings of its pendulum's parametric resonance (shooting-checked in
+/// tests/it/hbm_period_doubling.rs); the study switches at both, marks the rows
+/// `period_doubled`, reports the half order (multiple 0.5) on them, zero on the period-1
+/// branches (whose states hold no half order), and says where each goes.
+#[test]
+fn a_study_switches_at_its_period_doublings() {
+    let report = run_switch_study_in(
+        "switch_pd",
+        "cpva.ron",
+        "[500.0]",
+        "order_min: 6.0, order_max: 6.8, multiples: [0.5, 1.0]",
+    )
+    .unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let rows: Vec<_> = report.hbm.iter().filter(|b| b.switched_at.is_some()).collect();
+    assert_eq!(rows.len(), 2);
+    for row in &rows {
+        assert!(row.period_doubled);
+        assert!(row.accel[0][0] < 1e-3 * row.accel[1][0], "a small half order at the doubling");
+        assert!(row.accel[0].iter().any(|&a| a > 0.1 * row.accel[1][0]), "the half order grows");
+    }
+    for row in report.hbm.iter().filter(|b| b.switched_at.is_none()) {
+        assert!(!row.period_doubled && row.accel[0].iter().all(|&a| a == 0.0));
+    }
+    println!("{}", report.summary);
+    assert!(
+        report.summary.contains("period-doubled branch at 500 N·m switched at the period doubling 6.37625")
+            && report.summary.contains("switched at the period doubling 6.38705"),
+        "{}",
+        report.summary
     );
 }

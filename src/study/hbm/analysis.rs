@@ -115,9 +115,6 @@ impl Analysis for HbmSpec {
         if h.route == super::HbmRoute::Cyclic {
             check_route(c, h)?;
         }
-        if h.switch {
-            check_switch(c, h)?;
-        }
         Ok(())
     }
 
@@ -253,11 +250,17 @@ pub(super) fn check_hbm(src: &Source, spec: &StudySpec, k: usize, h: &super::Hbm
         return Err(src.error(&at("multiples"), "give 1 to 64 harmonic multiples"));
     }
     for (j, &m) in h.multiples.iter().enumerate() {
-        // A periodic solution holds the harmonics 1..=H of its base order only.
-        if !(m >= 1.0 && m.fract() == 0.0 && m <= h.harmonics as f64) {
+        // A periodic solution holds the harmonics 1..=H of its base order only; a period-doubled
+        // one (switched at a period doubling) also the half orders, 0.5, 1.5, ….
+        let half = h.switch && (2.0 * m).fract() == 0.0 && m >= 0.5;
+        if !((m >= 1.0 && m.fract() == 0.0 || half) && m <= h.harmonics as f64) {
             return Err(src.error(
                 &format!("analyses[{k}].multiples[{j}]"),
-                format!("reported multiples must be whole numbers from 1 to harmonics = {}, got {m}", h.harmonics),
+                format!(
+                    "reported multiples must be whole numbers from 1 to harmonics = {} (with `switch: true` also \
+                     halves from 0.5, the orders of a period-doubled branch), got {m}",
+                    h.harmonics
+                ),
             ));
         }
     }
@@ -304,19 +307,4 @@ fn check_route(c: &Checks<'_>, h: &super::HbmSpec) -> Result<()> {
             ),
         )),
     }
-}
-
-/// `switch: true` needs a symmetry to break: one set of exactly two identical one-coordinate
-/// absorbers (the mirror that swaps them is the permutation `Hbm::switch_at` takes).
-fn check_switch(c: &Checks<'_>, h: &super::HbmSpec) -> Result<()> {
-    let Checks { mech, spin, src, .. } = *c;
-    let inputs: Vec<usize> = if h.excite.is_empty() {
-        vec![spin]
-    } else {
-        h.excite.iter().filter_map(|e| mech.joint_index(&e.joint)).collect()
-    };
-    let kane = crate::kane::Kane::new(mech)?;
-    super::switch_mirror(mech, &crate::hbm::route_for(&kane, spin, &inputs))
-        .map(|_| ())
-        .map_err(|why| src.error(&c.at("switch"), format!("`switch: true`: no branch switch can exist here: {why}")))
 }

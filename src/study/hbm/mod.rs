@@ -13,7 +13,7 @@ use super::{Direction, Output, Study};
 use crate::error::{Error, Result};
 use crate::hbm::{
     BifurcationClass, Branch, BranchEnd, ContinuationOptions, HbmError, HbmOptions, HbmSolution, Parameter, PointHook,
-    RoutedHbm,
+    RoutedHbm, Symmetry,
 };
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
@@ -109,6 +109,11 @@ pub struct HbmBranch {
     /// …, stops because …).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub goes: Option<String>,
+    /// A switched branch started at a period doubling of the branch (a multiplier through −1):
+    /// its states repeat every two excitation periods, so the order n/2 (reported multiple 0.5)
+    /// is present; false, and left out of `results.json`, otherwise.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub period_doubled: bool,
     /// The drawn curve: the branch points with `CURVE_SUBDIVISION` − 1 Hermite-interpolated
     /// states ([`Branch::interpolate`]) between each two, in the parameter's units.
     pub curve_parameter: Vec<f64>,
@@ -478,8 +483,8 @@ fn compute_with(
                 let range = (lo * scale, hi * scale);
                 rows = switched(study, spec, (omega, &harmonics, &per_omega2), &b, range, &mut failures, &what);
             }
-            rows.insert(0, (hbm, b, wall_s, None));
-            for (mut hbm, b, wall_s, switched_at) in rows {
+            rows.insert(0, (hbm, b, wall_s, None, false));
+            for (mut hbm, b, wall_s, switched_at, period_doubled) in rows {
                 let from = switched_at.map_or(from, |v: f64| v * ax.to_unit);
                 let p = &b.points;
                 // A branch that could not go on says why and where in the summary (its points are
@@ -590,7 +595,8 @@ fn compute_with(
                     end: format!("{:?}", b.end),
                     from,
                     switched_at: switched_at.map(|v| v * ax.to_unit),
-                    goes: switched_at.map(|_| goes(&b, ax.to_unit)),
+                    goes: switched_at.map(|_| goes(&b, ax.to_unit, period_doubled)),
+                    period_doubled,
                 });
             }
         }
@@ -631,9 +637,10 @@ pub(crate) fn switch_mirror(mech: &Mechanism, route: &crate::hbm::Route) -> std:
     Ok(mirror)
 }
 
-/// The non-unison branches switched at the branch points of the unison branch `b` (in the
-/// solver's parameter `range`), each with its wall time and the branch point; a failure (naming
-/// the analysis and the field `switch`) for a branch without a branch point and for every
+/// The branches switched at the branch points of the unison branch `b` (the non-unison ones)
+/// and at its period doublings (the period-doubled ones), in the solver's parameter `range`,
+/// each with its wall time, the point it was switched at and whether it is period-doubled; a
+/// failure (naming the analysis and the field `switch`) for a branch with neither and for every
 /// switch that fails.
 fn switched(
     study: &Study,
@@ -643,19 +650,22 @@ fn switched(
     range: (f64, f64),
     failures: &mut Vec<String>,
     what: &str,
-) -> Vec<(RoutedHbm, Branch, f64, Option<f64>)> {
-    let points: Vec<f64> =
-        b.bifurcations.iter().filter(|x| x.class == BifurcationClass::BranchPoint).map(|x| x.parameter).collect();
-    if points.is_empty() {
+) -> Vec<SwitchedRow> {
+    let of = |class: BifurcationClass| -> Vec<f64> {
+        b.bifurcations.iter().filter(|x| x.class == class).map(|x| x.parameter).collect()
+    };
+    let (points, doublings) = (of(BifurcationClass::BranchPoint), of(BifurcationClass::PeriodDoubling));
+    if points.is_empty() && doublings.is_empty() {
         failures.push(format!(
-            "{}{what}: `switch`: the unison branch has no branch point (a multiplier through +1 that is not a fold) \
-             in the range: no branch switch exists here",
-            spec.name
+            "{}{what}: `switch` ({}): the branch has no branch point (a multiplier through +1 that is not a fold) \
+             and no period doubling (through −1) in the range: no branch switch exists here",
+            spec.name,
+            switch_field(study, spec)
         ));
         return Vec::new();
     }
     let mut out = Vec::new();
-    let fail = |e: String| format!("{}{what}: `switch`: {e}", spec.name);
+    let fail = |e: String| format!("{}{what}: `switch` ({}): {e}", spec.name, switch_field(study, spec));
     let kane = match study.kane(false) {
         Ok(k) => k,
         Err(e) => {
@@ -665,11 +675,15 @@ fn switched(
     };
     let inputs = study.excited_joints(&study.mechanism, &spec.excite);
     let input_joints: Vec<usize> = inputs.iter().map(|i| i.0).collect();
-    let mirror = match switch_mirror(&study.mechanism, &crate::hbm::route_for(&kane, study.spin, &input_joints)) {
-        Ok(m) => m,
-        Err(e) => {
-            failures.push(fail(e));
-            return out;
+    let mirror = if points.is_empty() {
+        None
+    } else {
+        match switch_mirror(&study.mechanism, &crate::hbm::route_for(&kane, study.spin, &input_joints)) {
+            Ok(m) => Some(m),
+            Err(e) => {
+                failures.push(fail(e));
+                None
+            }
         }
     };
     let opts = HbmOptions { harmonics: spec.harmonics, ..HbmOptions::default() };
@@ -681,25 +695,53 @@ fn switched(
         deadline: study.spec.integration.deadline,
         ..defaults
     };
-    for at in points {
+    // A period-doubled branch is solved on the problem of half the base frequency, with twice
+    // the harmonics (the same resolution of the excitation's own harmonics).
+    let base = b.points.first().map(|p| p.solution.base_frequency / (p.solution.order * p.solution.omega));
+    let mut halved = harmonics.to_vec();
+    halved.push(Harmonic { multiple: 0.5 * base.unwrap_or(1.0), amplitude: 0.0, phase: 0.0 });
+    let switches = mirror
+        .iter()
+        .flat_map(|m| points.iter().map(move |&at| (at, Symmetry::Swap(m.clone()))))
+        .chain(doublings.iter().map(|&at| (at, Symmetry::HalfPeriod)));
+    for (at, symmetry) in switches {
         let start = std::time::Instant::now();
         let Some(guess) = b.guesses_at(at).first().map(|g| (*g).clone()) else { continue };
-        let solved = RoutedHbm::new_general(&kane, study.spin, omega, (harmonics, per_omega2), &inputs, opts).and_then(
-            |mut hbm| {
-                let sw = hbm.hbm_mut().switch_at(b.parameter, at, &guess, &mirror, range, &copts)?;
-                Ok((hbm, sw))
-            },
-        );
+        let doubled = symmetry == Symmetry::HalfPeriod;
+        let (forcing, opts) = if doubled {
+            ((&halved[..], per_omega2), HbmOptions { harmonics: 2 * spec.harmonics, ..opts })
+        } else {
+            ((harmonics, per_omega2), opts)
+        };
+        let solved = RoutedHbm::new_general(&kane, study.spin, omega, forcing, &inputs, opts).and_then(|mut hbm| {
+            let sw = hbm.hbm_mut().switch_at(b.parameter, at, &guess, &symmetry, range, &copts)?;
+            Ok((hbm, sw))
+        });
         match solved {
-            Ok((hbm, sw)) => out.push((hbm, sw, start.elapsed().as_secs_f64(), Some(at))),
+            Ok((hbm, sw)) => out.push((hbm, sw, start.elapsed().as_secs_f64(), Some(at), doubled)),
             Err(e) => failures.push(fail(format!("the switch at {at}: {e}"))),
         }
     }
     out
 }
 
-/// Where a switched branch goes, in words, in the continued parameter's unit (`to_unit`).
-fn goes(b: &Branch, to_unit: f64) -> String {
+/// Where the study file sets the analysis's `switch` (file:line:col).
+fn switch_field(study: &Study, spec: &HbmSpec) -> String {
+    // A design study's own analysis is not in the list: its study's `analyses` then.
+    let field = match study.spec.analyses.iter().position(|a| a.name() == spec.name) {
+        Some(k) => format!("analyses[{k}].switch"),
+        None => "analyses".into(),
+    };
+    study.source.locate(&field).to_string()
+}
+
+/// A row of [`switched`]: the problem, the branch, its wall time (s), the point it was switched
+/// at, and whether it is period-doubled.
+type SwitchedRow = (RoutedHbm, Branch, f64, Option<f64>, bool);
+
+/// Where a switched branch goes, in words, in the continued parameter's unit (`to_unit`); a
+/// period-doubled one returns to the period-1 branch rather than to unison.
+fn goes(b: &Branch, to_unit: f64, period_doubled: bool) -> String {
     let Some(last) = b.points.last() else { return "no point".into() };
     let at = last.parameter * to_unit;
     let folds = if b.folds.is_empty() {
@@ -708,6 +750,9 @@ fn goes(b: &Branch, to_unit: f64) -> String {
         format!(", after folds at {}", list(&b.folds.iter().map(|f| f.parameter * to_unit).collect::<Vec<_>>()))
     };
     match b.end {
+        BranchEnd::Unison if period_doubled => {
+            format!("returns to the period-1 branch at {at:.7} (a period doubling of it){folds}")
+        }
         BranchEnd::Unison => format!("returns to unison at {at:.7} (a branch point of the unison branch){folds}"),
         BranchEnd::ReachedTarget | BranchEnd::LeftRange => format!("leaves the range at {at:.7}{folds}"),
         BranchEnd::StepTooSmall => format!("stops at {at:.7}: the corrector failed at every step{folds}"),
@@ -1148,9 +1193,11 @@ pub(crate) fn render(
                 br.stable.iter().filter(|s| **s == Some(true)).count(),
                 br.stable.iter().filter(|s| **s == Some(false)).count(),
             );
+            let (kind, point) =
+                if br.period_doubled { ("period-doubled", "period doubling") } else { ("non-unison", "branch point") };
             let _ = writeln!(
                 md,
-                "- The non-unison branch{what} switched at the branch point {at:.7} ({st} stable, {un} unstable points) {goes}."
+                "- The {kind} branch{what} switched at the {point} {at:.7} ({st} stable, {un} unstable points) {goes}."
             );
         }
         if let Some(why) = &br.stopped_short {
@@ -1240,7 +1287,7 @@ fn push_segments(series: &mut Vec<Series>, br: &HbmBranch, k: usize, legend: boo
         let idx = usize::from(!s);
         series.push(Series {
             label: if let (Some(at), true, 0) = (br.switched_at, legend, i) {
-                format!("non-unison, switched at {at:.5}")
+                format!("{}, switched at {at:.5}", if br.period_doubled { "period-doubled" } else { "non-unison" })
             } else if labelled[idx] || !legend || br.switched_at.is_some() {
                 String::new()
             } else {

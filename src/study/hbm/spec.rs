@@ -72,12 +72,15 @@ pub struct HbmSpec {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub orbits_at: Vec<f64>,
     /// Switch at every branch point of the unison branch (a Floquet multiplier through +1 where
-    /// two identical absorbers leave unison) onto the non-unison branch and follow it with its
-    /// stability (default false; issue 28, item 3; `hbm::switch`). Each switched branch is an
+    /// two identical absorbers leave unison) onto the non-unison branch, and at every period
+    /// doubling (a multiplier through −1) onto the period-doubled branch, and follow each with
+    /// its stability (default false; issue 28, item 3; `hbm::switch`). Each switched branch is an
     /// extra row (route `general`, every coordinate an unknown), drawn dotted in the figure, with
-    /// where it goes in the summary. Needs one set of exactly two identical one-coordinate
-    /// absorbers (a located error otherwise); a unison branch without a branch point in the range
-    /// is a failure of the analysis naming this field.
+    /// where it goes in the summary; a period-doubled one (`period_doubled` in results.json) is
+    /// solved with twice the harmonics of half the base frequency, and `multiples` may then hold
+    /// halves (0.5: the order n/2 of its subharmonic). Branch points need one set of exactly two
+    /// identical one-coordinate absorbers; a branch with neither crossing in the range is a
+    /// failure of the analysis naming this field at its line.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub switch: bool,
     /// The engine's series, filled when the study is loaded (not part of the file).
