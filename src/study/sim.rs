@@ -202,6 +202,15 @@ pub(crate) fn options_for(
         Integrator::Auto if !lambda.is_finite() || lambda <= 0.0 => {
             (Method::Dop853, "auto: no linearised spectrum, explicit".to_string())
         }
+        // A stability limit longer than the accuracy's step does not bind: said so, rather than
+        // quoting a "fastest mode" that may be a slow decay (a locked twin's rotor damping).
+        Integrator::Auto if ratio <= 1.0 => (
+            Method::Dop853,
+            format!(
+                "auto: explicit, accuracy sets the step ({h_accurate:.3e} s); the fastest eigenvalue \
+                 |λ| = {lambda:.4e} 1/s ({top_hz:.4} Hz) would allow {h_stable:.3e} s"
+            ),
+        ),
         Integrator::Auto => {
             let m = if ratio > IMPLICIT_BREAK_EVEN { Method::Radau5 } else { Method::Dop853 };
             let reason = format!(
