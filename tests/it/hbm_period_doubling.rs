@@ -12,7 +12,7 @@
 use crate::support::cpva_hbm;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
-use crate::support::shooting::shooting_multipliers;
+use crate::support::shooting::{shooting_multipliers, time_run_defects};
 use cpva_hbm::{RPM, omega, single};
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{BifurcationClass, Branch, ContinuationOptions, Hbm, HbmOptions};
@@ -192,7 +192,6 @@ fn period_doubled_branches_start_at_the_doublings_and_carry_the_half_order() {
 /// largest magnitude (the rotor speed to 5e-3 of its oscillation).
 #[test]
 fn the_period_doubled_branch_agrees_with_time_integration() {
-    use kanedyn::time::integrate::{IntegrateOptions, integrate};
     let (hbm, _, sw) = switched_pd(1);
     let point = sw
         .points
@@ -202,32 +201,7 @@ fn the_period_doubled_branch_agrees_with_time_integration() {
         .expect("a stable point");
     let sol = &point.solution;
     println!("n = {:.7}: half-order amplitude {:.4} rad", sol.order, sol.amplitude(1, 1));
-    let mut kane = excited_kane(sol);
-    let opts = IntegrateOptions { rtol: 1e-10, atol: 1e-10, ..IntegrateOptions::default() };
-    let period = 2.0 * PI / sol.base_frequency;
-    let t0 = 100.0 * period;
-    let mut x = hbm.state_at(sol, 0.0);
-    x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, 0.0, t0, &opts, |_| {}).unwrap().x_end;
-    let samples = 24;
-    let (mut hb, mut td) = (Vec::new(), Vec::new());
-    for j in 0..samples {
-        let (a, b) = (t0 + period * j as f64 / samples as f64, t0 + period * (j + 1) as f64 / samples as f64);
-        hb.push(hbm.state_at(sol, a - t0));
-        td.push(x.clone());
-        x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, a, b, &opts, |_| {}).unwrap().x_end;
-    }
-    let dof = x.len() / 2;
-    let mut worst = vec![0.0f64; x.len()];
-    for i in 1..x.len() {
-        let mean = hb.iter().map(|h: &Vec<f64>| h[i]).sum::<f64>() / samples as f64;
-        let scale = if i == dof {
-            hb.iter().map(|h| (h[i] - mean).abs()).fold(0.0, f64::max)
-        } else {
-            hb.iter().map(|h| h[i].abs()).fold(0.0, f64::max)
-        };
-        worst[i] =
-            hb.iter().zip(&td).map(|(h, t): (&Vec<f64>, &Vec<f64>)| (h[i] - t[i]).abs()).fold(0.0, f64::max) / scale;
-    }
+    let worst = time_run_defects(&hbm, sol, &mut excited_kane(sol), 100.0);
     println!("relative differences per state (spin angle skipped): {worst:?}");
     assert!(worst.iter().all(|w| *w <= 5e-3), "{worst:?}");
 }

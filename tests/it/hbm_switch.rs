@@ -5,12 +5,11 @@
 //! time integration started on it, and returns to unison at the second.
 
 use crate::support::cpva_hbm::{RPM, omega, single};
+use crate::support::shooting::time_run_defects;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{BifurcationClass, Branch, BranchEnd, ContinuationOptions, Hbm, HbmOptions, Parameter, Symmetry};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Order};
-use kanedyn::time::integrate::{IntegrateOptions, integrate};
-use std::f64::consts::PI;
 
 /// The mirror of the two pendulums: the rotor (coordinate 0) fixed, the pendulums swapped.
 const MIRROR: [usize; 3] = [0, 2, 1];
@@ -63,33 +62,7 @@ fn the_switched_branch_agrees_with_time_integration() {
         ramp_s: 0.0,
     };
     let p2 = CpvaParams::canonical().with_pendulums(2);
-    let mut kane = Kane::new(&p2.mechanism(Some(exc)).unwrap()).unwrap();
-    let opts = IntegrateOptions { rtol: 1e-10, atol: 1e-10, ..IntegrateOptions::default() };
-    let period = 2.0 * PI / sol.base_frequency;
-    let t0 = 200.0 * period;
-    let mut x = hbm.state_at(sol, 0.0);
-    x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, 0.0, t0, &opts, |_| {}).unwrap().x_end;
-    let samples = 24;
-    let mut worst = vec![0.0f64; x.len()];
-    let mut hb: Vec<Vec<f64>> = Vec::new();
-    let mut td: Vec<Vec<f64>> = Vec::new();
-    for j in 0..samples {
-        let (a, b) = (t0 + period * j as f64 / samples as f64, t0 + period * (j + 1) as f64 / samples as f64);
-        hb.push(hbm.state_at(sol, a - t0));
-        td.push(x.clone());
-        x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, a, b, &opts, |_| {}).unwrap().x_end;
-    }
-    let dof = x.len() / 2;
-    for i in 1..x.len() {
-        let mean = hb.iter().map(|h| h[i]).sum::<f64>() / samples as f64;
-        // The rotor speed against its oscillation, every other state against its magnitude.
-        let scale = if i == dof {
-            hb.iter().map(|h| (h[i] - mean).abs()).fold(0.0, f64::max)
-        } else {
-            hb.iter().map(|h| h[i].abs()).fold(0.0, f64::max)
-        };
-        worst[i] = hb.iter().zip(&td).map(|(h, t)| (h[i] - t[i]).abs()).fold(0.0, f64::max) / scale;
-    }
+    let worst = time_run_defects(&hbm, sol, &mut Kane::new(&p2.mechanism(Some(exc)).unwrap()).unwrap(), 200.0);
     println!("relative differences per state (spin angle skipped): {worst:?}");
     assert!(worst.iter().all(|w| *w <= 5e-3), "{worst:?}");
 }

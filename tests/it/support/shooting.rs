@@ -66,3 +66,41 @@ pub fn differenced_monodromy(flow: &mut impl FnMut(&[f64]) -> Vec<f64>, x0: &[f6
     }
     phi
 }
+
+/// How far a time integration started on the harmonic-balance state `sol` of `hbm` strays from
+/// it: DOP853 at 1e-10 on `kane` (the mechanism with `sol`'s excitation) for `periods` base
+/// periods, then over one more period at 24 instants each state but the spin angle (a gauge)
+/// against the harmonic balance's, relative to its own largest magnitude over the period (the
+/// spin speed, Ω plus a small oscillation, relative to its oscillation). Index 0 is 0.
+pub fn time_run_defects(
+    hbm: &kanedyn::hbm::Hbm,
+    sol: &kanedyn::hbm::HbmSolution,
+    kane: &mut Kane,
+    periods: f64,
+) -> Vec<f64> {
+    let opts = IntegrateOptions { rtol: 1e-10, atol: 1e-10, ..IntegrateOptions::default() };
+    let period = 2.0 * std::f64::consts::PI / sol.base_frequency;
+    let t0 = periods * period;
+    let mut x = hbm.state_at(sol, 0.0);
+    x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, 0.0, t0, &opts, |_| {}).unwrap().x_end;
+    let samples = 24;
+    let (mut hb, mut td): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
+    for j in 0..samples {
+        let (a, b) = (t0 + period * j as f64 / samples as f64, t0 + period * (j + 1) as f64 / samples as f64);
+        hb.push(hbm.state_at(sol, a - t0));
+        td.push(x.clone());
+        x = integrate(|t, x, dx| kane.rhs(t, x, dx), &x, a, b, &opts, |_| {}).unwrap().x_end;
+    }
+    let dof = x.len() / 2;
+    let mut worst = vec![0.0f64; x.len()];
+    for i in 1..x.len() {
+        let mean = hb.iter().map(|h| h[i]).sum::<f64>() / samples as f64;
+        let scale = if i == dof {
+            hb.iter().map(|h| (h[i] - mean).abs()).fold(0.0, f64::max)
+        } else {
+            hb.iter().map(|h| h[i].abs()).fold(0.0, f64::max)
+        };
+        worst[i] = hb.iter().zip(&td).map(|(h, t)| (h[i] - t[i]).abs()).fold(0.0, f64::max) / scale;
+    }
+    worst
+}
