@@ -67,4 +67,5 @@ mod study;
 mod study_reliability;
 mod transient;
 mod truck_driveline;
+mod unison_averaging;
 mod welded_study;
