@@ -1159,7 +1159,13 @@ pub(crate) fn render(
                 (None, true) => "continued".to_string(),
                 (None, false) => br.amplitude.to_string(),
             },
-            br.from,
+            // A switched branch starts at a located crossing: the list's precision, and what
+            // it was.
+            match br.switched_at {
+                Some(at) if br.period_doubled => format!("{at:.5} (period doubling)"),
+                Some(at) => format!("{at:.5} (branch point)"),
+                None => br.from.to_string(),
+            },
             f.points,
             br.route_detail,
             f.stable,
