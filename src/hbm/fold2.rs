@@ -420,12 +420,24 @@ impl Hbm {
         value: f64,
         guess: &HbmSolution,
     ) -> Result<FoldCurvePoint, HbmError> {
+        self.singular_at_value(plane, Singularity::Jacobian, value, guess)
+    }
+
+    /// [`Hbm::fold_at_value`] for the singularity `test` (a loss of unison with
+    /// [`Singularity::Block`]).
+    pub fn singular_at_value(
+        &mut self,
+        plane: FoldPlane,
+        test: Singularity,
+        value: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
         let mut at = match plane {
             FoldPlane::Order => At { order: value, omega: guess.omega, scale: guess.torque_scale },
             FoldPlane::Speed { order } => At { order, omega: value, scale: guess.torque_scale },
         };
-        let mut walk = self.walk(plane, Singularity::Jacobian, &x, &at);
+        let mut walk = self.walk(plane, test, &x, &at);
         let it = self.fold_solve(&mut walk, &mut x, &mut at, false)?;
         let solution = self.solution_from(&x, &at, it);
         Ok(walk.plane.point(&at, 0.0, solution))

@@ -39,7 +39,7 @@ mod check;
 mod report;
 mod sampling;
 
-pub(crate) use check::{check, check_parameters};
+pub(crate) use check::{check, check_mechanism_quantity, check_parameters};
 pub use sampling::{below, case_count, case_values, uniform};
 
 use crate::error::{Error, Result};
