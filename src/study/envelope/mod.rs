@@ -21,7 +21,7 @@
 mod analysis;
 mod spec;
 
-pub use spec::{EnvelopePlane, EnvelopeSpec};
+pub use spec::{EnvelopeParameter, EnvelopePlane, EnvelopeSpec};
 
 use super::analysis::Output;
 use super::hbm::hbm_error;
@@ -29,9 +29,10 @@ use super::table::Table;
 use super::{Study, StudyReport};
 use crate::error::Result;
 use crate::hbm::{
-    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldCurvePoint, FoldPlane, Hbm, HbmOptions, HbmSolution,
-    Parameter, RoutedHbm, Singularity,
+    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldCurvePoint, FoldPlane, Hbm, HbmError, HbmOptions,
+    HbmSolution, MechanismFamily, Parameter, RoutedHbm, Singularity,
 };
+use crate::kane::Kane;
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
 use schemars::JsonSchema;
@@ -305,10 +306,44 @@ struct Second {
     label: String,
     /// Whether the chart spaces it logarithmically.
     log: bool,
+    /// What a mechanism parameter's plane holds fixed, in words (empty otherwise).
+    fixed: String,
 }
 
 impl Second {
-    fn of(spec: &EnvelopeSpec) -> Self {
+    fn of(study: &Study, spec: &EnvelopeSpec) -> Self {
+        if let Some(par) = &spec.parameter {
+            let slide = par
+                .quantity
+                .joint()
+                .and_then(|j| study.mechanism.joint_index(j))
+                .is_some_and(|j| study.mechanism.joints[j].kind.slide_axis().is_some());
+            let (suffix, unit) = (par.quantity.suffix(slide), par.quantity.unit(slide));
+            let (harmonics, fixed) = if spec.load.is_empty() {
+                let h = vec![Harmonic { multiple: 1.0, amplitude: spec.torque, phase: 0.0 }];
+                (h, format!("torque {} N·m", num(spec.torque, 6)))
+            } else {
+                (spec.load.clone(), "the torque set as written".to_string())
+            };
+            // Evenly spaced, from the top down: a damping's jump lies at its low end.
+            let (lo, hi) = (par.from, par.to);
+            let seeds = if spec.seeds.is_empty() {
+                (0..SEEDS).map(|k| hi - (hi - lo) * k as f64 / (SEEDS - 1) as f64).collect()
+            } else {
+                spec.seeds.clone()
+            };
+            return Second {
+                harmonics,
+                per_scale: 1.0,
+                range: (lo, hi),
+                seeds,
+                column: if suffix.is_empty() { par.name.clone() } else { format!("{}_{suffix}", par.name) },
+                unit: unit.into(),
+                label: format!("{} {}, {unit}", par.quantity.describe(), par.name),
+                log: false,
+                fixed,
+            };
+        }
         if spec.load.is_empty() {
             // A single order: s scales the largest torque mapped.
             let t_ref = spec.torque_max;
@@ -326,6 +361,7 @@ impl Second {
                 unit: "N·m".into(),
                 label: "torque amplitude T, N·m".into(),
                 log: true,
+                fixed: String::new(),
             }
         } else {
             let range = (spec.scale_min, spec.scale_max);
@@ -338,6 +374,7 @@ impl Second {
                 unit: "1 (scale of the set)".into(),
                 label: "scale s of the torque set (1: as written)".into(),
                 log: range.1 >= 10.0 * range.0,
+                fixed: String::new(),
             }
         }
     }
@@ -349,8 +386,24 @@ impl Second {
 
     /// A value in the results' unit, in words.
     fn words(&self, v: f64) -> String {
-        if self.per_scale == 1.0 { format!("scale {}", num(v, 6)) } else { format!("{} N·m", num(v, 6)) }
+        match self.column.as_str() {
+            "torque_N_m" => format!("{} N·m", num(v, 6)),
+            SCALE_COLUMN => format!("scale {}", num(v, 6)),
+            column => format!("{column} = {} {}", num(v, 6), self.unit),
+        }
     }
+}
+
+/// The study's mechanism with the envelope's parameter `par` at `p` (its unit), checked.
+fn mechanism_at(study: &Study, par: &EnvelopeParameter, p: f64) -> Result<crate::model::mechanism::Mechanism> {
+    let err = |m: String| crate::error::Error::Model {
+        mechanism: study.mechanism.name.clone(),
+        message: format!("{} = {p}: {m}", par.name),
+    };
+    let mut mech = study.mechanism.clone();
+    super::design::set_quantity(&mut mech, &par.quantity, p).map_err(err)?;
+    super::design::check_masses(&mech).map_err(err)?;
+    Ok(mech)
 }
 
 /// A curve being mapped: its kind, its test, and the walks from its start both ways.
@@ -409,7 +462,14 @@ impl Axis {
 
 /// The singular points of `test` on `branch` (torque scale s): folds for the Jacobian, sign
 /// changes of the block's determinant otherwise; each localised at s from the nearer state.
-fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Branch, s: f64) -> Vec<FoldCurvePoint> {
+fn seeds_on(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    test: Singularity,
+    branch: &crate::hbm::Branch,
+    s: f64,
+) -> Vec<FoldCurvePoint> {
     let guesses: Vec<HbmSolution> = match test {
         Singularity::Jacobian => branch.folds.iter().map(|f| branch.points[f.after].solution.clone()).collect(),
         Singularity::Block { .. } => {
@@ -422,20 +482,21 @@ fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Br
                 .collect()
         }
     };
-    guesses.iter().filter_map(|g| hbm.singular_at(ax.fold, test, s, g).ok()).collect()
+    guesses.iter().filter_map(|g| hbm.singular_at_with(ax.fold, family, test, s, g).ok()).collect()
 }
 
-/// The values (axis unit) where the walked curve `w` crosses torque scale `s`: each solved at `s`
+/// The values (axis unit) where the walked curve `w` crosses the second parameter's value `s`
+/// (the torque scale, or p on a mechanism plane): each solved at `s`
 /// from the curve's nearer point of the crossing pair, repeats (within [`SAME_CURVE`] of the
 /// range) dropped, ascending.
-fn crossings_at(hbm: &mut Hbm, ax: &Axis, w: &Walked, s: f64) -> Vec<f64> {
+fn crossings_at(hbm: &mut Hbm, ax: &Axis, family: Option<&MechanismFamily<'_>>, w: &Walked, s: f64) -> Vec<f64> {
     let mut out: Vec<f64> = Vec::new();
     for pair in w.points.windows(2) {
-        if (pair[0].scale - s) * (pair[1].scale - s) > 0.0 {
+        if (pair[0].parameter - s) * (pair[1].parameter - s) > 0.0 {
             continue;
         }
-        let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
-        if let Ok(p) = hbm.singular_at(ax.fold, w.test, s, &near.solution) {
+        let near = if (pair[0].parameter - s).abs() < (pair[1].parameter - s).abs() { &pair[0] } else { &pair[1] };
+        if let Ok(p) = hbm.singular_at_with(ax.fold, family, w.test, s, &near.solution) {
             let v = ax.value(p.order, p.omega);
             if !out.iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
                 out.push(v);
@@ -446,10 +507,18 @@ fn crossings_at(hbm: &mut Hbm, ax: &Axis, w: &Walked, s: f64) -> Vec<f64> {
     out
 }
 
-/// The scales where the walked curve `w` crosses the first parameter's value `v` (results'
-/// unit: order, or rpm): each solved at `v` from the curve's nearer point of the crossing pair,
-/// the scale free, repeats (within [`SAME_CURVE`] of the scale range) dropped, ascending.
-fn sections_at(hbm: &mut Hbm, ax: &Axis, range: (f64, f64), w: &Walked, v: f64) -> Vec<f64> {
+/// The second parameter (s, or p) where the walked curve `w` crosses the first parameter's
+/// value `v` (results' unit: order, or rpm): each solved at `v` from the curve's nearer point of
+/// the crossing pair, the second parameter free, repeats (within [`SAME_CURVE`] of its range)
+/// dropped, ascending.
+fn sections_at(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    range: (f64, f64),
+    w: &Walked,
+    v: f64,
+) -> Vec<f64> {
     let at = |p: &FoldCurvePoint| ax.value(p.order, p.omega) - v;
     let mut out: Vec<f64> = Vec::new();
     for pair in w.points.windows(2) {
@@ -457,11 +526,12 @@ fn sections_at(hbm: &mut Hbm, ax: &Axis, range: (f64, f64), w: &Walked, v: f64) 
             continue;
         }
         let near = if at(&pair[0]).abs() < at(&pair[1]).abs() { &pair[0] } else { &pair[1] };
-        if let Ok(p) = hbm.singular_at_value(ax.fold, w.test, v / ax.to_unit, &near.solution)
-            && (range.0..=range.1).contains(&p.scale)
-            && !out.iter().any(|&s| (s - p.scale).abs() <= SAME_CURVE * range.1)
+        if let Ok(p) =
+            hbm.singular_at_value_with(ax.fold, family, w.test, v / ax.to_unit, near.parameter, &near.solution)
+            && (range.0..=range.1).contains(&p.parameter)
+            && !out.iter().any(|&s| (s - p.parameter).abs() <= SAME_CURVE * range.1.abs())
         {
-            out.push(p.scale);
+            out.push(p.parameter);
         }
     }
     out.sort_by(f64::total_cmp);
@@ -470,10 +540,19 @@ fn sections_at(hbm: &mut Hbm, ax: &Axis, range: (f64, f64), w: &Walked, v: f64) 
 
 /// Whether `seed` lies on one of `walked` (same test): one of the curve's crossings of the
 /// seed's torque is the seed.
-fn covered(hbm: &mut Hbm, ax: &Axis, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
+fn covered(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    walked: &[Walked],
+    test: Singularity,
+    seed: &FoldCurvePoint,
+) -> bool {
     let v = ax.value(seed.order, seed.omega);
     walked.iter().filter(|w| w.test == test).any(|w| {
-        crossings_at(hbm, ax, w, seed.scale).iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit)
+        crossings_at(hbm, ax, family, w, seed.parameter)
+            .iter()
+            .any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit)
     })
 }
 
@@ -492,12 +571,52 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let start = std::time::Instant::now();
     let kane = study.kane(false)?;
     let inputs = study.excited_joints(&study.mechanism, &spec.excite);
-    let second = Second::of(spec);
+    let second = Second::of(study, spec);
     let opts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
     let ax = Axis::of(spec);
-    let mut routed = RoutedHbm::new(&kane, study.spin, ax.omega, (&second.harmonics, &[]), &inputs, opts)
-        .map_err(hbm_error(study))?;
+    let forcing = (&second.harmonics[..], &[][..]);
+    let (mut routed, general) = match &spec.parameter {
+        None => (RoutedHbm::new(&kane, study.spin, ax.omega, forcing, &inputs, opts).map_err(hbm_error(study))?, false),
+        Some(par) => {
+            // One route along the whole range: the cyclic one only where the mechanism keeps its
+            // identical sets at both ends (a parameter of one absorber of a set parts them).
+            let at = |p: f64| -> Result<RoutedHbm> {
+                let k = Kane::new(&mechanism_at(study, par, p)?)?;
+                RoutedHbm::new(&k, study.spin, ax.omega, forcing, &inputs, opts).map_err(hbm_error(study))
+            };
+            let (lo, hi) = (at(par.from)?, at(par.to)?);
+            let cyclic = |r: &RoutedHbm| matches!(r.route(), crate::hbm::Route::Cyclic { .. });
+            if cyclic(&lo) && cyclic(&hi) && lo.hbm().unknowns() == hi.hbm().unknowns() {
+                (lo, false)
+            } else {
+                let k = Kane::new(&mechanism_at(study, par, par.from)?)?;
+                (
+                    RoutedHbm::new_general(&k, study.spin, ax.omega, forcing, &inputs, opts)
+                        .map_err(hbm_error(study))?,
+                    true,
+                )
+            }
+        }
+    };
     let route = routed.route().to_string();
+    // The problem at a value of a mechanism parameter, on the route chosen.
+    let build = |p: f64| -> std::result::Result<Hbm, HbmError> {
+        let par = spec.parameter.as_ref().ok_or_else(|| HbmError::Invalid("no mechanism parameter".into()))?;
+        let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
+        let k = Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?;
+        let r = if general {
+            RoutedHbm::new_general(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+        } else {
+            RoutedHbm::new(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+        };
+        Ok(r.hbm().clone())
+    };
+    let family = spec.parameter.as_ref().map(|par| MechanismFamily {
+        build: &build,
+        scale: 1.0,
+        reference: par.from.abs().max(par.to.abs()),
+    });
+    let fam = family.as_ref();
     let hbm = routed.hbm_mut();
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
     tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
@@ -523,10 +642,26 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         FoldPlane::Speed { .. } => (ax.range.1, ax.range.0),
     };
     for &s in &second.seeds {
-        let branch = hbm
-            .set_torque_scale(s)
-            .and_then(|()| hbm.continue_in(ax.param, ends.0, ends.1, None, &copts))
-            .or_else(|e| hbm.continue_in(ax.param, ends.1, ends.0, None, &copts).map_err(|_| e));
+        // The seed's problem: this one at torque scale s, or the family's at p = s.
+        let mut own;
+        let hk: &mut Hbm = match fam {
+            None => &mut *hbm,
+            Some(f) => match (f.build)(s) {
+                Ok(h) => {
+                    own = h;
+                    &mut own
+                }
+                Err(e) => {
+                    failures.push(format!("{}: seed branch at {}: {e}", spec.name, second.words(s)));
+                    continue;
+                }
+            },
+        };
+        let scale = fam.map_or(s, |f| f.scale);
+        let branch = hk
+            .set_torque_scale(scale)
+            .and_then(|()| hk.continue_in(ax.param, ends.0, ends.1, None, &copts))
+            .or_else(|e| hk.continue_in(ax.param, ends.1, ends.0, None, &copts).map_err(|_| e));
         let branch = match branch {
             Ok(b) => b,
             Err(e) => {
@@ -535,8 +670,8 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             }
         };
         for (kind, set, test) in &tests {
-            for seed in seeds_on(hbm, &ax, *test, &branch, s) {
-                if covered(hbm, &ax, &walked, *test, &seed) {
+            for seed in seeds_on(hk, &ax, fam, *test, &branch, s) {
+                if covered(hk, &ax, fam, &walked, *test, &seed) {
                     continue;
                 }
                 let fo = FoldCurveOptions { test: *test, ..fopts };
@@ -549,7 +684,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     ends: [String::new(), String::new()],
                 };
                 for (k, up) in [false, true].into_iter().enumerate() {
-                    match hbm.continue_fold(ax.fold, &seed, up, &fo) {
+                    match hk.continue_fold_with(ax.fold, fam, &seed, up, &fo) {
                         Ok(c) => {
                             w.ends[k] = end_words(&c);
                             if up {
@@ -582,14 +717,14 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut boundaries = Vec::new();
     let mut points = Vec::new();
     for (i, w) in walked.iter().enumerate() {
-        let at_top = crossings_at(hbm, &ax, w, second.range.1);
+        let at_top = crossings_at(hbm, &ax, fam, w, second.range.1);
         for c in &w.curves {
             for p in &c.cusps {
                 points.push(MapPoint {
                     kind: MapPointKind::Cusp,
                     boundary: i,
                     value: ax.value(p.order, p.omega),
-                    second_value: second.value(p.scale),
+                    second_value: second.value(p.parameter),
                 });
             }
             for p in &c.scale_extrema {
@@ -601,7 +736,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     kind,
                     boundary: i,
                     value: ax.value(p.order, p.omega),
-                    second_value: second.value(p.scale),
+                    second_value: second.value(p.parameter),
                 });
             }
         }
@@ -610,7 +745,10 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             .iter()
             .map(|&v| Section {
                 value: v,
-                second_values: sections_at(hbm, &ax, second.range, w, v).into_iter().map(|s| second.value(s)).collect(),
+                second_values: sections_at(hbm, &ax, fam, second.range, w, v)
+                    .into_iter()
+                    .map(|s| second.value(s))
+                    .collect(),
             })
             .collect();
         boundaries.push(Boundary {
@@ -618,7 +756,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             kind: w.kind,
             set: w.set.clone(),
             values: w.points.iter().map(|p| ax.value(p.order, p.omega)).collect(),
-            second_values: w.points.iter().map(|p| second.value(p.scale)).collect(),
+            second_values: w.points.iter().map(|p| second.value(p.parameter)).collect(),
             at_second_max: at_top,
             ends: w.ends.clone(),
         });
@@ -638,7 +776,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         second: second.column.clone(),
         second_unit: second.unit.clone(),
         second_label: second.label.clone(),
-        fixed: String::new(),
+        fixed: second.fixed.clone(),
         log_second: second.log,
         route,
         seeds: second.seeds.iter().map(|&s| second.value(s)).collect(),
