@@ -1,6 +1,7 @@
-//! Two-parameter continuation of folds of the harmonic balance in (excitation order n, torque
-//! scale s): the jump boundary of a response in the (order, torque) plane, and its cusp, where the
-//! two folds of a jump meet and the jump disappears.
+//! Two-parameter continuation of folds of the harmonic balance in (excitation order n or mean
+//! speed Ω, torque scale s or a mechanism parameter p): the jump boundary of a response in the
+//! (order, torque) plane, and its cusp, where the two folds of a jump meet and the jump
+//! disappears.
 //!
 //! A fold of a branch in n at fixed s is a point where the Jacobian `J = ∂R̂/∂x` of the balance
 //! is singular. It is followed by the minimally augmented system (Govaerts, *Numerical Methods
@@ -17,6 +18,11 @@
 //! same difference of `∂R̂/∂n`; for the torque scale, zero, since s multiplies the excitation,
 //! which does not depend on x. After every point b and c take the new w and v, so the bordered
 //! matrices stay far from singular along the curve.
+//!
+//! The second parameter may also be a mechanism parameter p (a pivot's damping, an absorber's
+//! tuning) at a fixed torque scale, through a [`MechanismFamily`] that builds the problem at any p:
+//! the same system with ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` by central differences between
+//! problems built at p ± h, as the mechanism offers no derivative in p (see its docs).
 //!
 //! Along the curve s has a minimum at a cusp (there the projection of the fold curve on the
 //! (n, s) plane has its spike: in the normal form `x³ − s x − n = 0` the folds are

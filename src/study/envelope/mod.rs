@@ -1,8 +1,10 @@
-//! The operating envelope (issue 28, item 2): the boundaries of a single-order excitation's
-//! steady response in the (excitation order n, torque amplitude T) plane at a mean speed, each a
-//! curve of codimension-one points followed by two-parameter continuation (`hbm::fold2`, the
-//! minimally augmented systems of Govaerts 2000, §4.3.2), with the codimension-two points where
-//! they end or turn.
+//! The operating envelope (issue 28, items 1 and 2): the boundaries of the steady response in a
+//! plane of two parameters, each a curve of codimension-one points followed by two-parameter
+//! continuation (`hbm::fold2`, the minimally augmented systems of Govaerts 2000, §4.3.2), with the
+//! codimension-two points where they end or turn. The first parameter is the excitation order n
+//! at a mean speed (or the speed at an order); the second the torque amplitude T of a single
+//! order, the common scale s of a multi-order set, or a mechanism parameter p at a fixed torque
+//! (the problem rebuilt at each p, `hbm::MechanismFamily`).
 //!
 //! - **Jump boundary**: the fold curve. Inside its wedge three periodic states coexist at each
 //!   (n, T) and the response jumps at the wedge's edges; its cusp is the least torque at which a
@@ -485,32 +487,45 @@ fn seeds_on(
     guesses.iter().filter_map(|g| hbm.singular_at_with(ax.fold, family, test, s, g).ok()).collect()
 }
 
-/// The values (axis unit) where the walked curve `w` crosses the second parameter's value `s`
-/// (the torque scale, or p on a mechanism plane): each solved at `s`
-/// from the curve's nearer point of the crossing pair, repeats (within [`SAME_CURVE`] of the
-/// range) dropped, ascending.
-fn crossings_at(hbm: &mut Hbm, ax: &Axis, family: Option<&MechanismFamily<'_>>, w: &Walked, s: f64) -> Vec<f64> {
+/// The values `solve` gives from the walked curve `w`'s nearer point of each pair of consecutive
+/// points across which `offset` changes sign, repeats within `tol` dropped, ascending.
+fn solved_crossings(
+    w: &Walked,
+    offset: impl Fn(&FoldCurvePoint) -> f64,
+    mut solve: impl FnMut(&FoldCurvePoint) -> Option<f64>,
+    tol: f64,
+) -> Vec<f64> {
     let mut out: Vec<f64> = Vec::new();
     for pair in w.points.windows(2) {
-        if (pair[0].parameter - s) * (pair[1].parameter - s) > 0.0 {
+        let (a, b) = (offset(&pair[0]), offset(&pair[1]));
+        if a * b > 0.0 {
             continue;
         }
-        let near = if (pair[0].parameter - s).abs() < (pair[1].parameter - s).abs() { &pair[0] } else { &pair[1] };
-        if let Ok(p) = hbm.singular_at_with(ax.fold, family, w.test, s, &near.solution) {
-            let v = ax.value(p.order, p.omega);
-            if !out.iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
-                out.push(v);
-            }
+        let near = if a.abs() < b.abs() { &pair[0] } else { &pair[1] };
+        if let Some(v) = solve(near)
+            && !out.iter().any(|&n| (n - v).abs() <= tol)
+        {
+            out.push(v);
         }
     }
     out.sort_by(f64::total_cmp);
     out
 }
 
+/// The values (axis unit) where the walked curve `w` crosses the second parameter's value `s`
+/// (the torque scale, or p on a mechanism plane): each solved at `s`, repeats (within
+/// [`SAME_CURVE`] of the range) dropped, ascending.
+fn crossings_at(hbm: &mut Hbm, ax: &Axis, family: Option<&MechanismFamily<'_>>, w: &Walked, s: f64) -> Vec<f64> {
+    let solve = |near: &FoldCurvePoint| {
+        let p = hbm.singular_at_with(ax.fold, family, w.test, s, &near.solution).ok()?;
+        Some(ax.value(p.order, p.omega))
+    };
+    solved_crossings(w, |p| p.parameter - s, solve, SAME_CURVE * ax.range.1 * ax.to_unit)
+}
+
 /// The second parameter (s, or p) where the walked curve `w` crosses the first parameter's
-/// value `v` (results' unit: order, or rpm): each solved at `v` from the curve's nearer point of
-/// the crossing pair, the second parameter free, repeats (within [`SAME_CURVE`] of its range)
-/// dropped, ascending.
+/// value `v` (results' unit: order, or rpm): each solved at `v`, the second parameter free,
+/// those inside `range` kept, repeats (within [`SAME_CURVE`] of it) dropped, ascending.
 fn sections_at(
     hbm: &mut Hbm,
     ax: &Axis,
@@ -519,27 +534,16 @@ fn sections_at(
     w: &Walked,
     v: f64,
 ) -> Vec<f64> {
-    let at = |p: &FoldCurvePoint| ax.value(p.order, p.omega) - v;
-    let mut out: Vec<f64> = Vec::new();
-    for pair in w.points.windows(2) {
-        if at(&pair[0]) * at(&pair[1]) > 0.0 {
-            continue;
-        }
-        let near = if at(&pair[0]).abs() < at(&pair[1]).abs() { &pair[0] } else { &pair[1] };
-        if let Ok(p) =
-            hbm.singular_at_value_with(ax.fold, family, w.test, v / ax.to_unit, near.parameter, &near.solution)
-            && (range.0..=range.1).contains(&p.parameter)
-            && !out.iter().any(|&s| (s - p.parameter).abs() <= SAME_CURVE * range.1.abs())
-        {
-            out.push(p.parameter);
-        }
-    }
-    out.sort_by(f64::total_cmp);
-    out
+    let solve = |near: &FoldCurvePoint| {
+        let p =
+            hbm.singular_at_value_with(ax.fold, family, w.test, v / ax.to_unit, near.parameter, &near.solution).ok()?;
+        (range.0..=range.1).contains(&p.parameter).then_some(p.parameter)
+    };
+    solved_crossings(w, |p| ax.value(p.order, p.omega) - v, solve, SAME_CURVE * range.1.abs())
 }
 
 /// Whether `seed` lies on one of `walked` (same test): one of the curve's crossings of the
-/// seed's torque is the seed.
+/// seed's second parameter is the seed.
 fn covered(
     hbm: &mut Hbm,
     ax: &Axis,
