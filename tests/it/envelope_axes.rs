@@ -66,6 +66,19 @@ fn the_speed_scale_envelope_of_the_table_1_set_passes_through_the_600_rpm_fold()
     assert!(nearest <= 1e-6, "the map at 600 rpm {at600:?} against the branch's fold {s_fold}");
 }
 
+/// Each `(from, to, field)` of `cases`: `base` with `from` replaced by `to` is refused at load
+/// with an error naming `field` and the file's line.
+fn refused(base: &str, cases: impl IntoIterator<Item = (&'static str, &'static str, &'static str)>) {
+    for (from, to, field) in cases {
+        let text = base.replacen(from, to, 1);
+        assert_ne!(text, base, "{from}");
+        let src = kanedyn::io::Source::from_text("examples/bad_axes.ron", &text);
+        let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();
+        println!("{to}: {e}");
+        assert!(e.contains(field) && e.contains("bad_axes.ron:"), "{to}: {e}");
+    }
+}
+
 /// Bad second parameters are refused at load with the field's path and the file's line.
 #[test]
 fn a_bad_second_parameter_is_refused_with_its_field() {
@@ -73,7 +86,7 @@ fn a_bad_second_parameter_is_refused_with_its_field() {
         analyses: [Envelope(name: "envelope", plane: Speed(order: 3.0, rpm_min: 500.0, rpm_max: 900.0),
                             load: [(multiple: 1.0, amplitude: 670.0), (multiple: 2.0, amplitude: 430.0, phase: -0.32)],
                             scale_min: 0.5, scale_max: 1.2)])"#;
-    for (from, to, field) in [
+    let cases = [
         ("scale_min: 0.5", "scale_min: 0.0", "analyses[0].scale_min"),
         ("scale_min: 0.5", "scale_min: -0.5", "analyses[0].scale_min"),
         ("scale_max: 1.2", "scale_max: 0.4", "analyses[0].scale_max"),
@@ -83,14 +96,8 @@ fn a_bad_second_parameter_is_refused_with_its_field() {
         ("scale_min: 0.5", "torque: 40.0, scale_min: 0.5", "analyses[0].torque"),
         ("scale_max: 1.2", "scale_max: 1.2, seeds: [2.0]", "analyses[0].seeds[0]"),
         ("scale_max: 1.2", "scale_max: 1.2, sections: [300.0]", "analyses[0].sections[0]"),
-    ] {
-        let text = base.replacen(from, to, 1);
-        assert_ne!(text, base);
-        let src = kanedyn::io::Source::from_text("examples/bad_axes.ron", &text);
-        let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();
-        println!("{to}: {e}");
-        assert!(e.contains(field) && e.contains("bad_axes.ron:"), "{to}: {e}");
-    }
+    ];
+    refused(base, cases);
 }
 
 /// The study text of the (order, pivot damping) plane at 40 N·m, 1000 rpm, c_p over `from`..`to`.
@@ -187,7 +194,7 @@ fn the_damping_cusp_agrees_with_a_bisection_on_order_branches() {
 #[test]
 fn a_bad_mechanism_parameter_is_refused_with_its_field() {
     let base = damping_study("bad", 1e-4, 6e-3, "");
-    for (from, to, field) in [
+    let cases = [
         ("JointDamping(\"pivot\")", "JointDamping(\"hinge\")", "analyses[0].parameter.quantity"),
         ("JointDamping(\"pivot\")", "BodyMass(\"wheel\")", "analyses[0].parameter.quantity"),
         ("JointDamping(\"pivot\")", "Rpm", "analyses[0].parameter.quantity"),
@@ -198,12 +205,6 @@ fn a_bad_mechanism_parameter_is_refused_with_its_field() {
         ("torque: 40.0,", "torque: 40.0, torque_min: 1.0,", "analyses[0].torque_min"),
         ("torque: 40.0,", "torque: 40.0, load: [(multiple: 1.0, amplitude: 40.0)],", "analyses[0].torque"),
         ("to: 6e-3)", "to: 6e-3), seeds: [1.0]", "analyses[0].seeds[0]"),
-    ] {
-        let text = base.replacen(from, to, 1);
-        assert_ne!(text, base, "{from}");
-        let src = kanedyn::io::Source::from_text("examples/bad_axes.ron", &text);
-        let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();
-        println!("{to}: {e}");
-        assert!(e.contains(field) && e.contains("bad_axes.ron:"), "{to}: {e}");
-    }
+    ];
+    refused(&base, cases);
 }
