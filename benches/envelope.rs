@@ -63,7 +63,7 @@ fn main() {
     let (t_slow, slow) = best_of(2, "bench_sweep", &sweep(2400.0));
     let r = &map.envelopes[0];
     let levels: usize =
-        r.boundaries.iter().map(|b| b.torques_nm.iter().filter(|&&t| (1.0..=500.0).contains(&t)).count()).sum();
+        r.boundaries.iter().map(|b| b.second_values.iter().filter(|&&t| (1.0..=500.0).contains(&t)).count()).sum();
     println!(
         "envelope: jump boundary over n 2.9–3.3, 1–500 N·m: {:.1} ms (best of 5), {levels} boundary points, {} cusp(s)",
         t_map * 1e3,

@@ -1,6 +1,7 @@
-//! Two-parameter continuation of folds of the harmonic balance in (excitation order n, torque
-//! scale s): the jump boundary of a response in the (order, torque) plane, and its cusp, where the
-//! two folds of a jump meet and the jump disappears.
+//! Two-parameter continuation of folds of the harmonic balance in (excitation order n or mean
+//! speed Ω, torque scale s or a mechanism parameter p): the jump boundary of a response in the
+//! (order, torque) plane, and its cusp, where the two folds of a jump meet and the jump
+//! disappears.
 //!
 //! A fold of a branch in n at fixed s is a point where the Jacobian `J = ∂R̂/∂x` of the balance
 //! is singular. It is followed by the minimally augmented system (Govaerts, *Numerical Methods
@@ -17,6 +18,11 @@
 //! same difference of `∂R̂/∂n`; for the torque scale, zero, since s multiplies the excitation,
 //! which does not depend on x. After every point b and c take the new w and v, so the bordered
 //! matrices stay far from singular along the curve.
+//!
+//! The second parameter may also be a mechanism parameter p (a pivot's damping, an absorber's
+//! tuning) at a fixed torque scale, through a [`MechanismFamily`] that builds the problem at any p:
+//! the same system with ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` by central differences between
+//! problems built at p ± h, as the mechanism offers no derivative in p (see its docs).
 //!
 //! Along the curve s has a minimum at a cusp (there the projection of the fold curve on the
 //! (n, s) plane has its spike: in the normal form `x³ − s x − n = 0` the folds are
@@ -77,7 +83,7 @@ impl Plane {
     }
 
     fn point(&self, at: &At, arclength: f64, solution: HbmSolution) -> FoldCurvePoint {
-        FoldCurvePoint { order: at.order, omega: at.omega, scale: at.scale, arclength, solution }
+        FoldCurvePoint { order: at.order, omega: at.omega, scale: at.scale, parameter: at.scale, arclength, solution }
     }
 }
 
@@ -90,7 +96,10 @@ pub struct FoldCurvePoint {
     pub omega: f64,
     /// Torque scale s (the excitation amplitudes are s·T_k).
     pub scale: f64,
-    /// Arclength along the curve, in the norm of (coefficients in rad, n, s).
+    /// The plane's second parameter: s on a torque-scale plane, the mechanism parameter p (its
+    /// unit) on a [`MechanismFamily`]'s.
+    pub parameter: f64,
+    /// Arclength along the curve, in the norm of (coefficients in rad, n, s or p / reference).
     pub arclength: f64,
     /// The periodic state at the fold.
     pub solution: HbmSolution,
@@ -105,6 +114,8 @@ pub struct ParameterPoint {
     pub omega: f64,
     /// Torque scale s.
     pub scale: f64,
+    /// The plane's second parameter: s, or the mechanism parameter p.
+    pub parameter: f64,
 }
 
 /// Why a fold curve ended.
@@ -138,7 +149,8 @@ pub struct FoldCurve {
 pub struct FoldCurveOptions {
     /// Range of the plane's first parameter, n or Ω in rad/s (the curve ends on leaving it).
     pub range: (f64, f64),
-    /// Torque-scale range s (likewise).
+    /// Range of the second parameter, the torque scale s or a mechanism parameter p in its
+    /// unit (likewise).
     pub scales: (f64, f64),
     /// First and largest arclength step.
     pub ds: f64,
@@ -172,21 +184,78 @@ impl Default for FoldCurveOptions {
     }
 }
 
-/// The augmented system's pieces at one point: R̂, J, ∂R̂/∂λ, and g with its gradient in
-/// (x, λ) (its s-derivative is zero), v and w.
+/// A family of problems along a mechanism parameter p (a pivot's damping, an absorber's
+/// tuning), the plane's second parameter in place of the torque scale.
+///
+/// The residual depends on p through the mechanism, which the engine builds once (its mass
+/// matrix, the joints' laws): there is no ∂R̂/∂p in closed form, and no way to change p in place.
+/// So `build(p)` makes the whole problem at p, and ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` are central
+/// differences of problems built at p ± h, h = [`FD_STEP`] · `reference` (O(h²) of the third
+/// derivatives; the residual is linear in a damping, so exact there up to rounding).
+pub struct MechanismFamily<'a> {
+    /// The problem at p: the same mechanism and route at every p, so the same unknowns.
+    pub build: &'a dyn Fn(f64) -> Result<Hbm, HbmError>,
+    /// The torque scale s held fixed.
+    pub scale: f64,
+    /// The size of p, its unit (> 0): the arclength weighs p / reference like the order and the
+    /// coefficients in rad, and the difference step is relative to it.
+    pub reference: f64,
+}
+
+impl std::fmt::Debug for MechanismFamily<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MechanismFamily").field("scale", &self.scale).field("reference", &self.reference).finish()
+    }
+}
+
+/// Problems built at recent values of p, the last few kept (a corrector needs p and p ± h at
+/// each iterate, and the tangent the same again at the converged point).
+#[derive(Default)]
+struct Built {
+    problems: Vec<(f64, Hbm)>,
+}
+
+impl Built {
+    const KEPT: usize = 6;
+
+    /// The problem at p, built unless kept.
+    fn at(&mut self, family: &MechanismFamily<'_>, p: f64) -> Result<&mut Hbm, HbmError> {
+        let k = match self.problems.iter().position(|(q, _)| q.to_bits() == p.to_bits()) {
+            Some(k) => k,
+            None => {
+                if !p.is_finite() {
+                    return Err(HbmError::NonFinite { order: f64::NAN });
+                }
+                let hbm = (family.build)(p)?;
+                if self.problems.len() >= Self::KEPT {
+                    self.problems.remove(0);
+                }
+                self.problems.push((p, hbm));
+                self.problems.len() - 1
+            }
+        };
+        Ok(&mut self.problems[k].1)
+    }
+}
+
+/// The augmented system's pieces at one point: R̂, J, ∂R̂/∂λ, ∂R̂/∂σ (σ the second parameter:
+/// s, or p / reference), and g with its gradient in (x, λ, σ), v and w.
 struct Augmented {
     r: DVector<f64>,
     j: DMatrix<f64>,
     rl: DVector<f64>,
+    rs: DVector<f64>,
     g: f64,
     gx: DVector<f64>,
     gl: f64,
+    gs: f64,
     v: DVector<f64>,
     w: DVector<f64>,
 }
 
-/// A fold curve's walk: its plane, the borders b and c, and ∂R̂/∂s (constant).
-struct Walk {
+/// A fold curve's walk: its plane, the borders b and c, ∂R̂/∂s (constant) on a torque-scale
+/// plane, or the family of problems on a mechanism parameter's.
+struct Walk<'a> {
     plane: Plane,
     b: DVector<f64>,
     c: DVector<f64>,
@@ -194,6 +263,48 @@ struct Walk {
     /// The unknowns whose rows and columns of J form the matrix tested for singularity (all of
     /// them for a fold).
     block: Vec<usize>,
+    family: Option<&'a MechanismFamily<'a>>,
+    built: Built,
+}
+
+impl Walk<'_> {
+    /// The parameters at (λ, σ): the problem's (n, Ω, s), and p on a mechanism plane.
+    fn at(&self, lambda: f64, sigma: f64) -> (At, Option<f64>) {
+        match self.family {
+            None => (self.plane.at(lambda, sigma), None),
+            Some(f) => (self.plane.at(lambda, f.scale), Some(sigma * f.reference)),
+        }
+    }
+
+    /// σ of a value of the second parameter (s, or p in its unit).
+    fn sigma(&self, value: f64) -> f64 {
+        self.family.map_or(value, |f| value / f.reference)
+    }
+
+    /// The second parameter's value (s, or p) at σ.
+    fn second(&self, sigma: f64) -> f64 {
+        self.family.map_or(sigma, |f| sigma * f.reference)
+    }
+
+    /// A point of the curve.
+    fn point(&self, at: &At, sigma: f64, arclength: f64, solution: HbmSolution) -> FoldCurvePoint {
+        let mut p = self.plane.point(at, arclength, solution);
+        p.parameter = self.second(sigma);
+        p
+    }
+}
+
+/// The problem at p: `base` on a torque-scale plane (p None), else the family's, built if need be.
+fn problem<'h>(
+    base: &'h mut Hbm,
+    built: &'h mut Built,
+    family: Option<&MechanismFamily<'_>>,
+    p: Option<f64>,
+) -> Result<&'h mut Hbm, HbmError> {
+    match (family, p) {
+        (Some(f), Some(p)) => built.at(f, p),
+        _ => Ok(base),
+    }
 }
 
 /// x with `Aᵀ x = e` from A's LU factors: `PA = LU` gives `Aᵀ = Uᵀ Lᵀ P` (P orthogonal), so
@@ -242,21 +353,23 @@ impl Hbm {
         Plane { kind, p_ref: self.omega, omega: self.omega }
     }
 
-    /// The augmented system at x and `at`.
-    fn augmented(&mut self, x: &[f64], at: &At, walk: &Walk) -> Result<Augmented, HbmError> {
+    /// The augmented system at x, `at` and p (on a mechanism plane; `self` is then the
+    /// problem's layout only, every number comes from the family's problems).
+    fn augmented(&mut self, x: &[f64], at: &At, p: Option<f64>, walk: &mut Walk) -> Result<Augmented, HbmError> {
         let order = at.order;
         let m = self.unknowns();
-        let (param, scale) =
-            (walk.plane.param(), if walk.plane.kind == FoldPlane::Order { 1.0 } else { walk.plane.p_ref });
-        self.assemble(x, at, Some(param));
-        let (r, j, rl) = (self.rhat.clone(), self.jac.clone(), &self.gp * scale);
-        let idx = &walk.block;
+        let Walk { plane, b, c, rs, block, family, built } = walk;
+        let (param, scale) = (plane.param(), if plane.kind == FoldPlane::Order { 1.0 } else { plane.p_ref });
+        let hbm = problem(self, built, *family, p)?;
+        hbm.assemble(x, at, Some(param));
+        let (r, j, rl) = (hbm.rhat.clone(), hbm.jac.clone(), &hbm.gp * scale);
+        let idx = &*block;
         let mb = idx.len();
         let jb = DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]);
         let mut e = DVector::zeros(mb + 1);
         e[mb] = 1.0;
         // The bordered matrix of Jᵀ (borders swapped) is the transpose of J's: one LU for both.
-        let lu = Self::border(&jb, &walk.b, &walk.c).lu();
+        let lu = Self::border(&jb, b, c).lu();
         let sv = lu.solve(&e).ok_or(HbmError::Singular { order })?;
         let sw = solve_transposed(&lu, &e).ok_or(HbmError::Singular { order })?;
         let (vb, g) = (sv.rows(0, mb).clone_owned(), sv[mb]);
@@ -273,13 +386,30 @@ impl Hbm {
         }
         let h = FD_STEP / vn;
         let shifted = |sign: f64| -> Vec<f64> { x.iter().zip(v.iter()).map(|(xi, vi)| xi + sign * h * vi).collect() };
-        self.assemble(&shifted(1.0), at, Some(param));
-        let (jp, rlp) = (self.jac.clone(), self.gp.clone());
-        self.assemble(&shifted(-1.0), at, Some(param));
-        let gx = -((&jp - &self.jac).transpose() * &w) / (2.0 * h);
-        let gl = -scale * w.dot(&(&rlp - &self.gp)) / (2.0 * h);
+        hbm.assemble(&shifted(1.0), at, Some(param));
+        let (jp, rlp) = (hbm.jac.clone(), hbm.gp.clone());
+        hbm.assemble(&shifted(-1.0), at, Some(param));
+        let gx = -((&jp - &hbm.jac).transpose() * &w) / (2.0 * h);
+        let gl = -scale * w.dot(&(&rlp - &hbm.gp)) / (2.0 * h);
+        // ∂R̂/∂σ and ∂g/∂σ: s multiplies the excitation, which does not depend on x (so ∂J/∂s = 0);
+        // p is differenced between the problems built at p ± h (per unit σ = p / reference).
+        let (rs, gs) = match (*family, p) {
+            (Some(f), Some(p)) => {
+                let hp = FD_STEP * f.reference;
+                let mut side = |q: f64| -> Result<(DVector<f64>, DMatrix<f64>), HbmError> {
+                    let other = built.at(f, q)?;
+                    other.assemble(x, at, Some(param));
+                    Ok((other.rhat.clone(), other.jac.clone()))
+                };
+                let (r_up, j_up) = side(p + hp)?;
+                let (r_down, j_down) = side(p - hp)?;
+                let per = f.reference / (2.0 * hp);
+                ((r_up - r_down) * per, -w.dot(&((j_up - j_down) * &v)) * per)
+            }
+            _ => (rs.clone(), 0.0),
+        };
         let (v, w) = (vb, wb);
-        Ok(Augmented { r, j, rl, g, gx, gl, v, w })
+        Ok(Augmented { r, j, rl, rs, g, gx, gl, gs, v, w })
     }
 
     /// The unknowns whose rows and columns of J form the matrix `test` keeps singular.
@@ -291,43 +421,51 @@ impl Hbm {
         }
     }
 
-    /// The start of a walk in `kind` at x and `at`: borders from the singular vectors of J's
-    /// smallest singular value, and ∂R̂/∂s, which depends on neither x nor the other parameters
-    /// (s multiplies the excitation).
-    fn walk(&mut self, kind: FoldPlane, test: Singularity, x: &[f64], at: &At) -> Walk {
+    /// The start of a walk in `kind` at x, `at` and p: borders from the singular vectors of J's
+    /// smallest singular value, and on a torque-scale plane ∂R̂/∂s, which depends on neither x
+    /// nor the other parameters (s multiplies the excitation).
+    fn walk<'a>(
+        &mut self,
+        kind: FoldPlane,
+        test: Singularity,
+        family: Option<&'a MechanismFamily<'a>>,
+        x: &[f64],
+        at: &At,
+        p: Option<f64>,
+    ) -> Result<Walk<'a>, HbmError> {
         let plane = self.plane(kind);
-        self.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
-        let rs = self.gp.clone();
         let block = self.tested(test);
+        let mut built = Built::default();
+        let hbm = problem(self, &mut built, family, p)?;
+        hbm.assemble(x, at, Some(Parameter::TorqueScale { order: at.order }));
+        let rs = hbm.gp.clone();
         let mb = block.len();
-        let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
+        let jb = DMatrix::from_fn(mb, mb, |a, b| hbm.jac[(block[a], block[b])]);
         let svd = jb.svd(true, true);
         let k = svd.singular_values.imin();
         let unit = DVector::from_element(mb, 1.0 / (mb as f64).sqrt());
         let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
         let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
-        Walk { plane, b, c, rs, block }
+        Ok(Walk { plane, b, c, rs, block, family, built })
     }
 
-    /// Newton's method on `R̂ = 0, g = 0` with one of (λ, s) free: λ when `free_lambda`, else s.
+    /// Newton's method on `R̂ = 0, g = 0` with one of (λ, σ) free: λ when `free_lambda`, else σ.
     fn fold_solve(
         &mut self,
         walk: &mut Walk,
         x: &mut [f64],
-        at: &mut At,
+        (lambda, sigma): (&mut f64, &mut f64),
         free_lambda: bool,
     ) -> Result<usize, HbmError> {
         let m = self.unknowns();
         for it in 1..=self.opts.max_iter {
-            let aug = self.augmented(x, at, walk)?;
+            let (at, p) = walk.at(*lambda, *sigma);
+            let aug = self.augmented(x, &at, p, walk)?;
             let mut mat = DMatrix::zeros(m + 1, m + 1);
             mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
-            if free_lambda {
-                mat.view_mut((0, m), (m, 1)).copy_from(&aug.rl);
-                mat[(m, m)] = aug.gl;
-            } else {
-                mat.view_mut((0, m), (m, 1)).copy_from(&walk.rs);
-            }
+            let (col, corner) = if free_lambda { (&aug.rl, aug.gl) } else { (&aug.rs, aug.gs) };
+            mat.view_mut((0, m), (m, 1)).copy_from(col);
+            mat[(m, m)] = corner;
             mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&aug.r);
@@ -341,16 +479,20 @@ impl Hbm {
                 *xi -= di;
             }
             if free_lambda {
-                *at = walk.plane.at(walk.plane.lambda(at) - d[m], at.scale);
+                *lambda -= d[m];
             } else {
-                at.scale -= d[m];
+                *sigma -= d[m];
             }
             (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             if step <= self.opts.tol {
                 return Ok(it);
             }
         }
-        Err(HbmError::NoConvergence { order: at.order, iterations: self.opts.max_iter, step: f64::NAN })
+        Err(HbmError::NoConvergence {
+            order: walk.at(*lambda, *sigma).0.order,
+            iterations: self.opts.max_iter,
+            step: f64::NAN,
+        })
     }
 
     /// The fold in `plane` at torque scale `scale` nearest `guess` (a state near a fold of a
@@ -401,15 +543,26 @@ impl Hbm {
         scale: f64,
         guess: &HbmSolution,
     ) -> Result<FoldCurvePoint, HbmError> {
+        self.singular_at_with(plane, None, test, scale, guess)
+    }
+
+    /// [`Hbm::singular_at`] with the second parameter `second`: the torque scale s (`family`
+    /// None), or the mechanism parameter p of `family` (its unit; `self` is then any problem of
+    /// the family, for the layout of the unknowns).
+    pub fn singular_at_with(
+        &mut self,
+        plane: FoldPlane,
+        family: Option<&MechanismFamily<'_>>,
+        test: Singularity,
+        second: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
-        let mut at = At { order: guess.order, omega: guess.omega, scale };
-        if let FoldPlane::Speed { order } = plane {
-            at.order = order;
-        }
-        let mut walk = self.walk(plane, test, &x, &at);
-        let it = self.fold_solve(&mut walk, &mut x, &mut at, true)?;
-        let solution = self.solution_from(&x, &at, it);
-        Ok(walk.plane.point(&at, 0.0, solution))
+        let order = match plane {
+            FoldPlane::Order => guess.order,
+            FoldPlane::Speed { order } => order,
+        };
+        self.singular_solve(plane, family, test, &mut x, (order, guess.omega), second, true)
     }
 
     /// The fold in `plane` at the value `value` of its first parameter (n, or Ω in rad/s)
@@ -420,15 +573,62 @@ impl Hbm {
         value: f64,
         guess: &HbmSolution,
     ) -> Result<FoldCurvePoint, HbmError> {
+        self.singular_at_value(plane, Singularity::Jacobian, value, guess)
+    }
+
+    /// [`Hbm::fold_at_value`] for the singularity `test` (a loss of unison with
+    /// [`Singularity::Block`]).
+    pub fn singular_at_value(
+        &mut self,
+        plane: FoldPlane,
+        test: Singularity,
+        value: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
+        self.singular_at_value_with(plane, None, test, value, guess.torque_scale, guess)
+    }
+
+    /// [`Hbm::singular_at_value`] with the second parameter (free, from `second`) the torque
+    /// scale (`family` None) or the mechanism parameter p of `family`.
+    pub fn singular_at_value_with(
+        &mut self,
+        plane: FoldPlane,
+        family: Option<&MechanismFamily<'_>>,
+        test: Singularity,
+        value: f64,
+        second: f64,
+        guess: &HbmSolution,
+    ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
-        let mut at = match plane {
-            FoldPlane::Order => At { order: value, omega: guess.omega, scale: guess.torque_scale },
-            FoldPlane::Speed { order } => At { order, omega: value, scale: guess.torque_scale },
+        let (order, omega) = match plane {
+            FoldPlane::Order => (value, guess.omega),
+            FoldPlane::Speed { order } => (order, value),
         };
-        let mut walk = self.walk(plane, Singularity::Jacobian, &x, &at);
-        let it = self.fold_solve(&mut walk, &mut x, &mut at, false)?;
-        let solution = self.solution_from(&x, &at, it);
-        Ok(walk.plane.point(&at, 0.0, solution))
+        self.singular_solve(plane, family, test, &mut x, (order, omega), second, false)
+    }
+
+    /// Newton's method on `R̂ = 0, g = 0` from x at (n, Ω) and the second parameter `second`,
+    /// the first parameter free when `free_lambda`, else the second.
+    #[allow(clippy::too_many_arguments)]
+    fn singular_solve(
+        &mut self,
+        plane: FoldPlane,
+        family: Option<&MechanismFamily<'_>>,
+        test: Singularity,
+        x: &mut [f64],
+        (order, omega): (f64, f64),
+        second: f64,
+        free_lambda: bool,
+    ) -> Result<FoldCurvePoint, HbmError> {
+        let scale = family.map_or(second, |f| f.scale);
+        let at = At { order, omega, scale };
+        let p = family.map(|_| second);
+        let mut walk = self.walk(plane, test, family, x, &at, p)?;
+        let (mut lambda, mut sigma) = (walk.plane.lambda(&at), walk.sigma(second));
+        let it = self.fold_solve(&mut walk, x, (&mut lambda, &mut sigma), free_lambda)?;
+        let (at, p) = walk.at(lambda, sigma);
+        let solution = problem(self, &mut walk.built, family, p)?.solution_from(x, &at, it);
+        Ok(walk.point(&at, sigma, 0.0, solution))
     }
 
     /// Follows the fold curve in `plane` through `start` (from [`Hbm::fold_at`]) in the
@@ -440,20 +640,33 @@ impl Hbm {
         up: bool,
         opts: &FoldCurveOptions,
     ) -> Result<FoldCurve, HbmError> {
+        self.continue_fold_with(plane, None, start, up, opts)
+    }
+
+    /// [`Hbm::continue_fold`] with the second parameter the torque scale (`family` None) or the
+    /// mechanism parameter p of `family` (`start` from [`Hbm::singular_at_with`]; `up` then
+    /// means increasing p, and `opts.scales` is p's range).
+    pub fn continue_fold_with(
+        &mut self,
+        plane: FoldPlane,
+        family: Option<&MechanismFamily<'_>>,
+        start: &FoldCurvePoint,
+        up: bool,
+        opts: &FoldCurveOptions,
+    ) -> Result<FoldCurve, HbmError> {
         let m = self.unknowns();
         let x0 = self.unknowns_from(Some(&start.solution));
         let at0 = At { order: start.order, omega: start.omega, scale: start.scale };
-        let mut walk = self.walk(plane, opts.test, &x0, &at0);
+        let p0 = family.map(|_| start.parameter);
+        let mut walk = self.walk(plane, opts.test, family, &x0, &at0, p0)?;
         walk.plane.p_ref = start.omega;
-        let pl = walk.plane;
-        let at_of = |y: &DVector<f64>| pl.at(y[m], y[m + 1]);
         let mut y = DVector::zeros(m + 2);
         y.rows_mut(0, m).copy_from(&DVector::from_vec(x0));
-        (y[m], y[m + 1]) = (pl.lambda(&at0), start.scale);
-        // The tangent at the start, oriented by the requested direction of s.
+        (y[m], y[m + 1]) = (walk.plane.lambda(&at0), walk.sigma(start.parameter));
+        // The tangent at the start, oriented by the requested direction of the second parameter.
         let mut e_s = DVector::zeros(m + 2);
         e_s[m + 1] = if up { 1.0 } else { -1.0 };
-        let (mut t, aug) = self.fold_tangent(&y, &walk, &e_s)?;
+        let (mut t, aug) = self.fold_tangent(&y, &mut walk, &e_s)?;
         (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
         if t[m + 1] * e_s[m + 1] < 0.0 {
             t = -t;
@@ -462,13 +675,14 @@ impl Hbm {
         let (mut cusps, mut scale_extrema) = (Vec::new(), Vec::new());
         let mut ds = opts.ds;
         let mut s_arc = 0.0;
-        let inside = |y: &DVector<f64>| {
-            let at = at_of(y);
+        let inside = |walk: &Walk, y: &DVector<f64>| {
+            let (at, _) = walk.at(y[m], y[m + 1]);
             let first = match plane {
                 FoldPlane::Order => at.order,
                 FoldPlane::Speed { .. } => at.omega,
             };
-            (opts.range.0..=opts.range.1).contains(&first) && (opts.scales.0..=opts.scales.1).contains(&y[m + 1])
+            (opts.range.0..=opts.range.1).contains(&first)
+                && (opts.scales.0..=opts.scales.1).contains(&walk.second(y[m + 1]))
         };
         let end = loop {
             if points.len() >= opts.max_points {
@@ -478,14 +692,14 @@ impl Hbm {
                 break FoldCurveEnd::StepTooSmall;
             }
             let pred = &y + &t * ds;
-            let (y_new, iters) = match self.fold_correct(&pred, &t, &walk, opts) {
+            let (y_new, iters) = match self.fold_correct(&pred, &t, &mut walk, opts) {
                 Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
                     continue;
                 }
             };
-            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &walk, &t) else {
+            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &mut walk, &t) else {
                 ds *= 0.5;
                 continue;
             };
@@ -499,19 +713,19 @@ impl Hbm {
             (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             let chord = (&y_new - &y).norm();
             if t[m + 1] * t_new[m + 1] < 0.0
-                && let Some((p, tl)) = self.locate_extremum(&y, &t, chord, &walk, opts)
+                && let Some((p, tl)) = self.locate_extremum(&y, &t, chord, &mut walk, opts)
             {
-                // At the located point |ds/dσ| ≤ 1e-10; at a cusp dλ/dσ follows it to zero
+                // At the located point |dσ/dσ_arc| ≤ 1e-10; at a cusp dλ/dσ follows it to zero
                 // (the paper's rotor: 2e-11), elsewhere it stays of order one.
                 if tl.abs() <= 1e-6 { cusps.push(p) } else { scale_extrema.push(p) }
             }
             s_arc += chord;
             let x_new: Vec<f64> = y_new.rows(0, m).iter().copied().collect();
-            let at = at_of(&y_new);
-            let solution = self.solution_from(&x_new, &at, iters);
-            points.push(pl.point(&at, s_arc, solution));
+            let (at, p) = walk.at(y_new[m], y_new[m + 1]);
+            let solution = problem(self, &mut walk.built, family, p)?.solution_from(&x_new, &at, iters);
+            points.push(walk.point(&at, y_new[m + 1], s_arc, solution));
             (y, t) = (y_new, t_new);
-            if !inside(&y) {
+            if !inside(&walk, &y) {
                 break FoldCurveEnd::LeftBox;
             }
             if iters <= 3 {
@@ -523,24 +737,25 @@ impl Hbm {
         Ok(FoldCurve { points, cusps, scale_extrema, end })
     }
 
-    /// The augmented Jacobian `[[J, ∂R̂/∂λ, ∂R̂/∂s], [∂g/∂x, ∂g/∂λ, 0]]` at y bordered below by
-    /// `row`, and the augmented system there.
+    /// The augmented Jacobian `[[J, ∂R̂/∂λ, ∂R̂/∂σ], [∂g/∂x, ∂g/∂λ, ∂g/∂σ]]` at y bordered below
+    /// by `row`, and the augmented system there.
     fn fold_matrix(
         &mut self,
         y: &DVector<f64>,
-        walk: &Walk,
+        walk: &mut Walk,
         row: &DVector<f64>,
     ) -> Result<(DMatrix<f64>, Augmented), HbmError> {
         let m = self.unknowns();
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-        let at = walk.plane.at(y[m], y[m + 1]);
-        let aug = self.augmented(&x, &at, walk)?;
+        let (at, p) = walk.at(y[m], y[m + 1]);
+        let aug = self.augmented(&x, &at, p, walk)?;
         let mut mat = DMatrix::zeros(m + 2, m + 2);
         mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
         mat.view_mut((0, m), (m, 1)).copy_from(&aug.rl);
-        mat.view_mut((0, m + 1), (m, 1)).copy_from(&walk.rs);
+        mat.view_mut((0, m + 1), (m, 1)).copy_from(&aug.rs);
         mat.view_mut((m, 0), (1, m)).copy_from(&aug.gx.transpose());
         mat[(m, m)] = aug.gl;
+        mat[(m, m + 1)] = aug.gs;
         mat.view_mut((m + 1, 0), (1, m + 2)).copy_from(&row.transpose());
         Ok((mat, aug))
     }
@@ -549,7 +764,7 @@ impl Hbm {
     fn fold_tangent(
         &mut self,
         y: &DVector<f64>,
-        walk: &Walk,
+        walk: &mut Walk,
         row: &DVector<f64>,
     ) -> Result<(DVector<f64>, Augmented), HbmError> {
         let m = self.unknowns();
@@ -569,7 +784,7 @@ impl Hbm {
         &mut self,
         pred: &DVector<f64>,
         t: &DVector<f64>,
-        walk: &Walk,
+        walk: &mut Walk,
         opts: &FoldCurveOptions,
     ) -> Result<(DVector<f64>, usize), HbmError> {
         let m = self.unknowns();
@@ -593,19 +808,19 @@ impl Hbm {
         Err(HbmError::NoConvergence { order: y[m], iterations: opts.max_iter, step: f64::NAN })
     }
 
-    /// The extremum of s between y (tangent t) and the point a chord further on, where ds/dσ
-    /// changes sign: a secant (Illinois) search on the tangent's s-component along the step.
-    /// Returns the point and dλ/dσ there.
+    /// The extremum of the second parameter between y (tangent t) and the point a chord further
+    /// on, where its rate along the curve changes sign: a secant (Illinois) search on the
+    /// tangent's σ-component along the step. Returns the point and dλ/dσ there.
     fn locate_extremum(
         &mut self,
         y: &DVector<f64>,
         t: &DVector<f64>,
         chord: f64,
-        walk: &Walk,
+        walk: &mut Walk,
         opts: &FoldCurveOptions,
     ) -> Option<(ParameterPoint, f64)> {
         let m = self.unknowns();
-        let slope = |this: &mut Self, sigma: f64| -> Option<(DVector<f64>, DVector<f64>)> {
+        let slope = |this: &mut Self, walk: &mut Walk, sigma: f64| -> Option<(DVector<f64>, DVector<f64>)> {
             let pred = y + t * sigma;
             let (yc, _) = this.fold_correct(&pred, t, walk, opts).ok()?;
             let (mut tc, _) = this.fold_tangent(&yc, walk, t).ok()?;
@@ -614,7 +829,7 @@ impl Hbm {
             }
             Some((tc, yc))
         };
-        let f1 = slope(self, chord)?.0[m + 1];
+        let f1 = slope(self, walk, chord)?.0[m + 1];
         let mut ill = Illinois::new((0.0, t[m + 1]), (chord, f1));
         let mut best = None;
         for _ in 0..60 {
@@ -622,10 +837,12 @@ impl Hbm {
                 break;
             }
             let s = ill.secant();
-            let (tc, yc) = slope(self, s)?;
+            let (tc, yc) = slope(self, walk, s)?;
             let f = tc[m + 1];
-            let at = walk.plane.at(yc[m], yc[m + 1]);
-            best = Some((ParameterPoint { order: at.order, omega: at.omega, scale: at.scale }, tc[m]));
+            let (at, _) = walk.at(yc[m], yc[m + 1]);
+            let point =
+                ParameterPoint { order: at.order, omega: at.omega, scale: at.scale, parameter: walk.second(yc[m + 1]) };
+            best = Some((point, tc[m]));
             if f.abs() < 1e-10 || (ill.s1 - ill.s0).abs() < 1e-12 * chord.max(1e-300) {
                 break;
             }

@@ -117,7 +117,9 @@ pub use branch::{
 };
 pub use continuation::{ContinuationOptions, continue_in_order};
 pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
-pub use fold2::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, Singularity};
+pub use fold2::{
+    FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, MechanismFamily, ParameterPoint, Singularity,
+};
 pub use free::{BackboneOptions, FreeOrbit, FreeSpin, FreeStart};
 pub use reaction::{MeshTorqueHarmonics, ReactionHarmonics};
 pub use solution::HbmSolution;

@@ -53,8 +53,8 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
 
     // The jump boundary at 500 N·m: the one-parameter fold (confirmed by independent
     // shooting in `hbm_events`), 1e-6 in n.
-    assert_eq!(jump.at_torque_max.len(), 1, "{:?}", jump.at_torque_max);
-    assert!((jump.at_torque_max[0] - 3.1015322).abs() <= 1e-6, "{:?}", jump.at_torque_max);
+    assert_eq!(jump.at_second_max.len(), 1, "{:?}", jump.at_second_max);
+    assert!((jump.at_second_max[0] - 3.1015322).abs() <= 1e-6, "{:?}", jump.at_second_max);
     // Points of the CSV are folds of one-parameter branches at their own torques: three of
     // them (at about 40, 10 and 5 N·m), each matched by a fold of the single-pendulum branch
     // to 1e-6 in n (both solved to 1e-10; the branch's folds are refined by bisection).
@@ -62,10 +62,10 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     for target in [40.0, 10.0, 5.0] {
         let i = (0..jump.values.len())
             .min_by(|&a, &b| {
-                (jump.torques_nm[a] / target).ln().abs().total_cmp(&(jump.torques_nm[b] / target).ln().abs())
+                (jump.second_values[a] / target).ln().abs().total_cmp(&(jump.second_values[b] / target).ln().abs())
             })
             .unwrap();
-        let (n, t) = (jump.values[i], jump.torques_nm[i]);
+        let (n, t) = (jump.values[i], jump.second_values[i]);
         let folds = folds_at(&mut one, t, (2.9, 3.3), 0.02);
         let nearest = folds.iter().map(|f| (f - n).abs()).fold(f64::INFINITY, f64::min);
         println!("boundary point n {n:.8} at {t:.4} N·m; branch folds {folds:?}");
@@ -76,7 +76,7 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
     // `hbm_fold_curve`).
     let cusps: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "Cusp").collect();
     assert_eq!(cusps.len(), 1, "{:?}", r.points);
-    let (nc, tc) = (cusps[0].value, cusps[0].torque_nm);
+    let (nc, tc) = (cusps[0].value, cusps[0].second_value);
     println!("cusp n {nc:.8} T {tc:.7} N·m");
     let window = (nc - 0.03, nc + 0.03);
     assert!(folds_at(&mut one, 0.99 * tc, window, 0.001).is_empty());
@@ -84,15 +84,15 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
 
     // The unison-loss boundary at 500 N·m: the general route's +1 points on the two pendulums
     // (located by bisection on the Floquet multipliers, `hbm_cyclic`), 1e-8.
-    assert_eq!(unison.at_torque_max.len(), 2, "{:?}", unison.at_torque_max);
-    for (got, want) in unison.at_torque_max.iter().zip([3.0813662811512907, 3.0946057552055217]) {
+    assert_eq!(unison.at_second_max.len(), 2, "{:?}", unison.at_second_max);
+    for (got, want) in unison.at_second_max.iter().zip([3.0813662811512907, 3.0946057552055217]) {
         assert!((got - want).abs() <= 1e-8, "{got} against {want}");
     }
     // Its onset: the general route on both pendulums shows no +1 point off its folds 1 % below
     // it, two at 1.5 times it.
     let onsets: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "UnisonLossOnset").collect();
     assert_eq!(onsets.len(), 1, "{:?}", r.points);
-    let onset = onsets[0].torque_nm;
+    let onset = onsets[0].second_value;
     for (torque, expected) in [(0.99 * onset, 0), (1.5 * onset, 2)] {
         let (plus, found) = crate::support::two_pendulums::plus_one_points(torque);
         assert_eq!(plus, expected, "{torque} N·m: {found}");
@@ -112,8 +112,9 @@ fn the_envelope_of_two_pendulums_maps_the_jump_and_the_unison_loss() {
         assert!(svg.contains(text), "the chart lacks `{text}`");
     }
     let findings = &json["analyses"][0]["findings"];
-    assert_eq!(findings["jump_from_nm"].as_f64(), Some(tc));
-    assert_eq!(findings["unison_lost_from_nm"].as_f64(), Some(onset));
+    assert_eq!(findings["jump_limits"][0].as_f64(), Some(tc));
+    assert_eq!(findings["unison_loss_limits"][0].as_f64(), Some(onset));
+    assert_eq!(findings["unit"].as_str(), Some("N·m"));
 }
 
 /// The two pendulums' unison motion is the single pendulum's exactly, so the one-pendulum
@@ -131,10 +132,13 @@ fn one_pendulum_has_the_same_jump_boundary_and_no_unison_loss() {
     let (a, b) = (&two.envelopes[0], &one.envelopes[0]);
     assert!(b.route.starts_with("general"), "{}", b.route);
     assert_eq!(b.boundaries.len(), 1);
-    assert!((a.boundaries[0].at_torque_max[0] - b.boundaries[0].at_torque_max[0]).abs() <= 1e-8);
+    assert!((a.boundaries[0].at_second_max[0] - b.boundaries[0].at_second_max[0]).abs() <= 1e-8);
     let cusp = |r: &EnvelopeResult| *r.points.iter().find(|p| format!("{:?}", p.kind) == "Cusp").unwrap();
     let (ca, cb) = (cusp(a), cusp(b));
-    assert!((ca.value - cb.value).abs() <= 1e-8 && (ca.torque_nm / cb.torque_nm - 1.0).abs() <= 1e-8, "{ca:?} {cb:?}");
+    assert!(
+        (ca.value - cb.value).abs() <= 1e-8 && (ca.second_value / cb.second_value - 1.0).abs() <= 1e-8,
+        "{ca:?} {cb:?}"
+    );
 }
 
 #[test]
@@ -179,7 +183,7 @@ fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
     let copts = ContinuationOptions { stability: false, ..Default::default() };
     let k = b.values.len();
     for i in [k / 5, k / 2, 4 * k / 5] {
-        let (rpm, t) = (b.values[i], b.torques_nm[i]);
+        let (rpm, t) = (b.values[i], b.second_values[i]);
         let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1500.0), &single(t), opts).unwrap();
         let br = hbm
             .continue_in(Parameter::Speed { order: 3.0 }, rpm_to_rad_s(1500.0), rpm_to_rad_s(250.0), None, &copts)
@@ -190,6 +194,6 @@ fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
         assert!(nearest <= 1e-7, "({rpm} rpm, {t} N·m) is {nearest} from the branch's folds {folds:?}");
     }
     let (first, last) = (0, k - 1);
-    let ratio = (b.torques_nm[last] / b.torques_nm[first]) / (b.values[last] / b.values[first]).powi(2);
+    let ratio = (b.second_values[last] / b.second_values[first]) / (b.values[last] / b.values[first]).powi(2);
     assert!((ratio - 1.0).abs() < 0.25, "T/Ω² along the fold curve changes by {ratio}");
 }

@@ -22,6 +22,7 @@ mod engine;
 mod engine_excitation;
 mod engine_study;
 mod envelope;
+mod envelope_axes;
 mod excite_at;
 mod figures;
 mod gear_reactions;

@@ -77,7 +77,7 @@ pub(crate) fn check_parameters(src: &Source, mech: &Mechanism, spin: usize, k: u
             return Err(src.error(&pat("quantity"), format!("the {} is varied twice", p.quantity.describe())));
         }
         check_quantity(src, &pat("quantity"), mech, spin, inner, &p.quantity)?;
-        check_values(src, &pat(""), d.sampling, p, |v| value_ok(&p.quantity, inner, v))?;
+        check_values(src, &pat(""), d.sampling, p, |v| value_ok(&p.quantity, Some(inner), v))?;
     }
     match d.sampling {
         Sampling::Grid => {}
@@ -97,6 +97,33 @@ pub(crate) fn check_parameters(src: &Source, mech: &Mechanism, spin: usize, k: u
     Ok(())
 }
 
+/// A mechanism quantity named outside a design study (an envelope's axis, at `path`): it names
+/// a body or joint of the mechanism that has it, and both ends of its range `from`..`to` (at
+/// `from_path` and `to_path`) are admissible values with `from < to`.
+pub(crate) fn check_mechanism_quantity(
+    src: &Source,
+    path: &str,
+    mech: &Mechanism,
+    spin: usize,
+    q: &Quantity,
+    (from, to): (f64, f64),
+    (from_path, to_path): (&str, &str),
+) -> Result<()> {
+    if matches!(q, Quantity::Rpm | Quantity::TorqueAmplitude | Quantity::Order) {
+        return Err(src.error(
+            path,
+            format!("the {} is not a mechanism parameter: name a body's or joint's quantity", q.describe()),
+        ));
+    }
+    check_names(src, path, mech, spin, q)?;
+    value_ok(q, None, from).map_err(|m| src.error(from_path, m))?;
+    value_ok(q, None, to).map_err(|m| src.error(to_path, m))?;
+    if from >= to {
+        return Err(src.error(to_path, format!("need from < to, got {from} and {to}")));
+    }
+    Ok(())
+}
+
 /// The quantity's name exists and the quantity applies to this mechanism and analysis.
 fn check_quantity(
     src: &Source,
@@ -106,6 +133,12 @@ fn check_quantity(
     inner: &AnalysisSpec,
     q: &Quantity,
 ) -> Result<()> {
+    check_names(src, path, mech, spin, q)?;
+    check_applies(src, path, inner, q)
+}
+
+/// The body or joint a quantity names exists and has that quantity.
+fn check_names(src: &Source, path: &str, mech: &Mechanism, spin: usize, q: &Quantity) -> Result<()> {
     if let Some(b) = q.body() {
         let Some(i) = mech.body_index(b) else {
             let names: Vec<&str> = mech.bodies.iter().map(|b| b.name.as_str()).collect();
@@ -150,6 +183,11 @@ fn check_quantity(
             );
         }
     }
+    Ok(())
+}
+
+/// An analysis quantity (speed, torque, order) applies to the analysis run per case.
+fn check_applies(src: &Source, path: &str, inner: &AnalysisSpec, q: &Quantity) -> Result<()> {
     let applies = match (q, inner) {
         (Quantity::Rpm, AnalysisSpec::HarmonicBalance(h)) => !matches!(h.parameter, HbmParameter::Speed { .. }),
         (Quantity::TorqueAmplitude, AnalysisSpec::HarmonicBalance(h)) => {
@@ -180,8 +218,9 @@ fn check_quantity(
     Ok(())
 }
 
-/// Whether `v` is an admissible value of `q` in `inner`, and if not, the admissible range.
-fn value_ok(q: &Quantity, inner: &AnalysisSpec, v: f64) -> std::result::Result<(), String> {
+/// Whether `v` is an admissible value of `q` in `inner` (None: a mechanism quantity outside a
+/// design study), and if not, the admissible range.
+fn value_ok(q: &Quantity, inner: Option<&AnalysisSpec>, v: f64) -> std::result::Result<(), String> {
     let within = |lo: f64, hi: f64, lo_open: bool| {
         let above = if lo_open { v > lo } else { v >= lo };
         v.is_finite() && above && v <= hi
@@ -199,7 +238,7 @@ fn value_ok(q: &Quantity, inner: &AnalysisSpec, v: f64) -> std::result::Result<(
         }
         Quantity::TorqueAmplitude => {
             // Harmonic balance has no periodic response to continue at zero torque.
-            let zero_ok = !matches!(inner, AnalysisSpec::HarmonicBalance(_));
+            let zero_ok = !matches!(inner, Some(AnalysisSpec::HarmonicBalance(_)));
             (
                 v.is_finite() && v.abs() <= MAX_TORQUE_NM && (zero_ok || v != 0.0),
                 format!("0 < |T_n| ≤ {MAX_TORQUE_NM:e} N·m"),

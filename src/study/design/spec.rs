@@ -119,7 +119,7 @@ pub enum Quantity {
 impl Quantity {
     /// The unit as the CSV column suffix: `kg`, `kg_m2`, `m`, `Nm_per_rad`, …; empty for an
     /// order. `slide`: the joint is prismatic.
-    pub(super) fn suffix(&self, slide: bool) -> &'static str {
+    pub(crate) fn suffix(&self, slide: bool) -> &'static str {
         match self {
             Quantity::BodyMass(_) => "kg",
             Quantity::BodyInertia(_) => "kg_m2",
@@ -135,7 +135,7 @@ impl Quantity {
     }
 
     /// The SI unit (`"1"` for an order).
-    pub(super) fn unit(&self, slide: bool) -> &'static str {
+    pub(crate) fn unit(&self, slide: bool) -> &'static str {
         match self {
             Quantity::BodyMass(_) => "kg",
             Quantity::BodyInertia(_) => "kg·m²",
@@ -151,7 +151,7 @@ impl Quantity {
     }
 
     /// The joint it names, if any.
-    pub(super) fn joint(&self) -> Option<&str> {
+    pub(crate) fn joint(&self) -> Option<&str> {
         match self {
             Quantity::JointStiffness(j)
             | Quantity::JointDamping(j)
@@ -162,7 +162,7 @@ impl Quantity {
     }
 
     /// The body it names, if any.
-    pub(super) fn body(&self) -> Option<&str> {
+    pub(crate) fn body(&self) -> Option<&str> {
         match self {
             Quantity::BodyMass(b) | Quantity::BodyInertia(b) | Quantity::BodyComRadius(b) => Some(b),
             _ => None,

@@ -3,6 +3,7 @@
 
 use super::{EnvelopePlane, EnvelopeResult, EnvelopeSpec, MapPointKind, run};
 use crate::error::Result;
+use crate::model::excitation::Harmonic;
 use crate::study::Study;
 use crate::study::StudyReport;
 use crate::study::analysis::{Analysis, Bench, Checks, Output};
@@ -10,7 +11,7 @@ use crate::study::digest::{count, num};
 use crate::study::json::Json;
 use crate::study::plan::{AnalysisPlan, CSV_CELL_BYTES, hbm_branch_s};
 use crate::study::validate::{
-    MAX_LIST, MAX_TORQUE_NM, check_excite, order, order_range, pos, require_steady_spin, rpm,
+    MAX_LIST, MAX_TORQUE_NM, check_excite, order, order_range, pos, require_steady_spin, rpm, torque,
 };
 use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
@@ -27,22 +28,163 @@ struct Findings {
     jump_boundaries: usize,
     /// Number of unison-loss boundaries.
     unison_loss_boundaries: usize,
-    /// The least torque of a jump, N·m (the lowest cusp or jump onset; `null` without a jump).
-    jump_from_nm: Option<f64>,
-    /// The least torque of a loss of unison, N·m (`null` without one).
-    unison_lost_from_nm: Option<f64>,
+    /// The unit of the limits below (the second parameter's: `N·m`, `1 (scale of the set)`, or
+    /// a mechanism parameter's SI unit).
+    unit: String,
+    /// The second parameter at each cusp and jump onset, ascending: on a torque or scale plane
+    /// the first is the least torque (scale) at which the response jumps; on a mechanism
+    /// parameter's plane each is where a jump region ends as the parameter changes.
+    jump_limits: Vec<f64>,
+    /// The same at each unison-loss onset.
+    unison_loss_limits: Vec<f64>,
 }
 
 fn findings(r: &EnvelopeResult) -> Findings {
-    let least = |kinds: &[MapPointKind]| {
-        r.points.iter().filter(|p| kinds.contains(&p.kind)).map(|p| p.torque_nm).reduce(f64::min)
+    let limits = |kinds: &[MapPointKind]| {
+        let mut v: Vec<f64> = r.points.iter().filter(|p| kinds.contains(&p.kind)).map(|p| p.second_value).collect();
+        v.sort_by(f64::total_cmp);
+        v
     };
     Findings {
         jump_boundaries: r.boundaries.iter().filter(|b| b.kind == super::BoundaryKind::Jump).count(),
         unison_loss_boundaries: r.boundaries.iter().filter(|b| b.kind == super::BoundaryKind::UnisonLoss).count(),
-        jump_from_nm: least(&[MapPointKind::Cusp, MapPointKind::JumpOnset]),
-        unison_lost_from_nm: least(&[MapPointKind::UnisonLossOnset]),
+        unit: r.second_unit.clone(),
+        jump_limits: limits(&[MapPointKind::Cusp, MapPointKind::JumpOnset]),
+        unison_loss_limits: limits(&[MapPointKind::UnisonLossOnset]),
     }
+}
+
+/// Largest scale of a multi-order set (dimensionless): far beyond any load.
+const MAX_SCALE: f64 = 1e6;
+
+/// The plane's second parameter: exactly one of a single order's torque range, a set's scale
+/// range, and a mechanism parameter (with its fixed torque or set), each with its values and
+/// seeds in range; the fields of another refused where they are written.
+fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
+    let src = c.src;
+    // The fields each kind of second parameter takes (the others must be left out).
+    let given = |field: &str| match field {
+        "torque_min" => e.torque_min != 0.0,
+        "torque_max" => e.torque_max != 0.0,
+        "seed_torques" => !e.seed_torques.is_empty(),
+        "scale_min" => e.scale_min != 0.0,
+        "scale_max" => e.scale_max != 0.0,
+        "torque" => e.torque != 0.0,
+        "seeds" => !e.seeds.is_empty(),
+        _ => false,
+    };
+    let refuse = |fields: &[&str], why: &str| -> Result<()> {
+        match fields.iter().find(|f| given(f)) {
+            Some(f) => Err(src.error(&c.at(f), format!("`{f}` does not apply here: {why}"))),
+            None => Ok(()),
+        }
+    };
+    let seeds_in = |field: &str, seeds: &[f64], (lo, hi): (f64, f64), unit: &str| -> Result<()> {
+        if seeds.len() > MAX_LIST {
+            return Err(src.error(&c.at(field), format!("at most {MAX_LIST} values")));
+        }
+        for (i, &t) in seeds.iter().enumerate() {
+            if !(t.is_finite() && lo <= t && t <= hi) {
+                return Err(src.error(
+                    &c.at(&format!("{field}[{i}]")),
+                    format!("{t}{unit} lies outside the map's range {lo}..{hi}{unit}"),
+                ));
+            }
+        }
+        Ok(())
+    };
+    check_load(c, &e.load)?;
+    if let Some(p) = &e.parameter {
+        refuse(
+            &["torque_min", "torque_max", "seed_torques", "scale_min", "scale_max"],
+            "a mechanism parameter's plane holds the torque fixed (`torque`, or the set `load` as written)",
+        )?;
+        match (e.load.is_empty(), e.torque) {
+            (true, t) if !(pos(t) && t <= MAX_TORQUE_NM) => {
+                return Err(src.error(
+                    &c.at("torque"),
+                    format!("a mechanism parameter's plane needs the fixed torque 0 < torque ≤ {MAX_TORQUE_NM:e} N·m (or a `load`), got {t}"),
+                ));
+            }
+            (false, t) if t != 0.0 => {
+                return Err(src.error(&c.at("torque"), "give the fixed `torque` or a `load`, not both"));
+            }
+            _ => {}
+        }
+        if let Err(m) = crate::study::validate::limits::check_file_name(&p.name) {
+            return Err(src.error(&c.at("parameter.name"), m));
+        }
+        crate::study::design::check_mechanism_quantity(
+            src,
+            &c.at("parameter.quantity"),
+            c.mech,
+            c.spin,
+            &p.quantity,
+            (p.from, p.to),
+            (&c.at("parameter.from"), &c.at("parameter.to")),
+        )?;
+        return seeds_in("seeds", &e.seeds, (p.from, p.to), "");
+    }
+    if !e.load.is_empty() {
+        refuse(
+            &["torque_min", "torque_max", "seed_torques", "torque"],
+            "a `load` is mapped over its scale: give `scale_min` and `scale_max` (dimensionless)",
+        )?;
+        if !(pos(e.scale_min) && e.scale_min < e.scale_max && e.scale_max <= MAX_SCALE) {
+            return Err(src.error(
+                &c.at(if pos(e.scale_min) { "scale_max" } else { "scale_min" }),
+                format!(
+                    "need 0 < scale_min < scale_max ≤ {MAX_SCALE:e} (scales of the set), got {} and {}",
+                    e.scale_min, e.scale_max
+                ),
+            ));
+        }
+        return seeds_in("seeds", &e.seeds, (e.scale_min, e.scale_max), "");
+    }
+    refuse(
+        &["scale_min", "scale_max", "torque", "seeds"],
+        "a single order is mapped over its torque amplitude (`torque_min`, `torque_max`, `seed_torques`); \
+         a scale needs a `load`, a fixed torque a `parameter`",
+    )?;
+    if !(pos(e.torque_min) && e.torque_min < e.torque_max && e.torque_max <= MAX_TORQUE_NM) {
+        return Err(src.error(
+            &c.at("torque_min"),
+            format!(
+                "need 0 < torque_min < torque_max ≤ {MAX_TORQUE_NM:e} N·m, got {} and {}",
+                e.torque_min, e.torque_max
+            ),
+        ));
+    }
+    seeds_in("seed_torques", &e.seed_torques, (e.torque_min, e.torque_max), " N·m")
+}
+
+/// A multi-order set: 1 to [`MAX_LIST`] harmonics, each a positive multiple, an admissible
+/// amplitude and a finite phase, not all amplitudes zero.
+fn check_load(c: &Checks<'_>, load: &[Harmonic]) -> Result<()> {
+    let src = c.src;
+    if load.len() > MAX_LIST {
+        return Err(src.error(&c.at("load"), format!("give 1 to {MAX_LIST} harmonics")));
+    }
+    for (h, hm) in load.iter().enumerate() {
+        let hp = c.at(&format!("load[{h}]"));
+        order(src, &format!("{hp}.multiple"), hm.multiple)?;
+        torque(src, &format!("{hp}.amplitude"), hm.amplitude)?;
+        if !(hm.phase.is_finite() && hm.phase.abs() <= 1e3) {
+            return Err(src.error(&format!("{hp}.phase"), "phase must be finite, |α| ≤ 1000 rad"));
+        }
+    }
+    // The harmonic balance's base frequency is the multiples' greatest common divisor.
+    let common = |d: f64| load.iter().all(|h| (h.multiple * d - (h.multiple * d).round()).abs() < 1e-9);
+    if !(1..=12).any(|d| common(f64::from(d))) {
+        return Err(src.error(
+            &c.at("load"),
+            "the multiples must be fractions with a common denominator ≤ 12 (the set must have a common period)",
+        ));
+    }
+    if !load.is_empty() && load.iter().all(|h| h.amplitude == 0.0) {
+        return Err(src.error(&c.at("load"), "every amplitude of the set is zero: nothing excites the response"));
+    }
+    Ok(())
 }
 
 impl Analysis for EnvelopeSpec {
@@ -74,27 +216,23 @@ impl Analysis for EnvelopeSpec {
                 }
             }
         }
-        if !(pos(e.torque_min) && e.torque_min < e.torque_max && e.torque_max <= MAX_TORQUE_NM) {
-            return Err(src.error(
-                &c.at("torque_min"),
-                format!(
-                    "need 0 < torque_min < torque_max ≤ {MAX_TORQUE_NM:e} N·m, got {} and {}",
-                    e.torque_min, e.torque_max
-                ),
-            ));
+        check_second(c, e)?;
+        let first = match e.plane {
+            EnvelopePlane::Order => (e.order_min, e.order_max),
+            EnvelopePlane::Speed { rpm_min, rpm_max, .. } => (rpm_min, rpm_max),
+        };
+        if e.sections.len() > MAX_LIST {
+            return Err(src.error(&c.at("sections"), format!("at most {MAX_LIST} values")));
         }
-        crate::study::validate::limits::check_harmonics(e.harmonics).map_err(|m| src.error(&c.at("harmonics"), m))?;
-        if e.seed_torques.len() > MAX_LIST {
-            return Err(src.error(&c.at("seed_torques"), format!("at most {MAX_LIST} torques")));
-        }
-        for (i, &t) in e.seed_torques.iter().enumerate() {
-            if !(t.is_finite() && e.torque_min <= t && t <= e.torque_max) {
+        for (i, &v) in e.sections.iter().enumerate() {
+            if !(v.is_finite() && first.0 <= v && v <= first.1) {
                 return Err(src.error(
-                    &c.at(&format!("seed_torques[{i}]")),
-                    format!("{t} N·m lies outside the map's torques {}..{} N·m", e.torque_min, e.torque_max),
+                    &c.at(&format!("sections[{i}]")),
+                    format!("{v} lies outside the map's first parameter range {}..{}", first.0, first.1),
                 ));
             }
         }
+        crate::study::validate::limits::check_harmonics(e.harmonics).map_err(|m| src.error(&c.at("harmonics"), m))?;
         check_excite(src, c.spec, c.mech, &c.at("excite"), &e.excite, None)
     }
 
@@ -143,11 +281,19 @@ impl Analysis for EnvelopeSpec {
             count(f.unison_loss_boundaries, "unison-loss boundary", "unison-loss boundaries"),
             num(r.time_s)
         );
-        if let Some(t) = f.jump_from_nm {
-            line += &format!("; jumps from {} N·m", num(t));
+        // On a torque or scale plane the least limit is where the jump (the loss) begins; on a
+        // mechanism parameter's plane the limits are listed as found.
+        let words = |v: &[f64]| v.iter().map(|&t| r.second_words(t, 4)).collect::<Vec<_>>().join(", ");
+        let from = !r.on_mechanism();
+        match (f.jump_limits.first(), from) {
+            (Some(&t), true) => line += &format!("; jumps from {}", r.second_words(t, 4)),
+            (Some(_), false) => line += &format!("; jump limits at {}", words(&f.jump_limits)),
+            (None, _) => {}
         }
-        if let Some(t) = f.unison_lost_from_nm {
-            line += &format!("; unison lost from {} N·m", num(t));
+        match (f.unison_loss_limits.first(), from) {
+            (Some(&t), true) => line += &format!("; unison lost from {}", r.second_words(t, 4)),
+            (Some(_), false) => line += &format!("; unison-loss limits at {}", words(&f.unison_loss_limits)),
+            (None, _) => {}
         }
         Some(line)
     }

@@ -1,8 +1,10 @@
-//! The operating envelope (issue 28, item 2): the boundaries of a single-order excitation's
-//! steady response in the (excitation order n, torque amplitude T) plane at a mean speed, each a
-//! curve of codimension-one points followed by two-parameter continuation (`hbm::fold2`, the
-//! minimally augmented systems of Govaerts 2000, §4.3.2), with the codimension-two points where
-//! they end or turn.
+//! The operating envelope (issue 28, items 1 and 2): the boundaries of the steady response in a
+//! plane of two parameters, each a curve of codimension-one points followed by two-parameter
+//! continuation (`hbm::fold2`, the minimally augmented systems of Govaerts 2000, §4.3.2), with the
+//! codimension-two points where they end or turn. The first parameter is the excitation order n
+//! at a mean speed (or the speed at an order); the second the torque amplitude T of a single
+//! order, the common scale s of a multi-order set, or a mechanism parameter p at a fixed torque
+//! (the problem rebuilt at each p, `hbm::MechanismFamily`).
 //!
 //! - **Jump boundary**: the fold curve. Inside its wedge three periodic states coexist at each
 //!   (n, T) and the response jumps at the wedge's edges; its cusp is the least torque at which a
@@ -21,7 +23,7 @@
 mod analysis;
 mod spec;
 
-pub use spec::{EnvelopePlane, EnvelopeSpec};
+pub use spec::{EnvelopeParameter, EnvelopePlane, EnvelopeSpec};
 
 use super::analysis::Output;
 use super::hbm::hbm_error;
@@ -29,9 +31,10 @@ use super::table::Table;
 use super::{Study, StudyReport};
 use crate::error::Result;
 use crate::hbm::{
-    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldCurvePoint, FoldPlane, Hbm, HbmOptions, HbmSolution,
-    Parameter, RoutedHbm, Singularity,
+    ContinuationOptions, FoldCurve, FoldCurveOptions, FoldCurvePoint, FoldPlane, Hbm, HbmError, HbmOptions,
+    HbmSolution, MechanismFamily, Parameter, RoutedHbm, Singularity,
 };
+use crate::kane::Kane;
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
 use schemars::JsonSchema;
@@ -105,9 +108,9 @@ impl MapPointKind {
 
     fn meaning(self) -> &'static str {
         match self {
-            MapPointKind::Cusp => "the two folds of the jump meet: below this torque the response does not jump",
-            MapPointKind::JumpOnset => "the least torque of this jump region (it has no cusp)",
-            MapPointKind::UnisonLossOnset => "below this torque the set keeps unison at every order of the map",
+            MapPointKind::Cusp => "the two folds of the jump meet: past this value the response does not jump",
+            MapPointKind::JumpOnset => "the extreme value of this jump region (it has no cusp)",
+            MapPointKind::UnisonLossOnset => "past this value the set keeps unison at every order of the map",
         }
     }
 }
@@ -123,12 +126,27 @@ pub struct Boundary {
     /// The first parameter of its points (excitation order n, or mean speed in rpm), in the
     /// order followed.
     pub values: Vec<f64>,
-    /// Torque amplitudes of its points, N·m.
-    pub torques_nm: Vec<f64>,
-    /// Where it crosses the map's largest torque (order, or rpm), solved there.
-    pub at_torque_max: Vec<f64>,
+    /// The second parameter of its points, in the result's `second_unit` (torque amplitude in
+    /// N·m, scale of the set, or the mechanism parameter's unit).
+    pub second_values: Vec<f64>,
+    /// Where it crosses the largest value of the map's second parameter (order, or rpm), solved
+    /// there.
+    pub at_second_max: Vec<f64>,
     /// Why each end stopped (`left the map`, `most points`, `step too small`).
     pub ends: [String; 2],
+    /// Where it crosses each of the analysis's `sections`, solved there.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sections: Vec<Section>,
+}
+
+/// A boundary's crossings of one value of the first parameter (a section of the map).
+#[derive(Debug, Clone, Serialize, JsonSchema)]
+pub struct Section {
+    /// The first parameter's value: excitation order n, or mean speed in rpm.
+    pub value: f64,
+    /// The second parameter where the boundary crosses it, ascending, in the result's
+    /// `second_unit`; each solved exactly with the second parameter free.
+    pub second_values: Vec<f64>,
 }
 
 /// A codimension-two point of the map.
@@ -140,8 +158,8 @@ pub struct MapPoint {
     pub boundary: usize,
     /// The first parameter: excitation order n, or mean speed in rpm.
     pub value: f64,
-    /// Torque amplitude, N·m.
-    pub torque_nm: f64,
+    /// The second parameter, in the result's `second_unit`.
+    pub second_value: f64,
 }
 
 /// An operating envelope's result.
@@ -155,12 +173,26 @@ pub struct EnvelopeResult {
     pub held: f64,
     /// The map's range of its first parameter (order, or rpm).
     pub range: [f64; 2],
-    /// The map's torque range, N·m.
-    pub torques_nm: [f64; 2],
+    /// The second parameter's CSV column: `torque_N_m` (a single order's amplitude),
+    /// `scale_of_set` (the common scale of a multi-order set, dimensionless) or
+    /// `<name>_<unit>` (a mechanism parameter).
+    pub second: String,
+    /// The second parameter's unit: `N·m`, `1 (scale of the set)` or the parameter's SI unit.
+    pub second_unit: String,
+    /// The second parameter in words (the chart's axis).
+    pub second_label: String,
+    /// What the plane holds fixed besides `held` (the torque of a mechanism-parameter plane),
+    /// empty otherwise.
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub fixed: String,
+    /// The map's range of its second parameter, in `second_unit`.
+    pub second_range: [f64; 2],
+    /// Whether the chart's second axis is logarithmic.
+    pub log_second: bool,
     /// The harmonic-balance route (`cyclic (…)` with the identical sets, or `general (why)`).
     pub route: String,
-    /// The seed branches' torques, N·m.
-    pub seeds_nm: Vec<f64>,
+    /// The seed branches' values of the second parameter, in `second_unit`.
+    pub seeds: Vec<f64>,
     /// The boundaries.
     pub boundaries: Vec<Boundary>,
     /// The codimension-two points.
@@ -179,17 +211,32 @@ impl EnvelopeResult {
         }
     }
 
+    /// Whether the second parameter is a mechanism parameter (not a torque or a scale).
+    fn on_mechanism(&self) -> bool {
+        !matches!(self.second.as_str(), "torque_N_m" | SCALE_COLUMN)
+    }
+
+    /// A value of the second parameter in words: `3.6 N·m`, `s = 0.93` or `c_p = 0.002 N·m·s/rad`.
+    fn second_words(&self, v: f64, sig: usize) -> String {
+        match self.second.as_str() {
+            "torque_N_m" => format!("{} N·m", num(v, sig)),
+            SCALE_COLUMN => format!("s = {}", num(v, sig)),
+            column => format!("{column} = {} {}", num(v, sig), self.second_unit),
+        }
+    }
+
     /// A value of the first parameter in words: `n = 3.1` or `812 rpm`.
     fn value_words(&self, v: f64, sig: usize) -> String {
         if self.parameter == "order" { num(v, sig) } else { format!("{} rpm", num(v, sig)) }
     }
 
     /// Its CSV table: one row per boundary point, then one per codimension-two point; columns
-    /// `boundary`, `kind`, the first parameter (`order` or `speed_rpm`) and `torque_N_m`.
+    /// `boundary`, `kind`, the first parameter (`order` or `speed_rpm`) and the second
+    /// (`torque_N_m`, `scale_of_set` or the mechanism parameter's column).
     pub fn table(&self) -> Table {
         let (mut curve, mut kind, mut order, mut torque) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, b) in self.boundaries.iter().enumerate() {
-            for (&n, &t) in b.values.iter().zip(&b.torques_nm) {
+            for (&n, &t) in b.values.iter().zip(&b.second_values) {
                 curve.push((i + 1) as f64);
                 kind.push(b.kind.code());
                 order.push(n);
@@ -200,27 +247,30 @@ impl EnvelopeResult {
             curve.push((p.boundary + 1) as f64);
             kind.push(p.kind.code());
             order.push(p.value);
-            torque.push(p.torque_nm);
+            torque.push(p.second_value);
         }
         let mut t = Table::new(self.name.clone());
         t.push("boundary", "1", curve);
         t.push("kind", "1", kind);
         t.push(self.parameter.clone(), if self.parameter == "order" { "1" } else { "rpm" }, order);
-        t.push("torque_N_m", "N·m", torque);
+        // The table's units are static strings: the second's is one of the quantities' own.
+        const UNITS: [&str; 8] = ["N·m", "kg", "kg·m²", "m", "N·m/rad", "N/m", "N·s/m", "N·m·s/rad"];
+        let unit = UNITS.into_iter().find(|u| *u == self.second_unit).unwrap_or("1");
+        t.push(self.second.clone(), unit, torque);
         t
     }
 }
 
-/// The orders where boundary `b`'s polyline crosses the torque `t` (linear in log T between
-/// points), ascending.
-fn crossings(b: &Boundary, t: f64) -> Vec<f64> {
-    let lt = t.ln();
+/// The orders where boundary `b`'s polyline crosses the second parameter's value `t` (linear
+/// between points in the chart's coordinate `f`: log T, or the value itself), ascending.
+fn crossings(b: &Boundary, t: f64, f: impl Fn(f64) -> f64) -> Vec<f64> {
+    let lt = f(t);
     let mut out: Vec<f64> = b
         .values
         .windows(2)
-        .zip(b.torques_nm.windows(2))
+        .zip(b.second_values.windows(2))
         .filter_map(|(n, tq)| {
-            let (a, c) = (tq[0].ln() - lt, tq[1].ln() - lt);
+            let (a, c) = (f(tq[0]) - lt, f(tq[1]) - lt);
             if a * c > 0.0 || a == c {
                 return None;
             }
@@ -233,13 +283,129 @@ fn crossings(b: &Boundary, t: f64) -> Vec<f64> {
     out
 }
 
-/// The seed torques, N·m: as given, or [`SEEDS`] from the top down, evenly in log T.
-fn seed_torques(spec: &EnvelopeSpec) -> Vec<f64> {
-    if !spec.seed_torques.is_empty() {
-        return spec.seed_torques.clone();
-    }
-    let (lo, hi) = (spec.torque_min.ln(), spec.torque_max.ln());
+/// The CSV column of a multi-order set's scale.
+const SCALE_COLUMN: &str = "scale_of_set";
+
+/// `SEEDS` values from `hi` down to `lo`, evenly in the logarithm (both ends included).
+fn log_spaced(lo: f64, hi: f64) -> Vec<f64> {
+    let (lo, hi) = (lo.ln(), hi.ln());
     (0..SEEDS).map(|k| (hi - (hi - lo) * k as f64 / (SEEDS - 1) as f64).exp()).collect()
+}
+
+/// The plane's second parameter as the continuation sees it (the torque scale s of the
+/// problem's excitation) and as the results give it.
+struct Second {
+    /// The excitation the problem is built with (its s = 1).
+    harmonics: Vec<Harmonic>,
+    /// Results' unit per unit of s: the reference torque of a single order (N·m), 1 for a set.
+    per_scale: f64,
+    /// The range of s.
+    range: (f64, f64),
+    /// The seed branches' values of s.
+    seeds: Vec<f64>,
+    column: String,
+    unit: String,
+    label: String,
+    /// Whether the chart spaces it logarithmically.
+    log: bool,
+    /// What a mechanism parameter's plane holds fixed, in words (empty otherwise).
+    fixed: String,
+}
+
+impl Second {
+    fn of(study: &Study, spec: &EnvelopeSpec) -> Self {
+        if let Some(par) = &spec.parameter {
+            let slide = par
+                .quantity
+                .joint()
+                .and_then(|j| study.mechanism.joint_index(j))
+                .is_some_and(|j| study.mechanism.joints[j].kind.slide_axis().is_some());
+            let (suffix, unit) = (par.quantity.suffix(slide), par.quantity.unit(slide));
+            let (harmonics, fixed) = if spec.load.is_empty() {
+                let h = vec![Harmonic { multiple: 1.0, amplitude: spec.torque, phase: 0.0 }];
+                (h, format!("torque {} N·m", num(spec.torque, 6)))
+            } else {
+                (spec.load.clone(), "the torque set as written".to_string())
+            };
+            // Evenly spaced, from the top down: a damping's jump lies at its low end.
+            let (lo, hi) = (par.from, par.to);
+            let seeds = if spec.seeds.is_empty() {
+                (0..SEEDS).map(|k| hi - (hi - lo) * k as f64 / (SEEDS - 1) as f64).collect()
+            } else {
+                spec.seeds.clone()
+            };
+            return Second {
+                harmonics,
+                per_scale: 1.0,
+                range: (lo, hi),
+                seeds,
+                column: if suffix.is_empty() { par.name.clone() } else { format!("{}_{suffix}", par.name) },
+                unit: unit.into(),
+                label: format!("{} {}, {unit}", par.quantity.describe(), par.name),
+                log: false,
+                fixed,
+            };
+        }
+        if spec.load.is_empty() {
+            // A single order: s scales the largest torque mapped.
+            let t_ref = spec.torque_max;
+            let seeds = if spec.seed_torques.is_empty() {
+                log_spaced(spec.torque_min, spec.torque_max)
+            } else {
+                spec.seed_torques.clone()
+            };
+            Second {
+                harmonics: vec![Harmonic { multiple: 1.0, amplitude: t_ref, phase: 0.0 }],
+                per_scale: t_ref,
+                range: (spec.torque_min / t_ref, 1.0),
+                seeds: seeds.iter().map(|t| t / t_ref).collect(),
+                column: "torque_N_m".into(),
+                unit: "N·m".into(),
+                label: "torque amplitude T, N·m".into(),
+                log: true,
+                fixed: String::new(),
+            }
+        } else {
+            let range = (spec.scale_min, spec.scale_max);
+            Second {
+                harmonics: spec.load.clone(),
+                per_scale: 1.0,
+                range,
+                seeds: if spec.seeds.is_empty() { log_spaced(range.0, range.1) } else { spec.seeds.clone() },
+                column: SCALE_COLUMN.into(),
+                unit: "1 (scale of the set)".into(),
+                label: "scale s of the torque set (1: as written)".into(),
+                log: range.1 >= 10.0 * range.0,
+                fixed: String::new(),
+            }
+        }
+    }
+
+    /// A value of s in the results' unit.
+    fn value(&self, s: f64) -> f64 {
+        s * self.per_scale
+    }
+
+    /// A value in the results' unit, in words.
+    fn words(&self, v: f64) -> String {
+        match self.column.as_str() {
+            "torque_N_m" => format!("{} N·m", num(v, 6)),
+            SCALE_COLUMN => format!("scale {}", num(v, 6)),
+            column => format!("{column} = {} {}", num(v, 6), self.unit),
+        }
+    }
+}
+
+/// The study's mechanism with the envelope's parameter `par` at `p` (its unit), checked.
+fn mechanism_at(study: &Study, par: &EnvelopeParameter, p: f64) -> Result<crate::model::mechanism::Mechanism> {
+    let err = |m: String| crate::error::Error::Model {
+        mechanism: study.mechanism.name.clone(),
+        message: format!("{} = {p}: {m}", par.name),
+    };
+    let mut mech = study.mechanism.clone();
+    super::design::set_quantity(&mut mech, &par.quantity, p).map_err(err)?;
+    super::design::check_masses(&mech).map_err(err)?;
+    Ok(mech)
 }
 
 /// A curve being mapped: its kind, its test, and the walks from its start both ways.
@@ -298,7 +464,14 @@ impl Axis {
 
 /// The singular points of `test` on `branch` (torque scale s): folds for the Jacobian, sign
 /// changes of the block's determinant otherwise; each localised at s from the nearer state.
-fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Branch, s: f64) -> Vec<FoldCurvePoint> {
+fn seeds_on(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    test: Singularity,
+    branch: &crate::hbm::Branch,
+    s: f64,
+) -> Vec<FoldCurvePoint> {
     let guesses: Vec<HbmSolution> = match test {
         Singularity::Jacobian => branch.folds.iter().map(|f| branch.points[f.after].solution.clone()).collect(),
         Singularity::Block { .. } => {
@@ -311,36 +484,79 @@ fn seeds_on(hbm: &mut Hbm, ax: &Axis, test: Singularity, branch: &crate::hbm::Br
                 .collect()
         }
     };
-    guesses.iter().filter_map(|g| hbm.singular_at(ax.fold, test, s, g).ok()).collect()
+    guesses.iter().filter_map(|g| hbm.singular_at_with(ax.fold, family, test, s, g).ok()).collect()
 }
 
-/// The values (axis unit) where the walked curve `w` crosses torque scale `s`: each solved at `s`
-/// from the curve's nearer point of the crossing pair, repeats (within [`SAME_CURVE`] of the
-/// range) dropped, ascending.
-fn crossings_at(hbm: &mut Hbm, ax: &Axis, w: &Walked, s: f64) -> Vec<f64> {
+/// The values `solve` gives from the walked curve `w`'s nearer point of each pair of consecutive
+/// points across which `offset` changes sign, repeats within `tol` dropped, ascending.
+fn solved_crossings(
+    w: &Walked,
+    offset: impl Fn(&FoldCurvePoint) -> f64,
+    mut solve: impl FnMut(&FoldCurvePoint) -> Option<f64>,
+    tol: f64,
+) -> Vec<f64> {
     let mut out: Vec<f64> = Vec::new();
     for pair in w.points.windows(2) {
-        if (pair[0].scale - s) * (pair[1].scale - s) > 0.0 {
+        let (a, b) = (offset(&pair[0]), offset(&pair[1]));
+        if a * b > 0.0 {
             continue;
         }
-        let near = if (pair[0].scale - s).abs() < (pair[1].scale - s).abs() { &pair[0] } else { &pair[1] };
-        if let Ok(p) = hbm.singular_at(ax.fold, w.test, s, &near.solution) {
-            let v = ax.value(p.order, p.omega);
-            if !out.iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit) {
-                out.push(v);
-            }
+        let near = if a.abs() < b.abs() { &pair[0] } else { &pair[1] };
+        if let Some(v) = solve(near)
+            && !out.iter().any(|&n| (n - v).abs() <= tol)
+        {
+            out.push(v);
         }
     }
     out.sort_by(f64::total_cmp);
     out
 }
 
+/// The values (axis unit) where the walked curve `w` crosses the second parameter's value `s`
+/// (the torque scale, or p on a mechanism plane): each solved at `s`, repeats (within
+/// [`SAME_CURVE`] of the range) dropped, ascending.
+fn crossings_at(hbm: &mut Hbm, ax: &Axis, family: Option<&MechanismFamily<'_>>, w: &Walked, s: f64) -> Vec<f64> {
+    let solve = |near: &FoldCurvePoint| {
+        let p = hbm.singular_at_with(ax.fold, family, w.test, s, &near.solution).ok()?;
+        Some(ax.value(p.order, p.omega))
+    };
+    solved_crossings(w, |p| p.parameter - s, solve, SAME_CURVE * ax.range.1 * ax.to_unit)
+}
+
+/// The second parameter (s, or p) where the walked curve `w` crosses the first parameter's
+/// value `v` (results' unit: order, or rpm): each solved at `v`, the second parameter free,
+/// those inside `range` kept, repeats (within [`SAME_CURVE`] of it) dropped, ascending.
+fn sections_at(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    range: (f64, f64),
+    w: &Walked,
+    v: f64,
+) -> Vec<f64> {
+    let solve = |near: &FoldCurvePoint| {
+        let p =
+            hbm.singular_at_value_with(ax.fold, family, w.test, v / ax.to_unit, near.parameter, &near.solution).ok()?;
+        (range.0..=range.1).contains(&p.parameter).then_some(p.parameter)
+    };
+    solved_crossings(w, |p| ax.value(p.order, p.omega) - v, solve, SAME_CURVE * range.1.abs())
+}
+
 /// Whether `seed` lies on one of `walked` (same test): one of the curve's crossings of the
-/// seed's torque is the seed.
-fn covered(hbm: &mut Hbm, ax: &Axis, walked: &[Walked], test: Singularity, seed: &FoldCurvePoint) -> bool {
+/// seed's second parameter is the seed.
+fn covered(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    walked: &[Walked],
+    test: Singularity,
+    seed: &FoldCurvePoint,
+) -> bool {
     let v = ax.value(seed.order, seed.omega);
     walked.iter().filter(|w| w.test == test).any(|w| {
-        crossings_at(hbm, ax, w, seed.scale).iter().any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit)
+        crossings_at(hbm, ax, family, w, seed.parameter)
+            .iter()
+            .any(|&n| (n - v).abs() <= SAME_CURVE * ax.range.1 * ax.to_unit)
     })
 }
 
@@ -359,17 +575,56 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let start = std::time::Instant::now();
     let kane = study.kane(false)?;
     let inputs = study.excited_joints(&study.mechanism, &spec.excite);
-    let t_ref = spec.torque_max;
-    let h = [Harmonic { multiple: 1.0, amplitude: t_ref, phase: 0.0 }];
+    let second = Second::of(study, spec);
     let opts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
     let ax = Axis::of(spec);
-    let mut routed = RoutedHbm::new(&kane, study.spin, ax.omega, (&h, &[]), &inputs, opts).map_err(hbm_error(study))?;
+    let forcing = (&second.harmonics[..], &[][..]);
+    let (mut routed, general) = match &spec.parameter {
+        None => (RoutedHbm::new(&kane, study.spin, ax.omega, forcing, &inputs, opts).map_err(hbm_error(study))?, false),
+        Some(par) => {
+            // One route along the whole range: the cyclic one only where the mechanism keeps its
+            // identical sets at both ends (a parameter of one absorber of a set parts them).
+            let at = |p: f64| -> Result<RoutedHbm> {
+                let k = Kane::new(&mechanism_at(study, par, p)?)?;
+                RoutedHbm::new(&k, study.spin, ax.omega, forcing, &inputs, opts).map_err(hbm_error(study))
+            };
+            let (lo, hi) = (at(par.from)?, at(par.to)?);
+            let cyclic = |r: &RoutedHbm| matches!(r.route(), crate::hbm::Route::Cyclic { .. });
+            if cyclic(&lo) && cyclic(&hi) && lo.hbm().unknowns() == hi.hbm().unknowns() {
+                (lo, false)
+            } else {
+                let k = Kane::new(&mechanism_at(study, par, par.from)?)?;
+                (
+                    RoutedHbm::new_general(&k, study.spin, ax.omega, forcing, &inputs, opts)
+                        .map_err(hbm_error(study))?,
+                    true,
+                )
+            }
+        }
+    };
     let route = routed.route().to_string();
+    // The problem at a value of a mechanism parameter, on the route chosen.
+    let build = |p: f64| -> std::result::Result<Hbm, HbmError> {
+        let par = spec.parameter.as_ref().ok_or_else(|| HbmError::Invalid("no mechanism parameter".into()))?;
+        let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
+        let k = Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?;
+        let r = if general {
+            RoutedHbm::new_general(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+        } else {
+            RoutedHbm::new(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+        };
+        Ok(r.hbm().clone())
+    };
+    let family = spec.parameter.as_ref().map(|par| MechanismFamily {
+        build: &build,
+        scale: 1.0,
+        reference: par.from.abs().max(par.to.abs()),
+    });
+    let fam = family.as_ref();
     let hbm = routed.hbm_mut();
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
     tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
-    let s_min = spec.torque_min / t_ref;
-    let fopts = FoldCurveOptions { range: ax.range, scales: (s_min, 1.0), ..FoldCurveOptions::default() };
+    let fopts = FoldCurveOptions { range: ax.range, scales: second.range, ..FoldCurveOptions::default() };
     // The seed branches only supply starting points (each seed is solved exactly on its curve
     // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
     // the multi-order analysis's order branches (`study::hbm::branch`).
@@ -380,27 +635,47 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         deadline: study.spec.integration.deadline,
         ..ContinuationOptions::default()
     };
-    let seeds = seed_torques(spec);
     let mut failures = Vec::new();
     let mut walked: Vec<Walked> = Vec::new();
-    for &torque in &seeds {
-        let s = torque / t_ref;
-        let branch = hbm
-            .set_torque_scale(s)
-            .and_then(|()| hbm.continue_in(ax.param, ax.range.0, ax.range.1, None, &copts))
-            // A speed branch may not start at the lowest speed, where the torque is largest
-            // against the centrifugal stiffness (∝ Ω²): then from the other end.
-            .or_else(|e| hbm.continue_in(ax.param, ax.range.1, ax.range.0, None, &copts).map_err(|_| e));
+    // A speed branch starts at the highest speed, where the torque is smallest against the
+    // centrifugal stiffness (∝ Ω²) and the one state there is the small one: from the lowest,
+    // it may start on a large state that never folds back (the Table 1 set at 500 rpm). If it
+    // fails, from the other end.
+    let ends = match ax.fold {
+        FoldPlane::Order => ax.range,
+        FoldPlane::Speed { .. } => (ax.range.1, ax.range.0),
+    };
+    for &s in &second.seeds {
+        // The seed's problem: this one at torque scale s, or the family's at p = s.
+        let mut own;
+        let hk: &mut Hbm = match fam {
+            None => &mut *hbm,
+            Some(f) => match (f.build)(s) {
+                Ok(h) => {
+                    own = h;
+                    &mut own
+                }
+                Err(e) => {
+                    failures.push(format!("{}: seed branch at {}: {e}", spec.name, second.words(s)));
+                    continue;
+                }
+            },
+        };
+        let scale = fam.map_or(s, |f| f.scale);
+        let branch = hk
+            .set_torque_scale(scale)
+            .and_then(|()| hk.continue_in(ax.param, ends.0, ends.1, None, &copts))
+            .or_else(|e| hk.continue_in(ax.param, ends.1, ends.0, None, &copts).map_err(|_| e));
         let branch = match branch {
             Ok(b) => b,
             Err(e) => {
-                failures.push(format!("{}: seed branch at {} N·m: {e}", spec.name, num(torque, 6)));
+                failures.push(format!("{}: seed branch at {}: {e}", spec.name, second.words(second.value(s))));
                 continue;
             }
         };
         for (kind, set, test) in &tests {
-            for seed in seeds_on(hbm, &ax, *test, &branch, s) {
-                if covered(hbm, &ax, &walked, *test, &seed) {
+            for seed in seeds_on(hk, &ax, fam, *test, &branch, s) {
+                if covered(hk, &ax, fam, &walked, *test, &seed) {
                     continue;
                 }
                 let fo = FoldCurveOptions { test: *test, ..fopts };
@@ -413,7 +688,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     ends: [String::new(), String::new()],
                 };
                 for (k, up) in [false, true].into_iter().enumerate() {
-                    match hbm.continue_fold(ax.fold, &seed, up, &fo) {
+                    match hk.continue_fold_with(ax.fold, fam, &seed, up, &fo) {
                         Ok(c) => {
                             w.ends[k] = end_words(&c);
                             if up {
@@ -429,11 +704,11 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                                 w.points.push(seed.clone());
                             }
                             failures.push(format!(
-                                "{}: {} boundary from {} at {} N·m, {} in torque: {e}",
+                                "{}: {} boundary from {} at {}, {} in the second parameter: {e}",
                                 spec.name,
                                 kind.words(),
                                 num(ax.value(seed.order, seed.omega), 8),
-                                num(torque, 6),
+                                second.words(second.value(s)),
                                 if up { "up" } else { "down" }
                             ));
                         }
@@ -446,14 +721,14 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut boundaries = Vec::new();
     let mut points = Vec::new();
     for (i, w) in walked.iter().enumerate() {
-        let at_top = crossings_at(hbm, &ax, w, 1.0);
+        let at_top = crossings_at(hbm, &ax, fam, w, second.range.1);
         for c in &w.curves {
             for p in &c.cusps {
                 points.push(MapPoint {
                     kind: MapPointKind::Cusp,
                     boundary: i,
                     value: ax.value(p.order, p.omega),
-                    torque_nm: p.scale * t_ref,
+                    second_value: second.value(p.parameter),
                 });
             }
             for p in &c.scale_extrema {
@@ -465,16 +740,28 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     kind,
                     boundary: i,
                     value: ax.value(p.order, p.omega),
-                    torque_nm: p.scale * t_ref,
+                    second_value: second.value(p.parameter),
                 });
             }
         }
+        let sections = spec
+            .sections
+            .iter()
+            .map(|&v| Section {
+                value: v,
+                second_values: sections_at(hbm, &ax, fam, second.range, w, v)
+                    .into_iter()
+                    .map(|s| second.value(s))
+                    .collect(),
+            })
+            .collect();
         boundaries.push(Boundary {
+            sections,
             kind: w.kind,
             set: w.set.clone(),
             values: w.points.iter().map(|p| ax.value(p.order, p.omega)).collect(),
-            torques_nm: w.points.iter().map(|p| p.scale * t_ref).collect(),
-            at_torque_max: at_top,
+            second_values: w.points.iter().map(|p| second.value(p.parameter)).collect(),
+            at_second_max: at_top,
             ends: w.ends.clone(),
         });
     }
@@ -489,9 +776,14 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             EnvelopePlane::Speed { order, .. } => order,
         },
         range: [ax.range.0 * ax.to_unit, ax.range.1 * ax.to_unit],
-        torques_nm: [spec.torque_min, spec.torque_max],
+        second_range: [second.value(second.range.0), second.value(second.range.1)],
+        second: second.column.clone(),
+        second_unit: second.unit.clone(),
+        second_label: second.label.clone(),
+        fixed: second.fixed.clone(),
+        log_second: second.log,
         route,
-        seeds_nm: seeds,
+        seeds: second.seeds.iter().map(|&s| second.value(s)).collect(),
         boundaries,
         points,
         time_s: start.elapsed().as_secs_f64(),
@@ -508,24 +800,33 @@ pub(crate) fn run(study: &Study, spec: &EnvelopeSpec, dir: &Path) -> Result<Outp
     Ok(Output { markdown: markdown(&r), files: vec![csv, svg], failures, results: Box::new(r) })
 }
 
-/// A point of the map in unit coordinates: u along the orders, v along log T.
+/// A point of the map in unit coordinates: u along the first parameter, v along the second
+/// (its logarithm on a logarithmic axis).
 type Unit = (f64, f64);
 
-/// The map's unit coordinates of (n, T), and back.
+/// The map's unit coordinates of (first, second), and back.
 struct Frame {
     n: (f64, f64),
     lt: (f64, f64),
+    log: bool,
 }
 
 impl Frame {
     fn of(r: &EnvelopeResult) -> Self {
-        Self { n: (r.range[0], r.range[1]), lt: (r.torques_nm[0].ln(), r.torques_nm[1].ln()) }
+        let log = r.log_second;
+        let f = |t: f64| if log { t.ln() } else { t };
+        Self { n: (r.range[0], r.range[1]), lt: (f(r.second_range[0]), f(r.second_range[1])), log }
+    }
+    /// The chart's coordinate of a second-parameter value.
+    fn f(&self, t: f64) -> f64 {
+        if self.log { t.ln() } else { t }
     }
     fn unit(&self, n: f64, t: f64) -> Unit {
-        ((n - self.n.0) / (self.n.1 - self.n.0), (t.ln() - self.lt.0) / (self.lt.1 - self.lt.0))
+        ((n - self.n.0) / (self.n.1 - self.n.0), (self.f(t) - self.lt.0) / (self.lt.1 - self.lt.0))
     }
     fn back(&self, (u, v): Unit) -> (f64, f64) {
-        (self.n.0 + u * (self.n.1 - self.n.0), (self.lt.0 + v * (self.lt.1 - self.lt.0)).exp())
+        let t = self.lt.0 + v * (self.lt.1 - self.lt.0);
+        (self.n.0 + u * (self.n.1 - self.n.0), if self.log { t.exp() } else { t })
     }
 }
 
@@ -583,30 +884,39 @@ fn widest_inside(poly: &[Unit], v: f64) -> Option<Unit> {
 }
 
 /// A boundary's region as a closed polygon in unit coordinates: the curve closed along the
-/// map's edge on the side that holds the region just above its lowest codimension-two point
-/// (between the two crossings nearest its order: inside a jump wedge above its cusp, inside a
-/// unison-loss tongue above its onset). None for a boundary without such a point, whose inside
-/// the map alone cannot tell.
+/// map's edge on the side that holds the region just past one of its codimension-two points
+/// (between the two crossings nearest its order, both close to it: inside a jump wedge above
+/// its cusp in torque, below it in a damping, inside a unison-loss tongue above its onset).
+/// The points are tried from the lowest up, above before below. None for a boundary without
+/// such a point, whose inside the map alone cannot tell.
 fn region(r: &EnvelopeResult, frame: &Frame, i: usize) -> Option<Vec<Unit>> {
     let b = &r.boundaries[i];
-    let p = r.points.iter().filter(|p| p.boundary == i).min_by(|a, c| a.torque_nm.total_cmp(&c.torque_nm))?;
+    let mut points: Vec<&MapPoint> = r.points.iter().filter(|p| p.boundary == i).collect();
+    points.sort_by(|a, c| a.second_value.total_cmp(&c.second_value));
     let curve: Vec<Unit> = b
         .values
         .iter()
-        .zip(&b.torques_nm)
+        .zip(&b.second_values)
         .map(|(&n, &t)| {
             let (u, v) = frame.unit(n, t);
             (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
         })
         .collect();
-    // Just above the point (a hundredth of the way to the top in log T), between the two
-    // crossings nearest its order (both lie on one side of a cusp, which is a spike).
-    let (_, vp) = frame.unit(p.value, p.torque_nm);
-    let t = frame.back((0.0, vp + 0.01 * (1.0 - vp))).1;
-    let mut x = crossings(b, t);
-    x.sort_by(|a, c| (a - p.value).abs().total_cmp(&(c - p.value).abs()));
-    let (&a, &c) = (x.first()?, x.get(1)?);
-    let q = frame.unit(0.5 * (a + c), t);
+    // Just past the point (a hundredth of the way to the map's edge), between the two
+    // crossings nearest its order (both lie on one side of a cusp, which is a spike), both within
+    // a tenth of the map's width of it.
+    let inside = |p: &MapPoint, up: bool| -> Option<Unit> {
+        let (up_, vp) = frame.unit(p.value, p.second_value);
+        let v = if up { vp + 0.01 * (1.0 - vp) } else { vp - 0.01 * vp };
+        let t = frame.back((0.0, v)).1;
+        let mut x = crossings(b, t, |t| frame.f(t));
+        x.sort_by(|a, c| (a - p.value).abs().total_cmp(&(c - p.value).abs()));
+        let (&a, &c) = (x.first()?, x.get(1)?);
+        let q = frame.unit(0.5 * (a + c), t);
+        let near = |n: f64| (frame.unit(n, t).0 - up_).abs() < 0.1;
+        (near(a) && near(c)).then_some(q)
+    };
+    let q = points.iter().find_map(|p| inside(p, true).or_else(|| inside(p, false)))?;
     [true, false].into_iter().map(|ccw| closed(&curve, ccw)).find(|poly| contains(poly, q))
 }
 
@@ -630,7 +940,13 @@ fn panel(r: &EnvelopeResult) -> Panel {
             // The region's name three quarters of the way up from its lowest point, in its
             // widest part there.
             let low = poly.iter().map(|p| p.1).fold(1.0, f64::min);
-            if let Some(at) = widest_inside(&poly, low + 0.75 * (1.0 - low)) {
+            let high = poly.iter().map(|p| p.1).fold(0.0, f64::max);
+            // (A region that narrows upwards, a jump wedge below its cusp in a damping, is named a
+            // quarter of the way up instead.)
+            let at = widest_inside(&poly, low + 0.75 * (high - low))
+                .filter(|&q| contains(&poly, q))
+                .or_else(|| widest_inside(&poly, low + 0.25 * (high - low)));
+            if let Some(at) = at {
                 let (x, y) = frame.back(at);
                 let text = match b.kind {
                     BoundaryKind::Jump => "several states: jump possible",
@@ -652,13 +968,13 @@ fn panel(r: &EnvelopeResult) -> Panel {
             String::new()
         };
         let style = if b.kind == BoundaryKind::Jump { LineStyle::Solid } else { LineStyle::Dashed };
-        series.push(Series { label, x: b.values.clone(), y: b.torques_nm.clone(), color: c, style });
+        series.push(Series { label, x: b.values.clone(), y: b.second_values.clone(), color: c, style });
     }
     for p in &r.points {
         labels.push(PointLabel {
             x: p.value,
-            y: p.torque_nm,
-            text: format!("{} {}, {} N·m", p.kind.words(), r.value_words(p.value, 6), num(p.torque_nm, 4)),
+            y: p.second_value,
+            text: format!("{} {}, {}", p.kind.words(), r.value_words(p.value, 6), r.second_words(p.second_value, 4)),
             marker: true,
         });
     }
@@ -673,10 +989,10 @@ fn panel(r: &EnvelopeResult) -> Panel {
     Panel {
         title: format!("Operating envelope {}", r.held_words()),
         x_label: if r.parameter == "order" { "excitation order n" } else { "mean speed, rpm" }.into(),
-        y_label: "torque amplitude T, N·m".into(),
-        log_y: true,
+        y_label: r.second_label.clone(),
+        log_y: r.log_second,
         x_range: Some((r.range[0], r.range[1])),
-        y_range: Some((r.torques_nm[0], r.torques_nm[1])),
+        y_range: Some((r.second_range[0], r.second_range[1])),
         series,
         labels,
         ..Panel::default()
@@ -688,7 +1004,7 @@ fn markdown(r: &EnvelopeResult) -> String {
     let mut md = format!("## Operating envelope `{}`\n\n", r.name);
     let _ = writeln!(
         md,
-        "{} over {} {}–{}{} and torques {}–{} N·m, route {}: {} from {} seed branches ({} N·m) in {} s. \
+        "{}{} over {} {}–{}{} and {} {}–{}, route {}: {} from {} seed branches ({}) in {} s. \
          Each boundary is a curve of folds or of +1 branch points followed in the plane by two-parameter \
          continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, 2: unison-loss boundary, \
          10: cusp, 11: jump onset, 12: unison-loss onset).\n",
@@ -697,44 +1013,43 @@ fn markdown(r: &EnvelopeResult) -> String {
         } else {
             format!("At order {}", num(r.held, 6))
         },
+        if r.fixed.is_empty() { String::new() } else { format!(" and {}", r.fixed) },
         if r.parameter == "order" { "orders" } else { "speeds" },
         num(r.range[0], 6),
         num(r.range[1], 6),
         if r.parameter == "order" { "" } else { " rpm" },
-        num(r.torques_nm[0], 6),
-        num(r.torques_nm[1], 6),
+        r.second_label,
+        num(r.second_range[0], 6),
+        num(r.second_range[1], 6),
         r.route,
         super::digest::count(r.boundaries.len(), "boundary", "boundaries"),
-        r.seeds_nm.len(),
-        r.seeds_nm.iter().map(|t| num(*t, 4)).collect::<Vec<_>>().join(", "),
+        r.seeds.len(),
+        r.seeds.iter().map(|t| r.second_words(*t, 4)).collect::<Vec<_>>().join(", "),
         num(r.time_s, 2),
         r.name,
         r.name
     );
     if r.boundaries.is_empty() {
-        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison at the seeds' \
-               torques).\n\n";
+        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison on the seed \
+               branches).\n\n";
         return md;
     }
     let _ = writeln!(
         md,
-        "| boundary | kind | points | torque range (N·m) | {} at the largest torque | ends |\n|---|---|---|---|---|---|",
+        "| boundary | kind | points | range of the {} | {} at its largest | ends |\n|---|---|---|---|---|---|",
+        r.second_label,
         if r.parameter == "order" { "orders" } else { "speeds (rpm)" }
     );
     for (i, b) in r.boundaries.iter().enumerate() {
-        let lo = b
-            .torques_nm
-            .iter()
-            .copied()
-            .chain(r.points.iter().filter(|p| p.boundary == i).map(|p| p.torque_nm))
-            .fold(f64::INFINITY, f64::min)
-            .max(r.torques_nm[0]);
-        let hi = b.torques_nm.iter().copied().fold(0.0, f64::max).min(r.torques_nm[1]);
+        let extra = || r.points.iter().filter(|p| p.boundary == i).map(|p| p.second_value);
+        let lo = b.second_values.iter().copied().chain(extra()).fold(f64::INFINITY, f64::min).max(r.second_range[0]);
+        let hi =
+            b.second_values.iter().copied().chain(extra()).fold(f64::NEG_INFINITY, f64::max).min(r.second_range[1]);
         let kind = match &b.set {
             Some(set) => format!("{} ({set})", b.kind.words()),
             None => b.kind.words().to_string(),
         };
-        let top: Vec<String> = b.at_torque_max.iter().map(|n| num(*n, 8)).collect();
+        let top: Vec<String> = b.at_second_max.iter().map(|n| num(*n, 8)).collect();
         let _ = writeln!(
             md,
             "| {} | {kind} | {} | {}–{} | {} | {}; {} |",
@@ -748,9 +1063,32 @@ fn markdown(r: &EnvelopeResult) -> String {
         );
     }
     md.push('\n');
+    let sections: Vec<String> = r
+        .boundaries
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| {
+            b.sections.iter().map(move |sec| {
+                let at: Vec<String> = sec.second_values.iter().map(|&v| r.second_words(v, 9)).collect();
+                format!(
+                    "boundary {} at {}: {}",
+                    i + 1,
+                    r.value_words(sec.value, 9),
+                    if at.is_empty() { "none".into() } else { at.join(", ") }
+                )
+            })
+        })
+        .collect();
+    if !sections.is_empty() {
+        let _ = writeln!(md, "Sections (solved exactly there): {}.\n", sections.join("; "));
+    }
     if !r.points.is_empty() {
-        md +=
-            "Codimension-two points:\n\n| point | boundary | order | torque (N·m) | meaning |\n|---|---|---|---|---|\n";
+        let _ = writeln!(
+            md,
+            "Codimension-two points:\n\n| point | boundary | {} | {} | meaning |\n|---|---|---|---|---|",
+            if r.parameter == "order" { "order" } else { "speed (rpm)" },
+            r.second_label
+        );
         for p in &r.points {
             let _ = writeln!(
                 md,
@@ -758,7 +1096,7 @@ fn markdown(r: &EnvelopeResult) -> String {
                 p.kind.words(),
                 p.boundary + 1,
                 num(p.value, 8),
-                num(p.torque_nm, 7),
+                num(p.second_value, 7),
                 p.kind.meaning()
             );
         }

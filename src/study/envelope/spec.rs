@@ -1,13 +1,25 @@
-//! The operating envelope as written in the study file: the (order, torque) or (speed, torque)
-//! plane it maps.
+//! The operating envelope as written in the study file: the plane it maps, (order or speed) ×
+//! (torque amplitude, torque scale of a multi-order set, or a mechanism parameter).
 
+use crate::model::excitation::Harmonic;
 use crate::study::ExciteAt;
 use serde::{Deserialize, Serialize};
 
-/// The operating envelope of a single-order excitation `T sin(nΩt)` at a mean speed: the
-/// boundaries in the (excitation order n, torque amplitude T) plane where the steady response
-/// jumps (fold curves, with their cusps) and, for identical absorbers, where their unison
-/// motion is lost, each followed by two-parameter continuation (`hbm::fold2`).
+/// The operating envelope at a mean speed (or at an order): the boundaries in a plane of two
+/// parameters where the steady response jumps (fold curves, with their cusps) and, for identical
+/// absorbers, where their unison motion is lost, each followed by two-parameter continuation
+/// (`hbm::fold2`).
+///
+/// The first parameter is the excitation order n (or the mean speed, `plane`). The second is
+/// one of:
+/// - the torque amplitude T of a single order `T sin(nΩt)` over `torque_min`..`torque_max`
+///   (N·m; the default);
+/// - the common scale s (dimensionless) of a multi-order set `load`, over
+///   `scale_min`..`scale_max`: the excitation is `s Σ T_k sin(m_k nΩt + α_k)`;
+/// - a mechanism parameter (`parameter`, named as a design study names it) over its
+///   `from`..`to`, at the fixed single-order torque `torque` (N·m) or at the set `load` as given.
+///
+/// The three are exclusive: fields of another are refused at their place in the file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvelopeSpec {
@@ -26,10 +38,30 @@ pub struct EnvelopeSpec {
     /// Upper end of the order range (an `Order` plane only).
     #[serde(default)]
     pub order_max: f64,
-    /// Smallest torque amplitude mapped, N·m.
+    /// Smallest torque amplitude mapped, N·m (a single-order torque plane only).
+    #[serde(default)]
     pub torque_min: f64,
-    /// Largest torque amplitude mapped, N·m.
+    /// Largest torque amplitude mapped, N·m (a single-order torque plane only).
+    #[serde(default)]
     pub torque_max: f64,
+    /// A multi-order set `[(multiple, amplitude, phase), …]` (N·m, rad; the same harmonics as
+    /// `MultiOrder`'s) in place of the single order: with `scale_min`/`scale_max` its common
+    /// scale s is the plane's second parameter; with `parameter` it is applied as given.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub load: Vec<Harmonic>,
+    /// Smallest scale of `load` mapped (dimensionless, > 0).
+    #[serde(default)]
+    pub scale_min: f64,
+    /// Largest scale of `load` mapped (dimensionless; 1 is the set as written).
+    #[serde(default)]
+    pub scale_max: f64,
+    /// A mechanism parameter as the plane's second parameter (a body's or joint's quantity, as
+    /// a `DesignStudy` names it), at the fixed torque `torque` or the set `load`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<EnvelopeParameter>,
+    /// The single-order torque amplitude, N·m, held fixed on a mechanism-parameter plane.
+    #[serde(default)]
+    pub torque: f64,
     /// Harmonics of nΩ kept (default 10).
     #[serde(default = "default_harmonics")]
     pub harmonics: usize,
@@ -38,10 +70,36 @@ pub struct EnvelopeSpec {
     /// spaced in log T). A boundary that none of them crosses is not found.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub seed_torques: Vec<f64>,
+    /// The same for a scale or mechanism-parameter plane: the values of the second parameter
+    /// (its unit) of the seed branches (default: five over its range, evenly in the logarithm
+    /// for a scale, evenly for a mechanism parameter).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub seeds: Vec<f64>,
+    /// Values of the first parameter (order, or rpm on a `Speed` plane) at which every boundary's
+    /// crossings are solved exactly, the second parameter free, and reported (a section of the
+    /// map: the torque, scale or parameter value of each fold at that order or speed).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sections: Vec<f64>,
     /// The joints the oscillating torque acts at, each with its share and phase lead (default:
     /// the spin joint alone).
     #[serde(default)]
     pub excite: Vec<ExciteAt>,
+}
+
+/// A mechanism parameter as the second parameter of an envelope's plane.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EnvelopeParameter {
+    /// Column name (letters, digits, `_`, `-`, `.`); the CSV column is `<name>_<unit>`.
+    pub name: String,
+    /// What is varied: a body's or joint's quantity (`JointDamping("pivot")`,
+    /// `TuningOrder("pivot")`, `BodyMass("pendulum")`, …), not the analysis's speed, torque or
+    /// order.
+    pub quantity: crate::study::design::Quantity,
+    /// Lower end of the range, in the quantity's unit.
+    pub from: f64,
+    /// Upper end of the range.
+    pub to: f64,
 }
 
 /// The first parameter of an envelope's plane (the second is the torque amplitude).

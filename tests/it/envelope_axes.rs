@@ -1,0 +1,210 @@
+//! The operating envelope's other second parameters (issue 28, item 1): the common torque scale
+//! of a multi-order set and a mechanism parameter, each checked through the study file against
+//! one-parameter branches that share none of the two-parameter machinery.
+
+use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, Parameter};
+use kanedyn::kane::Kane;
+use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
+use kanedyn::study::{LoadOptions, RunOptions, Study, StudyReport, run};
+
+/// Runs the study text `text` (read as if it were `examples/<name>.ron`, so the examples'
+/// mechanisms are found); returns the report, the CSV and results.json.
+fn run_study(name: &str, text: &str) -> (StudyReport, String, serde_json::Value) {
+    let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), text);
+    let study = Study::from_source(src, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let out = std::env::temp_dir().join(format!("kanedyn_envelope_axes_{name}_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    let dir = out.join(name);
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+    let (csv, json) = (read("envelope.csv"), read("results.json"));
+    std::fs::remove_dir_all(&out).ok();
+    (report, csv, serde_json::from_str(&json).unwrap())
+}
+
+/// The paper's Table 1 load at 600 rpm: n = 3, T_n = 670 N·m, T_2n = 430 N·m, α_2n = −0.32 rad.
+fn table1() -> Vec<Harmonic> {
+    vec![
+        Harmonic { multiple: 1.0, amplitude: 670.0, phase: 0.0 },
+        Harmonic { multiple: 2.0, amplitude: 430.0, phase: -0.32 },
+    ]
+}
+
+/// The (speed, scale) plane of the Table 1 set at order 3 over 500–900 rpm: its jump boundary,
+/// solved exactly at 600 rpm (the analysis's `sections`), is the first fold of an independent
+/// one-parameter continuation in the torque scale at 600 rpm (`Parameter::TorqueScale`, the
+/// issue's s = 0.92908, confirmed by time integration in `tests/it/hbm.rs`).
+#[test]
+fn the_speed_scale_envelope_of_the_table_1_set_passes_through_the_600_rpm_fold() {
+    let text = r#"Study(name: "table1", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", plane: Speed(order: 3.0, rpm_min: 500.0, rpm_max: 900.0),
+                            load: [(multiple: 1.0, amplitude: 670.0), (multiple: 2.0, amplitude: 430.0, phase: -0.32)],
+                            scale_min: 0.5, scale_max: 1.2, sections: [600.0])])"#;
+    let (report, csv, json) = run_study("table1", text);
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    assert_eq!((r.parameter.as_str(), r.second.as_str()), ("speed_rpm", "scale_of_set"));
+    assert_eq!(csv.lines().next(), Some("boundary,kind,speed_rpm,scale_of_set"));
+    assert_eq!(json["analyses"][0]["findings"]["unit"].as_str(), Some("1 (scale of the set)"));
+    assert_eq!(json["analyses"][0]["result"]["second_unit"].as_str(), Some("1 (scale of the set)"));
+    let at600: Vec<f64> = r.boundaries.iter().flat_map(|b| b.sections[0].second_values.clone()).collect();
+    println!("the map's boundaries at 600 rpm: s = {at600:?}");
+
+    // The reference: the scale branch at 600 rpm from a small scale up, its first fold.
+    let mech = kanedyn::cpva::CpvaParams::canonical().mechanism(None).unwrap();
+    let kane = Kane::new(&mech).unwrap();
+    let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+    let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(600.0), &table1(), opts).unwrap();
+    let copts = ContinuationOptions { stability: false, ..Default::default() };
+    let branch = hbm.continue_in(Parameter::TorqueScale { order: 3.0 }, 0.01, 1.5, None, &copts).unwrap();
+    let s_fold = branch.folds[0].parameter;
+    println!("600 rpm scale branch: first fold at s = {s_fold:.10}");
+    assert!((s_fold - 0.92908).abs() < 5e-6, "the issue's 0.92908: {s_fold}");
+    // Both are the same fold solved to 1e-10 on the coefficients by different systems (the
+    // branch's refined fold, the map's augmented system at fixed speed): 1e-6 leaves a margin
+    // of four orders over their agreement.
+    let nearest = at600.iter().map(|s| (s - s_fold).abs()).fold(f64::INFINITY, f64::min);
+    assert!(nearest <= 1e-6, "the map at 600 rpm {at600:?} against the branch's fold {s_fold}");
+}
+
+/// Each `(from, to, field)` of `cases`: `base` with `from` replaced by `to` is refused at load
+/// with an error naming `field` and the file's line.
+fn refused(base: &str, cases: impl IntoIterator<Item = (&'static str, &'static str, &'static str)>) {
+    for (from, to, field) in cases {
+        let text = base.replacen(from, to, 1);
+        assert_ne!(text, base, "{from}");
+        let src = kanedyn::io::Source::from_text("examples/bad_axes.ron", &text);
+        let e = Study::from_source(src, &LoadOptions::default()).expect_err(to).to_string();
+        println!("{to}: {e}");
+        assert!(e.contains(field) && e.contains("bad_axes.ron:"), "{to}: {e}");
+    }
+}
+
+/// Bad second parameters are refused at load with the field's path and the file's line.
+#[test]
+fn a_bad_second_parameter_is_refused_with_its_field() {
+    let base = r#"Study(name: "bad", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", plane: Speed(order: 3.0, rpm_min: 500.0, rpm_max: 900.0),
+                            load: [(multiple: 1.0, amplitude: 670.0), (multiple: 2.0, amplitude: 430.0, phase: -0.32)],
+                            scale_min: 0.5, scale_max: 1.2)])"#;
+    let cases = [
+        ("scale_min: 0.5", "scale_min: 0.0", "analyses[0].scale_min"),
+        ("scale_min: 0.5", "scale_min: -0.5", "analyses[0].scale_min"),
+        ("scale_max: 1.2", "scale_max: 0.4", "analyses[0].scale_max"),
+        ("(multiple: 2.0", "(multiple: -2.0", "analyses[0].load[1].multiple"),
+        ("(multiple: 1.0", "(multiple: 0.0", "analyses[0].load[0].multiple"),
+        ("scale_min: 0.5", "torque_min: 1.0, scale_min: 0.5", "analyses[0].torque_min"),
+        ("scale_min: 0.5", "torque: 40.0, scale_min: 0.5", "analyses[0].torque"),
+        ("scale_max: 1.2", "scale_max: 1.2, seeds: [2.0]", "analyses[0].seeds[0]"),
+        ("scale_max: 1.2", "scale_max: 1.2, sections: [300.0]", "analyses[0].sections[0]"),
+    ];
+    refused(base, cases);
+}
+
+/// The study text of the (order, pivot damping) plane at 40 N·m, 1000 rpm, c_p over `from`..`to`.
+fn damping_study(name: &str, from: f64, to: f64, extra: &str) -> String {
+    format!(
+        r#"Study(name: "{name}", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", rpm: 1000.0, order_min: 2.9, order_max: 3.3, torque: 40.0,
+                            parameter: (name: "c_p", quantity: JointDamping("pivot"), from: {from:e}, to: {to:e}){extra})])"#
+    )
+}
+
+/// The folds of the one-parameter order branch over `window` of the paper's rotor with the
+/// pivot damping `c_p` (N·m·s/rad), built from `CpvaParams` (not through the study's
+/// substitution), at 40 N·m and 1000 rpm.
+fn damped_folds(c_p: f64, window: (f64, f64), ds_max: f64) -> Vec<f64> {
+    let params = kanedyn::cpva::CpvaParams { c_p, ..kanedyn::cpva::CpvaParams::canonical() };
+    let mech = params.mechanism(None).unwrap();
+    let kane = Kane::new(&mech).unwrap();
+    let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+    let h = [Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.0 }];
+    let mut hbm = Hbm::new(&kane, mech.joint_index("spin").unwrap(), rpm_to_rad_s(1000.0), &h, opts).unwrap();
+    let copts = ContinuationOptions { stability: false, ds_max, ds: 0.01_f64.min(ds_max), ..Default::default() };
+    hbm.continue_in_order(window.0, window.1, None, &copts).unwrap().folds.iter().map(|f| f.order).collect()
+}
+
+/// (a) The (order, pivot damping) plane's jump boundary at 40 N·m, solved exactly where it
+/// crosses the map's largest damping (`to` set to each reference value in turn), is the pair of
+/// folds of the one-parameter order branch of the rotor built with that damping.
+#[test]
+fn the_order_damping_fold_curve_passes_through_the_damped_branches_folds() {
+    for (k, c_p) in [5e-4, 1e-3, 2e-3].into_iter().enumerate() {
+        let name = format!("damping{k}");
+        let (report, csv, _json) = run_study(&name, &damping_study(&name, 1e-4, c_p, ""));
+        assert!(report.failures.is_empty(), "{:?}", report.failures);
+        let r = &report.envelopes[0];
+        assert_eq!(csv.lines().next(), Some("boundary,kind,order,c_p_Nms_per_rad"));
+        assert_eq!(r.second_unit, "N·m·s/rad");
+        // Below the cusp the two folds may be two curves inside this box (joined beyond it).
+        let mut map: Vec<f64> = r.boundaries.iter().flat_map(|b| b.at_second_max.clone()).collect();
+        map.sort_by(f64::total_cmp);
+        let mut branch = damped_folds(c_p, (2.9, 3.3), 0.02);
+        branch.sort_by(f64::total_cmp);
+        println!("c_p = {c_p}: map {map:?}, order branch {branch:?}");
+        assert_eq!(map.len(), 2, "{map:?}");
+        assert_eq!(branch.len(), 2, "{branch:?}");
+        // Both solved to 1e-10 on the coefficients (the branch's folds refined by bisection,
+        // the map's by its augmented system, ∂R̂/∂c_p differenced between rebuilt rotors); 1e-6
+        // as the issue asks.
+        for (m, b) in map.iter().zip(&branch) {
+            assert!((m - b).abs() <= 1e-6, "c_p = {c_p}: map {m} against the branch's {b}");
+        }
+        if c_p == 5e-4 {
+            // The canonical damping: the issue's quoted folds at 40 N·m.
+            assert!((branch[0] - 2.9403761).abs() <= 1e-6 && (branch[1] - 3.1740911).abs() <= 1e-6, "{branch:?}");
+        }
+    }
+}
+
+/// (b) The cusp of the (order, pivot damping) plane at 40 N·m, where the jump disappears as the
+/// damping grows, against a bisection in c_p on one-parameter order branches at a fine step
+/// (jumps: the branch has folds; no jump: none).
+#[test]
+fn the_damping_cusp_agrees_with_a_bisection_on_order_branches() {
+    let (report, ..) = run_study("dampingcusp", &damping_study("dampingcusp", 1e-4, 6e-3, ""));
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    let cusps: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "Cusp").collect();
+    assert_eq!(cusps.len(), 1, "{:?}", r.points);
+    let (nc, pc) = (cusps[0].value, cusps[0].second_value);
+    println!("map: cusp at n = {nc:.8}, c_p = {pc:.8e} N·m·s/rad in {:.3} s", r.time_s);
+    let window = (3.15, 3.20);
+    let (mut lo, mut hi) = (2.0e-3, 3.0e-3);
+    let mut pair = damped_folds(lo, window, 0.001);
+    assert_eq!(pair.len(), 2, "{pair:?}");
+    assert!(damped_folds(hi, window, 0.001).is_empty());
+    // To 1e-5 relative, a tenth of the tolerance below.
+    while hi - lo > 1e-5 * lo {
+        let mid = 0.5 * (lo + hi);
+        let f = damped_folds(mid, window, 0.001);
+        if f.is_empty() {
+            hi = mid;
+        } else {
+            (lo, pair) = (mid, f);
+        }
+    }
+    let n_pair = 0.5 * (pair[0] + pair[1]);
+    println!("bisection: c_p between {lo:.8e} and {hi:.8e}, folds {pair:?}");
+    // The bisection brackets the cusp to 1e-5; the map locates it to |dσ| ≤ 1e-10 along the curve.
+    assert!((pc / lo - 1.0).abs() <= 1e-4, "cusp c_p {pc} against the bisection's {lo}..{hi}");
+    assert!((nc - n_pair).abs() <= 1e-4, "cusp order {nc} against {n_pair}");
+}
+
+/// Bad mechanism parameters are refused at load with the field's path and the file's line.
+#[test]
+fn a_bad_mechanism_parameter_is_refused_with_its_field() {
+    let base = damping_study("bad", 1e-4, 6e-3, "");
+    let cases = [
+        ("JointDamping(\"pivot\")", "JointDamping(\"hinge\")", "analyses[0].parameter.quantity"),
+        ("JointDamping(\"pivot\")", "BodyMass(\"wheel\")", "analyses[0].parameter.quantity"),
+        ("JointDamping(\"pivot\")", "Rpm", "analyses[0].parameter.quantity"),
+        ("to: 6e-3", "to: 1e-4", "analyses[0].parameter.to"),
+        ("to: 6e-3", "to: 5e-5", "analyses[0].parameter.to"),
+        ("from: 1e-4", "from: -1e-4", "analyses[0].parameter.from"),
+        ("torque: 40.0,", "", "analyses[0].torque"),
+        ("torque: 40.0,", "torque: 40.0, torque_min: 1.0,", "analyses[0].torque_min"),
+        ("torque: 40.0,", "torque: 40.0, load: [(multiple: 1.0, amplitude: 40.0)],", "analyses[0].torque"),
+        ("to: 6e-3)", "to: 6e-3), seeds: [1.0]", "analyses[0].seeds[0]"),
+    ];
+    refused(&base, cases);
+}
