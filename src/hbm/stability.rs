@@ -359,31 +359,15 @@ impl Hbm {
                 out[na + nbz + l_count + p] = d;
             }
         }
-        let d2 = 2 * n;
         let system = TreeSystem { n, winv_nz, a_nz, b_nz, pinv, perm, below, na, nbz, l_count };
-        let scratch = std::cell::RefCell::new(vec![0.0; n * d2]);
+        let inst = Instants { values: &inst, stride, ns };
         #[cfg(target_arch = "x86_64")]
-        let avx2 = std::arch::is_x86_feature_detected!("avx2");
-        let deriv = |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
-            let mut g = scratch.borrow_mut();
-            #[cfg(target_arch = "x86_64")]
-            if avx2 {
-                // SAFETY: the processor has AVX2 (detected above).
-                unsafe { system.deriv_avx2(c, phi, out, &mut g) };
-                return;
-            }
-            system.deriv(c, phi, out, &mut g);
-        };
-        let at = |j: usize| {
-            let j = if j >= ns { j - ns } else { j };
-            &inst[j * stride..(j + 1) * stride]
-        };
-        let mut phi = vec![0.0; d2 * d2];
-        for i in 0..d2 {
-            phi[i * d2 + i] = 1.0;
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (detected just above).
+            let (fine, coarse) = unsafe { system.monodromy_avx2(&inst, period) };
+            return Some(richardson(&fine, &coarse));
         }
-        let fine = rk4_period(phi.clone(), ns, 1, period, at, deriv);
-        let coarse = rk4_period(phi, ns, 2, period, at, deriv);
+        let (fine, coarse) = system.monodromy(&inst, period);
         Some(richardson(&fine, &coarse))
     }
 }
@@ -546,13 +530,60 @@ impl TreeSystem {
         }
     }
 
-    /// [`TreeSystem::deriv`] compiled for AVX2: the same operations element by element (no fused
-    /// multiply-adds, no reordered sums), so the same results to the bit, on four doubles at a
-    /// time instead of SSE2's two (the row operations have length 2n).
+    /// Φ(T) by RK4 with the steps 2T/N_s and 4T/N_s (`rk4_period`), from the identity.
+    fn monodromy(&self, inst: &Instants, period: f64) -> (Vec<f64>, Vec<f64>) {
+        let scratch = std::cell::RefCell::new(vec![0.0; 2 * self.n * self.n]);
+        self.integrate(inst, period, |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
+            self.deriv(c, phi, out, &mut scratch.borrow_mut())
+        })
+    }
+
+    /// [`TreeSystem::monodromy`] compiled for AVX2: the same operations element by element (no
+    /// fused multiply-adds, no reordered sums), so the same results to the bit, on four doubles
+    /// at a time instead of SSE2's two (the row operations have length 2n). The derivative's
+    /// closure is written here, not taken from `monodromy`, because a closure takes the target
+    /// features of the function it is written in.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn deriv_avx2(&self, c: &[f64], phi: &[f64], out: &mut [f64], g: &mut [f64]) {
-        self.deriv(c, phi, out, g);
+    fn monodromy_avx2(&self, inst: &Instants, period: f64) -> (Vec<f64>, Vec<f64>) {
+        let scratch = std::cell::RefCell::new(vec![0.0; 2 * self.n * self.n]);
+        self.integrate(inst, period, |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
+            self.deriv(c, phi, out, &mut scratch.borrow_mut())
+        })
+    }
+
+    /// The fine and coarse RK4 runs from the identity with the derivative `deriv`.
+    #[inline(always)]
+    fn integrate(
+        &self,
+        inst: &Instants,
+        period: f64,
+        deriv: impl Fn(&[f64], &Vec<f64>, &mut Vec<f64>) + Copy,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let d2 = 2 * self.n;
+        let at = |j: usize| inst.at(j);
+        let mut phi = vec![0.0; d2 * d2];
+        for i in 0..d2 {
+            phi[i * d2 + i] = 1.0;
+        }
+        let fine = rk4_period(phi.clone(), inst.ns, 1, period, at, deriv);
+        (fine, rk4_period(phi, inst.ns, 2, period, at, deriv))
+    }
+}
+
+/// The tree system's values at the N_s instants: instant j's `[A | B W⁻¹ | L | D]` is
+/// `values[j·stride..(j + 1)·stride]`; instants past the period wrap around.
+struct Instants<'a> {
+    values: &'a [f64],
+    stride: usize,
+    ns: usize,
+}
+
+impl Instants<'_> {
+    #[inline(always)]
+    fn at(&self, j: usize) -> &[f64] {
+        let j = if j >= self.ns { j - self.ns } else { j };
+        &self.values[j * self.stride..(j + 1) * self.stride]
     }
 }
 
@@ -664,9 +695,11 @@ impl<const D: usize> Phi for [[f64; D]; D] {
 }
 
 impl Phi for Vec<f64> {
+    #[inline(always)]
     fn axpy(x: &Self, y: &Self, s: f64, out: &mut Self) {
         axpy(x, y, s, out);
     }
+    #[inline(always)]
     fn rk4_update(&mut self, [k1, k2, k3, k4]: [&Self; 4], h: f64) {
         for ((((p, &a), &b), &c), &e) in self.iter_mut().zip(k1).zip(k2).zip(k3).zip(k4) {
             *p += h / 6.0 * (a + 2.0 * b + 2.0 * c + e);
@@ -676,7 +709,9 @@ impl Phi for Vec<f64> {
 
 /// RK4 for `Φ' = 𝒜(t) Φ` over one period T from `phi`, with step 2T·stride/N_s: the stages of a
 /// step from instant j read the coefficients `at(j)`, `at(j + stride)` (twice) and
-/// `at(j + 2 stride)`; `deriv(coefficients, Φ, out)` writes 𝒜Φ.
+/// `at(j + 2 stride)`; `deriv(coefficients, Φ, out)` writes 𝒜Φ. Inlined, so that it takes the
+/// target features of its caller (`TreeSystem::monodromy_avx2`).
+#[inline(always)]
 fn rk4_period<'a, T: Phi, C: ?Sized + 'a>(
     mut phi: T,
     ns: usize,
@@ -703,6 +738,7 @@ fn rk4_period<'a, T: Phi, C: ?Sized + 'a>(
 }
 
 /// `out = x + s y`.
+#[inline(always)]
 fn axpy(x: &[f64], y: &[f64], s: f64, out: &mut [f64]) {
     for ((o, &a), &b) in out.iter_mut().zip(x).zip(y) {
         *o = a + s * b;
@@ -783,12 +819,12 @@ mod tests {
         }
     }
 
-    /// The AVX2 build of the tree system's derivative gives the plain build's results to the bit
-    /// (the same operations element by element), on an arrow of 4 leaves and a root with
-    /// arbitrary values: the monodromy does not depend on the processor it runs on.
+    /// The AVX2 build of the tree monodromy gives the plain build's results to the bit (the same
+    /// operations element by element), on an arrow of 4 leaves and a root with arbitrary
+    /// values: the multipliers do not depend on the processor they are computed on.
     #[cfg(target_arch = "x86_64")]
     #[test]
-    fn the_avx2_derivative_is_the_plain_one_to_the_bit() {
+    fn the_avx2_monodromy_is_the_plain_one_to_the_bit() {
         if !std::arch::is_x86_feature_detected!("avx2") {
             return;
         }
@@ -808,17 +844,18 @@ mod tests {
             l_count: 4,
         };
         let value = |i: usize| ((i * 7919 % 101) as f64 / 101.0 - 0.5) * 1.7;
-        let mut c: Vec<f64> = (0..2 * arrow.len() + 4).map(value).collect();
-        c.extend((0..n).map(|p| 1.0 + value(p + 3)));
-        let d2 = 2 * n;
-        let phi: Vec<f64> = (0..d2 * d2).map(|i| value(i + 11)).collect();
-        let (mut plain, mut wide) = (vec![0.0; d2 * d2], vec![0.0; d2 * d2]);
-        let (mut g1, mut g2) = (vec![0.0; n * d2], vec![0.0; n * d2]);
-        system.deriv(&c, &phi, &mut plain, &mut g1);
+        // Eight instants of [A | B W⁻¹ | L | D], D positive.
+        let (ns, stride) = (8, 2 * arrow.len() + 4 + n);
+        let values: Vec<f64> =
+            (0..ns * stride).map(|e| if e % stride >= stride - n { 1.0 + value(e).abs() } else { value(e) }).collect();
+        let inst = Instants { values: &values, stride, ns };
+        let plain = system.monodromy(&inst, 0.9);
         // SAFETY: the processor has AVX2 (checked above).
-        unsafe { system.deriv_avx2(&c, &phi, &mut wide, &mut g2) };
-        assert!(plain.iter().zip(&wide).all(|(a, b)| a.to_bits() == b.to_bits()));
-        assert!(plain.iter().any(|v| *v != 0.0));
+        let wide = unsafe { system.monodromy_avx2(&inst, 0.9) };
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&plain.0), bits(&wide.0));
+        assert_eq!(bits(&plain.1), bits(&wide.1));
+        assert!(plain.0.iter().any(|v| *v != 0.0 && *v != 1.0));
     }
 
     /// The fixed-size (and padded) monodromy equals the slice version on arbitrary coefficients.
