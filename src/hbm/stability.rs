@@ -21,9 +21,9 @@
 //! `M = C W⁻¹` applied through its LDLᵀ factors, which a leaves-first order leaves as sparse as
 //! the tree. Same RK4 stages and extrapolation, so the same multipliers (to 3e-12 on 8 mistuned
 //! pendulums, a unit test) at a cost per stage that grows with the tree's non-zeros instead of
-//! with n³. Its derivative is compiled a second time for AVX2 and taken where the processor has
-//! it: the same element-wise operations on four doubles instead of two (no fused multiply-adds),
-//! so the same bits (a unit test).
+//! with n³. Its RK4 (derivative, stages, update) is compiled a second time for AVX2 and taken
+//! where the processor has it: the same element-wise operations on four doubles instead of two
+//! (no fused multiply-adds), so the same bits (a unit test).
 //!
 //! The spin angle is cyclic: its column of A is zero, so `δq_s` feeds nothing and the column of
 //! Φ for it is the unit vector — the trivial multiplier +1 (a shift of the spin angle is again a
