@@ -21,7 +21,9 @@
 //! `M = C W⁻¹` applied through its LDLᵀ factors, which a leaves-first order leaves as sparse as
 //! the tree. Same RK4 stages and extrapolation, so the same multipliers (to 3e-12 on 8 mistuned
 //! pendulums, a unit test) at a cost per stage that grows with the tree's non-zeros instead of
-//! with n³.
+//! with n³. Its RK4 (derivative, stages, update) is compiled a second time for AVX2 and taken
+//! where the processor has it: the same element-wise operations on four doubles instead of two
+//! (no fused multiply-adds), so the same bits (a unit test).
 //!
 //! The spin angle is cyclic: its column of A is zero, so `δq_s` feeds nothing and the column of
 //! Φ for it is the unit vector — the trivial multiplier +1 (a shift of the spin angle is again a
@@ -357,66 +359,15 @@ impl Hbm {
                 out[na + nbz + l_count + p] = d;
             }
         }
-        let d2 = 2 * n;
-        let scratch = std::cell::RefCell::new(vec![0.0; n * d2]);
-        let row = |x: &mut [f64], y: &[f64], f: f64| {
-            for (a, &b) in x.iter_mut().zip(y) {
-                *a += f * b;
-            }
-        };
-        let deriv = |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
-            let mut g = scratch.borrow_mut();
-            let (top, bottom) = out.split_at_mut(n * d2);
-            let (pq, pu) = phi.split_at(n * d2);
-            top.fill(0.0);
-            for &(i, k, v) in &winv_nz {
-                row(&mut top[i * d2..(i + 1) * d2], &pu[k * d2..(k + 1) * d2], v);
-            }
-            g.fill(0.0);
-            for (e, &(i, k)) in a_nz.iter().enumerate() {
-                let p = pinv[i];
-                row(&mut g[p * d2..(p + 1) * d2], &pq[k * d2..(k + 1) * d2], c[e]);
-            }
-            for (e, &(i, k)) in b_nz.iter().enumerate() {
-                let p = pinv[i];
-                row(&mut g[p * d2..(p + 1) * d2], &pu[k * d2..(k + 1) * d2], c[na + e]);
-            }
-            // M⁻¹ = L⁻ᵀ D⁻¹ L⁻¹ in elimination positions.
-            let (lv, dv) = c[na + nbz..].split_at(l_count);
-            let mut l = 0;
-            for (p, rows) in below.iter().enumerate() {
-                for &i in rows {
-                    let (head, tail) = g.split_at_mut(i * d2);
-                    row(tail[..d2].as_mut(), &head[p * d2..(p + 1) * d2], -lv[l]);
-                    l += 1;
-                }
-            }
-            for (p, &d) in dv.iter().enumerate() {
-                g[p * d2..(p + 1) * d2].iter_mut().for_each(|v| *v /= d);
-            }
-            for (p, rows) in below.iter().enumerate().rev() {
-                l -= rows.len();
-                for (x, &i) in rows.iter().enumerate() {
-                    let (head, tail) = g.split_at_mut(i * d2);
-                    row(&mut head[p * d2..(p + 1) * d2], &tail[..d2], -lv[l + x]);
-                }
-            }
-            for (p, &k) in perm.iter().enumerate() {
-                for (o, &v) in bottom[k * d2..(k + 1) * d2].iter_mut().zip(&g[p * d2..(p + 1) * d2]) {
-                    *o = -v;
-                }
-            }
-        };
-        let at = |j: usize| {
-            let j = if j >= ns { j - ns } else { j };
-            &inst[j * stride..(j + 1) * stride]
-        };
-        let mut phi = vec![0.0; d2 * d2];
-        for i in 0..d2 {
-            phi[i * d2 + i] = 1.0;
+        let system = TreeSystem { n, winv_nz, a_nz, b_nz, pinv, perm, below, na, nbz, l_count };
+        let inst = Instants { values: &inst, stride, ns };
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor has AVX2 (detected just above).
+            let (fine, coarse) = unsafe { system.monodromy_avx2(&inst, period) };
+            return Some(richardson(&fine, &coarse));
         }
-        let fine = rk4_period(phi.clone(), ns, 1, period, at, deriv);
-        let coarse = rk4_period(phi, ns, 2, period, at, deriv);
+        let (fine, coarse) = system.monodromy(&inst, period);
         Some(richardson(&fine, &coarse))
     }
 }
@@ -500,6 +451,140 @@ fn monodromy(sys: &[f64], n: usize, ns: usize, period: f64) -> Vec<f64> {
         _ => (monodromy_slices(sys, n, ns, 1, period), monodromy_slices(sys, n, ns, 2, period)),
     };
     richardson(&fine, &coarse)
+}
+
+/// The variational equations of the whole mechanism in the states `(δq, δu)` as the tree keeps
+/// them sparse (`Hbm::tree_monodromy`): the non-zeros of W⁻¹, A and B W⁻¹, and the LDLᵀ
+/// factors of M in a fill-free elimination order.
+struct TreeSystem {
+    n: usize,
+    /// W⁻¹'s non-zeros (row, column, value).
+    winv_nz: Vec<(usize, usize, f64)>,
+    /// A's and B W⁻¹'s non-zero positions; their values at an instant lead the instant's slice.
+    a_nz: Vec<(usize, usize)>,
+    b_nz: Vec<(usize, usize)>,
+    /// Elimination position of each coordinate, and the coordinate eliminated at each position.
+    pinv: Vec<usize>,
+    perm: Vec<usize>,
+    /// Rows (elimination positions) of L's column p.
+    below: Vec<Vec<usize>>,
+    na: usize,
+    nbz: usize,
+    l_count: usize,
+}
+
+/// `x += f y`.
+#[inline(always)]
+fn row(x: &mut [f64], y: &[f64], f: f64) {
+    for (a, &b) in x.iter_mut().zip(y) {
+        *a += f * b;
+    }
+}
+
+impl TreeSystem {
+    /// `out = 𝒜Φ` with the instant's values `c` (`[A | B W⁻¹ | L | D]`), Φ row-major 2n × 2n;
+    /// `g` is scratch of n × 2n.
+    #[inline(always)]
+    fn deriv(&self, c: &[f64], phi: &[f64], out: &mut [f64], g: &mut [f64]) {
+        let (n, d2) = (self.n, 2 * self.n);
+        let (na, nbz) = (self.na, self.nbz);
+        let (top, bottom) = out.split_at_mut(n * d2);
+        let (pq, pu) = phi.split_at(n * d2);
+        top.fill(0.0);
+        for &(i, k, v) in &self.winv_nz {
+            row(&mut top[i * d2..(i + 1) * d2], &pu[k * d2..(k + 1) * d2], v);
+        }
+        g.fill(0.0);
+        for (e, &(i, k)) in self.a_nz.iter().enumerate() {
+            let p = self.pinv[i];
+            row(&mut g[p * d2..(p + 1) * d2], &pq[k * d2..(k + 1) * d2], c[e]);
+        }
+        for (e, &(i, k)) in self.b_nz.iter().enumerate() {
+            let p = self.pinv[i];
+            row(&mut g[p * d2..(p + 1) * d2], &pu[k * d2..(k + 1) * d2], c[na + e]);
+        }
+        // M⁻¹ = L⁻ᵀ D⁻¹ L⁻¹ in elimination positions.
+        let (lv, dv) = c[na + nbz..].split_at(self.l_count);
+        let mut l = 0;
+        for (p, rows) in self.below.iter().enumerate() {
+            for &i in rows {
+                let (head, tail) = g.split_at_mut(i * d2);
+                row(&mut tail[..d2], &head[p * d2..(p + 1) * d2], -lv[l]);
+                l += 1;
+            }
+        }
+        for (p, &d) in dv.iter().enumerate() {
+            g[p * d2..(p + 1) * d2].iter_mut().for_each(|v| *v /= d);
+        }
+        for (p, rows) in self.below.iter().enumerate().rev() {
+            l -= rows.len();
+            for (x, &i) in rows.iter().enumerate() {
+                let (head, tail) = g.split_at_mut(i * d2);
+                row(&mut head[p * d2..(p + 1) * d2], &tail[..d2], -lv[l + x]);
+            }
+        }
+        for (p, &k) in self.perm.iter().enumerate() {
+            for (o, &v) in bottom[k * d2..(k + 1) * d2].iter_mut().zip(&g[p * d2..(p + 1) * d2]) {
+                *o = -v;
+            }
+        }
+    }
+
+    /// Φ(T) by RK4 with the steps 2T/N_s and 4T/N_s (`rk4_period`), from the identity.
+    fn monodromy(&self, inst: &Instants, period: f64) -> (Vec<f64>, Vec<f64>) {
+        let scratch = std::cell::RefCell::new(vec![0.0; 2 * self.n * self.n]);
+        self.integrate(inst, period, |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
+            self.deriv(c, phi, out, &mut scratch.borrow_mut())
+        })
+    }
+
+    /// [`TreeSystem::monodromy`] compiled for AVX2: the same operations element by element (no
+    /// fused multiply-adds, no reordered sums), so the same results to the bit, on four doubles
+    /// at a time instead of SSE2's two (the row operations have length 2n). The derivative's
+    /// closure is written here, not taken from `monodromy`, because a closure takes the target
+    /// features of the function it is written in.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn monodromy_avx2(&self, inst: &Instants, period: f64) -> (Vec<f64>, Vec<f64>) {
+        let scratch = std::cell::RefCell::new(vec![0.0; 2 * self.n * self.n]);
+        self.integrate(inst, period, |c: &[f64], phi: &Vec<f64>, out: &mut Vec<f64>| {
+            self.deriv(c, phi, out, &mut scratch.borrow_mut())
+        })
+    }
+
+    /// The fine and coarse RK4 runs from the identity with the derivative `deriv`.
+    #[inline(always)]
+    fn integrate(
+        &self,
+        inst: &Instants,
+        period: f64,
+        deriv: impl Fn(&[f64], &Vec<f64>, &mut Vec<f64>) + Copy,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let d2 = 2 * self.n;
+        let at = |j: usize| inst.at(j);
+        let mut phi = vec![0.0; d2 * d2];
+        for i in 0..d2 {
+            phi[i * d2 + i] = 1.0;
+        }
+        let fine = rk4_period(phi.clone(), inst.ns, 1, period, at, deriv);
+        (fine, rk4_period(phi, inst.ns, 2, period, at, deriv))
+    }
+}
+
+/// The tree system's values at the N_s instants: instant j's `[A | B W⁻¹ | L | D]` is
+/// `values[j·stride..(j + 1)·stride]`; instants past the period wrap around.
+struct Instants<'a> {
+    values: &'a [f64],
+    stride: usize,
+    ns: usize,
+}
+
+impl Instants<'_> {
+    #[inline(always)]
+    fn at(&self, j: usize) -> &[f64] {
+        let j = if j >= self.ns { j - self.ns } else { j };
+        &self.values[j * self.stride..(j + 1) * self.stride]
+    }
 }
 
 /// `(16 Φ_h − Φ_2h)/15`: RK4's h⁴ error term removed.
@@ -610,9 +695,11 @@ impl<const D: usize> Phi for [[f64; D]; D] {
 }
 
 impl Phi for Vec<f64> {
+    #[inline(always)]
     fn axpy(x: &Self, y: &Self, s: f64, out: &mut Self) {
         axpy(x, y, s, out);
     }
+    #[inline(always)]
     fn rk4_update(&mut self, [k1, k2, k3, k4]: [&Self; 4], h: f64) {
         for ((((p, &a), &b), &c), &e) in self.iter_mut().zip(k1).zip(k2).zip(k3).zip(k4) {
             *p += h / 6.0 * (a + 2.0 * b + 2.0 * c + e);
@@ -622,7 +709,9 @@ impl Phi for Vec<f64> {
 
 /// RK4 for `Φ' = 𝒜(t) Φ` over one period T from `phi`, with step 2T·stride/N_s: the stages of a
 /// step from instant j read the coefficients `at(j)`, `at(j + stride)` (twice) and
-/// `at(j + 2 stride)`; `deriv(coefficients, Φ, out)` writes 𝒜Φ.
+/// `at(j + 2 stride)`; `deriv(coefficients, Φ, out)` writes 𝒜Φ. Inlined, so that it takes the
+/// target features of its caller (`TreeSystem::monodromy_avx2`).
+#[inline(always)]
 fn rk4_period<'a, T: Phi, C: ?Sized + 'a>(
     mut phi: T,
     ns: usize,
@@ -649,6 +738,7 @@ fn rk4_period<'a, T: Phi, C: ?Sized + 'a>(
 }
 
 /// `out = x + s y`.
+#[inline(always)]
 fn axpy(x: &[f64], y: &[f64], s: f64, out: &mut [f64]) {
     for ((o, &a), &b) in out.iter_mut().zip(x).zip(y) {
         *o = a + s * b;
@@ -727,6 +817,45 @@ mod tests {
             println!("n = {order}: |μ| max {:.6}, tree vs dense {e:.1e}", dense[0].norm());
             assert!(e <= 1e-9, "{e:e}");
         }
+    }
+
+    /// The AVX2 build of the tree monodromy gives the plain build's results to the bit (the same
+    /// operations element by element), on an arrow of 4 leaves and a root with arbitrary
+    /// values: the multipliers do not depend on the processor they are computed on.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_avx2_monodromy_is_the_plain_one_to_the_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let n = 5;
+        let arrow: Vec<(usize, usize)> =
+            (0..n).flat_map(|i| (0..n).map(move |k| (i, k))).filter(|&(i, k)| i == k || i == 4 || k == 4).collect();
+        let system = TreeSystem {
+            n,
+            winv_nz: (0..n).map(|i| (i, i, 1.0 + 0.1 * i as f64)).chain([(1, 4, -0.3)]).collect(),
+            a_nz: arrow.clone(),
+            b_nz: arrow.clone(),
+            pinv: (0..n).collect(),
+            perm: (0..n).collect(),
+            below: (0..n).map(|p| if p < 4 { vec![4] } else { Vec::new() }).collect(),
+            na: arrow.len(),
+            nbz: arrow.len(),
+            l_count: 4,
+        };
+        let value = |i: usize| ((i * 7919 % 101) as f64 / 101.0 - 0.5) * 1.7;
+        // Eight instants of [A | B W⁻¹ | L | D], D positive.
+        let (ns, stride) = (8, 2 * arrow.len() + 4 + n);
+        let values: Vec<f64> =
+            (0..ns * stride).map(|e| if e % stride >= stride - n { 1.0 + value(e).abs() } else { value(e) }).collect();
+        let inst = Instants { values: &values, stride, ns };
+        let plain = system.monodromy(&inst, 0.9);
+        // SAFETY: the processor has AVX2 (checked above).
+        let wide = unsafe { system.monodromy_avx2(&inst, 0.9) };
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&plain.0), bits(&wide.0));
+        assert_eq!(bits(&plain.1), bits(&wide.1));
+        assert!(plain.0.iter().any(|v| *v != 0.0 && *v != 1.0));
     }
 
     /// The fixed-size (and padded) monodromy equals the slice version on arbitrary coefficients.
