@@ -19,6 +19,13 @@
 //! which does not depend on x. After every point b and c take the new w and v, so the bordered
 //! matrices stay far from singular along the curve.
 //!
+//! Period doublings are followed the same way on the problem of half the base frequency
+//! (`Singularity::HalfPeriod`): at its states of even harmonics only (the period-1 states) the
+//! odd harmonics decouple, and g is built on the odd-harmonic block of J, whose singularity is a
+//! Floquet multiplier −1; the odd unknowns are pinned at zero, so the curve stays on the
+//! period-1 states. Along an order-torque curve of a parametric resonance the least torque is
+//! the tongue's tip (an extremum of s that is not a cusp).
+//!
 //! The second parameter may also be a mechanism parameter p (a pivot's damping, an absorber's
 //! tuning) at a fixed torque scale, through a [`MechanismFamily`] that builds the problem at any p:
 //! the same system with ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` by central differences between
@@ -190,7 +197,7 @@ impl Default for FoldCurveOptions {
 /// The residual depends on p through the mechanism, which the engine builds once (its mass
 /// matrix, the joints' laws): there is no ∂R̂/∂p in closed form, and no way to change p in place.
 /// So `build(p)` makes the whole problem at p, and ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` are central
-/// differences of problems built at p ± h, h = [`FD_STEP`] · `reference` (O(h²) of the third
+/// differences of problems built at p ± h, h = 1e-5 · `reference` (O(h²) of the third
 /// derivatives; the residual is linear in a damping, so exact there up to rounding).
 pub struct MechanismFamily<'a> {
     /// The problem at p: the same mechanism and route at every p, so the same unknowns.
@@ -263,6 +270,9 @@ struct Walk<'a> {
     /// The unknowns whose rows and columns of J form the matrix tested for singularity (all of
     /// them for a fold).
     block: Vec<usize>,
+    /// The tested unknowns are held at zero ([`Singularity::HalfPeriod`]): their rows of R̂ and
+    /// of the augmented Jacobian become `x_i = 0`.
+    pinned: bool,
     family: Option<&'a MechanismFamily<'a>>,
     built: Built,
 }
@@ -335,6 +345,13 @@ pub enum Singularity {
         /// Number of coordinates.
         count: usize,
     },
+    /// On the problem of half the base frequency ([`Symmetry::HalfPeriod`](super::Symmetry)),
+    /// the block of the odd harmonics at states of even harmonics only (the period-1 states):
+    /// there the odd harmonics decouple from the even ones at linear order, and the odd block is
+    /// the Jacobian of the perturbations that change sign every excitation period, so its
+    /// singularity is a period doubling (a Floquet multiplier −1 of the period-1 state). The
+    /// curve's states are held on the even harmonics (the odd unknowns pinned at zero).
+    HalfPeriod,
 }
 
 impl Hbm {
@@ -358,7 +375,7 @@ impl Hbm {
     fn augmented(&mut self, x: &[f64], at: &At, p: Option<f64>, walk: &mut Walk) -> Result<Augmented, HbmError> {
         let order = at.order;
         let m = self.unknowns();
-        let Walk { plane, b, c, rs, block, family, built } = walk;
+        let Walk { plane, b, c, rs, block, family, built, pinned } = walk;
         let (param, scale) = (plane.param(), if plane.kind == FoldPlane::Order { 1.0 } else { plane.p_ref });
         let hbm = problem(self, built, *family, p)?;
         hbm.assemble(x, at, Some(param));
@@ -409,7 +426,20 @@ impl Hbm {
             _ => (rs.clone(), 0.0),
         };
         let (v, w) = (vb, wb);
-        Ok(Augmented { r, j, rl, rs, g, gx, gl, gs, v, w })
+        let mut aug = Augmented { r, j, rl, rs, g, gx, gl, gs, v, w };
+        if *pinned {
+            // By the symmetry the even rows do not depend on the odd unknowns at an even state
+            // (and g is even in them), so these columns are zero there: the pinned rows only
+            // keep the odd unknowns at zero, and the system stays regular at a period doubling.
+            for &i in block.iter() {
+                aug.r[i] = x[i];
+                aug.j.row_mut(i).fill(0.0);
+                aug.j.column_mut(i).fill(0.0);
+                aug.j[(i, i)] = 1.0;
+                (aug.rl[i], aug.rs[i], aug.gx[i]) = (0.0, 0.0, 0.0);
+            }
+        }
+        Ok(aug)
     }
 
     /// The unknowns whose rows and columns of J form the matrix `test` keeps singular.
@@ -418,6 +448,8 @@ impl Hbm {
         match test {
             Singularity::Jacobian => (0..m).collect(),
             Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
+            // Slot i of a coordinate holds harmonic ⌈i/2⌉ (0 the mean, then cosine and sine).
+            Singularity::HalfPeriod => (0..m).filter(|i| (i % self.nb).div_ceil(2) % 2 == 1).collect(),
         }
     }
 
@@ -446,7 +478,7 @@ impl Hbm {
         let unit = DVector::from_element(mb, 1.0 / (mb as f64).sqrt());
         let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
         let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
-        Ok(Walk { plane, b, c, rs, block, family, built })
+        Ok(Walk { plane, b, c, rs, block, pinned: test == Singularity::HalfPeriod, family, built })
     }
 
     /// Newton's method on `R̂ = 0, g = 0` with one of (λ, σ) free: λ when `free_lambda`, else σ.

@@ -301,8 +301,10 @@ impl Hbm {
     }
 
     /// `guess` on this problem's base: as it is when both bases agree; a state of the
-    /// period-1 problem (base twice this one's) with its harmonic h moved to 2h.
-    fn on_doubled_period(&self, guess: &HbmSolution, order: f64) -> Result<HbmSolution, HbmError> {
+    /// period-1 problem (base twice this one's, as on the problem of half the base frequency
+    /// that [`Symmetry::HalfPeriod`] needs) with its harmonic h moved to 2h. An error names any
+    /// other ratio (`order` is the excitation order, for the message).
+    pub fn on_doubled_period(&self, guess: &HbmSolution, order: f64) -> Result<HbmSolution, HbmError> {
         let ratio = |s: &HbmSolution| s.base_frequency / (s.order * s.omega);
         let r = ratio(guess) / self.ratio;
         if (r - 1.0).abs() < 1e-9 {

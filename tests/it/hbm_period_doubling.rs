@@ -228,3 +228,84 @@ fn a_half_period_switch_is_refused_without_its_problem_or_its_crossing() {
     println!("{e}");
     assert!(e.to_string().contains("regular"), "{e}");
 }
+
+/// The period doublings of the one-parameter order branch over 6.0–6.8 at `torque` N·m.
+fn doublings_at(torque: f64) -> Vec<f64> {
+    let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+    let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
+    period_doublings(&hbm.continue_in_order(6.0, 6.8, None, &ContinuationOptions::default()).unwrap())
+}
+
+/// The period-doubling curve in (order, torque): the singularity of the odd-harmonic block of
+/// the problem of half the base frequency, followed at states of even harmonics
+/// (`Singularity::HalfPeriod`), from the lower edge of the 500 N·m tongue down to the tongue's
+/// tip and up its other side. Checked against one-parameter order branches computed apart: it
+/// passes through their period doublings at 500 and 2000 N·m (the edges 6.37625/6.38706 and
+/// 6.35508/6.40473) to 1e-6 in n, and its least torque (the tip, below which the response never
+/// period-doubles) lies inside a bisection on "has a period doubling or not" to 1e-4 relative.
+#[test]
+fn the_period_doubling_curve_passes_through_the_branches_doublings_and_its_tip() {
+    use kanedyn::hbm::{FoldCurveOptions, FoldPlane, Singularity};
+    use kanedyn::model::excitation::Harmonic;
+    const T_REF: f64 = 500.0;
+    let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+    let mut one = Hbm::new(&kane, 0, omega(), &single(T_REF), HbmOptions::default()).unwrap();
+    let b = one.continue_in_order(6.0, 6.8, None, &ContinuationOptions::default()).unwrap();
+    let pd = period_doublings(&b);
+    let mut halved = single(T_REF);
+    halved.push(Harmonic { multiple: 0.5, amplitude: 0.0, phase: 0.0 });
+    let opts = HbmOptions { harmonics: 20, stability_samples: 0, ..HbmOptions::default() };
+    let mut doubled = Hbm::new(&kane, 0, omega(), &halved, opts).unwrap();
+    let guess = doubled.on_doubled_period(b.guesses_at(pd[0])[0], pd[0]).unwrap();
+    let start = doubled.singular_at(FoldPlane::Order, Singularity::HalfPeriod, 1.0, &guess).unwrap();
+    println!("start: n {:.9} (branch {:.9})", start.order, pd[0]);
+    assert!((start.order - pd[0]).abs() < 1e-6);
+    let fopts = FoldCurveOptions {
+        range: (6.0, 6.8),
+        scales: (0.01, 8.0),
+        test: Singularity::HalfPeriod,
+        ..FoldCurveOptions::default()
+    };
+    let down = doubled.continue_fold(FoldPlane::Order, &start, false, &fopts).unwrap();
+    let up = doubled.continue_fold(FoldPlane::Order, &start, true, &fopts).unwrap();
+    println!(
+        "down: {} points, end {:?}, extrema {:?}; up: {} points, end {:?}",
+        down.points.len(),
+        down.end,
+        down.scale_extrema,
+        up.points.len(),
+        up.end
+    );
+    // The curve's orders where it crosses torque scale s: from the point before each crossing,
+    // solved at that scale.
+    let crossings = |doubled: &mut Hbm, s: f64| -> Vec<f64> {
+        let all: Vec<_> = down.points.windows(2).chain(up.points.windows(2)).collect();
+        let mut v: Vec<f64> = all
+            .iter()
+            .filter(|w| (w[0].scale - s) * (w[1].scale - s) <= 0.0)
+            .map(|w| doubled.singular_at(FoldPlane::Order, Singularity::HalfPeriod, s, &w[0].solution).unwrap().order)
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        v
+    };
+    for torque in [500.0, 2000.0] {
+        let on_curve = crossings(&mut doubled, torque / T_REF);
+        let reference = doublings_at(torque);
+        println!("{torque} N·m: curve {on_curve:?}, branch {reference:?}");
+        assert_eq!(on_curve.len(), 2, "{on_curve:?}");
+        for (a, b) in on_curve.iter().zip(&reference) {
+            assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+        }
+    }
+    let tip = down.scale_extrema.first().expect("the tongue's tip");
+    let t_tip = tip.scale * T_REF;
+    let (mut lo, mut hi) = (0.5 * t_tip, 2.0 * t_tip);
+    assert!(doublings_at(lo).is_empty() && doublings_at(hi).len() == 2);
+    while hi / lo - 1.0 > 2e-5 {
+        let mid = 0.5 * (lo + hi);
+        if doublings_at(mid).is_empty() { lo = mid } else { hi = mid }
+    }
+    println!("tip: curve {t_tip:.6} N·m at n {:.7}; bisection ({lo:.6}, {hi:.6}) N·m", tip.order);
+    assert!(t_tip / lo - 1.0 > -1e-4 && t_tip / hi - 1.0 < 1e-4, "{t_tip} vs ({lo}, {hi})");
+}

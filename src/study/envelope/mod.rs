@@ -483,6 +483,9 @@ fn seeds_on(
                 .map(|(i, _)| branch.points[i].solution.clone())
                 .collect()
         }
+        // The envelope draws no period-doubling curves yet (they are continued on the problem of
+        // half the base frequency, which its seed branches are not).
+        Singularity::HalfPeriod => Vec::new(),
     };
     guesses.iter().filter_map(|g| hbm.singular_at_with(ax.fold, family, test, s, g).ok()).collect()
 }
