@@ -270,9 +270,9 @@ struct Walk<'a> {
     /// The unknowns whose rows and columns of J form the matrix tested for singularity (all of
     /// them for a fold).
     block: Vec<usize>,
-    /// The tested unknowns are held at zero ([`Singularity::HalfPeriod`]): their rows of R̂ and
-    /// of the augmented Jacobian become `x_i = 0`.
-    pinned: bool,
+    /// The unknowns held at zero (the odd harmonics, on the half-frequency problem): their rows
+    /// of R̂ and of the augmented Jacobian become `x_i = 0`.
+    pinned: Vec<usize>,
     family: Option<&'a MechanismFamily<'a>>,
     built: Built,
 }
@@ -352,6 +352,37 @@ pub enum Singularity {
     /// singularity is a period doubling (a Floquet multiplier −1 of the period-1 state). The
     /// curve's states are held on the even harmonics (the odd unknowns pinned at zero).
     HalfPeriod,
+    /// Both at once: on the half-frequency problem of identical absorbers (one representative),
+    /// the odd harmonics of the representative's own block (coordinates `first..first + count`):
+    /// the Jacobian of the non-unison perturbations that change sign every excitation period, so
+    /// its singularity is a period doubling that also breaks the unison (the absorbers swing at
+    /// half the order against each other). The odd unknowns of every coordinate are pinned, as
+    /// for [`Singularity::HalfPeriod`].
+    HalfPeriodBlock {
+        /// First coordinate of the block.
+        first: usize,
+        /// Number of coordinates.
+        count: usize,
+    },
+}
+
+impl Singularity {
+    /// Whether the curve lives on the problem of half the base frequency (its odd unknowns
+    /// pinned at zero).
+    pub fn on_half_period(self) -> bool {
+        matches!(self, Singularity::HalfPeriod | Singularity::HalfPeriodBlock { .. })
+    }
+
+    /// The test at half the base frequency of a unison-loss test (`Block` → `HalfPeriodBlock`;
+    /// the whole Jacobian → `HalfPeriod`).
+    pub fn halved(self) -> Singularity {
+        match self {
+            Singularity::Block { first, count } | Singularity::HalfPeriodBlock { first, count } => {
+                Singularity::HalfPeriodBlock { first, count }
+            }
+            Singularity::Jacobian | Singularity::HalfPeriod => Singularity::HalfPeriod,
+        }
+    }
 }
 
 impl Hbm {
@@ -427,11 +458,11 @@ impl Hbm {
         };
         let (v, w) = (vb, wb);
         let mut aug = Augmented { r, j, rl, rs, g, gx, gl, gs, v, w };
-        if *pinned {
+        if !pinned.is_empty() {
             // By the symmetry the even rows do not depend on the odd unknowns at an even state
             // (and g is even in them), so these columns are zero there: the pinned rows only
             // keep the odd unknowns at zero, and the system stays regular at a period doubling.
-            for &i in block.iter() {
+            for &i in pinned.iter() {
                 aug.r[i] = x[i];
                 aug.j.row_mut(i).fill(0.0);
                 aug.j.column_mut(i).fill(0.0);
@@ -449,8 +480,22 @@ impl Hbm {
             Singularity::Jacobian => (0..m).collect(),
             Singularity::Block { first, count } => (first * self.nb..((first + count) * self.nb).min(m)).collect(),
             // Slot i of a coordinate holds harmonic ⌈i/2⌉ (0 the mean, then cosine and sine).
-            Singularity::HalfPeriod => (0..m).filter(|i| (i % self.nb).div_ceil(2) % 2 == 1).collect(),
+            Singularity::HalfPeriod => (0..m).filter(|&i| self.odd_slot(i)).collect(),
+            Singularity::HalfPeriodBlock { first, count } => {
+                (first * self.nb..((first + count) * self.nb).min(m)).filter(|&i| self.odd_slot(i)).collect()
+            }
         }
+    }
+
+    /// Whether unknown i holds an odd harmonic: slot i of a coordinate holds harmonic ⌈i/2⌉.
+    fn odd_slot(&self, i: usize) -> bool {
+        (i % self.nb).div_ceil(2) % 2 == 1
+    }
+
+    /// The unknowns a curve of `test` holds at zero: every odd harmonic on the half-frequency
+    /// problem, none otherwise.
+    fn pinned(&self, test: Singularity) -> Vec<usize> {
+        if test.on_half_period() { (0..self.unknowns()).filter(|&i| self.odd_slot(i)).collect() } else { Vec::new() }
     }
 
     /// The start of a walk in `kind` at x, `at` and p: borders from the singular vectors of J's
@@ -478,7 +523,8 @@ impl Hbm {
         let unit = DVector::from_element(mb, 1.0 / (mb as f64).sqrt());
         let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
         let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
-        Ok(Walk { plane, b, c, rs, block, pinned: test == Singularity::HalfPeriod, family, built })
+        let pinned = self.pinned(test);
+        Ok(Walk { plane, b, c, rs, block, pinned, family, built })
     }
 
     /// Newton's method on `R̂ = 0, g = 0` with one of (λ, σ) free: λ when `free_lambda`, else σ.
@@ -555,16 +601,26 @@ impl Hbm {
     /// sign from J's LU factors (the product of U's diagonal signs and the permutation's), which
     /// neither overflows nor underflows whatever the size; 0 when a pivot is exactly zero.
     pub fn singularity_sign(&mut self, sol: &HbmSolution, test: Singularity) -> f64 {
+        self.singularity_signs(sol, &[test])[0]
+    }
+
+    /// [`Hbm::singularity_sign`] of each of `tests`, from one Jacobian.
+    pub fn singularity_signs(&mut self, sol: &HbmSolution, tests: &[Singularity]) -> Vec<f64> {
         let x = self.unknowns_from(Some(sol));
         let at = At { order: sol.order, omega: sol.omega, scale: sol.torque_scale };
         self.assemble(&x, &at, Some(Parameter::Order));
-        let block = self.tested(test);
-        let mb = block.len();
-        let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
-        let lu = jb.lu();
-        let u = lu.u();
-        let diag: f64 = (0..mb).map(|i| u[(i, i)].signum() * f64::from(u[(i, i)] != 0.0)).product();
-        diag * lu.p().determinant::<f64>()
+        tests
+            .iter()
+            .map(|&test| {
+                let block = self.tested(test);
+                let mb = block.len();
+                let jb = DMatrix::from_fn(mb, mb, |a, b| self.jac[(block[a], block[b])]);
+                let lu = jb.lu();
+                let u = lu.u();
+                let diag: f64 = (0..mb).map(|i| u[(i, i)].signum() * f64::from(u[(i, i)] != 0.0)).product();
+                diag * lu.p().determinant::<f64>()
+            })
+            .collect()
     }
 
     /// [`Hbm::fold_at`] for the singularity `test` (a loss of unison with [`Singularity::Block`]).

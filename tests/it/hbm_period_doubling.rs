@@ -309,3 +309,117 @@ fn the_period_doubling_curve_passes_through_the_branches_doublings_and_its_tip()
     println!("tip: curve {t_tip:.6} N·m at n {:.7}; bisection ({lo:.6}, {hi:.6}) N·m", tip.order);
     assert!(t_tip / lo - 1.0 > -1e-4 && t_tip / hi - 1.0 < 1e-4, "{t_tip} vs ({lo}, {hi})");
 }
+
+/// The `Envelope` analysis over orders 6.0–6.8 and 100–2000 N·m maps the period-doubling tongue:
+/// one boundary of kind `PeriodDoubling` whose orders at 2000 N·m are the one-parameter
+/// branch's doublings (1e-6), and its onset, the tongue's tip, inside the bisection on branches
+/// of `the_period_doubling_curve_passes_through_the_branches_doublings_and_its_tip`
+/// (250.879859–250.882730 N·m; here checked against a fresh bracket of 1e-4 relative).
+#[test]
+fn the_envelope_maps_the_period_doubling_tongue() {
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = "Study(name: \"pd_map\", mechanism: \"cpva.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 6.0, order_max: 6.8, torque_min: 100.0, \
+                torque_max: 2000.0)])\n";
+    let src = kanedyn::io::Source::from_text("examples/pd_map.ron", text);
+    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
+    let out = std::env::temp_dir().join(format!("kanedyn_pd_map_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    assert!(r.period_doubling_search.starts_with("searched"), "{}", r.period_doubling_search);
+    let pd: Vec<_> = r.boundaries.iter().filter(|b| format!("{:?}", b.kind) == "PeriodDoubling").collect();
+    assert_eq!(pd.len(), 1);
+    let reference = doublings_at(2000.0);
+    println!("at 2000 N·m: map {:?}, branch {reference:?}", pd[0].at_second_max);
+    assert_eq!(pd[0].at_second_max.len(), 2);
+    for (a, b) in pd[0].at_second_max.iter().zip(&reference) {
+        assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+    }
+    let tip = r.points.iter().find(|p| format!("{:?}", p.kind) == "PeriodDoublingOnset").expect("the tip");
+    println!("tip {} N·m at n {}", tip.second_value, tip.value);
+    let (lo, hi) = (tip.second_value * (1.0 - 1e-4), tip.second_value * (1.0 + 1e-4));
+    assert!(doublings_at(lo).is_empty() && doublings_at(hi).len() == 2, "tip {}", tip.second_value);
+}
+
+/// The envelope skips the search for period doublings where no linear parametric resonance is
+/// near (the paper's map over 2.9–3.3, whose eigen-orders 3.11–3.19 lie far from n/2 and 3n/2).
+/// That costs nothing there: the order branches at the map's extreme torques, with stability at
+/// every point and crossings found at any step, have no period doubling.
+#[test]
+fn the_envelope_skips_the_doubling_search_only_where_none_exists() {
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = "Study(name: \"pd_skip\", mechanism: \"cpva.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 2.9, order_max: 3.3, torque_min: 1.0, \
+                torque_max: 500.0)])\n";
+    let src = kanedyn::io::Source::from_text("examples/pd_skip.ron", text);
+    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
+    let out = std::env::temp_dir().join(format!("kanedyn_pd_skip_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    let r = &report.envelopes[0];
+    assert!(r.period_doubling_search.starts_with("not searched"), "{}", r.period_doubling_search);
+    let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+    for torque in [1.0, 40.0, 500.0] {
+        let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
+        for (from, to) in [(2.9, 3.3), (3.3, 2.9)] {
+            let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).unwrap();
+            assert!(period_doublings(&b).is_empty(), "{torque} N·m {from}→{to}: {:?}", period_doublings(&b));
+        }
+    }
+}
+
+/// Two identical pendulums (the paper's split in two, `examples/cpva2.ron`, cyclic route) over
+/// orders 6.0–6.8 and 100–2000 N·m: besides the unison tongue of the one-pendulum rotor, the
+/// pendulums swing at half the order against each other in a tongue of their own, near twice
+/// their tuning order 3.11 (the rotor does not take part, so it sits lower than the unison one
+/// at 2 × 3.19). The map follows it on the representative's odd-harmonic block
+/// (`Singularity::HalfPeriodBlock`). Checked against the general solver (every pendulum an
+/// unknown, both tongues in one Jacobian), whose order branch at 2000 N·m, at a step fine
+/// enough to see both tongues, has its period doublings at the four orders the map gives at
+/// 2000 N·m (1e-6), and the non-unison tongue's tip lies inside a bracket of 1e-4 relative
+/// on the general solver's branches.
+#[test]
+fn the_envelope_maps_the_non_unison_period_doubling_of_two_pendulums() {
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = "Study(name: \"pd_map2\", mechanism: \"cpva2.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 6.0, order_max: 6.8, torque_min: 100.0, \
+                torque_max: 2000.0)])\n";
+    let src = kanedyn::io::Source::from_text("examples/pd_map2.ron", text);
+    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
+    let out = std::env::temp_dir().join(format!("kanedyn_pd_map2_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    assert!(r.route.starts_with("cyclic"), "{}", r.route);
+    let pd: Vec<_> = r.boundaries.iter().filter(|b| format!("{:?}", b.kind) == "PeriodDoubling").collect();
+    assert_eq!(pd.len(), 2, "{:?}", r.boundaries.iter().map(|b| (&b.kind, &b.set)).collect::<Vec<_>>());
+    let non_unison = pd.iter().find(|b| b.set.is_some()).expect("a non-unison tongue");
+    let mut mapped: Vec<f64> = pd.iter().flat_map(|b| b.at_second_max.iter().copied()).collect();
+    mapped.sort_by(f64::total_cmp);
+    let general = |torque: f64| -> Vec<f64> {
+        let kane = Kane::new(&CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap()).unwrap();
+        let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
+        let copts = ContinuationOptions { ds_max: 0.005, ..ContinuationOptions::default() };
+        period_doublings(&hbm.continue_in_order(6.0, 6.8, None, &copts).unwrap())
+    };
+    let reference = general(2000.0);
+    println!("at 2000 N·m: map {mapped:?}, general solver {reference:?}");
+    assert_eq!(reference.len(), 4, "{reference:?}");
+    for (a, b) in mapped.iter().zip(&reference) {
+        assert!((a - b).abs() < 1e-6, "{a} vs {b}");
+    }
+    // The non-unison tip: the general branch below it has only the unison tongue's two
+    // doublings (the unison tip is higher), above it two more.
+    let tip = r
+        .points
+        .iter()
+        .find(|p| format!("{:?}", p.kind) == "PeriodDoublingOnset" && r.boundaries[p.boundary].set.is_some())
+        .expect("the non-unison tip");
+    println!("non-unison tip {} N·m at n {} ({:?})", tip.second_value, tip.value, non_unison.set);
+    let (below, above) = (general(tip.second_value * (1.0 - 1e-4)), general(tip.second_value * (1.0 + 1e-4)));
+    println!("below: {below:?}, above: {above:?}");
+    assert!(below.is_empty() && above.len() == 2, "below {below:?}, above {above:?}");
+}

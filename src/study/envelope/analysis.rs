@@ -28,6 +28,8 @@ struct Findings {
     jump_boundaries: usize,
     /// Number of unison-loss boundaries.
     unison_loss_boundaries: usize,
+    /// Number of period-doubling boundaries.
+    period_doubling_boundaries: usize,
     /// The unit of the limits below (the second parameter's: `N·m`, `1 (scale of the set)`, or
     /// a mechanism parameter's SI unit).
     unit: String,
@@ -37,6 +39,8 @@ struct Findings {
     jump_limits: Vec<f64>,
     /// The same at each unison-loss onset.
     unison_loss_limits: Vec<f64>,
+    /// The same at each period-doubling onset (a tongue's tip).
+    period_doubling_limits: Vec<f64>,
 }
 
 fn findings(r: &EnvelopeResult) -> Findings {
@@ -48,9 +52,15 @@ fn findings(r: &EnvelopeResult) -> Findings {
     Findings {
         jump_boundaries: r.boundaries.iter().filter(|b| b.kind == super::BoundaryKind::Jump).count(),
         unison_loss_boundaries: r.boundaries.iter().filter(|b| b.kind == super::BoundaryKind::UnisonLoss).count(),
+        period_doubling_boundaries: r
+            .boundaries
+            .iter()
+            .filter(|b| b.kind == super::BoundaryKind::PeriodDoubling)
+            .count(),
         unit: r.second_unit.clone(),
         jump_limits: limits(&[MapPointKind::Cusp, MapPointKind::JumpOnset]),
         unison_loss_limits: limits(&[MapPointKind::UnisonLossOnset]),
+        period_doubling_limits: limits(&[MapPointKind::PeriodDoublingOnset]),
     }
 }
 
@@ -275,12 +285,15 @@ impl Analysis for EnvelopeSpec {
     fn digest(&self, _study: &Study, report: &StudyReport, _nth: usize) -> Option<String> {
         let r = report.envelopes.iter().find(|r| r.name == self.name)?;
         let f = findings(r);
-        let mut line = format!(
-            "{} and {} in {} s",
+        let mut kinds = vec![
             count(f.jump_boundaries, "jump boundary", "jump boundaries"),
             count(f.unison_loss_boundaries, "unison-loss boundary", "unison-loss boundaries"),
-            num(r.time_s)
-        );
+        ];
+        if f.period_doubling_boundaries > 0 {
+            kinds.push(count(f.period_doubling_boundaries, "period-doubling boundary", "period-doubling boundaries"));
+        }
+        let last = kinds.pop().unwrap_or_default();
+        let mut line = format!("{} and {last} in {} s", kinds.join(", "), num(r.time_s));
         // On a torque or scale plane the least limit is where the jump (the loss) begins; on a
         // mechanism parameter's plane the limits are listed as found.
         let words = |v: &[f64]| v.iter().map(|&t| r.second_words(t, 4)).collect::<Vec<_>>().join(", ");
@@ -293,6 +306,11 @@ impl Analysis for EnvelopeSpec {
         match (f.unison_loss_limits.first(), from) {
             (Some(&t), true) => line += &format!("; unison lost from {}", r.second_words(t, 4)),
             (Some(_), false) => line += &format!("; unison-loss limits at {}", words(&f.unison_loss_limits)),
+            (None, _) => {}
+        }
+        match (f.period_doubling_limits.first(), from) {
+            (Some(&t), true) => line += &format!("; period doubled from {}", r.second_words(t, 4)),
+            (Some(_), false) => line += &format!("; period-doubling limits at {}", words(&f.period_doubling_limits)),
             (None, _) => {}
         }
         Some(line)

@@ -58,6 +58,9 @@ pub enum BoundaryKind {
     /// A unison-loss curve: an identical set's unison motion is unstable against non-unison
     /// motion inside it (a +1 branch point on its edge).
     UnisonLoss,
+    /// A period-doubling curve: inside it the response is unstable against a motion of twice
+    /// its period (a −1 multiplier on its edge; a parametric resonance's tongue).
+    PeriodDoubling,
 }
 
 impl BoundaryKind {
@@ -66,6 +69,7 @@ impl BoundaryKind {
         match self {
             BoundaryKind::Jump => 1.0,
             BoundaryKind::UnisonLoss => 2.0,
+            BoundaryKind::PeriodDoubling => 3.0,
         }
     }
 
@@ -73,6 +77,7 @@ impl BoundaryKind {
         match self {
             BoundaryKind::Jump => "jump (folds)",
             BoundaryKind::UnisonLoss => "unison lost",
+            BoundaryKind::PeriodDoubling => "period doubled",
         }
     }
 }
@@ -86,6 +91,9 @@ pub enum MapPointKind {
     JumpOnset,
     /// The least torque of a unison-loss boundary: below it the set keeps unison at every order.
     UnisonLossOnset,
+    /// The least torque of a period-doubling boundary (a tongue's tip): below it the response
+    /// keeps its period at every order of the map.
+    PeriodDoublingOnset,
 }
 
 impl MapPointKind {
@@ -95,6 +103,7 @@ impl MapPointKind {
             MapPointKind::Cusp => 10.0,
             MapPointKind::JumpOnset => 11.0,
             MapPointKind::UnisonLossOnset => 12.0,
+            MapPointKind::PeriodDoublingOnset => 13.0,
         }
     }
 
@@ -103,6 +112,7 @@ impl MapPointKind {
             MapPointKind::Cusp => "cusp",
             MapPointKind::JumpOnset => "jump onset",
             MapPointKind::UnisonLossOnset => "unison-loss onset",
+            MapPointKind::PeriodDoublingOnset => "period-doubling onset",
         }
     }
 
@@ -111,6 +121,9 @@ impl MapPointKind {
             MapPointKind::Cusp => "the two folds of the jump meet: past this value the response does not jump",
             MapPointKind::JumpOnset => "the extreme value of this jump region (it has no cusp)",
             MapPointKind::UnisonLossOnset => "past this value the set keeps unison at every order of the map",
+            MapPointKind::PeriodDoublingOnset => {
+                "past this value the response keeps its period at every order of the map"
+            }
         }
     }
 }
@@ -120,7 +133,8 @@ impl MapPointKind {
 pub struct Boundary {
     /// What it separates.
     pub kind: BoundaryKind,
-    /// For a unison-loss boundary, the identical set it belongs to.
+    /// For a unison-loss boundary, or a period doubling that breaks the unison (the absorbers
+    /// swing at half the order against each other), the identical set it belongs to.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub set: Option<String>,
     /// The first parameter of its points (excitation order n, or mean speed in rpm), in the
@@ -197,6 +211,9 @@ pub struct EnvelopeResult {
     pub boundaries: Vec<Boundary>,
     /// The codimension-two points.
     pub points: Vec<MapPoint>,
+    /// Where period doublings were searched, in words: along the seed branches, or why not
+    /// (no linear parametric resonance near the map, or a mechanism-parameter plane).
+    pub period_doubling_search: String,
     /// Wall time of the whole map, s.
     pub time_s: f64,
 }
@@ -485,7 +502,7 @@ fn seeds_on(
         }
         // The envelope draws no period-doubling curves yet (they are continued on the problem of
         // half the base frequency, which its seed branches are not).
-        Singularity::HalfPeriod => Vec::new(),
+        Singularity::HalfPeriod | Singularity::HalfPeriodBlock { .. } => Vec::new(),
     };
     guesses.iter().filter_map(|g| hbm.singular_at_with(ax.fold, family, test, s, g).ok()).collect()
 }
@@ -563,6 +580,149 @@ fn covered(
     })
 }
 
+/// One boundary through `seed`, followed both ways in the second parameter on `hk` (`what` its
+/// kind, identical set and test); each walk that fails is a failure worded by `fail`.
+#[allow(clippy::too_many_arguments)]
+fn walk_boundary(
+    hk: &mut Hbm,
+    ax: &Axis,
+    fam: Option<&MechanismFamily<'_>>,
+    seed: &FoldCurvePoint,
+    (kind, set, test): (BoundaryKind, Option<String>, Singularity),
+    fopts: &FoldCurveOptions,
+    failures: &mut Vec<String>,
+    fail: impl Fn(String) -> String,
+) -> Walked {
+    let fo = FoldCurveOptions { test, ..*fopts };
+    let mut w =
+        Walked { kind, set, test, points: Vec::new(), curves: Vec::new(), ends: [String::new(), String::new()] };
+    for (k, up) in [false, true].into_iter().enumerate() {
+        match hk.continue_fold_with(ax.fold, fam, seed, up, &fo) {
+            Ok(c) => {
+                w.ends[k] = end_words(&c);
+                if up {
+                    w.points.extend(c.points.iter().skip(1).cloned());
+                } else {
+                    w.points.extend(c.points.iter().rev().cloned());
+                }
+                w.curves.push(c);
+            }
+            Err(e) => {
+                w.ends[k] = format!("failed: {e}");
+                if !up {
+                    w.points.push(seed.clone());
+                }
+                failures.push(fail(format!("{} in the second parameter: {e}", if up { "up" } else { "down" })));
+            }
+        }
+    }
+    w
+}
+
+/// Sub-intervals per step of a seed branch at which [`doubling_seeds`] tests for a period
+/// doubling: a tongue is often narrower than the seed branch's step (0.05 wide in n at 2000 N·m
+/// on the paper's rotor against steps of 0.1), and the states between points come from the
+/// branch's Hermite interpolation, without a solve.
+const DOUBLING_SUBSTEPS: usize = 10;
+
+/// The period doublings of the seed branch `branch` (on the problem at the base frequency, at
+/// scale `s`), each solved on the problem of half the base frequency `h2` with its test: where
+/// the sign of a test's determinant (the odd-harmonic block, or its part of an identical set's
+/// representative) changes between two of the branch's points or interpolated states.
+fn doubling_seeds(
+    h2: &mut Hbm,
+    ax: &Axis,
+    branch: &crate::hbm::Branch,
+    s: f64,
+    tests: &[Singularity],
+) -> Vec<(Singularity, FoldCurvePoint)> {
+    let mut states: Vec<HbmSolution> = Vec::new();
+    for i in 0..branch.points.len() {
+        states.push(branch.points[i].solution.clone());
+        if i + 1 < branch.points.len() {
+            states.extend(
+                (1..DOUBLING_SUBSTEPS).filter_map(|j| branch.interpolate(i, j as f64 / DOUBLING_SUBSTEPS as f64)),
+            );
+        }
+    }
+    let doubled: Vec<HbmSolution> = states.iter().filter_map(|p| h2.on_doubled_period(p, p.order).ok()).collect();
+    let signs: Vec<Vec<f64>> = doubled.iter().map(|d| h2.singularity_signs(d, tests)).collect();
+    let mut seeds = Vec::new();
+    for (k, &test) in tests.iter().enumerate() {
+        for (i, w) in signs.windows(2).enumerate() {
+            if w[0][k] * w[1][k] < 0.0
+                && let Ok(p) = h2.singular_at_with(ax.fold, None, test, s, &doubled[i])
+            {
+                seeds.push((test, p));
+            }
+        }
+    }
+    seeds
+}
+
+/// How far (as a factor either way) a period-doubling tongue is looked for from the linear
+/// parametric resonance it grows from: the amplitude shifts an absorber's tuning (a circular
+/// path's order falls by 15 % at a 90° swing) and a tongue widens with the pump.
+const DOUBLING_MARGIN: f64 = 1.3;
+
+/// Whether the map can hold a period doubling, from the linearised mechanism (free spin, no
+/// damping) at the map's mean speeds: a multiplier −1 over the base period T_b grows from the
+/// parametric resonance of a mode of eigen-order o with a pump of order e (a harmonic of the
+/// response, the excitation's own orders first) where o ≈ k·e/2 for k = 1 (the principal
+/// Mathieu tongue) or 3, and only where k·e/e_b is odd (e_b the base order: an even multiple
+/// makes the mode's motion repeat over T_b, a +1 tongue). Ok(words) when some resonance lies
+/// within [`DOUBLING_MARGIN`] of the map's orders (and when the linear model fails: then the
+/// search runs), Err(words) when none does and the search is skipped.
+fn doubling_screen(
+    study: &Study,
+    ax: &Axis,
+    harmonics: &[Harmonic],
+    ratio: f64,
+) -> std::result::Result<String, String> {
+    use crate::linear::{Damping, LinearModel, ModeKind, Spin};
+    let searched = "searched along the seed branches".to_string();
+    // The base order's range and the speeds the eigen-orders are taken at.
+    let (n, speeds) = match ax.fold {
+        FoldPlane::Order => (ax.range, vec![ax.omega]),
+        FoldPlane::Speed { order } => ((order, order), vec![ax.range.0, ax.range.1]),
+    };
+    let mut orders: Vec<(f64, f64)> = Vec::new();
+    for (i, &omega) in speeds.iter().enumerate() {
+        let modal = LinearModel::new(&study.mechanism, &study.spec.spin_joint, omega, None)
+            .and_then(|m| m.modes(Spin::Free, Damping::Undamped));
+        let Ok(modal) = modal else { return Ok(searched) };
+        let vib = modal.modes.iter().filter(|m| m.kind == ModeKind::Vibration && m.order.is_finite());
+        for (j, o) in vib.map(|m| m.order).enumerate() {
+            if i == 0 {
+                orders.push((o, o));
+            } else if let Some(r) = orders.get_mut(j) {
+                *r = (r.0.min(o), r.1.max(o));
+            }
+        }
+    }
+    for h in harmonics.iter().filter(|h| h.amplitude != 0.0) {
+        let m = (h.multiple / ratio).round() as i64;
+        for k in [1_i64, 3] {
+            if (k * m) % 2 == 0 {
+                continue;
+            }
+            let lo = 0.5 * k as f64 * h.multiple * n.0.min(n.1) / DOUBLING_MARGIN;
+            let hi = 0.5 * k as f64 * h.multiple * n.0.max(n.1) * DOUBLING_MARGIN;
+            if let Some(o) = orders.iter().find(|o| o.1 >= lo && o.0 <= hi) {
+                return Ok(format!(
+                    "{searched}: the linear eigen-order {} is near {k}/2 of the excitation's order {}",
+                    num(o.0, 5),
+                    num(h.multiple * 0.5 * (n.0 + n.1), 5)
+                ));
+            }
+        }
+    }
+    Err(format!(
+        "not searched: no linear eigen-order lies within a factor {DOUBLING_MARGIN} of k/2 of an excitation order \
+         (k = 1, 3, the parametric resonances that double the period)"
+    ))
+}
+
 fn end_words(c: &FoldCurve) -> String {
     match c.end {
         crate::hbm::FoldCurveEnd::LeftBox => "left the map",
@@ -628,6 +788,23 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
     tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
     let fopts = FoldCurveOptions { range: ax.range, scales: second.range, ..FoldCurveOptions::default() };
+    // The problem of half the base frequency (the extra multiple at zero amplitude, twice the
+    // harmonics), on which period doublings are followed; on a torque-scale plane only (a
+    // mechanism parameter's family builds its problems at the base frequency).
+    let screen = match fam {
+        Some(_) => Err("not searched on a mechanism parameter's plane".to_string()),
+        None => doubling_screen(study, &ax, &second.harmonics, hbm.base_frequency(1.0) / hbm.omega()),
+    };
+    let mut half = match &screen {
+        Err(_) => None,
+        Ok(_) => {
+            let ratio = hbm.base_frequency(1.0) / hbm.omega();
+            let mut halved = second.harmonics.clone();
+            halved.push(Harmonic { multiple: 0.5 * ratio, amplitude: 0.0, phase: 0.0 });
+            let opts2 = HbmOptions { harmonics: 2 * spec.harmonics, ..opts };
+            RoutedHbm::new(&kane, study.spin, ax.omega, (&halved[..], &[][..]), &inputs, opts2).ok()
+        }
+    };
     // The seed branches only supply starting points (each seed is solved exactly on its curve
     // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
     // the multi-order analysis's order branches (`study::hbm::branch`).
@@ -681,42 +858,42 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 if covered(hk, &ax, fam, &walked, *test, &seed) {
                     continue;
                 }
-                let fo = FoldCurveOptions { test: *test, ..fopts };
-                let mut w = Walked {
-                    kind: *kind,
-                    set: set.clone(),
-                    test: *test,
-                    points: Vec::new(),
-                    curves: Vec::new(),
-                    ends: [String::new(), String::new()],
-                };
-                for (k, up) in [false, true].into_iter().enumerate() {
-                    match hk.continue_fold_with(ax.fold, fam, &seed, up, &fo) {
-                        Ok(c) => {
-                            w.ends[k] = end_words(&c);
-                            if up {
-                                w.points.extend(c.points.iter().skip(1).cloned());
-                            } else {
-                                w.points.extend(c.points.iter().rev().cloned());
-                            }
-                            w.curves.push(c);
-                        }
-                        Err(e) => {
-                            w.ends[k] = format!("failed: {e}");
-                            if !up {
-                                w.points.push(seed.clone());
-                            }
-                            failures.push(format!(
-                                "{}: {} boundary from {} at {}, {} in the second parameter: {e}",
-                                spec.name,
-                                kind.words(),
-                                num(ax.value(seed.order, seed.omega), 8),
-                                second.words(second.value(s)),
-                                if up { "up" } else { "down" }
-                            ));
-                        }
-                    }
+                let w = walk_boundary(hk, &ax, fam, &seed, (*kind, set.clone(), *test), &fopts, &mut failures, |e| {
+                    format!(
+                        "{}: {} boundary from {} at {}, {e}",
+                        spec.name,
+                        kind.words(),
+                        num(ax.value(seed.order, seed.omega), 8),
+                        second.words(second.value(s))
+                    )
+                });
+                walked.push(w);
+            }
+        }
+        // Period doublings, on the problem of half the base frequency at the same scale.
+        if let Some(h2) = half.as_mut().map(RoutedHbm::hbm_mut)
+            && h2.set_torque_scale(scale).is_ok()
+        {
+            // The set's label of a non-unison doubling (its test the set's representative's
+            // block at half the base frequency).
+            let mut halves = vec![(None, Singularity::HalfPeriod)];
+            halves.extend(h2.unison_loss_tests().into_iter().map(|(l, t)| (Some(l), t.halved())));
+            let tests: Vec<Singularity> = halves.iter().map(|h| h.1).collect();
+            for (test, seed) in doubling_seeds(h2, &ax, &branch, s, &tests) {
+                if covered(h2, &ax, None, &walked, test, &seed) {
+                    continue;
                 }
+                let kind = BoundaryKind::PeriodDoubling;
+                let set = halves.iter().find(|h| h.1 == test).and_then(|h| h.0.clone());
+                let w = walk_boundary(h2, &ax, None, &seed, (kind, set, test), &fopts, &mut failures, |e| {
+                    format!(
+                        "{}: {} boundary from {} at {}, {e}",
+                        spec.name,
+                        kind.words(),
+                        num(ax.value(seed.order, seed.omega), 8),
+                        second.words(second.value(s))
+                    )
+                });
                 walked.push(w);
             }
         }
@@ -724,6 +901,11 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut boundaries = Vec::new();
     let mut points = Vec::new();
     for (i, w) in walked.iter().enumerate() {
+        // A period-doubling curve lives on the problem of half the base frequency.
+        let hbm: &mut Hbm = match (w.test, half.as_mut()) {
+            (t, Some(h2)) if t.on_half_period() => h2.hbm_mut(),
+            _ => &mut *hbm,
+        };
         let at_top = crossings_at(hbm, &ax, fam, w, second.range.1);
         for c in &w.curves {
             for p in &c.cusps {
@@ -738,6 +920,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 let kind = match w.kind {
                     BoundaryKind::Jump => MapPointKind::JumpOnset,
                     BoundaryKind::UnisonLoss => MapPointKind::UnisonLossOnset,
+                    BoundaryKind::PeriodDoubling => MapPointKind::PeriodDoublingOnset,
                 };
                 points.push(MapPoint {
                     kind,
@@ -789,6 +972,9 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         seeds: second.seeds.iter().map(|&s| second.value(s)).collect(),
         boundaries,
         points,
+        period_doubling_search: match screen {
+            Ok(w) | Err(w) => w,
+        },
         time_s: start.elapsed().as_secs_f64(),
     };
     Ok((result, failures))
@@ -932,8 +1118,9 @@ fn panel(r: &EnvelopeResult) -> Panel {
     let color = |k: BoundaryKind| match k {
         BoundaryKind::Jump => 1,
         BoundaryKind::UnisonLoss => 3,
+        BoundaryKind::PeriodDoubling => 5,
     };
-    let mut legend = [true, true];
+    let mut legend = [true, true, true];
     let mut jump_regions = Vec::new();
     for (i, b) in r.boundaries.iter().enumerate() {
         let c = color(b.kind);
@@ -954,6 +1141,8 @@ fn panel(r: &EnvelopeResult) -> Panel {
                 let text = match b.kind {
                     BoundaryKind::Jump => "several states: jump possible",
                     BoundaryKind::UnisonLoss => "unison lost",
+                    BoundaryKind::PeriodDoubling if b.set.is_some() => "period doubled, out of unison",
+                    BoundaryKind::PeriodDoubling => "period doubled",
                 };
                 labels.push(PointLabel { x, y, text: text.into(), marker: false });
             }
@@ -961,11 +1150,16 @@ fn panel(r: &EnvelopeResult) -> Panel {
                 jump_regions.push(poly);
             }
         }
-        let k = usize::from(b.kind == BoundaryKind::UnisonLoss);
+        let k = match b.kind {
+            BoundaryKind::Jump => 0,
+            BoundaryKind::UnisonLoss => 1,
+            BoundaryKind::PeriodDoubling => 2,
+        };
         let label = if std::mem::take(&mut legend[k]) {
             match b.kind {
                 BoundaryKind::Jump => "jump boundary (folds)".to_string(),
                 BoundaryKind::UnisonLoss => "unison-loss boundary (+1 branch points)".to_string(),
+                BoundaryKind::PeriodDoubling => "period-doubling boundary (−1 multipliers)".to_string(),
             }
         } else {
             String::new()
@@ -1008,9 +1202,10 @@ fn markdown(r: &EnvelopeResult) -> String {
     let _ = writeln!(
         md,
         "{}{} over {} {}–{}{} and {} {}–{}, route {}: {} from {} seed branches ({}) in {} s. \
-         Each boundary is a curve of folds or of +1 branch points followed in the plane by two-parameter \
-         continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, 2: unison-loss boundary, \
-         10: cusp, 11: jump onset, 12: unison-loss onset).\n",
+         Each boundary is a curve of folds, of +1 branch points or of period doublings (−1) followed in the \
+         plane by two-parameter continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, \
+         2: unison-loss boundary, 3: period-doubling boundary, 10: cusp, 11: jump onset, 12: unison-loss \
+         onset, 13: period-doubling onset).\n",
         if r.parameter == "order" {
             format!("At {} rpm", num(r.held, 6))
         } else {
@@ -1032,9 +1227,10 @@ fn markdown(r: &EnvelopeResult) -> String {
         r.name,
         r.name
     );
+    let _ = writeln!(md, "Period doublings: {}.\n", r.period_doubling_search);
     if r.boundaries.is_empty() {
-        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison on the seed \
-               branches).\n\n";
+        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison, no period \
+               doubling on the seed branches).\n\n";
         return md;
     }
     let _ = writeln!(
@@ -1049,6 +1245,7 @@ fn markdown(r: &EnvelopeResult) -> String {
         let hi =
             b.second_values.iter().copied().chain(extra()).fold(f64::NEG_INFINITY, f64::max).min(r.second_range[1]);
         let kind = match &b.set {
+            Some(set) if b.kind == BoundaryKind::PeriodDoubling => format!("{}, out of unison ({set})", b.kind.words()),
             Some(set) => format!("{} ({set})", b.kind.words()),
             None => b.kind.words().to_string(),
         };
@@ -1111,7 +1308,11 @@ fn markdown(r: &EnvelopeResult) -> String {
         md += "; inside a unison-loss boundary the identical absorbers' unison motion is unstable (a non-unison \
                motion takes over)";
     }
-    md += ". Period-doubling boundaries are not mapped yet.\n\n";
+    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::PeriodDoubling) {
+        md += "; inside a period-doubling boundary the response is unstable against a motion of twice its period \
+               (a swing at half the order takes over: see `switch: true` on a harmonic balance)";
+    }
+    md += ".\n\n";
     md
 }
 
