@@ -197,3 +197,58 @@ fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
     let ratio = (b.second_values[last] / b.second_values[first]) / (b.values[last] / b.values[first]).powi(2);
     assert!((ratio - 1.0).abs() < 0.25, "T/Ω² along the fold curve changes by {ratio}");
 }
+
+/// Over orders 2.6–3.3 and 1–5000 N·m the unison-loss boundary of the two pendulums reaches
+/// the jump boundary: a codimension-two point where the branch point sits on the fold
+/// (`UnisonLossMeetsJump`). Checked on one-parameter branches of the general solver (both
+/// pendulums unknowns, no two-parameter machinery): at the point's torque the branch's fold is
+/// at the point's order (1e-6); 0.5 % below and above it, the branch point next to the fold
+/// lies on opposite sides of it along the branch (it passes through the fold there).
+#[test]
+fn the_unison_loss_boundary_meets_the_jump_boundary() {
+    use crate::support::cpva_hbm::omega;
+    use kanedyn::cpva::CpvaParams;
+    use kanedyn::hbm::BifurcationClass;
+    use kanedyn::kane::Kane;
+    let text = "Study(name: \"meet\", mechanism: \"cpva2.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+                analyses: [Envelope(name: \"envelope\", rpm: 1000.0, order_min: 2.6, order_max: 3.3, torque_min: 1.0, \
+                torque_max: 5000.0)])\n";
+    let (report, csv, _, _) = run_study("meet", text, "meet");
+    let r = &report.envelopes[0];
+    let meet = r.points.iter().find(|p| format!("{:?}", p.kind) == "UnisonLossMeetsJump").expect("a meeting point");
+    println!("meeting at n {} T {} N·m", meet.value, meet.second_value);
+    assert!(csv.lines().any(|l| l.starts_with(&format!("{},14,", meet.boundary + 1))), "CSV kind 14");
+    let kane = Kane::new(&CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap()).unwrap();
+    // (fold order, whether the branch point nearest the fold comes before it along the branch)
+    let events = |torque: f64| -> (f64, bool) {
+        let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
+        let copts = ContinuationOptions { ds_max: 1e-4, ds: 1e-4, ..Default::default() };
+        let b = hbm.continue_in_order(meet.value - 0.01, meet.value + 0.01, None, &copts).unwrap();
+        assert_eq!(b.folds.len(), 1, "{torque} N·m: {:?}", b.folds);
+        let fold = &b.folds[0];
+        let bp = b
+            .bifurcations
+            .iter()
+            .filter(|x| x.class == BifurcationClass::BranchPoint)
+            .min_by(|x, y| (x.order - fold.order).abs().total_cmp(&(y.order - fold.order).abs()))
+            .expect("a branch point");
+        println!(
+            "{torque} N·m: fold {} after {}, branch point {} after {}",
+            fold.order, fold.after, bp.order, bp.after
+        );
+        assert_ne!(bp.after, fold.after, "{torque} N·m: the step does not separate them");
+        (fold.order, bp.after < fold.after)
+    };
+    let t = meet.second_value;
+    let (n_fold, _) = {
+        let mut hbm = Hbm::new(&kane, 0, omega(), &single(t), HbmOptions::default()).unwrap();
+        let copts = ContinuationOptions { ds_max: 1e-3, stability: false, ..Default::default() };
+        let b = hbm.continue_in_order(meet.value - 0.01, meet.value + 0.01, None, &copts).unwrap();
+        (b.folds[0].order, ())
+    };
+    println!("fold at the meeting torque: {n_fold}");
+    assert!((n_fold - meet.value).abs() < 1e-6, "{n_fold} vs {}", meet.value);
+    let (_, below) = events(t * (1.0 - 5e-3));
+    let (_, above) = events(t * (1.0 + 5e-3));
+    assert_ne!(below, above, "the branch point does not pass through the fold between the two torques");
+}

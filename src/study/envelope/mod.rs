@@ -94,6 +94,10 @@ pub enum MapPointKind {
     /// The least torque of a period-doubling boundary (a tongue's tip): below it the response
     /// keeps its period at every order of the map.
     PeriodDoublingOnset,
+    /// A unison-loss boundary meets the jump boundary: the branch point reaches a fold of the
+    /// unison response (on one side of it the set loses unison before the response jumps, on
+    /// the other only after).
+    UnisonLossMeetsJump,
 }
 
 impl MapPointKind {
@@ -104,6 +108,7 @@ impl MapPointKind {
             MapPointKind::JumpOnset => 11.0,
             MapPointKind::UnisonLossOnset => 12.0,
             MapPointKind::PeriodDoublingOnset => 13.0,
+            MapPointKind::UnisonLossMeetsJump => 14.0,
         }
     }
 
@@ -113,6 +118,7 @@ impl MapPointKind {
             MapPointKind::JumpOnset => "jump onset",
             MapPointKind::UnisonLossOnset => "unison-loss onset",
             MapPointKind::PeriodDoublingOnset => "period-doubling onset",
+            MapPointKind::UnisonLossMeetsJump => "unison loss meets jump",
         }
     }
 
@@ -123,6 +129,9 @@ impl MapPointKind {
             MapPointKind::UnisonLossOnset => "past this value the set keeps unison at every order of the map",
             MapPointKind::PeriodDoublingOnset => {
                 "past this value the response keeps its period at every order of the map"
+            }
+            MapPointKind::UnisonLossMeetsJump => {
+                "the loss of unison reaches the fold: on one side unison is lost on the branch before the jump, on the other only past it"
             }
         }
     }
@@ -723,6 +732,39 @@ fn doubling_screen(
     ))
 }
 
+/// Where the unison-loss curve `c` (its test `test`, a representative's block) meets a fold:
+/// its states where the whole Jacobian of the unison problem is singular too. Along the curve
+/// the sign of that determinant changes there (the curve crosses the fold line of the
+/// response surface); each change between two of its points is bisected in the second
+/// parameter, the states solved on the curve at each value from the nearer point, until the
+/// bracket is [`MEET_TOL`] of the value wide. On a torque or scale plane only.
+fn meets_fold(hbm: &mut Hbm, ax: &Axis, test: Singularity, c: &FoldCurve) -> Vec<FoldCurvePoint> {
+    let signs: Vec<f64> = c.points.iter().map(|p| hbm.singularity_sign(&p.solution, Singularity::Jacobian)).collect();
+    let mut out = Vec::new();
+    for (i, w) in signs.windows(2).enumerate() {
+        if w[0] * w[1] >= 0.0 {
+            continue;
+        }
+        let (mut a, mut b) = (c.points[i].clone(), c.points[i + 1].clone());
+        let sign_a = w[0];
+        while (a.parameter - b.parameter).abs() > MEET_TOL * a.parameter.abs().max(b.parameter.abs()) {
+            let mid = 0.5 * (a.parameter + b.parameter);
+            let near = if (mid - a.parameter).abs() <= (mid - b.parameter).abs() { &a } else { &b };
+            let Ok(m) = hbm.singular_at_with(ax.fold, None, test, mid, &near.solution) else { break };
+            if hbm.singularity_sign(&m.solution, Singularity::Jacobian) == sign_a {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        out.push(if (a.parameter - b.parameter).abs() < f64::EPSILON { a } else { b });
+    }
+    out
+}
+
+/// Relative width in the second parameter to which [`meets_fold`] brackets a meeting.
+const MEET_TOL: f64 = 1e-10;
+
 fn end_words(c: &FoldCurve) -> String {
     match c.end {
         crate::hbm::FoldCurveEnd::LeftBox => "left the map",
@@ -915,6 +957,16 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     value: ax.value(p.order, p.omega),
                     second_value: second.value(p.parameter),
                 });
+            }
+            if w.kind == BoundaryKind::UnisonLoss && fam.is_none() {
+                for p in meets_fold(hbm, &ax, w.test, c) {
+                    points.push(MapPoint {
+                        kind: MapPointKind::UnisonLossMeetsJump,
+                        boundary: i,
+                        value: ax.value(p.order, p.omega),
+                        second_value: second.value(p.parameter),
+                    });
+                }
             }
             for p in &c.scale_extrema {
                 let kind = match w.kind {
@@ -1205,7 +1257,7 @@ fn markdown(r: &EnvelopeResult) -> String {
          Each boundary is a curve of folds, of +1 branch points or of period doublings (−1) followed in the \
          plane by two-parameter continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, \
          2: unison-loss boundary, 3: period-doubling boundary, 10: cusp, 11: jump onset, 12: unison-loss \
-         onset, 13: period-doubling onset).\n",
+         onset, 13: period-doubling onset, 14: unison loss meets jump).\n",
         if r.parameter == "order" {
             format!("At {} rpm", num(r.held, 6))
         } else {
