@@ -262,6 +262,25 @@ struct Augmented {
 
 /// A fold curve's walk: its plane, the borders b and c, ∂R̂/∂s (constant) on a torque-scale
 /// plane, or the family of problems on a mechanism parameter's.
+/// A converged corrector: the point, its Newton iterations, and the last Newton matrix's LU
+/// and augmented system (at the iterate one step before y).
+struct Corrected {
+    y: DVector<f64>,
+    iterations: usize,
+    lu: nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
+    aug: Augmented,
+}
+
+/// The unit tangent `[[augmented Jacobian], [rowᵀ]] z = e_last`, normalised, from the bordered
+/// matrix's LU (`m` unknowns, then λ and σ); None where it is singular or not finite.
+fn unit_tangent(lu: &nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>, m: usize) -> Option<DVector<f64>> {
+    let mut e = DVector::zeros(m + 2);
+    e[m + 1] = 1.0;
+    let z = lu.solve(&e)?;
+    let norm = z.norm();
+    (norm.is_finite() && norm > 0.0).then(|| z / norm)
+}
+
 struct Walk<'a> {
     plane: Plane,
     b: DVector<f64>,
@@ -780,14 +799,19 @@ impl Hbm {
                 break FoldCurveEnd::StepTooSmall;
             }
             let pred = &y + &t * ds;
-            let (y_new, iters) = match self.fold_correct(&pred, &t, &mut walk, opts) {
+            let Corrected { y: y_new, iterations: iters, lu, aug } = match self.fold_correct(&pred, &t, &mut walk, opts)
+            {
                 Ok(r) => r,
                 Err(_) => {
                     ds *= 0.5;
                     continue;
                 }
             };
-            let Ok((mut t_new, aug)) = self.fold_tangent(&y_new, &mut walk, &t) else {
+            // The tangent from the last Newton matrix, factorised at the iterate before the
+            // converged one (within the tolerance of it): the predictor only needs it to that
+            // accuracy, and a new matrix would cost three Jacobians. Turning points of the
+            // second parameter are located with exact tangents (`locate_extremum`).
+            let Some(mut t_new) = unit_tangent(&lu, m) else {
                 ds *= 0.5;
                 continue;
             };
@@ -857,14 +881,8 @@ impl Hbm {
     ) -> Result<(DVector<f64>, Augmented), HbmError> {
         let m = self.unknowns();
         let (mat, aug) = self.fold_matrix(y, walk, row)?;
-        let mut e = DVector::zeros(m + 2);
-        e[m + 1] = 1.0;
-        let z = mat.lu().solve(&e).ok_or(HbmError::Singular { order: y[m] })?;
-        let norm = z.norm();
-        if !(norm.is_finite() && norm > 0.0) {
-            return Err(HbmError::NonFinite { order: y[m] });
-        }
-        Ok((z / norm, aug))
+        let z = unit_tangent(&mat.lu(), m).ok_or(HbmError::Singular { order: y[m] })?;
+        Ok((z, aug))
     }
 
     /// Newton's method on `R̂ = 0, g = 0, tᵀ(y − pred) = 0` from `pred`.
@@ -874,7 +892,7 @@ impl Hbm {
         t: &DVector<f64>,
         walk: &mut Walk,
         opts: &FoldCurveOptions,
-    ) -> Result<(DVector<f64>, usize), HbmError> {
+    ) -> Result<Corrected, HbmError> {
         let m = self.unknowns();
         let mut y = pred.clone();
         for it in 1..=opts.max_iter {
@@ -883,14 +901,15 @@ impl Hbm {
             rhs.rows_mut(0, m).copy_from(&aug.r);
             rhs[m] = aug.g;
             rhs[m + 1] = t.dot(&(&y - pred));
-            let d = mat.lu().solve(&rhs).ok_or(HbmError::Singular { order: y[m] })?;
+            let lu = mat.lu();
+            let d = lu.solve(&rhs).ok_or(HbmError::Singular { order: y[m] })?;
             let step = d.amax();
             if !step.is_finite() || (y[m] - d[m]).is_nan() || y[m] - d[m] <= 0.0 {
                 return Err(HbmError::NonFinite { order: y[m] });
             }
             y -= d;
             if step <= opts.tol {
-                return Ok((y, it));
+                return Ok(Corrected { y, iterations: it, lu, aug });
             }
         }
         Err(HbmError::NoConvergence { order: y[m], iterations: opts.max_iter, step: f64::NAN })
@@ -910,7 +929,7 @@ impl Hbm {
         let m = self.unknowns();
         let slope = |this: &mut Self, walk: &mut Walk, sigma: f64| -> Option<(DVector<f64>, DVector<f64>)> {
             let pred = y + t * sigma;
-            let (yc, _) = this.fold_correct(&pred, t, walk, opts).ok()?;
+            let yc = this.fold_correct(&pred, t, walk, opts).ok()?.y;
             let (mut tc, _) = this.fold_tangent(&yc, walk, t).ok()?;
             if tc.dot(t) < 0.0 {
                 tc = -tc;
