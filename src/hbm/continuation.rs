@@ -50,6 +50,7 @@
 use super::blocklu::Factor;
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
+use super::stability::PairSense;
 use super::{BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 use super::{Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::kane::Kane;
@@ -142,6 +143,7 @@ impl Hbm {
         }
         let x = su.x_of(y.as_slice(), m);
         let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
+        self.pair_senses.clear();
         if stability && self.opts.stability_samples > 0 {
             sol.stability = Some(self.stability(&sol)?);
         }
@@ -335,6 +337,8 @@ impl Hbm {
         let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, iterations, copts.stability)?];
         // The accepted points' arclengths and test functions (each computed once).
         let mut tests = vec![(0.0, test_functions(&points[0]))];
+        // And their Floquet pairs near ±1 with the senses they turn in.
+        let mut senses = vec![std::mem::take(&mut self.pair_senses)];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
         let mut s = 0.0;
@@ -426,6 +430,7 @@ impl Hbm {
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
             }
             let cand = self.branch_point(&su, &y, Some(&t), s + chord, iters, copts.stability)?;
+            let cand_senses = std::mem::take(&mut self.pair_senses);
             // A pair of crossings (two folds, or a multiplier out of the unit circle and back)
             // inside one step leaves the test functions with the same sign at both ends; the
             // quadratic through the last two points and this one shows the dip. Aim the step at
@@ -527,6 +532,7 @@ impl Hbm {
             s += chord;
             last_chord = chord;
             tests.push(cand_tests);
+            senses.push(cand_senses);
             if let Some(hook) = &self.on_point {
                 (hook.0)(points.len() + 1, cand.parameter);
             }
@@ -543,7 +549,8 @@ impl Hbm {
         // Past the deadline the crossings stay where the accepted points bracket them.
         let refine = copts.refine_folds && branch.end != BranchEnd::Watchdog;
         if refine && copts.stability {
-            self.split_narrow_pairs(&su, &mut branch, &mut tests);
+            self.split_tongues(&su, &mut branch, &mut tests, &mut senses);
+            self.split_narrow_pairs(&su, &mut branch, &mut tests, &mut senses);
         }
         branch.bifurcations = bifurcations(&branch.points, &branch.folds);
         if refine {
@@ -563,7 +570,7 @@ impl Hbm {
     /// the other sign is inserted as a point, so that the pair shows as two changes of sign
     /// between accepted points and is located and classified like any other. Segments with a
     /// fold are left alone (the parameter is not monotone there).
-    fn split_narrow_pairs(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Vec<(f64, Vec<(f64, f64)>)>) {
+    fn split_narrow_pairs(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
         const DEPTH: f64 = std::f64::consts::LN_2 * 2.0;
         let mut i = 1;
         // `tests` holds every accepted point's test functions but the end point's, made by a
@@ -586,57 +593,132 @@ impl Hbm {
             };
             let sign = b[j].0;
             // t in [0, 2]: segment i−1 for t < 1, segment i beyond; t = 1 is point i.
-            let eval = |hbm: &mut Hbm, t: f64| -> Option<(BranchPoint, (f64, f64))> {
-                let (seg, sigma) = if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
-                let guess = branch.interpolate(seg, sigma)?;
-                let lambda = su.param.value(&guess) / su.p_ref;
-                let sol = hbm.solve_at(&su.at(lambda), Some(&guess)).ok()?;
-                let y = hbm.y_of(su, &sol);
-                let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
-                let point = hbm.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
-                let f = *test_functions(&point).get(j)?;
-                Some((point, f))
-            };
-            // Golden section on ln |f| over [0, 2], from the bracket (0, 1, 2).
-            let golden = 0.381_966_011_250_105_2;
-            let (mut lo, mut mid, mut hi, mut f_mid) = (0.0, 1.0, 2.0, b[j].1);
-            let mut found = None;
-            for _ in 0..16 {
-                let t = if mid - lo > hi - mid { mid - golden * (mid - lo) } else { mid + golden * (hi - mid) };
-                let Some((point, (sg, lg))) = eval(self, t) else { break };
-                if sg != sign && sg != 0.0 {
-                    found = Some((t, point, (sg, lg)));
-                    break;
-                }
-                if lg < f_mid {
-                    if t < mid {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                    (mid, f_mid) = (t, lg);
-                } else if t < mid {
-                    lo = t;
-                } else {
-                    hi = t;
-                }
-            }
-            let Some((t, point, _)) = found else {
+            let at = |t: f64| if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
+            let Some((t, found)) = self.golden_for_sign(su, branch, &at, (0.0, 1.0, 2.0), b[j].1, j, sign) else {
                 i += 1;
                 continue;
             };
             let at = if t < 1.0 { i } else { i + 1 };
-            let values = test_functions(&point);
-            tests.insert(at, (point.arclength, values));
-            branch.points.insert(at, point);
-            for f in &mut branch.folds {
-                if f.after >= at {
-                    f.after += 1;
-                }
-            }
+            insert_point(branch, tests, senses, at, found);
             // Past the inserted point and its neighbours: they now straddle the changes.
             i = at + 2;
         }
+    }
+
+    /// Tongues stepped over whole, told by the sense of a pair near ±1 (see
+    /// `stability::PairSense`): where the member with Im μ > 0 of a pair near −1 (+1) turns the
+    /// other way at the end of a segment than at its start (the same pair: eigenvectors parallel
+    /// up to conjugation) while the block's Π(μ + 1) (Π(μ − 1)) kept its sign, the pair met on
+    /// the real axis inside the segment, and passed through −1 (+1) and back there unless it met
+    /// inside the unit circle. The segment is bisected on the sense (states from
+    /// [`Branch::interpolate`] solved at the fixed parameter) until a state inside the tongue is
+    /// found, or one where the pair is real but the test function has its old sign (the real
+    /// stretch is wider than the tongue): then its magnitude is minimised by golden section
+    /// between the two senses' states. A state where the test function has the other sign is
+    /// inserted as a point, so the pair becomes two changes of sign between accepted points.
+    /// Segments with a fold are left alone.
+    fn split_tongues(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
+        let mut i = 0;
+        while i + 1 < tests.len() && tests.len() <= branch.points.len() && senses.len() == tests.len() {
+            let near_fold = branch.folds.iter().any(|f| f.after == i);
+            let suspect =
+                if near_fold { None } else { flipped(&tests[i].1, &tests[i + 1].1, &senses[i], &senses[i + 1]) };
+            let Some((j, block, pair)) = suspect else {
+                i += 1;
+                continue;
+            };
+            let sign = tests[i].1[j].0;
+            let (mut lo, mut hi) = (0.0, 1.0);
+            let mut reference = pair.v.clone();
+            let mut found = None;
+            let at = |t: f64| (i, t);
+            for _ in 0..40 {
+                if hi - lo < 1e-9 {
+                    break;
+                }
+                let mid = 0.5 * (lo + hi);
+                let Some((point, ps)) = self.point_on_segment(su, branch, i, mid) else { break };
+                let f = test_functions(&point)[j];
+                if f.0 != sign && f.0 != 0.0 {
+                    found = Some((mid, (point, ps)));
+                    break;
+                }
+                match ps.get(block).and_then(|b| same_pair(b, pair.side, &reference)) {
+                    Some(p) if p.sense * pair.sense > 0.0 => {
+                        lo = mid;
+                        reference = p.v.clone();
+                    }
+                    Some(_) => hi = mid,
+                    None => {
+                        found = self.golden_for_sign(su, branch, &at, (lo, mid, hi), f.1, j, sign);
+                        break;
+                    }
+                }
+            }
+            let Some((_, point)) = found else {
+                i += 1;
+                continue;
+            };
+            insert_point(branch, tests, senses, i + 1, point);
+            i += 2;
+        }
+    }
+
+    /// The solution at fraction σ of segment `seg`, solved at the interpolated parameter, as a
+    /// branch point with its stability (no tangent), and its pairs' senses.
+    fn point_on_segment(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        seg: usize,
+        sigma: f64,
+    ) -> Option<(BranchPoint, PairSenses)> {
+        let guess = branch.interpolate(seg, sigma)?;
+        let lambda = su.param.value(&guess) / su.p_ref;
+        let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+        let y = self.y_of(su, &sol);
+        let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
+        let point = self.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
+        Some((point, std::mem::take(&mut self.pair_senses)))
+    }
+
+    /// Golden section on ln |f_j| (test function j) over the bracket (lo, mid, hi) of a
+    /// parameter t that `at` maps to (segment, σ), `f_mid` its value at mid, until a state
+    /// where f_j has the other sign than `sign` (16 evaluations at most): that t and state.
+    #[allow(clippy::too_many_arguments)]
+    fn golden_for_sign(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        at: &dyn Fn(f64) -> (usize, f64),
+        (mut lo, mut mid, mut hi): (f64, f64, f64),
+        mut f_mid: f64,
+        j: usize,
+        sign: f64,
+    ) -> Option<(f64, (BranchPoint, PairSenses))> {
+        let golden = 0.381_966_011_250_105_2;
+        for _ in 0..16 {
+            let t = if mid - lo > hi - mid { mid - golden * (mid - lo) } else { mid + golden * (hi - mid) };
+            let (seg, sigma) = at(t);
+            let (point, ps) = self.point_on_segment(su, branch, seg, sigma)?;
+            let (sg, lg) = *test_functions(&point).get(j)?;
+            if sg != sign && sg != 0.0 {
+                return Some((t, (point, ps)));
+            }
+            if lg < f_mid {
+                if t < mid {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+                (mid, f_mid) = (t, lg);
+            } else if t < mid {
+                lo = t;
+            } else {
+                hi = t;
+            }
+        }
+        None
     }
 
     /// Locates each crossing that is not a fold by bisection along its segment: states from
@@ -818,6 +900,81 @@ impl Hbm {
         let order = if su.param == Parameter::Order { lambda } else { samples[1].3 };
         Some((order, lambda * su.p_ref))
     }
+}
+
+/// Each accepted point's arclength and [`test_functions`].
+type Tests = Vec<(f64, Vec<(f64, f64)>)>;
+/// One point's pairs near ±1, per Floquet block.
+type PairSenses = Vec<Vec<PairSense>>;
+/// Each accepted point's [`PairSenses`].
+type Senses = Vec<PairSenses>;
+
+/// Inserts a point found inside a segment before index `at`, with its test functions and
+/// senses, and moves the folds after it along.
+fn insert_point(
+    branch: &mut Branch,
+    tests: &mut Tests,
+    senses: &mut Senses,
+    at: usize,
+    (point, ps): (BranchPoint, PairSenses),
+) {
+    tests.insert(at, (point.arclength, test_functions(&point)));
+    if senses.len() >= at {
+        senses.insert(at, ps);
+    }
+    branch.points.insert(at, point);
+    for f in &mut branch.folds {
+        if f.after >= at {
+            f.after += 1;
+        }
+    }
+}
+
+/// The pair of `pairs` on `side` whose eigenvector is nearest to parallel to `v` or to its
+/// conjugate (|vᴴw| or |vᵀw|, both unit vectors), if that overlap exceeds ½: the same pair at a
+/// nearby state, whichever member has Im μ > 0 there.
+fn same_pair<'a>(pairs: &'a [PairSense], side: f64, v: &DVector<nalgebra::Complex<f64>>) -> Option<&'a PairSense> {
+    let overlap = |w: &DVector<nalgebra::Complex<f64>>| {
+        let plain: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a.conj() * b).sum();
+        let conj: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
+        plain.norm().max(conj.norm())
+    };
+    pairs
+        .iter()
+        .filter(|p| p.side == side && p.v.len() == v.len())
+        .map(|p| (overlap(&p.v), p))
+        .filter(|(o, _)| *o > 0.5)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, p)| p)
+}
+
+/// A pair near ±1 whose sense differs between two neighbouring points `a` and `b` (test
+/// functions `ta`, `tb`; senses `sa`, `sb`) while its block's test function for that side kept
+/// its sign: that test function's index, the block and the pair at `a`.
+fn flipped(
+    ta: &[(f64, f64)],
+    tb: &[(f64, f64)],
+    sa: &PairSenses,
+    sb: &PairSenses,
+) -> Option<(usize, usize, PairSense)> {
+    if ta.len() != tb.len() || sa.len() != sb.len() || ta.len() != 1 + 3 * sa.len() {
+        return None;
+    }
+    for (k, (pa, pb)) in sa.iter().zip(sb).enumerate() {
+        for p in pa {
+            // Index of Π(μ − 1) or Π(μ + 1) of block k (see `test_functions`).
+            let j = 1 + 3 * k + usize::from(p.side < 0.0);
+            if ta[j].0 != tb[j].0 {
+                continue;
+            }
+            if let Some(q) = same_pair(pb, p.side, &p.v)
+                && q.sense * p.sense < 0.0
+            {
+                return Some((j, k, p.clone()));
+            }
+        }
+    }
+    None
 }
 
 /// The test functions of a branch point whose sign changes mark the events of a branch, each as
