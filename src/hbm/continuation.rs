@@ -620,48 +620,72 @@ impl Hbm {
     fn split_tongues(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
         let mut i = 0;
         while i + 1 < tests.len() && tests.len() <= branch.points.len() && senses.len() == tests.len() {
-            let near_fold = branch.folds.iter().any(|f| f.after == i);
-            let suspect =
-                if near_fold { None } else { flipped(&tests[i].1, &tests[i + 1].1, &senses[i], &senses[i + 1]) };
-            let Some((j, block, pair)) = suspect else {
+            let Some((j, block, pair, span)) = flipped(tests, senses, i) else {
                 i += 1;
                 continue;
             };
-            let sign = tests[i].1[j].0;
-            let (mut lo, mut hi) = (0.0, 1.0);
-            let mut reference = pair.v.clone();
-            let mut found = None;
-            let at = |t: f64| (i, t);
-            for _ in 0..40 {
-                if hi - lo < 1e-9 {
-                    break;
-                }
-                let mid = 0.5 * (lo + hi);
-                let Some((point, ps)) = self.point_on_segment(su, branch, i, mid) else { break };
-                let f = test_functions(&point)[j];
-                if f.0 != sign && f.0 != 0.0 {
-                    found = Some((mid, (point, ps)));
-                    break;
-                }
-                match ps.get(block).and_then(|b| same_pair(b, pair.side, &reference)) {
-                    Some(p) if p.sense * pair.sense > 0.0 => {
-                        lo = mid;
-                        reference = p.v.clone();
-                    }
-                    Some(_) => hi = mid,
-                    None => {
-                        found = self.golden_for_sign(su, branch, &at, (lo, mid, hi), f.1, j, sign);
-                        break;
-                    }
-                }
+            if branch.folds.iter().any(|f| f.after >= i && f.after < i + span) {
+                i += 1;
+                continue;
             }
-            let Some((_, point)) = found else {
+            let sign = tests[i].1[j].0;
+            let found = if span == 1 {
+                self.bisect_on_sense(su, branch, i, (j, block, sign), &pair)
+            } else {
+                // The points in between hold the pair on the real axis: the tongue, if any, is
+                // around the one where the test function is least.
+                let m = (1..span).min_by(|&a, &b| tests[i + a].1[j].1.total_cmp(&tests[i + b].1[j].1)).unwrap_or(1);
+                let at = |t: f64| {
+                    let k = (t.floor() as usize).min(span - 1);
+                    (i + k, t - k as f64)
+                };
+                self.golden_for_sign(su, branch, &at, (0.0, m as f64, span as f64), tests[i + m].1[j].1, j, sign)
+            };
+            let Some((t, point)) = found else {
                 i += 1;
                 continue;
             };
-            insert_point(branch, tests, senses, i + 1, point);
-            i += 2;
+            let at = i + (t.floor() as usize).min(span - 1) + 1;
+            insert_point(branch, tests, senses, at, point);
+            i += span + 1;
         }
+    }
+
+    /// Bisection of segment i on the sense of `pair` (of `block`, at point i) until a state
+    /// where test function j has the other sign than `sign`, or the pair is on the real axis
+    /// (then golden section on the test function between the two senses' states): that σ and
+    /// state.
+    fn bisect_on_sense(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        i: usize,
+        (j, block, sign): (usize, usize, f64),
+        pair: &PairSense,
+    ) -> Option<(f64, (BranchPoint, PairSenses))> {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        let mut reference = pair.v.clone();
+        let at = |t: f64| (i, t);
+        for _ in 0..40 {
+            if hi - lo < 1e-9 {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let (point, ps) = self.point_on_segment(su, branch, i, mid)?;
+            let f = test_functions(&point)[j];
+            if f.0 != sign && f.0 != 0.0 {
+                return Some((mid, (point, ps)));
+            }
+            match ps.get(block).and_then(|b| same_pair(b, pair.side, &reference)) {
+                Some(p) if p.sense * pair.sense > 0.0 => {
+                    lo = mid;
+                    reference = p.v.clone();
+                }
+                Some(_) => hi = mid,
+                None => return self.golden_for_sign(su, branch, &at, (lo, mid, hi), f.1, j, sign),
+            }
+        }
+        None
     }
 
     /// The solution at fraction σ of segment `seg`, solved at the interpolated parameter, as a
@@ -948,29 +972,31 @@ fn same_pair<'a>(pairs: &'a [PairSense], side: f64, v: &DVector<nalgebra::Comple
         .map(|(_, p)| p)
 }
 
-/// A pair near ±1 whose sense differs between two neighbouring points `a` and `b` (test
-/// functions `ta`, `tb`; senses `sa`, `sb`) while its block's test function for that side kept
-/// its sign: that test function's index, the block and the pair at `a`.
-fn flipped(
-    ta: &[(f64, f64)],
-    tb: &[(f64, f64)],
-    sa: &PairSenses,
-    sb: &PairSenses,
-) -> Option<(usize, usize, PairSense)> {
-    if ta.len() != tb.len() || sa.len() != sb.len() || ta.len() != 1 + 3 * sa.len() {
+/// A pair near ±1 at point i whose sense differs at the next point that holds it (within three
+/// points: in between it may sit on the real axis) while its block's test function for that
+/// side kept its sign: that test function's index, the block, the pair at i and the number of
+/// segments spanned.
+fn flipped(tests: &Tests, senses: &Senses, i: usize) -> Option<(usize, usize, PairSense, usize)> {
+    let ta = &tests.get(i)?.1;
+    let sa = senses.get(i)?;
+    if ta.len() != 1 + 3 * sa.len() {
         return None;
     }
-    for (k, (pa, pb)) in sa.iter().zip(sb).enumerate() {
+    for (k, pa) in sa.iter().enumerate() {
         for p in pa {
             // Index of Π(μ − 1) or Π(μ + 1) of block k (see `test_functions`).
             let j = 1 + 3 * k + usize::from(p.side < 0.0);
-            if ta[j].0 != tb[j].0 {
-                continue;
-            }
-            if let Some(q) = same_pair(pb, p.side, &p.v)
-                && q.sense * p.sense < 0.0
-            {
-                return Some((j, k, p.clone()));
+            for span in 1..=3 {
+                let (Some((_, tb)), Some(sb)) = (tests.get(i + span), senses.get(i + span)) else { break };
+                if tb.len() != ta.len() || sb.len() != sa.len() || tb[j].0 != ta[j].0 {
+                    break;
+                }
+                if let Some(q) = same_pair(&sb[k], p.side, &p.v) {
+                    if q.sense * p.sense < 0.0 {
+                        return Some((j, k, p.clone(), span));
+                    }
+                    break;
+                }
             }
         }
     }

@@ -23,9 +23,12 @@ use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{BifurcationClass, Branch, BranchEnd, ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::kane::Kane;
 
-/// The step limits compared: 0.1, the default options (ds_max 0.1, initial step 0.01) and the
-/// reference 0.001.
-const STEPS: [Option<f64>; 3] = [Some(0.1), None, Some(0.001)];
+/// The step limits compared: 0.1, the default options (ds_max 0.1, initial step 0.01), two
+/// between and the reference 0.001. At 170 N·m both in between missed the tongue while the pair
+/// was compared across one segment only: at 0.045 an accepted point falls next to the tongue,
+/// where the +1 pair is already on the real axis but still inside the unit circle, so it has no
+/// sense there (the pair is now compared across such points).
+const STEPS: [Option<f64>; 5] = [Some(0.1), None, Some(0.06), Some(0.045), Some(0.001)];
 
 fn problem(pendulums: usize, torque: f64) -> Hbm {
     let p = CpvaParams::canonical().with_pendulums(pendulums);
