@@ -43,9 +43,33 @@
 //! crossings inside one step leaves every sign unchanged; the quadratic through the test
 //! function's last three values then has an extremum of the other sign inside the step, and the
 //! step is shortened to land on it (once per step, by at most 5×, not below a floor), so the two
-//! crossings become sign changes between accepted points. Crossings are bracketed by the count
-//! of multipliers outside the unit circle (bisection along the segment); a branch point is then
-//! located on det ∂R̂/∂x, which vanishes there exactly for the truncated problem.
+//! crossings become sign changes between accepted points.
+//!
+//! A narrow tongue (a pair through −1 and back: a Mathieu tongue of period doubling; or through
+//! +1 and back: a short loss of unison) can still fit inside one step without a dip the
+//! quadratic sees. Such a pair is told by its sense of turning instead: for every complex pair
+//! of a Floquet block within ½ of ±1 (a cheap screen: elsewhere nothing is computed), the
+//! eigenvector v of the member with Im μ > 0 is found by inverse iteration on the block's
+//! monodromy, and the sign of `Σ_k Im(conj(v_qk) v_uk)` over the coordinates (angle and rate of
+//! each) says which way the motion turns in its phase planes (phase-invariant). Across a tongue
+//! the pair's rotation number ωT/2π passes ½ (or an integer), the member with Im μ > 0 becomes
+//! the conjugate of the old one and the sign flips; a pair that comes near ±1 and leaves keeps
+//! it (for lightly damped motion the sign changes only where the pair meets on the real axis,
+//! like a Krein signature). The same pair is recognised at the next point that holds
+//! it (up to three points on, the ones in between holding it on the real axis) by its
+//! eigenvector, parallel up to conjugation. Where the sense flipped but the block's Π(μ ± 1)
+//! kept its sign, the segment is bisected on the sense (states from [`Branch::interpolate`]
+//! solved at the fixed parameter) until a state inside the tongue is found, or one with the
+//! pair on the real axis (the real stretch is a little wider than the tongue), from which a
+//! golden section on the test function's magnitude finds the tongue; that state is inserted as
+//! a point, so the tongue's two edges are sign changes between accepted points (pairs met on the
+//! real axis inside the unit circle flip the sense too and cost a search that finds nothing).
+//! Last, where a test function's magnitude has a deep minimum at an accepted point, the two
+//! segments around it are searched the same way by golden section.
+//!
+//! Crossings are bracketed by the count of multipliers outside the unit circle (bisection along
+//! the segment); a branch point is then located on det ∂R̂/∂x, which vanishes there exactly for
+//! the truncated problem.
 
 use super::blocklu::Factor;
 use super::branch::bifurcations;
@@ -68,7 +92,9 @@ pub struct ContinuationOptions {
     pub ds_min: f64,
     /// Largest step. Events do not depend on it: a pair of crossings inside one step (two
     /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
-    /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
+    /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001);
+    /// a narrow tongue of period doubling or of loss of unison stepped over whole shows as a
+    /// flip of the sense of the Floquet pair near ±1 (module docs; `tests/it/hbm_tongue.rs`).
     pub ds_max: f64,
     /// Largest number of points on a branch (a bound on the work, and the plan's: the paper's
     /// branches take 16–60 points at the default `ds_max`, up to ~1600 at 0.001; raise it with a
