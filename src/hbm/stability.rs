@@ -381,10 +381,11 @@ impl Hbm {
 }
 
 /// The multipliers of a d × d monodromy (row-major), without the state at `drop` (the cyclic
-/// spin angle), by decreasing modulus, and the matrix they are the eigenvalues of. With a rigid rotation z over the angles (the first d/2
-/// states) the trivial +1 has the eigenvector `[z; 0]`: Φ is first taken to the coordinates
-/// `p = q − z q_drop` (`Φ' = (I − N) Φ (I + N)`, `N = (z − e_drop) e_dropᵀ`), in which that
-/// eigenvector is the unit vector of the dropped state.
+/// spin angle), by decreasing modulus, and the matrix they are the eigenvalues of. With a rigid
+/// rotation z over the angles (the first d/2 states) the trivial +1 has the eigenvector `[z; 0]`:
+/// Φ is first taken to the coordinates `p = q − z q_drop` (`Φ' = (I − N) Φ (I + N)`,
+/// `N = (z − e_drop) e_dropᵀ`), in which that eigenvector is the unit vector of the dropped
+/// state.
 fn finish(
     phi: Vec<f64>,
     d: usize,
@@ -434,7 +435,8 @@ pub(super) struct PairSense {
     /// `Σ_k Im(conj(v_qk) v_uk) / (|v_q| |v_u|)` over the coordinates k with both an angle and a
     /// rate in the state: the sign says the sense of turning (phase-invariant, in [−1, 1]).
     pub(super) sense: f64,
-    /// The unit eigenvector of `mu`, to recognise the same pair at the next point.
+    /// The unit eigenvector of the member with Im μ > 0, to recognise the same pair at the next
+    /// point.
     pub(super) v: DVector<Complex<f64>>,
 }
 
