@@ -43,13 +43,38 @@
 //! crossings inside one step leaves every sign unchanged; the quadratic through the test
 //! function's last three values then has an extremum of the other sign inside the step, and the
 //! step is shortened to land on it (once per step, by at most 5×, not below a floor), so the two
-//! crossings become sign changes between accepted points. Crossings are bracketed by the count
-//! of multipliers outside the unit circle (bisection along the segment); a branch point is then
-//! located on det ∂R̂/∂x, which vanishes there exactly for the truncated problem.
+//! crossings become sign changes between accepted points.
+//!
+//! A narrow tongue (a pair through −1 and back: a Mathieu tongue of period doubling; or through
+//! +1 and back: a short loss of unison) can still fit inside one step without a dip the
+//! quadratic sees. Such a pair is told by its sense of turning instead: for every complex pair
+//! of a Floquet block within ½ of ±1 (a cheap screen: elsewhere nothing is computed), the
+//! eigenvector v of the member with Im μ > 0 is found by inverse iteration on the block's
+//! monodromy, and the sign of `Σ_k Im(conj(v_qk) v_uk)` over the coordinates (angle and rate of
+//! each) says which way the motion turns in its phase planes (phase-invariant). Across a tongue
+//! the pair's rotation number ωT/2π passes ½ (or an integer), the member with Im μ > 0 becomes
+//! the conjugate of the old one and the sign flips; a pair that comes near ±1 and leaves keeps
+//! it (for lightly damped motion the sign changes only where the pair meets on the real axis,
+//! like a Krein signature). The same pair is recognised at the next point that holds
+//! it (up to three points on, the ones in between holding it on the real axis) by its
+//! eigenvector, parallel up to conjugation. Where the sense flipped but the block's Π(μ ± 1)
+//! kept its sign, the segment is bisected on the sense (states from [`Branch::interpolate`]
+//! solved at the fixed parameter) until a state inside the tongue is found, or one with the
+//! pair on the real axis (the real stretch is a little wider than the tongue), from which a
+//! golden section on the test function's magnitude finds the tongue; that state is inserted as
+//! a point, so the tongue's two edges are sign changes between accepted points (pairs met on the
+//! real axis inside the unit circle flip the sense too and cost a search that finds nothing).
+//! Last, where a test function's magnitude has a deep minimum at an accepted point, the two
+//! segments around it are searched the same way by golden section.
+//!
+//! Crossings are bracketed by the count of multipliers outside the unit circle (bisection along
+//! the segment); a branch point is then located on det ∂R̂/∂x, which vanishes there exactly for
+//! the truncated problem.
 
 use super::blocklu::Factor;
 use super::branch::bifurcations;
 use super::corrector::{Chord, Setup};
+use super::stability::PairSense;
 use super::{BifurcationKind, Branch, BranchEnd, BranchPoint, Fold, FoldKind, Parameter};
 use super::{Hbm, HbmError, HbmOptions, HbmSolution, Stability};
 use crate::kane::Kane;
@@ -67,7 +92,9 @@ pub struct ContinuationOptions {
     pub ds_min: f64,
     /// Largest step. Events do not depend on it: a pair of crossings inside one step (two
     /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
-    /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001).
+    /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001);
+    /// a narrow tongue of period doubling or of loss of unison stepped over whole shows as a
+    /// flip of the sense of the Floquet pair near ±1 (module docs; `tests/it/hbm_tongue.rs`).
     pub ds_max: f64,
     /// Largest number of points on a branch (a bound on the work, and the plan's: the paper's
     /// branches take 16–60 points at the default `ds_max`, up to ~1600 at 0.001; raise it with a
@@ -142,6 +169,7 @@ impl Hbm {
         }
         let x = su.x_of(y.as_slice(), m);
         let mut sol = self.solution_from(&x, &su.at(y[m]), iterations);
+        self.pair_senses.clear();
         if stability && self.opts.stability_samples > 0 {
             sol.stability = Some(self.stability(&sol)?);
         }
@@ -335,6 +363,8 @@ impl Hbm {
         let mut points = vec![self.branch_point(&su, &cur.y, Some(&cur.t), 0.0, iterations, copts.stability)?];
         // The accepted points' arclengths and test functions (each computed once).
         let mut tests = vec![(0.0, test_functions(&points[0]))];
+        // And their Floquet pairs near ±1 with the senses they turn in.
+        let mut senses = vec![std::mem::take(&mut self.pair_senses)];
         let mut folds = Vec::new();
         let mut ds = copts.ds;
         let mut s = 0.0;
@@ -426,6 +456,7 @@ impl Hbm {
                 break if past_target { BranchEnd::ReachedTarget } else { BranchEnd::LeftRange };
             }
             let cand = self.branch_point(&su, &y, Some(&t), s + chord, iters, copts.stability)?;
+            let cand_senses = std::mem::take(&mut self.pair_senses);
             // A pair of crossings (two folds, or a multiplier out of the unit circle and back)
             // inside one step leaves the test functions with the same sign at both ends; the
             // quadratic through the last two points and this one shows the dip. Aim the step at
@@ -527,6 +558,7 @@ impl Hbm {
             s += chord;
             last_chord = chord;
             tests.push(cand_tests);
+            senses.push(cand_senses);
             if let Some(hook) = &self.on_point {
                 (hook.0)(points.len() + 1, cand.parameter);
             }
@@ -543,7 +575,8 @@ impl Hbm {
         // Past the deadline the crossings stay where the accepted points bracket them.
         let refine = copts.refine_folds && branch.end != BranchEnd::Watchdog;
         if refine && copts.stability {
-            self.split_narrow_pairs(&su, &mut branch, &mut tests);
+            self.split_tongues(&su, &mut branch, &mut tests, &mut senses);
+            self.split_narrow_pairs(&su, &mut branch, &mut tests, &mut senses);
         }
         branch.bifurcations = bifurcations(&branch.points, &branch.folds);
         if refine {
@@ -563,7 +596,7 @@ impl Hbm {
     /// the other sign is inserted as a point, so that the pair shows as two changes of sign
     /// between accepted points and is located and classified like any other. Segments with a
     /// fold are left alone (the parameter is not monotone there).
-    fn split_narrow_pairs(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Vec<(f64, Vec<(f64, f64)>)>) {
+    fn split_narrow_pairs(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
         const DEPTH: f64 = std::f64::consts::LN_2 * 2.0;
         let mut i = 1;
         // `tests` holds every accepted point's test functions but the end point's, made by a
@@ -586,57 +619,156 @@ impl Hbm {
             };
             let sign = b[j].0;
             // t in [0, 2]: segment i−1 for t < 1, segment i beyond; t = 1 is point i.
-            let eval = |hbm: &mut Hbm, t: f64| -> Option<(BranchPoint, (f64, f64))> {
-                let (seg, sigma) = if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
-                let guess = branch.interpolate(seg, sigma)?;
-                let lambda = su.param.value(&guess) / su.p_ref;
-                let sol = hbm.solve_at(&su.at(lambda), Some(&guess)).ok()?;
-                let y = hbm.y_of(su, &sol);
-                let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
-                let point = hbm.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
-                let f = *test_functions(&point).get(j)?;
-                Some((point, f))
-            };
-            // Golden section on ln |f| over [0, 2], from the bracket (0, 1, 2).
-            let golden = 0.381_966_011_250_105_2;
-            let (mut lo, mut mid, mut hi, mut f_mid) = (0.0, 1.0, 2.0, b[j].1);
-            let mut found = None;
-            for _ in 0..16 {
-                let t = if mid - lo > hi - mid { mid - golden * (mid - lo) } else { mid + golden * (hi - mid) };
-                let Some((point, (sg, lg))) = eval(self, t) else { break };
-                if sg != sign && sg != 0.0 {
-                    found = Some((t, point, (sg, lg)));
-                    break;
-                }
-                if lg < f_mid {
-                    if t < mid {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                    (mid, f_mid) = (t, lg);
-                } else if t < mid {
-                    lo = t;
-                } else {
-                    hi = t;
-                }
-            }
-            let Some((t, point, _)) = found else {
+            let at = |t: f64| if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
+            let Some((t, found)) = self.golden_for_sign(su, branch, &at, (0.0, 1.0, 2.0), b[j].1, j, sign) else {
                 i += 1;
                 continue;
             };
             let at = if t < 1.0 { i } else { i + 1 };
-            let values = test_functions(&point);
-            tests.insert(at, (point.arclength, values));
-            branch.points.insert(at, point);
-            for f in &mut branch.folds {
-                if f.after >= at {
-                    f.after += 1;
-                }
-            }
+            insert_point(branch, tests, senses, at, found);
             // Past the inserted point and its neighbours: they now straddle the changes.
             i = at + 2;
         }
+    }
+
+    /// Tongues stepped over whole, told by the sense of a pair near ±1 (see
+    /// `stability::PairSense`): where the member with Im μ > 0 of a pair near −1 (+1) turns the
+    /// other way at the end of a segment than at its start (the same pair: eigenvectors parallel
+    /// up to conjugation) while the block's Π(μ + 1) (Π(μ − 1)) kept its sign, the pair met on
+    /// the real axis inside the segment, and passed through −1 (+1) and back there unless it met
+    /// inside the unit circle. The segment is bisected on the sense (states from
+    /// [`Branch::interpolate`] solved at the fixed parameter) until a state inside the tongue is
+    /// found, or one where the pair is real but the test function has its old sign (the real
+    /// stretch is wider than the tongue): then its magnitude is minimised by golden section
+    /// between the two senses' states. A state where the test function has the other sign is
+    /// inserted as a point, so the pair becomes two changes of sign between accepted points.
+    /// Segments with a fold are left alone.
+    fn split_tongues(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
+        let mut i = 0;
+        while i + 1 < tests.len() && tests.len() <= branch.points.len() && senses.len() == tests.len() {
+            let Some((j, block, pair, span)) = flipped(tests, senses, i) else {
+                i += 1;
+                continue;
+            };
+            if branch.folds.iter().any(|f| f.after >= i && f.after < i + span) {
+                i += 1;
+                continue;
+            }
+            let sign = tests[i].1[j].0;
+            let found = if span == 1 {
+                self.bisect_on_sense(su, branch, i, (j, block, sign), &pair)
+            } else {
+                // The points in between hold the pair on the real axis: the tongue, if any, is
+                // around the one where the test function is least.
+                let m = (1..span).min_by(|&a, &b| tests[i + a].1[j].1.total_cmp(&tests[i + b].1[j].1)).unwrap_or(1);
+                let at = |t: f64| {
+                    let k = (t.floor() as usize).min(span - 1);
+                    (i + k, t - k as f64)
+                };
+                self.golden_for_sign(su, branch, &at, (0.0, m as f64, span as f64), tests[i + m].1[j].1, j, sign)
+            };
+            let Some((t, point)) = found else {
+                i += 1;
+                continue;
+            };
+            let at = i + (t.floor() as usize).min(span - 1) + 1;
+            insert_point(branch, tests, senses, at, point);
+            i += span + 1;
+        }
+    }
+
+    /// Bisection of segment i on the sense of `pair` (of `block`, at point i) until a state
+    /// where test function j has the other sign than `sign`, or the pair is on the real axis
+    /// (then golden section on the test function between the two senses' states): that σ and
+    /// state.
+    fn bisect_on_sense(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        i: usize,
+        (j, block, sign): (usize, usize, f64),
+        pair: &PairSense,
+    ) -> Option<(f64, (BranchPoint, PairSenses))> {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        let mut reference = pair.v.clone();
+        let at = |t: f64| (i, t);
+        for _ in 0..40 {
+            if hi - lo < 1e-9 {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let (point, ps) = self.point_on_segment(su, branch, i, mid)?;
+            let f = test_functions(&point)[j];
+            if f.0 != sign && f.0 != 0.0 {
+                return Some((mid, (point, ps)));
+            }
+            match ps.get(block).and_then(|b| same_pair(b, pair.side, &reference)) {
+                Some(p) if p.sense * pair.sense > 0.0 => {
+                    lo = mid;
+                    reference = p.v.clone();
+                }
+                Some(_) => hi = mid,
+                None => return self.golden_for_sign(su, branch, &at, (lo, mid, hi), f.1, j, sign),
+            }
+        }
+        None
+    }
+
+    /// The solution at fraction σ of segment `seg`, solved at the interpolated parameter, as a
+    /// branch point with its stability (no tangent), and its pairs' senses.
+    fn point_on_segment(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        seg: usize,
+        sigma: f64,
+    ) -> Option<(BranchPoint, PairSenses)> {
+        let guess = branch.interpolate(seg, sigma)?;
+        let lambda = su.param.value(&guess) / su.p_ref;
+        let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+        let y = self.y_of(su, &sol);
+        let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
+        let point = self.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
+        Some((point, std::mem::take(&mut self.pair_senses)))
+    }
+
+    /// Golden section on ln |f_j| (test function j) over the bracket (lo, mid, hi) of a
+    /// parameter t that `at` maps to (segment, σ), `f_mid` its value at mid, until a state
+    /// where f_j has the other sign than `sign` (16 evaluations at most): that t and state.
+    #[allow(clippy::too_many_arguments)]
+    fn golden_for_sign(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        at: &dyn Fn(f64) -> (usize, f64),
+        (mut lo, mut mid, mut hi): (f64, f64, f64),
+        mut f_mid: f64,
+        j: usize,
+        sign: f64,
+    ) -> Option<(f64, (BranchPoint, PairSenses))> {
+        let golden = 0.381_966_011_250_105_2;
+        for _ in 0..16 {
+            let t = if mid - lo > hi - mid { mid - golden * (mid - lo) } else { mid + golden * (hi - mid) };
+            let (seg, sigma) = at(t);
+            let (point, ps) = self.point_on_segment(su, branch, seg, sigma)?;
+            let (sg, lg) = *test_functions(&point).get(j)?;
+            if sg != sign && sg != 0.0 {
+                return Some((t, (point, ps)));
+            }
+            if lg < f_mid {
+                if t < mid {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+                (mid, f_mid) = (t, lg);
+            } else if t < mid {
+                lo = t;
+            } else {
+                hi = t;
+            }
+        }
+        None
     }
 
     /// Locates each crossing that is not a fold by bisection along its segment: states from
@@ -818,6 +950,83 @@ impl Hbm {
         let order = if su.param == Parameter::Order { lambda } else { samples[1].3 };
         Some((order, lambda * su.p_ref))
     }
+}
+
+/// Each accepted point's arclength and [`test_functions`].
+type Tests = Vec<(f64, Vec<(f64, f64)>)>;
+/// One point's pairs near ±1, per Floquet block.
+type PairSenses = Vec<Vec<PairSense>>;
+/// Each accepted point's [`PairSenses`].
+type Senses = Vec<PairSenses>;
+
+/// Inserts a point found inside a segment before index `at`, with its test functions and
+/// senses, and moves the folds after it along.
+fn insert_point(
+    branch: &mut Branch,
+    tests: &mut Tests,
+    senses: &mut Senses,
+    at: usize,
+    (point, ps): (BranchPoint, PairSenses),
+) {
+    tests.insert(at, (point.arclength, test_functions(&point)));
+    if senses.len() >= at {
+        senses.insert(at, ps);
+    }
+    branch.points.insert(at, point);
+    for f in &mut branch.folds {
+        if f.after >= at {
+            f.after += 1;
+        }
+    }
+}
+
+/// The pair of `pairs` on `side` whose eigenvector is nearest to parallel to `v` or to its
+/// conjugate (|vᴴw| or |vᵀw|, both unit vectors), if that overlap exceeds ½: the same pair at a
+/// nearby state, whichever member has Im μ > 0 there.
+fn same_pair<'a>(pairs: &'a [PairSense], side: f64, v: &DVector<nalgebra::Complex<f64>>) -> Option<&'a PairSense> {
+    let overlap = |w: &DVector<nalgebra::Complex<f64>>| {
+        let plain: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a.conj() * b).sum();
+        let conj: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
+        plain.norm().max(conj.norm())
+    };
+    pairs
+        .iter()
+        .filter(|p| p.side == side && p.v.len() == v.len())
+        .map(|p| (overlap(&p.v), p))
+        .filter(|(o, _)| *o > 0.5)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, p)| p)
+}
+
+/// A pair near ±1 at point i whose sense differs at the next point that holds it (within three
+/// points: in between it may sit on the real axis) while its block's test function for that
+/// side kept its sign: that test function's index, the block, the pair at i and the number of
+/// segments spanned.
+fn flipped(tests: &Tests, senses: &Senses, i: usize) -> Option<(usize, usize, PairSense, usize)> {
+    let ta = &tests.get(i)?.1;
+    let sa = senses.get(i)?;
+    if ta.len() != 1 + 3 * sa.len() {
+        return None;
+    }
+    for (k, pa) in sa.iter().enumerate() {
+        for p in pa {
+            // Index of Π(μ − 1) or Π(μ + 1) of block k (see `test_functions`).
+            let j = 1 + 3 * k + usize::from(p.side < 0.0);
+            for span in 1..=3 {
+                let (Some((_, tb)), Some(sb)) = (tests.get(i + span), senses.get(i + span)) else { break };
+                if tb.len() != ta.len() || sb.len() != sa.len() || tb[j].0 != ta[j].0 {
+                    break;
+                }
+                if let Some(q) = same_pair(&sb[k], p.side, &p.v) {
+                    if q.sense * p.sense < 0.0 {
+                        return Some((j, k, p.clone(), span));
+                    }
+                    break;
+                }
+            }
+        }
+    }
+    None
 }
 
 /// The test functions of a branch point whose sign changes mark the events of a branch, each as

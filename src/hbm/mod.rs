@@ -317,6 +317,10 @@ pub struct Hbm {
     non_unison: Vec<cyclic::NonUnison>,
     /// Told of every accepted point of a continuation (a progress line), if set.
     on_point: Option<PointHook>,
+    /// The complex Floquet pairs near ±1 of the last stability analysis, per block, with the
+    /// sense in which their eigenvectors turn (`stability::PairSense`): the continuation's
+    /// test for a tongue stepped over whole.
+    pair_senses: Vec<Vec<stability::PairSense>>,
 }
 
 impl Hbm {
@@ -532,6 +536,7 @@ impl Hbm {
             couplings,
             non_unison: Vec::new(),
             on_point: None,
+            pair_senses: Vec::new(),
             ev,
             n,
             spin,

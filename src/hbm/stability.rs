@@ -113,6 +113,7 @@ impl Hbm {
         }
         let period = 2.0 * PI / sol.base_frequency;
         let all: Vec<usize> = (0..self.n).collect();
+        self.pair_senses.clear();
         // The cyclic spin angle's trivial +1 is not a physical multiplier; with gravity the spin
         // angle is a state like the others.
         let drop = self.cyclic.then_some(self.spin);
@@ -159,7 +160,11 @@ impl Hbm {
             && 2 * nb > 12
             && let Some(phi) = self.tree_monodromy(period)
         {
-            return finish(phi, 2 * nb, drop, self.rotation_to_drop(coords, drop).as_deref(), order);
+            let drop_at = drop.and_then(|k| coords.iter().position(|&c| c == k));
+            let (multipliers, reduced) =
+                finish(phi, 2 * nb, drop_at, self.rotation_to_drop(coords, drop).as_deref(), order)?;
+            self.pair_senses.push(pair_senses(&reduced, &multipliers, nb, drop_at));
+            return Ok(multipliers);
         }
         // [K | L] = C⁻¹ [A | B] at the N_t samples, stored as 2n² series of N_t values (entry
         // (i, c) of the n × 2n block is series i·2n + c), n = coords.len().
@@ -197,7 +202,10 @@ impl Hbm {
         }
         let phi = monodromy(&sys, nb, ns, period);
         let rotation = self.rotation_to_drop(coords, drop);
-        finish(phi, 2 * nb, drop.and_then(|k| coords.iter().position(|&c| c == k)), rotation.as_deref(), order)
+        let drop_at = drop.and_then(|k| coords.iter().position(|&c| c == k));
+        let (multipliers, reduced) = finish(phi, 2 * nb, drop_at, rotation.as_deref(), order)?;
+        self.pair_senses.push(pair_senses(&reduced, &multipliers, nb, drop_at));
+        Ok(multipliers)
     }
 
     /// The rigid rotation over `coords` when the dropped state is the spin angle and joints turn
@@ -373,17 +381,18 @@ impl Hbm {
 }
 
 /// The multipliers of a d × d monodromy (row-major), without the state at `drop` (the cyclic
-/// spin angle), by decreasing modulus. With a rigid rotation z over the angles (the first d/2
-/// states) the trivial +1 has the eigenvector `[z; 0]`: Φ is first taken to the coordinates
-/// `p = q − z q_drop` (`Φ' = (I − N) Φ (I + N)`, `N = (z − e_drop) e_dropᵀ`), in which that
-/// eigenvector is the unit vector of the dropped state.
+/// spin angle), by decreasing modulus, and the matrix they are the eigenvalues of. With a rigid
+/// rotation z over the angles (the first d/2 states) the trivial +1 has the eigenvector `[z; 0]`:
+/// Φ is first taken to the coordinates `p = q − z q_drop` (`Φ' = (I − N) Φ (I + N)`,
+/// `N = (z − e_drop) e_dropᵀ`), in which that eigenvector is the unit vector of the dropped
+/// state.
 fn finish(
     phi: Vec<f64>,
     d: usize,
     drop: Option<usize>,
     rotation: Option<&[f64]>,
     order: f64,
-) -> Result<Vec<Complex<f64>>, HbmError> {
+) -> Result<(Vec<Complex<f64>>, DMatrix<f64>), HbmError> {
     let mut phi = DMatrix::from_row_slice(d, d, &phi);
     if phi.iter().any(|v| !v.is_finite()) {
         return Err(HbmError::NonFinite { order });
@@ -405,9 +414,87 @@ fn finish(
         Some(p) => (phi.remove_row(p).remove_column(p), d - 1),
         None => (phi, d),
     };
-    let mut multipliers = eigenvalues(reduced).ok_or(HbmError::Eigen { order, dim })?;
+    let mut multipliers = eigenvalues(reduced.clone()).ok_or(HbmError::Eigen { order, dim })?;
     multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
-    Ok(multipliers)
+    Ok((multipliers, reduced))
+}
+
+/// A complex pair of Floquet multipliers near +1 or −1 and the sense in which its eigenvector
+/// turns. Along a branch the member with Im μ > 0 of a lightly damped pair belongs to a motion
+/// that turns one way in the phase plane of each coordinate (δq̇ ≈ iω δq for a mode of frequency
+/// ω whose multiplier is e^{iωT}); when the pair passes through ±1 (meets on the real axis,
+/// splits, meets again and leaves: a tongue of period doubling or of loss of unison) the
+/// rotation number ωT/2π passes through ½ or an integer and the member with Im μ > 0 becomes the
+/// conjugate of the old one, so the sense flips. A pair that comes near ±1 and leaves without
+/// meeting on the real axis keeps it. This sign is the continuation's test for a tongue
+/// stepped over whole (its module docs).
+#[derive(Debug, Clone)]
+pub(super) struct PairSense {
+    /// +1 or −1: the real multiplier the pair is near.
+    pub(super) side: f64,
+    /// `Σ_k Im(conj(v_qk) v_uk) / (|v_q| |v_u|)` over the coordinates k with both an angle and a
+    /// rate in the state: the sign says the sense of turning (phase-invariant, in [−1, 1]).
+    pub(super) sense: f64,
+    /// The unit eigenvector of the member with Im μ > 0, to recognise the same pair at the next
+    /// point.
+    pub(super) v: DVector<Complex<f64>>,
+}
+
+/// Pairs closer to ±1 than this are given their sense (a cheap screen: the eigenvector is only
+/// needed where a pair may pass through ±1 within one step).
+const PAIR_NEAR: f64 = 0.5;
+
+/// The complex pairs among `multipliers` (eigenvalues of `reduced`, the monodromy of a block of
+/// `nb` coordinates in the states (angles, rates) with the angle at `drop` removed) within
+/// [`PAIR_NEAR`] of +1 or −1, each with its eigenvector by inverse iteration (two solves with
+/// the shifted matrix, whose factorisation is the whole cost) and its sense.
+fn pair_senses(reduced: &DMatrix<f64>, multipliers: &[Complex<f64>], nb: usize, drop: Option<usize>) -> Vec<PairSense> {
+    let d = reduced.nrows();
+    let index = |k: usize, rate: bool| -> usize {
+        let i = if rate { nb + k } else { k };
+        match drop {
+            Some(p) if i > p => i - 1,
+            _ => i,
+        }
+    };
+    let mut out = Vec::new();
+    for &mu in multipliers {
+        if mu.im <= 1e-12 * mu.norm() {
+            continue;
+        }
+        let side = if mu.re < 0.0 { -1.0 } else { 1.0 };
+        if (mu - side).norm() >= PAIR_NEAR {
+            continue;
+        }
+        // Shifted off the eigenvalue so that the factorisation stays finite; the solve's growth
+        // along the eigenvector is then ~1/shift, far above every other direction's.
+        let shift = mu + Complex::new(1e-10, 1e-10) * (1.0 + mu.norm());
+        let a = DMatrix::from_fn(d, d, |i, j| {
+            Complex::new(reduced[(i, j)], 0.0) - if i == j { shift } else { Complex::new(0.0, 0.0) }
+        });
+        let lu = a.lu();
+        let mut v = DVector::from_element(d, Complex::new(1.0, 0.0));
+        for _ in 0..2 {
+            let Some(w) = lu.solve(&v) else { break };
+            let norm = w.norm();
+            if !(norm.is_finite() && norm > 0.0) {
+                break;
+            }
+            v = w / Complex::new(norm, 0.0);
+        }
+        let (mut cross, mut nq, mut nu) = (0.0, 0.0, 0.0);
+        for k in (0..nb).filter(|&k| Some(k) != drop) {
+            let (q, u) = (v[index(k, false)], v[index(k, true)]);
+            cross += (q.conj() * u).im;
+            nq += q.norm_sqr();
+            nu += u.norm_sqr();
+        }
+        let sense = cross / (nq * nu).sqrt();
+        if sense.is_finite() {
+            out.push(PairSense { side, sense, v });
+        }
+    }
+    out
 }
 
 /// Eigenvalues of a real square matrix by methods bounded in work; None when neither converges.

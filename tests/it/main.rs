@@ -36,6 +36,7 @@ mod hbm_fold_curve;
 mod hbm_neimark_sacker;
 mod hbm_period_doubling;
 mod hbm_switch;
+mod hbm_tongue;
 mod honest_peaks;
 mod honest_summaries;
 mod input_hardening;
