@@ -26,6 +26,7 @@
 use super::{GROUND_PARENT, Model, Workspace};
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, rotate_cs};
+use crate::model::sincos::sin_cos_many;
 
 impl Model {
     /// `Model::evaluate` for absolute angular velocities, in pair-coefficient form.
@@ -72,10 +73,24 @@ impl Model {
         let m = &mut ws.m[..n * n];
         let f = &mut ws.f[..n];
         let (pairs, mut pair) = (&self.pairs[..], 0);
+        // NOTE: beyond the fixed-size instances (N = 0: many bodies) the joint angles' sines and
+        // cosines are taken four at a time first (`sin_cos_many`, within an ulp of std's; one
+        // libm call per body was the largest cost of a 32-pendulum rotor's right-hand side,
+        // BENCHMARKS.md); the small instances keep std's, so their results do not move.
+        let (sin, cos) = (&mut ws.sin[..n], &mut ws.cos[..n]);
+        if N == 0 {
+            sin_cos_many(q, sin, cos);
+        }
         for j in 0..n {
             let nd = &nodes[j];
             let root = nd.parent == GROUND_PARENT;
-            let (js, jc) = if root && !world { (0.0, 1.0) } else { q[j].sin_cos() };
+            let (js, jc) = if root && !world {
+                (0.0, 1.0)
+            } else if N == 0 {
+                (sin[j], cos[j])
+            } else {
+                q[j].sin_cos()
+            };
             // NOTE: the body's own orientation is only needed by gravity and point forces; the
             // pairs use relative angles (measured, BENCHMARKS.md).
             let (c, s) = if root || !oriented {

@@ -304,6 +304,9 @@ pub struct Workspace {
     l: Vec<f64>,
     d_inv: Vec<f64>,
     row: Vec<f64>,
+    /// The joint angles' sines and cosines, for the forms that take them all at once.
+    sin: Vec<f64>,
+    cos: Vec<f64>,
     m_out: DMatrix<f64>,
     f_out: DVector<f64>,
     /// The unconstrained tree's buffers of a geared mechanism.
@@ -327,6 +330,8 @@ impl Workspace {
             l: vec![0.0; n * n],
             d_inv: vec![0.0; n],
             row: vec![0.0; n],
+            sin: vec![0.0; n],
+            cos: vec![0.0; n],
             m_out: DMatrix::zeros(n, n),
             f_out: DVector::zeros(n),
             geared: model.geared.as_deref().map(|g| Box::new(g.workspace())),
