@@ -118,6 +118,7 @@ pub mod reduce;
 pub mod reference;
 mod small;
 mod small_rates;
+mod star;
 pub mod tree;
 
 /// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).
@@ -281,6 +282,12 @@ pub struct Model {
     /// right-hand side solves `M u̇ = F` by the tree's own factorisation ([`tree`]); `None`: the
     /// dense LDLᵀ.
     tree: Option<Vec<usize>>,
+    /// True when `tree` is roots and leaves alone ([`Model::is_star`]), solved by
+    /// `Model::factor_solve_star`.
+    star: bool,
+    /// The packed constants of the one-pass right-hand side of a rotor carrying leaves
+    /// ([`star`]), used while `tree` is kept and the articulated route is not forced.
+    fast_star: Option<star::Star>,
     /// True when the right-hand side takes the articulated-body route ([`articulated`]),
     /// which never forms M; it then ignores `tree`.
     articulated: bool,
@@ -649,7 +656,9 @@ impl Model {
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        let out = if self.articulated {
+        let out = if let Some(star) = self.fast_star.as_ref().filter(|_| !self.articulated && self.tree.is_some()) {
+            self.rhs_star(star, ws, t, x, xdot)
+        } else if self.articulated {
             self.rhs_articulated(ws, t, x, xdot)
         } else if self.nb == n {
             with_literal_n!(n, self.rhs_n(ws, t, x, xdot))
