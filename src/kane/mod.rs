@@ -412,6 +412,16 @@ impl Kane {
         model.articulated = false;
     }
 
+    /// True when the right-hand side takes the one-pass evaluation and solve of a rotor carrying
+    /// leaves (chosen at build for the pair form with
+    /// more than six speeds, speed 0 spinning on the ground and every other body a leaf on it,
+    /// no gravity, point forces or couplings); [`Kane::use_dense_factorisation`] and
+    /// [`Kane::use_articulated_bodies`] turn it off.
+    pub fn solves_rotor_and_leaves(&self) -> bool {
+        let m = &self.model;
+        m.fast_star.is_some() && m.tree.is_some() && !m.articulated
+    }
+
     /// Makes the right-hand side form M and solve it along the tree ([`crate::kane::tree`])
     /// where it would take the articulated-body route (for checks and benchmarks of the routes
     /// against each other); the dense LDLᵀ where the tree's factorisation does not pay.

@@ -136,7 +136,8 @@ fn forces(
     forces_body(star, q, u, sin, cos, f, v, qd)
 }
 
-/// [`forces`] compiled for AVX2 (the same operations: no contraction into fused multiply-adds).
+/// [`forces_body`] in AVX2 vectors: four leaves per round, each lane one of the partial sums,
+/// and the same operations as the scalar loop (no fused multiply-adds), so the same bits.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[allow(clippy::too_many_arguments)]
@@ -150,10 +151,55 @@ unsafe fn forces_avx2(
     v: &mut [f64],
     qd: &mut [f64],
 ) -> f64 {
-    forces_body(star, q, u, sin, cos, f, v, qd)
+    use std::arch::x86_64::*;
+    let m = sin.len();
+    let rounds = m / 4;
+    assert!(
+        cos.len() >= m
+            && q.len() > m
+            && u.len() > m
+            && f.len() > m
+            && v.len() > m
+            && qd.len() > m
+            && [&star.alpha, &star.beta, &star.k_spring, &star.q_free, &star.c_joint, &star.c_ground]
+                .iter()
+                .all(|a| a.len() > m)
+    );
+    let u0 = u[0];
+    let u02 = u0 * u0;
+    let mut acc = [0.0; 4];
+    // SAFETY: every access is at 1 + 4r + 3 ≤ m (leaf arrays, m + 1 long) or 4r + 3 < m (sin,
+    // cos), checked above.
+    unsafe {
+        let ld = |a: &[f64], i: usize| _mm256_loadu_pd(a.as_ptr().add(i));
+        let (vu0, vu02) = (_mm256_set1_pd(u0), _mm256_set1_pd(u02));
+        let mut vacc = _mm256_setzero_pd();
+        for r in 0..rounds {
+            let (i, k) = (4 * r, 4 * r + 1);
+            let (s, c, w) = (ld(sin, i), ld(cos, i), ld(u, k));
+            let (al, be) = (ld(&star.alpha, k), ld(&star.beta, k));
+            let d = _mm256_add_pd(_mm256_mul_pd(al, s), _mm256_mul_pd(be, c));
+            _mm256_storeu_pd(v.as_mut_ptr().add(k), _mm256_sub_pd(_mm256_mul_pd(al, c), _mm256_mul_pd(be, s)));
+            let rate = _mm256_sub_pd(w, vu0);
+            _mm256_storeu_pd(qd.as_mut_ptr().add(k), rate);
+            let neg_ks = _mm256_xor_pd(ld(&star.k_spring, k), _mm256_set1_pd(-0.0));
+            let tau = _mm256_sub_pd(
+                _mm256_mul_pd(neg_ks, _mm256_sub_pd(ld(q, k), ld(&star.q_free, k))),
+                _mm256_mul_pd(ld(&star.c_joint, k), rate),
+            );
+            let fk = _mm256_sub_pd(
+                _mm256_sub_pd(tau, _mm256_mul_pd(ld(&star.c_ground, k), w)),
+                _mm256_mul_pd(vu02, d),
+            );
+            _mm256_storeu_pd(f.as_mut_ptr().add(k), fk);
+            vacc = _mm256_add_pd(vacc, _mm256_sub_pd(_mm256_mul_pd(_mm256_mul_pd(w, w), d), tau));
+        }
+        _mm256_storeu_pd(acc.as_mut_ptr(), vacc);
+    }
+    leaves(star, q, u, sin, cos, f, v, qd, 4 * rounds, &mut acc);
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn forces_body(
     star: &Star,
@@ -165,63 +211,131 @@ fn forces_body(
     v: &mut [f64],
     qd: &mut [f64],
 ) -> f64 {
-    let m = sin.len();
-    let u0 = u[0];
-    let u02 = u0 * u0;
-    let (q, u) = (&q[1..=m], &u[1..=m]);
-    let (f, v, qd) = (&mut f[1..=m], &mut v[1..=m], &mut qd[1..=m]);
-    let (al, be, ks, qf) = (&star.alpha[1..=m], &star.beta[1..=m], &star.k_spring[1..=m], &star.q_free[1..=m]);
-    let (cj, cg) = (&star.c_joint[1..=m], &star.c_ground[1..=m]);
-    let cos = &cos[..m];
     let mut acc = [0.0; 4];
-    let mut j = 0;
-    // Four leaves per round, one partial sum each (the same sums with or without vectors).
-    while j + 4 <= m {
-        for l in 0..4 {
-            let i = j + l;
-            let (s, c, w) = (sin[i], cos[i], u[i]);
-            let d = al[i] * s + be[i] * c;
-            v[i] = al[i] * c - be[i] * s;
-            let rate = w - u0;
-            qd[i] = rate;
-            let tau = -ks[i] * (q[i] - qf[i]) - cj[i] * rate;
-            f[i] = (tau - cg[i] * w) - u02 * d;
-            acc[l] += w * w * d - tau;
-        }
-        j += 4;
-    }
-    for i in j..m {
-        let (s, c, w) = (sin[i], cos[i], u[i]);
-        let d = al[i] * s + be[i] * c;
-        v[i] = al[i] * c - be[i] * s;
-        let rate = w - u0;
-        qd[i] = rate;
-        let tau = -ks[i] * (q[i] - qf[i]) - cj[i] * rate;
-        f[i] = (tau - cg[i] * w) - u02 * d;
-        acc[i - j] += w * w * d - tau;
-    }
+    leaves(star, q, u, sin, cos, f, v, qd, 0, &mut acc);
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// The leaves' eliminations: `(Σ M_0j²/M_jj, Σ M_0j F_j/M_jj)`, in four partial sums.
-fn eliminate(star: &Star, f: &[f64], v: &[f64]) -> (f64, f64) {
-    let m = f.len() - 1;
-    let (f, v, di) = (&f[1..], &v[1..], &star.d_inv[1..=m]);
-    let (mut hs, mut zs) = ([0.0; 4], [0.0; 4]);
-    let mut j = 0;
-    while j + 4 <= m {
-        for l in 0..4 {
-            let i = j + l;
-            let lk = v[i] * di[i];
-            hs[l] += lk * v[i];
-            zs[l] += lk * f[i];
-        }
-        j += 4;
+/// The scalar loop of [`forces`] over the leaves from `from` (a multiple of 4) on: leaf
+/// `from + i` adds its term of F_0 to the partial sum `acc[i % 4]`.
+#[allow(clippy::too_many_arguments)]
+fn leaves(
+    star: &Star,
+    q: &[f64],
+    u: &[f64],
+    sin: &[f64],
+    cos: &[f64],
+    f: &mut [f64],
+    v: &mut [f64],
+    qd: &mut [f64],
+    from: usize,
+    acc: &mut [f64; 4],
+) {
+    let u0 = u[0];
+    let u02 = u0 * u0;
+    for i in from..sin.len() {
+        let k = i + 1;
+        let (s, c, w) = (sin[i], cos[i], u[k]);
+        let (al, be) = (star.alpha[k], star.beta[k]);
+        let d = al * s + be * c;
+        v[k] = al * c - be * s;
+        let rate = w - u0;
+        qd[k] = rate;
+        let tau = -star.k_spring[k] * (q[k] - star.q_free[k]) - star.c_joint[k] * rate;
+        f[k] = (tau - star.c_ground[k] * w) - u02 * d;
+        acc[i % 4] += w * w * d - tau;
     }
-    for i in j..m {
-        let lk = v[i] * di[i];
-        hs[i - j] += lk * v[i];
-        zs[i - j] += lk * f[i];
+}
+
+/// The leaves' eliminations: `(Σ M_0j²/M_jj, Σ M_0j F_j/M_jj)`, in four partial sums (leaf j
+/// in sum (j − 1) mod 4).
+fn eliminate(star: &Star, f: &[f64], v: &[f64]) -> (f64, f64) {
+    let (mut hs, mut zs) = ([0.0; 4], [0.0; 4]);
+    let mut from = 0;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the feature the function is compiled for was just detected.
+        from = unsafe { eliminate_avx2(star, f, v, &mut hs, &mut zs) };
+    }
+    let m = f.len() - 1;
+    for i in from..m {
+        let k = i + 1;
+        let lk = v[k] * star.d_inv[k];
+        hs[i % 4] += lk * v[k];
+        zs[i % 4] += lk * f[k];
     }
     ((hs[0] + hs[1]) + (hs[2] + hs[3]), (zs[0] + zs[1]) + (zs[2] + zs[3]))
+}
+
+/// The whole rounds of four leaves of [`eliminate`] in AVX2 vectors (the same operations, so the
+/// same bits); returns the number of leaves done.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn eliminate_avx2(star: &Star, f: &[f64], v: &[f64], hs: &mut [f64; 4], zs: &mut [f64; 4]) -> usize {
+    use std::arch::x86_64::*;
+    let m = f.len() - 1;
+    assert!(v.len() > m && star.d_inv.len() > m);
+    let rounds = m / 4;
+    // SAFETY: every load is at 1 + 4r + 3 ≤ m, checked above.
+    unsafe {
+        let ld = |a: &[f64], i: usize| _mm256_loadu_pd(a.as_ptr().add(i));
+        let (mut vh, mut vz) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+        for r in 0..rounds {
+            let k = 4 * r + 1;
+            let vk = ld(v, k);
+            let lk = _mm256_mul_pd(vk, ld(&star.d_inv, k));
+            vh = _mm256_add_pd(vh, _mm256_mul_pd(lk, vk));
+            vz = _mm256_add_pd(vz, _mm256_mul_pd(lk, ld(f, k)));
+        }
+        _mm256_storeu_pd(hs.as_mut_ptr(), vh);
+        _mm256_storeu_pd(zs.as_mut_ptr(), vz);
+    }
+    4 * rounds
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Star, eliminate, forces_body};
+
+    /// The AVX2 passes give the scalar loops' bits, for every remainder of the four-leaf rounds.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn vector_passes_equal_the_scalar_loops() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let val = |i: usize, a: f64| ((i as f64 + 1.0) * a).sin() * (1.0 + a);
+        for m in 4..=13 {
+            let per = |a: f64| (0..=m).map(|i| val(i, a)).collect::<Vec<f64>>();
+            let star = Star {
+                alpha: per(0.7),
+                beta: per(1.3),
+                k_spring: per(2.1),
+                q_free: per(0.2),
+                c_joint: per(0.9),
+                c_ground: per(0.4),
+                d_inv: per(3.3),
+                diag0: 1.0,
+                scale: 1.0,
+            };
+            let (q, u, sin, cos) = (per(1.1), per(5.7), per(0.31)[1..].to_vec(), per(0.47)[1..].to_vec());
+            let (mut f1, mut v1, mut qd1) = (vec![0.0; m + 1], vec![0.0; m + 1], vec![0.0; m + 1]);
+            let (mut f2, mut v2, mut qd2) = (f1.clone(), v1.clone(), qd1.clone());
+            let s1 = forces_body(&star, &q, &u, &sin, &cos, &mut f1, &mut v1, &mut qd1);
+            // SAFETY: AVX2 was detected above.
+            let s2 = unsafe { super::forces_avx2(&star, &q, &u, &sin, &cos, &mut f2, &mut v2, &mut qd2) };
+            assert_eq!(s1.to_bits(), s2.to_bits(), "{m} leaves");
+            assert_eq!((f1.clone(), v1.clone(), qd1), (f2, v2, qd2), "{m} leaves");
+            let mut hs = [0.0; 4];
+            let mut zs = [0.0; 4];
+            for i in 0..m {
+                let lk = v1[i + 1] * star.d_inv[i + 1];
+                hs[i % 4] += lk * v1[i + 1];
+                zs[i % 4] += lk * f1[i + 1];
+            }
+            let scalar = ((hs[0] + hs[1]) + (hs[2] + hs[3]), (zs[0] + zs[1]) + (zs[2] + zs[3]));
+            let (h, z) = eliminate(&star, &f1, &v1);
+            assert_eq!((h.to_bits(), z.to_bits()), (scalar.0.to_bits(), scalar.1.to_bits()), "{m} leaves");
+        }
+    }
 }
