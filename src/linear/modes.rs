@@ -151,13 +151,7 @@ impl LinearModel {
         let is_real = |l: &C64| l.im.abs() <= REAL_TOL * scale;
         Ok(lambdas
             .iter()
-            .filter_map(|l| {
-                if is_real(l) {
-                    Some(l.re.abs())
-                } else {
-                    (l.im > 0.0).then(|| l.norm())
-                }
-            })
+            .filter_map(|l| if is_real(l) { Some(l.re.abs()) } else { (l.im > 0.0).then(|| l.norm()) })
             .fold(0.0, f64::max))
     }
 

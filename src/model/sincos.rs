@@ -157,7 +157,15 @@ mod avx2 {
         let z_err = _mm256_fmsub_pd(r, r, z);
         let h = _mm256_mul_pd(set(0.5), z);
         let w = _mm256_sub_pd(set(1.0), h);
-        let tail = _mm256_fnmadd_pd(r, rl, _mm256_fmadd_pd(_mm256_mul_pd(z, z), pc, _mm256_fnmadd_pd(set(0.5), z_err, _mm256_sub_pd(_mm256_sub_pd(set(1.0), w), h))));
+        let tail = _mm256_fnmadd_pd(
+            r,
+            rl,
+            _mm256_fmadd_pd(
+                _mm256_mul_pd(z, z),
+                pc,
+                _mm256_fnmadd_pd(set(0.5), z_err, _mm256_sub_pd(_mm256_sub_pd(set(1.0), w), h)),
+            ),
+        );
         let c = _mm256_add_pd(w, tail);
         if first {
             return Some((_mm256_xor_pd(s, _mm256_and_pd(x, sign_bit)), c));
@@ -175,7 +183,10 @@ mod avx2 {
         let sin_abs = _mm256_blendv_pd(s, c, odd);
         let cos_v = _mm256_blendv_pd(c, s, odd);
         let q2 = _mm256_slli_epi64::<62>(qbits);
-        let sin_sign = _mm256_xor_si256(_mm256_and_si256(q2, _mm256_set1_epi64x(i64::MIN)), _mm256_castpd_si256(_mm256_and_pd(x, sign_bit)));
+        let sin_sign = _mm256_xor_si256(
+            _mm256_and_si256(q2, _mm256_set1_epi64x(i64::MIN)),
+            _mm256_castpd_si256(_mm256_and_pd(x, sign_bit)),
+        );
         let q1 = _mm256_slli_epi64::<62>(_mm256_add_epi64(qbits, _mm256_set1_epi64x(1)));
         let cos_sign = _mm256_and_si256(q1, _mm256_set1_epi64x(i64::MIN));
         let sin_v = _mm256_xor_pd(sin_abs, _mm256_castsi256_pd(sin_sign));
@@ -252,7 +263,8 @@ mod tests {
     /// tail, and the fallback's cases (beyond the limit, infinite, NaN) equal to std's.
     #[test]
     fn small_angles_tails_and_fallback() {
-        let small: Vec<f64> = (0..2000).map(|i| 1e-300 * 1.5f64.powi(i % 1700) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let small: Vec<f64> =
+            (0..2000).map(|i| 1e-300 * 1.5f64.powi(i % 1700) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
         let (ws, wc) = worst_ulps(&small);
         assert!(ws <= 1.0 && wc <= 1.0, "sin {ws} ulp, cos {wc} ulp");
         for len in 0..9 {

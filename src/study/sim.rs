@@ -230,7 +230,8 @@ pub(crate) fn options_for(
 /// plan (fastest spring's natural frequency, fastest damper's decay rate) stand in.
 pub(crate) fn fastest_eigenvalue(mech: &Mechanism, spin_joint: &str, omega: f64) -> f64 {
     use crate::linear::{Damping, LinearModel, Spin};
-    let linear = LinearModel::new(mech, spin_joint, omega, None).and_then(|m| m.fastest_rate(Spin::Free, Damping::Damped));
+    let linear =
+        LinearModel::new(mech, spin_joint, omega, None).and_then(|m| m.fastest_rate(Spin::Free, Damping::Damped));
     match linear {
         Ok(l) if l.is_finite() && l > 0.0 => l,
         _ => {
