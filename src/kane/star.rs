@@ -53,7 +53,7 @@ impl Model {
             return None;
         }
         let scale = self.nodes[..n].iter().fold(0.0f64, |s, nd| s.max(nd.diag_abs.abs()));
-        if self.nodes[1..n].iter().any(|nd| !(nd.diag_abs > PIVOT_TOL * scale)) {
+        if self.nodes[1..n].iter().any(|nd| nd.diag_abs.is_nan() || nd.diag_abs <= PIVOT_TOL * scale) {
             return None;
         }
         let per = |f: &dyn Fn(usize) -> f64| (0..n).map(|j| if j == 0 { 0.0 } else { f(j) }).collect::<Vec<_>>();

@@ -305,13 +305,13 @@ mod timing {
         for (name, xs) in [("±6 rad", &wide), ("±0.5 rad", &swing), ("±6 rad", &wide), ("±0.5 rad", &swing)] {
             let t = Instant::now();
             for _ in 0..reps {
-                sin_cos_many(black_box(&xs), &mut s, &mut c);
+                sin_cos_many(black_box(xs), &mut s, &mut c);
                 black_box((&s, &c));
             }
             let kernel = t.elapsed().as_secs_f64() / (reps * 33) as f64 * 1e9;
             let t = Instant::now();
             for _ in 0..reps {
-                for ((x, s), c) in black_box(&xs).iter().zip(s.iter_mut()).zip(c.iter_mut()) {
+                for ((x, s), c) in black_box(xs).iter().zip(s.iter_mut()).zip(c.iter_mut()) {
                     (*s, *c) = x.sin_cos();
                 }
                 black_box((&s, &c));
