@@ -23,9 +23,10 @@
 //! angles of partial velocities are relative joint angles. Any other kind falls back to the
 //! joint-rate recursion of [`super::rates`] with its result mapped to these speeds.
 
-use super::{GROUND_PARENT, Model, Workspace};
+use super::{GROUND_PARENT, Model, NONE, Workspace};
 use crate::model::loads::ForceFrame;
 use crate::model::math::{Vec2, cross2, rotate_cs};
+use crate::model::sincos::sin_cos_many;
 
 impl Model {
     /// `Model::evaluate` for absolute angular velocities, in pair-coefficient form.
@@ -72,10 +73,29 @@ impl Model {
         let m = &mut ws.m[..n * n];
         let f = &mut ws.f[..n];
         let (pairs, mut pair) = (&self.pairs[..], 0);
+        // NOTE: beyond the fixed-size instances (N = 0: many bodies) the joint angles' sines and
+        // cosines are taken four at a time first (`sin_cos_many`, within an ulp of std's; one
+        // libm call per body was the largest cost of a 32-pendulum rotor's right-hand side,
+        // BENCHMARKS.md); the small instances keep std's, so their results do not move.
+        let (sin, cos) = (&mut ws.sin[..n], &mut ws.cos[..n]);
+        if N == 0 {
+            sin_cos_many(q, sin, cos);
+        }
+        // NOTE: F's entry of the ancestor that the last bodies added to (a rotor, for its
+        // pendulums) is accumulated in a register (`pk`, `pv`) rather than through memory, where
+        // every pendulum's two additions were a store and reload on one serial chain (measured,
+        // BENCHMARKS.md); the same operations in the same order. Bodies come after their parents.
+        let (mut pk, mut pv) = (NONE, 0.0);
         for j in 0..n {
             let nd = &nodes[j];
             let root = nd.parent == GROUND_PARENT;
-            let (js, jc) = if root && !world { (0.0, 1.0) } else { q[j].sin_cos() };
+            let (js, jc) = if root && !world {
+                (0.0, 1.0)
+            } else if N == 0 {
+                (sin[j], cos[j])
+            } else {
+                q[j].sin_cos()
+            };
             // NOTE: the body's own orientation is only needed by gravity and point forces; the
             // pairs use relative angles (measured, BENCHMARKS.md).
             let (c, s) = if root || !oriented {
@@ -88,16 +108,24 @@ impl Model {
             (b.c, b.s, b.jc, b.js) = (c, s, jc, js);
             m[j * n + j] = nd.diag_abs;
             let w = u[j];
+            let mut fj = 0.0;
             if forcing {
                 let qd = if root { w } else { w - u[nd.parent] };
                 b.qdot = qd;
                 let tau = -nd.k_spring * (q[j] - nd.q_free) - nd.c_joint * qd;
-                f[j] = tau - nd.c_ground * w;
+                fj = tau - nd.c_ground * w;
                 if !root {
-                    f[nd.parent] -= tau;
+                    let p = nd.parent;
+                    if pk != p {
+                        if pk != NONE {
+                            f[pk] = pv;
+                        }
+                        (pk, pv) = (p, f[p]);
+                    }
+                    pv -= tau;
                 }
                 if gravity {
-                    f[j] += cross2(rotate_cs(c, s, nd.first_abs), g);
+                    fj += cross2(rotate_cs(c, s, nd.first_abs), g);
                 }
             }
             // Ancestors k of j, nearest first, with (rc, rs) the cosine and sine of θ_j − θ_k.
@@ -111,8 +139,14 @@ impl Model {
                 m[j * n + k] = v;
                 if forcing {
                     let d = alpha * rs + beta * rc;
-                    f[k] += w * w * d;
-                    f[j] -= u[k] * u[k] * d;
+                    if pk != k {
+                        if pk != NONE {
+                            f[pk] = pv;
+                        }
+                        (pk, pv) = (k, f[k]);
+                    }
+                    pv += w * w * d;
+                    fj -= u[k] * u[k] * d;
                 }
                 let next = nodes[k].parent;
                 if next != GROUND_PARENT {
@@ -121,6 +155,12 @@ impl Model {
                 }
                 k = next;
             }
+            if forcing {
+                f[j] = fj;
+            }
+        }
+        if pk != NONE {
+            f[pk] = pv;
         }
         if !forcing {
             return;

@@ -143,6 +143,8 @@ impl Model {
             small: None,
             geared: None,
             tree: None,
+            star: false,
+            fast_star: None,
             articulated: false,
             roller_of: None,
             n,
@@ -169,8 +171,10 @@ impl Model {
         }
         k.small = k.small_form();
         k.tree = k.tree_order();
+        k.star = k.tree.as_deref().is_some_and(Model::is_star);
         k.roller_of = k.rollers_by_body();
         k.articulated = k.articulated_choice();
+        k.fast_star = k.star_rhs();
         Ok((k, ws))
     }
 

@@ -118,6 +118,7 @@ pub mod reduce;
 pub mod reference;
 mod small;
 mod small_rates;
+mod star;
 pub mod tree;
 
 /// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).
@@ -281,6 +282,12 @@ pub struct Model {
     /// right-hand side solves `M u̇ = F` by the tree's own factorisation ([`tree`]); `None`: the
     /// dense LDLᵀ.
     tree: Option<Vec<usize>>,
+    /// True when `tree` is roots and leaves alone ([`Model::is_star`]), solved by
+    /// `Model::factor_solve_star`.
+    star: bool,
+    /// The packed constants of the one-pass right-hand side of a rotor carrying leaves
+    /// ([`star`]), used while `tree` is kept and the articulated route is not forced.
+    fast_star: Option<star::Star>,
     /// True when the right-hand side takes the articulated-body route ([`articulated`]),
     /// which never forms M; it then ignores `tree`.
     articulated: bool,
@@ -304,6 +311,9 @@ pub struct Workspace {
     l: Vec<f64>,
     d_inv: Vec<f64>,
     row: Vec<f64>,
+    /// The joint angles' sines and cosines, for the forms that take them all at once.
+    sin: Vec<f64>,
+    cos: Vec<f64>,
     m_out: DMatrix<f64>,
     f_out: DVector<f64>,
     /// The unconstrained tree's buffers of a geared mechanism.
@@ -327,6 +337,8 @@ impl Workspace {
             l: vec![0.0; n * n],
             d_inv: vec![0.0; n],
             row: vec![0.0; n],
+            sin: vec![0.0; n],
+            cos: vec![0.0; n],
             m_out: DMatrix::zeros(n, n),
             f_out: DVector::zeros(n),
             geared: model.geared.as_deref().map(|g| Box::new(g.workspace())),
@@ -398,6 +410,16 @@ impl Kane {
         let model = self.model_mut();
         model.tree = None;
         model.articulated = false;
+    }
+
+    /// True when the right-hand side takes the one-pass evaluation and solve of a rotor carrying
+    /// leaves (chosen at build for the pair form with
+    /// more than six speeds, speed 0 spinning on the ground and every other body a leaf on it,
+    /// no gravity, point forces or couplings); [`Kane::use_dense_factorisation`] and
+    /// [`Kane::use_articulated_bodies`] turn it off.
+    pub fn solves_rotor_and_leaves(&self) -> bool {
+        let m = &self.model;
+        m.fast_star.is_some() && m.tree.is_some() && !m.articulated
     }
 
     /// Makes the right-hand side form M and solve it along the tree ([`crate::kane::tree`])
@@ -644,7 +666,9 @@ impl Model {
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        let out = if self.articulated {
+        let out = if let Some(star) = self.fast_star.as_ref().filter(|_| !self.articulated && self.tree.is_some()) {
+            self.rhs_star(star, ws, t, x, xdot)
+        } else if self.articulated {
             self.rhs_articulated(ws, t, x, xdot)
         } else if self.nb == n {
             with_literal_n!(n, self.rhs_n(ws, t, x, xdot))

@@ -52,12 +52,98 @@ impl Model {
             .collect()
     }
 
+    /// True when the speeds' tree `above` is roots and leaves alone: every speed with a speed
+    /// above it hangs from a root and has none below it (a rotor carrying pendulums), the case
+    /// of [`Model::factor_solve_star`].
+    pub(super) fn is_star(above: &[usize]) -> bool {
+        let mut has_child = vec![false; above.len()];
+        for &a in above {
+            if a != NONE {
+                has_child[a] = true;
+            }
+        }
+        above.iter().enumerate().all(|(k, &a)| a == NONE || (above[a] == NONE && !has_child[k]))
+    }
+
+    /// [`Model::factor_solve_tree`] for a tree of roots and leaves ([`Model::is_star`]): the same
+    /// operations in the same order, so the same result to the bit, in one pass over the leaves
+    /// that eliminates each leaf and updates its root's right-hand side together.
+    ///
+    /// NOTE: the general loop's cost at 32 pendulums was its bookkeeping (the ancestor walks'
+    /// tests, the run's flushes, a serial chain of `max` for the pivot scale), not its
+    /// arithmetic (measured, BENCHMARKS.md); here a leaf's pivot is its own diagonal entry and
+    /// its one factor entry is kept in `row`.
+    fn factor_solve_star(&self, ws: &mut Workspace, above: &[usize], x: &mut [f64]) -> Result<(), EngineError> {
+        let n = self.n;
+        let (m, f) = (&ws.m[..n * n], &ws.f[..n]);
+        let (d_inv, l, x, above) = (&mut ws.d_inv[..n], &mut ws.row[..n], &mut x[..n], &above[..n]);
+        // The largest diagonal entry, in four independent maxima (max is exact, so the order
+        // does not matter).
+        let mut sc = [0.0f64; 4];
+        for k in 0..n {
+            sc[k % 4] = sc[k % 4].max(m[k * n + k].abs());
+        }
+        let scale = sc[0].max(sc[1]).max(sc[2].max(sc[3]));
+        x.copy_from_slice(f);
+        // A root's pivot is accumulated in its `d_inv` entry until its turn; over a run of its
+        // leaves (descending index: a leaf's root has a smaller one) it and the root's
+        // right-hand side stay in registers instead.
+        for k in 0..n {
+            if above[k] == NONE {
+                d_inv[k] = m[k * n + k];
+            }
+        }
+        let (mut rp, mut hv, mut zv) = (NONE, 0.0, 0.0);
+        for k in (0..n).rev() {
+            let p = above[k];
+            if p == NONE {
+                if rp == k {
+                    (d_inv[k], x[k], rp) = (hv, zv, NONE);
+                }
+                let d = d_inv[k];
+                if d.is_nan() || d <= PIVOT_TOL * scale {
+                    return Err(self.pivot_error(k, d));
+                }
+                d_inv[k] = 1.0 / d;
+                continue;
+            }
+            if rp != p {
+                if rp != NONE {
+                    (d_inv[rp], x[rp]) = (hv, zv);
+                }
+                (rp, hv, zv) = (p, d_inv[p], x[p]);
+            }
+            let d = m[k * n + k];
+            if d.is_nan() || d <= PIVOT_TOL * scale {
+                return Err(self.pivot_error(k, d));
+            }
+            let dk_inv = 1.0 / d;
+            d_inv[k] = dk_inv;
+            let mkp = m[k * n + p];
+            let lkp = mkp * dk_inv;
+            hv -= lkp * mkp;
+            zv -= lkp * x[k];
+            l[k] = lkp;
+        }
+        for k in 0..n {
+            let p = above[k];
+            x[k] *= d_inv[k];
+            if p != NONE {
+                x[k] -= l[k] * x[p];
+            }
+        }
+        Ok(())
+    }
+
     /// Solves `M x = F` by the leaves-first factorisation `M = Lᵀ D L` along the speeds' tree
     /// (`self.tree`; see the module doc), L stored in place of M's below-diagonal entries in
     /// `l`, D⁻¹ in `d_inv`. Only entries between a speed and its ancestors are read.
     pub(super) fn factor_solve_tree(&self, ws: &mut Workspace, x: &mut [f64]) -> Result<(), EngineError> {
         let n = self.n;
         let Some(above) = self.tree.as_deref() else { return self.factor_solve_n::<0>(ws, x) };
+        if self.star {
+            return self.factor_solve_star(ws, above, x);
+        }
         let (m, h, f) = (&ws.m[..n * n], &mut ws.l[..n * n], &ws.f[..n]);
         let (d_inv, x) = (&mut ws.d_inv[..n], &mut x[..n]);
         let mut scale = 0.0f64;

@@ -135,6 +135,26 @@ impl LinearModel {
         Ok((s, qi, ui))
     }
 
+    /// The largest eigenvalue modulus |λ| (1/s) of [`LinearModel::modes`] for the same choices,
+    /// without the mode shapes: the eigenvalues alone, those within `REAL_TOL` of the real axis
+    /// counted by their real part as `modes` reports them, the complex ones by their modulus.
+    /// Equal to the largest `max(|eigenvalue|, |partner|)` over `modes`' rigid and vibration
+    /// modes, and fails where `modes` does.
+    ///
+    /// NOTE: a time run's step bound needs only this number; the shapes' singular value
+    /// decompositions (one per mode) were most of the set-up of a 32-pendulum sweep
+    /// (BENCHMARKS.md).
+    pub fn fastest_rate(&self, spin: Spin, damping: Damping) -> LinResult<f64> {
+        let (sm, _, _) = self.state_matrix(spin, damping)?;
+        let lambdas = eigenvalues(&sm)?;
+        let scale = lambdas.iter().map(|l| l.norm()).fold(self.op.omega.abs(), f64::max).max(f64::MIN_POSITIVE);
+        let is_real = |l: &C64| l.im.abs() <= REAL_TOL * scale;
+        Ok(lambdas
+            .iter()
+            .filter_map(|l| if is_real(l) { Some(l.re.abs()) } else { (l.im > 0.0).then(|| l.norm()) })
+            .fold(0.0, f64::max))
+    }
+
     /// Eigen-analysis: rigid-body modes of the free spin and the n − 1 vibration modes with
     /// eigen-orders, damping ratios, shapes and participation (see [`Mode`]).
     pub fn modes(&self, spin: Spin, damping: Damping) -> LinResult<Modal> {

@@ -18,5 +18,6 @@ pub mod mechanism;
 pub mod path;
 pub mod ranges;
 pub mod shape;
+pub mod sincos;
 pub mod speeds;
 pub mod time_scales;

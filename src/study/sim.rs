@@ -230,16 +230,8 @@ pub(crate) fn options_for(
 /// plan (fastest spring's natural frequency, fastest damper's decay rate) stand in.
 pub(crate) fn fastest_eigenvalue(mech: &Mechanism, spin_joint: &str, omega: f64) -> f64 {
     use crate::linear::{Damping, LinearModel, Spin};
-    let linear = LinearModel::new(mech, spin_joint, omega, None)
-        .and_then(|m| m.modes(Spin::Free, Damping::Damped))
-        .map(|modal| {
-            modal
-                .rigid
-                .iter()
-                .chain(&modal.modes)
-                .map(|m| m.eigenvalue.norm().max(m.partner.norm()))
-                .fold(0.0, f64::max)
-        });
+    let linear =
+        LinearModel::new(mech, spin_joint, omega, None).and_then(|m| m.fastest_rate(Spin::Free, Damping::Damped));
     match linear {
         Ok(l) if l.is_finite() && l > 0.0 => l,
         _ => {

@@ -612,3 +612,30 @@ fn a_locked_away_body_is_watched_through_the_body_that_absorbed_it() {
         assert_ne!(pend.response(n).unwrap(), rotor.response(n).unwrap());
     }
 }
+
+/// `LinearModel::fastest_rate` (eigenvalues only, the time runs' step bound) is the largest
+/// `max(|eigenvalue|, |partner|)` over the rigid and vibration modes of `modes`, to the bit, for
+/// both spin cases and damping choices on 1, 4 and 32 pendulums (damped and undamped pendulums
+/// give complex and real eigenvalues, and the free spin a real one at zero).
+#[test]
+fn fastest_rate_is_the_largest_modulus_of_the_modes() {
+    for n in [1, 4, 32] {
+        for (c_p, c_r) in [(5e-4, 5e-3), (0.0, 0.0), (5e-2, 5e-3)] {
+            let mech = params(n, c_p, c_r).mechanism(None).unwrap();
+            let lin = LinearModel::new(&mech, "spin", omega(), None).unwrap();
+            for spin in [Spin::Free, Spin::Held] {
+                for damping in [Damping::Damped, Damping::Undamped] {
+                    let modal = lin.modes(spin, damping).unwrap();
+                    let from_modes = modal
+                        .rigid
+                        .iter()
+                        .chain(&modal.modes)
+                        .map(|m| m.eigenvalue.norm().max(m.partner.norm()))
+                        .fold(0.0, f64::max);
+                    let rate = lin.fastest_rate(spin, damping).unwrap();
+                    assert_eq!(rate.to_bits(), from_modes.to_bits(), "{n} pendulums, {spin:?}, {damping:?}");
+                }
+            }
+        }
+    }
+}

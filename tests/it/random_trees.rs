@@ -921,3 +921,117 @@ fn the_articulated_body_route_equals_the_dense_one() {
     );
     assert!(kinds.iter().all(|&k| k >= 20) && rollers >= 10 && absolute >= 68);
 }
+
+/// A rotor on the ground carrying `n − 1` revolute leaves (random pivots, centres of mass,
+/// masses, inertias, springs, dampers and ground dampers; absolute speeds, no gravity), with a
+/// harmonic torque on the rotor's joint and a constant one on a leaf's.
+fn star_spec(seed: u64, n: usize) -> MechanismSpec {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let name = |i: usize| format!("b{i}");
+    let (mut bodies, mut joints, mut loads) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        bodies.push(BodySpec {
+            name: Some(name(i)),
+            mass: Some(rng.random_range(0.1..10.0)),
+            com: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
+            inertia: Some(rng.random_range(0.01..1.0)),
+            ..BodySpec::default()
+        });
+        joints.push(JointSpec {
+            name: Some(format!("j{i}")),
+            kind: Some(JointKind::Revolute),
+            parent: Some(if i == 0 { "ground".to_string() } else { name(0) }),
+            child: Some(name(i)),
+            at: Some((rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))),
+            spring: Some(Spring { stiffness: rng.random_range(0.0..50.0), free_angle: rng.random_range(-0.5..0.5) }),
+            damper: Some(rng.random_range(0.0..2.0)),
+            ..JointSpec::default()
+        });
+        if rng.random_bool(0.3) {
+            loads.push(LoadSpec::GroundDamper { body: name(i), c: rng.random_range(0.0..1.0) });
+        }
+    }
+    let harmonic = Excitation {
+        mean: 3.0,
+        rpm: 1000.0,
+        order: Order::Sweep { from: 2.9, to: 3.3, duration_s: 60.0 },
+        harmonics: vec![Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.3 }],
+        ramp_s: 0.0,
+    };
+    loads.push(LoadSpec::JointTorque { joint: "j0".into(), excitation: harmonic });
+    loads.push(LoadSpec::JointTorque { joint: format!("j{}", n / 2), excitation: Excitation::constant(0.7) });
+    MechanismSpec {
+        base: None,
+        name: format!("star{seed}"),
+        speeds: Speeds::AbsoluteAngularVelocities,
+        gravity: (0.0, 0.0),
+        bodies,
+        joints,
+        loads,
+        gears: Vec::new(),
+    }
+}
+
+/// Issue 30: the one-pass right-hand side of a rotor carrying leaves (`kane::star`) against the
+/// dense LDLᵀ, for 7 to 13 leaves (every remainder of the four-leaf rounds) and 32, 64: the same
+/// q̇ exactly and u̇ to 1e-12 of its largest entry (the two differ by the order of the root's
+/// sums and by rounding times M's condition), at random states with angles of any size (the
+/// sines' reduction in every quadrant).
+#[test]
+fn the_rotor_and_leaves_pass_equals_the_dense_factorisation() {
+    let mut worst: f64 = 0.0;
+    for n in (8..=14).chain([33, 65]) {
+        for seed in 0..6 {
+            let mech = Mechanism::from_spec(&star_spec(500 * n as u64 + seed, n)).unwrap();
+            let mut star = Kane::new(&mech).unwrap();
+            assert!(star.solves_rotor_and_leaves(), "n = {n}");
+            let mut dense = star.clone();
+            dense.use_dense_factorisation();
+            assert!(!dense.solves_rotor_and_leaves());
+            let mut rng = StdRng::seed_from_u64(9000 + seed);
+            let dof = mech.ndof();
+            let x: Vec<f64> = (0..2 * dof)
+                .map(|i| if i < dof { rng.random_range(-7.0..7.0) } else { rng.random_range(-50.0..50.0) })
+                .collect();
+            let (mut a, mut b) = (vec![0.0; 2 * dof], vec![0.0; 2 * dof]);
+            star.rhs(0.3, &x, &mut a).unwrap();
+            dense.rhs(0.3, &x, &mut b).unwrap();
+            assert_eq!(a[..dof], b[..dof]);
+            let size = b[dof..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = a[dof..].iter().zip(&b[dof..]).fold(0.0f64, |m, (p, r)| m.max((p - r).abs()));
+            worst = worst.max(diff / size);
+            assert!(diff <= 1e-12 * size, "n = {n}, seed {seed}: {diff:e} of {size:e}");
+        }
+    }
+    println!("largest difference: {worst:e} of the largest u̇");
+}
+
+/// A rotor carrying leaves with friction on one leaf's pivot (a coupling, so not the one-pass
+/// form): the tree's factorisation of roots and leaves (`tree::factor_solve_star`) against the
+/// dense LDLᵀ, to 1e-12 of the largest u̇ as above.
+#[test]
+fn roots_and_leaves_with_a_coupling_equal_the_dense_factorisation() {
+    for n in [9, 14, 33] {
+        for seed in 0..4 {
+            let mut spec = star_spec(700 * n as u64 + seed, n);
+            spec.joints[n - 1].friction = Some(Friction { torque: 0.8, smoothing: 0.3 });
+            let mech = Mechanism::from_spec(&spec).unwrap();
+            let mut tree = Kane::new(&mech).unwrap();
+            assert!(tree.factorises_along_tree() && !tree.solves_rotor_and_leaves(), "n = {n}");
+            let mut dense = tree.clone();
+            dense.use_dense_factorisation();
+            let mut rng = StdRng::seed_from_u64(9500 + seed);
+            let dof = mech.ndof();
+            let x: Vec<f64> = (0..2 * dof)
+                .map(|i| if i < dof { rng.random_range(-7.0..7.0) } else { rng.random_range(-50.0..50.0) })
+                .collect();
+            let (mut a, mut b) = (vec![0.0; 2 * dof], vec![0.0; 2 * dof]);
+            tree.rhs(0.3, &x, &mut a).unwrap();
+            dense.rhs(0.3, &x, &mut b).unwrap();
+            assert_eq!(a[..dof], b[..dof]);
+            let size = b[dof..].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = a[dof..].iter().zip(&b[dof..]).fold(0.0f64, |m, (p, r)| m.max((p - r).abs()));
+            assert!(diff <= 1e-12 * size, "n = {n}, seed {seed}: {diff:e} of {size:e}");
+        }
+    }
+}
