@@ -17,7 +17,10 @@
 //! directional derivative of J along v into the difference of two Jacobians); for the order, the
 //! same difference of `∂R̂/∂n`; for the torque scale, zero, since s multiplies the excitation,
 //! which does not depend on x. After every point b and c take the new w and v, so the bordered
-//! matrices stay far from singular along the curve.
+//! matrices stay far from singular along the curve. A step is retried shorter when the tangent
+//! turned by more than acos 0.95 or the tested block's null vector by more than acos `NULL_TURN`
+//! (the corrector has then landed on a neighbouring curve, as near an onset whose two legs are
+//! close in state).
 //!
 //! Period doublings are followed the same way on the problem of half the base frequency
 //! (`Singularity::HalfPeriod`): at its states of even harmonics only (the period-1 states) the
@@ -43,6 +46,9 @@ use nalgebra::{DMatrix, DVector};
 /// Relative step of the differences of the Jacobian along the null vector v (|v| = 1, in rad):
 /// central differences err by O(h²) of the third derivatives and by O(ε/h) of rounding.
 const FD_STEP: f64 = 1e-5;
+
+/// Smallest |cos| between the tested block's null vectors at successive points of a curve.
+const NULL_TURN: f64 = 0.9;
 
 /// The plane of a fold curve: the torque scale s and either the excitation order n (at the
 /// problem's mean speed) or the mean speed Ω (at a fixed order).
@@ -818,7 +824,10 @@ impl Hbm {
             if t_new.dot(&t) < 0.0 {
                 t_new = -t_new;
             }
-            if t_new.dot(&t) < 0.95 {
+            // A step whose tested block's null vector turned far has left the curve for a
+            // neighbouring one (near a turning point in the second parameter the corrector can
+            // land on another curve of the same test whose states are close): retry shorter.
+            if t_new.dot(&t) < 0.95 || aug.v.normalize().dot(&walk.c).abs() < NULL_TURN {
                 ds *= 0.5;
                 continue;
             }

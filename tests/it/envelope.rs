@@ -215,6 +215,11 @@ fn the_unison_loss_boundary_meets_the_jump_boundary() {
                 torque_max: 5000.0)])\n";
     let (report, csv, _, _) = run_study("meet", text, "meet");
     let r = &report.envelopes[0];
+    // One jump boundary and one unison-loss boundary: the unison-loss curve's two legs near its
+    // onset are close in state, and a walk that stepped across to the other leg once walked the
+    // first leg again and the map drew a second boundary (the null-vector guard of the walk).
+    let kinds: Vec<_> = r.boundaries.iter().map(|b| format!("{:?}", b.kind)).collect();
+    assert_eq!(kinds, ["Jump", "UnisonLoss"]);
     let meet = r.points.iter().find(|p| format!("{:?}", p.kind) == "UnisonLossMeetsJump").expect("a meeting point");
     println!("meeting at n {} T {} N·m", meet.value, meet.second_value);
     assert!(csv.lines().any(|l| l.starts_with(&format!("{},14,", meet.boundary + 1))), "CSV kind 14");
