@@ -317,15 +317,7 @@ fn the_period_doubling_curve_passes_through_the_branches_doublings_and_its_tip()
 /// (250.879859–250.882730 N·m; here checked against a fresh bracket of 1e-4 relative).
 #[test]
 fn the_envelope_maps_the_period_doubling_tongue() {
-    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
-    let text = "Study(name: \"pd_map\", mechanism: \"cpva.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
-                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 6.0, order_max: 6.8, torque_min: 100.0, \
-                torque_max: 2000.0)])\n";
-    let src = kanedyn::io::Source::from_text("examples/pd_map.ron", text);
-    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
-    let out = std::env::temp_dir().join(format!("kanedyn_pd_map_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let report = envelope_map("pd_map", "cpva.ron", (6.0, 6.8), (100.0, 2000.0));
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let r = &report.envelopes[0];
     assert!(r.period_doubling_search.starts_with("searched"), "{}", r.period_doubling_search);
@@ -349,15 +341,7 @@ fn the_envelope_maps_the_period_doubling_tongue() {
 /// every point and crossings found at any step, have no period doubling.
 #[test]
 fn the_envelope_skips_the_doubling_search_only_where_none_exists() {
-    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
-    let text = "Study(name: \"pd_skip\", mechanism: \"cpva.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
-                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 2.9, order_max: 3.3, torque_min: 1.0, \
-                torque_max: 500.0)])\n";
-    let src = kanedyn::io::Source::from_text("examples/pd_skip.ron", text);
-    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
-    let out = std::env::temp_dir().join(format!("kanedyn_pd_skip_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let report = envelope_map("pd_skip", "cpva.ron", (2.9, 3.3), (1.0, 500.0));
     let r = &report.envelopes[0];
     assert!(r.period_doubling_search.starts_with("not searched"), "{}", r.period_doubling_search);
     let kane = Kane::new(&CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
@@ -382,15 +366,7 @@ fn the_envelope_skips_the_doubling_search_only_where_none_exists() {
 /// on the general solver's branches.
 #[test]
 fn the_envelope_maps_the_non_unison_period_doubling_of_two_pendulums() {
-    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
-    let text = "Study(name: \"pd_map2\", mechanism: \"cpva2.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
-                analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: 6.0, order_max: 6.8, torque_min: 100.0, \
-                torque_max: 2000.0)])\n";
-    let src = kanedyn::io::Source::from_text("examples/pd_map2.ron", text);
-    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
-    let out = std::env::temp_dir().join(format!("kanedyn_pd_map2_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let report = envelope_map("pd_map2", "cpva2.ron", (6.0, 6.8), (100.0, 2000.0));
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let r = &report.envelopes[0];
     assert!(r.route.starts_with("cyclic"), "{}", r.route);
@@ -422,4 +398,23 @@ fn the_envelope_maps_the_non_unison_period_doubling_of_two_pendulums() {
     let (below, above) = (general(tip.second_value * (1.0 - 1e-4)), general(tip.second_value * (1.0 + 1e-4)));
     println!("below: {below:?}, above: {above:?}");
     assert!(below.is_empty() && above.len() == 2, "below {below:?}, above {above:?}");
+}
+
+/// Runs a study of one `Envelope` analysis named `env` at 1000 rpm on the example mechanism
+/// `mechanism` over `orders` and `torques` (N·m), read as `examples/<name>.ron`, into a fresh
+/// folder removed afterwards.
+fn envelope_map(name: &str, mechanism: &str, orders: (f64, f64), torques: (f64, f64)) -> kanedyn::study::StudyReport {
+    use kanedyn::study::{LoadOptions, RunOptions, Study, run};
+    let text = format!(
+        "Study(name: \"{name}\", mechanism: \"{mechanism}\", spin_joint: \"spin\", response_body: \"rotor\",\n\
+         analyses: [Envelope(name: \"env\", rpm: 1000.0, order_min: {:?}, order_max: {:?}, torque_min: {:?}, \
+         torque_max: {:?})])\n",
+        orders.0, orders.1, torques.0, torques.1
+    );
+    let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), &text);
+    let study = Study::from_source(src, &LoadOptions::default()).unwrap();
+    let out = std::env::temp_dir().join(format!("kanedyn_{name}_{}", std::process::id()));
+    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    report
 }

@@ -589,8 +589,9 @@ fn covered(
     })
 }
 
-/// One boundary through `seed`, followed both ways in the second parameter on `hk` (`what` its
-/// kind, identical set and test); each walk that fails is a failure worded by `fail`.
+/// One boundary through `seed`, followed both ways in the second parameter on `hk` (its kind,
+/// identical set and test); each walk that fails is a failure after `origin` (where it was
+/// seeded).
 #[allow(clippy::too_many_arguments)]
 fn walk_boundary(
     hk: &mut Hbm,
@@ -600,7 +601,7 @@ fn walk_boundary(
     (kind, set, test): (BoundaryKind, Option<String>, Singularity),
     fopts: &FoldCurveOptions,
     failures: &mut Vec<String>,
-    fail: impl Fn(String) -> String,
+    origin: &str,
 ) -> Walked {
     let fo = FoldCurveOptions { test, ..*fopts };
     let mut w =
@@ -621,7 +622,7 @@ fn walk_boundary(
                 if !up {
                     w.points.push(seed.clone());
                 }
-                failures.push(fail(format!("{} in the second parameter: {e}", if up { "up" } else { "down" })));
+                failures.push(format!("{origin}, {} in the second parameter: {e}", if up { "up" } else { "down" }));
             }
         }
     }
@@ -757,7 +758,7 @@ fn meets_fold(hbm: &mut Hbm, ax: &Axis, test: Singularity, c: &FoldCurve) -> Vec
                 b = m;
             }
         }
-        out.push(if (a.parameter - b.parameter).abs() < f64::EPSILON { a } else { b });
+        out.push(b);
     }
     out
 }
@@ -895,20 +896,23 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 continue;
             }
         };
+        // Where a boundary was seeded, for its failures.
+        let origin = |kind: BoundaryKind, seed: &FoldCurvePoint| {
+            format!(
+                "{}: {} boundary from {} at {}",
+                spec.name,
+                kind.words(),
+                num(ax.value(seed.order, seed.omega), 8),
+                second.words(second.value(s))
+            )
+        };
         for (kind, set, test) in &tests {
             for seed in seeds_on(hk, &ax, fam, *test, &branch, s) {
                 if covered(hk, &ax, fam, &walked, *test, &seed) {
                     continue;
                 }
-                let w = walk_boundary(hk, &ax, fam, &seed, (*kind, set.clone(), *test), &fopts, &mut failures, |e| {
-                    format!(
-                        "{}: {} boundary from {} at {}, {e}",
-                        spec.name,
-                        kind.words(),
-                        num(ax.value(seed.order, seed.omega), 8),
-                        second.words(second.value(s))
-                    )
-                });
+                let origin = origin(*kind, &seed);
+                let w = walk_boundary(hk, &ax, fam, &seed, (*kind, set.clone(), *test), &fopts, &mut failures, &origin);
                 walked.push(w);
             }
         }
@@ -927,15 +931,8 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 }
                 let kind = BoundaryKind::PeriodDoubling;
                 let set = halves.iter().find(|h| h.1 == test).and_then(|h| h.0.clone());
-                let w = walk_boundary(h2, &ax, None, &seed, (kind, set, test), &fopts, &mut failures, |e| {
-                    format!(
-                        "{}: {} boundary from {} at {}, {e}",
-                        spec.name,
-                        kind.words(),
-                        num(ax.value(seed.order, seed.omega), 8),
-                        second.words(second.value(s))
-                    )
-                });
+                let origin = origin(kind, &seed);
+                let w = walk_boundary(h2, &ax, None, &seed, (kind, set, test), &fopts, &mut failures, &origin);
                 walked.push(w);
             }
         }
