@@ -16,7 +16,11 @@
 //! unknowns, `−wᵀ (J(x + hv) − J(x − hv)) / 2h` (the symmetry of second derivatives turns the
 //! directional derivative of J along v into the difference of two Jacobians); for the order, the
 //! same difference of `∂R̂/∂n`; for the torque scale, zero, since s multiplies the excitation,
-//! which does not depend on x. After every point b and c take the new w and v, so the bordered
+//! which does not depend on x. Newton's iterates take the one-sided difference from J(x), which
+//! they have anyway (one Jacobian instead of two; g itself is exact, so the point converged to
+//! is the same), and stop once the contraction shows the next step below the tolerance
+//! (`settled`); the tangents that locate a turning point of s take the central ones. After
+//! every point b and c take the new w and v, so the bordered
 //! matrices stay far from singular along the curve. A step is retried shorter when the tangent
 //! turned by more than acos 0.95 or the tested block's null vector by more than acos `NULL_TURN`
 //! (the corrector has then landed on a neighbouring curve, as near an onset whose two legs are
@@ -31,8 +35,9 @@
 //!
 //! The second parameter may also be a mechanism parameter p (a pivot's damping, an absorber's
 //! tuning) at a fixed torque scale, through a [`MechanismFamily`] that builds the problem at any p:
-//! the same system with ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` by central differences between
-//! problems built at p ± h, as the mechanism offers no derivative in p (see its docs).
+//! the same system with ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` by differences between problems
+//! built at p ± h (one-sided in Newton's iterates, as for x), as the mechanism offers no
+//! derivative in p (see its docs).
 //!
 //! Along the curve s has a minimum at a cusp (there the projection of the fold curve on the
 //! (n, s) plane has its spike: in the normal form `x³ − s x − n = 0` the folds are
@@ -46,6 +51,12 @@ use nalgebra::{DMatrix, DVector};
 /// Relative step of the differences of the Jacobian along the null vector v (|v| = 1, in rad):
 /// central differences err by O(h²) of the third derivatives and by O(ε/h) of rounding.
 const FD_STEP: f64 = 1e-5;
+
+/// The step of the one-sided differences of the Newton iterations: they err by O(h) of the
+/// second derivatives and by O(ε/h) of rounding, balanced near √ε. Newton only needs ∂g/∂x to
+/// that accuracy (the residual g is exact, so the converged point is the same); the tangents
+/// at turning points of the second parameter take central differences (`Walk::central`).
+const FD_STEP_ONE_SIDED: f64 = 1e-7;
 
 /// Smallest |cos| between the tested block's null vectors at successive points of a curve.
 const NULL_TURN: f64 = 0.9;
@@ -202,9 +213,10 @@ impl Default for FoldCurveOptions {
 ///
 /// The residual depends on p through the mechanism, which the engine builds once (its mass
 /// matrix, the joints' laws): there is no ∂R̂/∂p in closed form, and no way to change p in place.
-/// So `build(p)` makes the whole problem at p, and ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` are central
-/// differences of problems built at p ± h, h = 1e-5 · `reference` (O(h²) of the third
-/// derivatives; the residual is linear in a damping, so exact there up to rounding).
+/// So `build(p)` makes the whole problem at p, and ∂R̂/∂p and `∂g/∂p = −wᵀ (∂J/∂p) v` are
+/// differences of problems built at p and p ± h, h = 1e-5 · `reference`: central (O(h²) of the
+/// third derivatives) for tangents at turning points, one-sided in Newton's iterates (the
+/// residual is linear in a damping, so both are exact there up to rounding).
 pub struct MechanismFamily<'a> {
     /// The problem at p: the same mechanism and route at every p, so the same unknowns.
     pub build: &'a dyn Fn(f64) -> Result<Hbm, HbmError>,
@@ -268,11 +280,21 @@ struct Augmented {
 
 /// A fold curve's walk: its plane, the borders b and c, ∂R̂/∂s (constant) on a torque-scale
 /// plane, or the family of problems on a mechanism parameter's.
-/// A converged corrector: the point, its Newton iterations, and the last Newton matrix's LU
-/// and augmented system (at the iterate one step before y).
+/// Whether a Newton iteration whose last two steps (max norm) were `step` and `previous` has
+/// settled to `tol` without one more iterate: it contracts at least by step/previous per
+/// iterate (≤ 1/2 asked), so the next step, which bounds the error left, is at most
+/// step²/previous. The iterate that step verifies costs a whole Jacobian set on a fold curve.
+fn settled(step: f64, previous: f64, tol: f64) -> bool {
+    previous.is_finite() && step <= 0.5 * previous && step * step <= tol * previous
+}
+
+/// A converged corrector: the point, its Newton iterations, whether the last iterate's own step
+/// was left out as [`settled`], and the last Newton matrix's LU and augmented system (at the
+/// iterate one step before y).
 struct Corrected {
     y: DVector<f64>,
     iterations: usize,
+    skipped: bool,
     lu: nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
     aug: Augmented,
 }
@@ -298,6 +320,9 @@ struct Walk<'a> {
     /// The unknowns held at zero (the odd harmonics, on the half-frequency problem): their rows
     /// of R̂ and of the augmented Jacobian become `x_i = 0`.
     pinned: Vec<usize>,
+    /// Whether ∂g/∂(x, λ, p) are central differences (exact tangents, for the turning points of
+    /// the second parameter) rather than one-sided ones (one Jacobian fewer per Newton iterate).
+    central: bool,
     family: Option<&'a MechanismFamily<'a>>,
     built: Built,
 }
@@ -431,7 +456,7 @@ impl Hbm {
     fn augmented(&mut self, x: &[f64], at: &At, p: Option<f64>, walk: &mut Walk) -> Result<Augmented, HbmError> {
         let order = at.order;
         let m = self.unknowns();
-        let Walk { plane, b, c, rs, block, family, built, pinned } = walk;
+        let Walk { plane, b, c, rs, block, family, built, pinned, central } = walk;
         let (param, scale) = (plane.param(), if plane.kind == FoldPlane::Order { 1.0 } else { plane.p_ref });
         let hbm = problem(self, built, *family, p)?;
         hbm.assemble(x, at, Some(param));
@@ -457,13 +482,17 @@ impl Hbm {
         if !(vn.is_finite() && vn > 0.0) {
             return Err(HbmError::NonFinite { order });
         }
-        let h = FD_STEP / vn;
+        let h = if *central { FD_STEP } else { FD_STEP_ONE_SIDED } / vn;
         let shifted = |sign: f64| -> Vec<f64> { x.iter().zip(v.iter()).map(|(xi, vi)| xi + sign * h * vi).collect() };
         hbm.assemble(&shifted(1.0), at, Some(param));
-        let (jp, rlp) = (hbm.jac.clone(), hbm.gp.clone());
-        hbm.assemble(&shifted(-1.0), at, Some(param));
-        let gx = -((&jp - &hbm.jac).transpose() * &w) / (2.0 * h);
-        let gl = -scale * w.dot(&(&rlp - &hbm.gp)) / (2.0 * h);
+        let (gx, gl) = if *central {
+            let (jp, rlp) = (hbm.jac.clone(), hbm.gp.clone());
+            hbm.assemble(&shifted(-1.0), at, Some(param));
+            (-((&jp - &hbm.jac).transpose() * &w) / (2.0 * h), -scale * w.dot(&(&rlp - &hbm.gp)) / (2.0 * h))
+        } else {
+            // J and ∂R̂/∂λ at x are `j` and `rl` (scaled).
+            (-((&hbm.jac - &j).transpose() * &w) / h, -w.dot(&(&hbm.gp * scale - &rl)) / h)
+        };
         // ∂R̂/∂σ and ∂g/∂σ: s multiplies the excitation, which does not depend on x (so ∂J/∂s = 0);
         // p is differenced between the problems built at p ± h (per unit σ = p / reference).
         let (rs, gs) = match (*family, p) {
@@ -475,8 +504,12 @@ impl Hbm {
                     Ok((other.rhat.clone(), other.jac.clone()))
                 };
                 let (r_up, j_up) = side(p + hp)?;
-                let (r_down, j_down) = side(p - hp)?;
-                let per = f.reference / (2.0 * hp);
+                let (r_down, j_down, per) = if *central {
+                    let (r_down, j_down) = side(p - hp)?;
+                    (r_down, j_down, f.reference / (2.0 * hp))
+                } else {
+                    (r.clone(), j.clone(), f.reference / hp)
+                };
                 ((r_up - r_down) * per, -w.dot(&((j_up - j_down) * &v)) * per)
             }
             _ => (rs.clone(), 0.0),
@@ -549,7 +582,7 @@ impl Hbm {
         let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
         let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
         let pinned = self.pinned(test);
-        Ok(Walk { plane, b, c, rs, block, pinned, family, built })
+        Ok(Walk { plane, b, c, rs, block, pinned, family, built, central: false })
     }
 
     /// Newton's method on `R̂ = 0, g = 0` with one of (λ, σ) free: λ when `free_lambda`, else σ.
@@ -561,6 +594,7 @@ impl Hbm {
         free_lambda: bool,
     ) -> Result<usize, HbmError> {
         let m = self.unknowns();
+        let mut previous = f64::INFINITY;
         for it in 1..=self.opts.max_iter {
             let (at, p) = walk.at(*lambda, *sigma);
             let aug = self.augmented(x, &at, p, walk)?;
@@ -587,9 +621,10 @@ impl Hbm {
                 *sigma -= d[m];
             }
             (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
-            if step <= self.opts.tol {
+            if step <= self.opts.tol || settled(step, previous, self.opts.tol) {
                 return Ok(it);
             }
+            previous = step;
         }
         Err(HbmError::NoConvergence {
             order: walk.at(*lambda, *sigma).0.order,
@@ -779,7 +814,9 @@ impl Hbm {
         // The tangent at the start, oriented by the requested direction of the second parameter.
         let mut e_s = DVector::zeros(m + 2);
         e_s[m + 1] = if up { 1.0 } else { -1.0 };
+        walk.central = true;
         let (mut t, aug) = self.fold_tangent(&y, &mut walk, &e_s)?;
+        walk.central = false;
         (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
         if t[m + 1] * e_s[m + 1] < 0.0 {
             t = -t;
@@ -805,14 +842,14 @@ impl Hbm {
                 break FoldCurveEnd::StepTooSmall;
             }
             let pred = &y + &t * ds;
-            let Corrected { y: y_new, iterations: iters, lu, aug } = match self.fold_correct(&pred, &t, &mut walk, opts)
-            {
-                Ok(r) => r,
-                Err(_) => {
-                    ds *= 0.5;
-                    continue;
-                }
-            };
+            let Corrected { y: y_new, iterations: iters, skipped, lu, aug } =
+                match self.fold_correct(&pred, &t, &mut walk, opts) {
+                    Ok(r) => r,
+                    Err(_) => {
+                        ds *= 0.5;
+                        continue;
+                    }
+                };
             // The tangent from the last Newton matrix, factorised at the iterate before the
             // converged one (within the tolerance of it): the predictor only needs it to that
             // accuracy, and a new matrix would cost three Jacobians. Turning points of the
@@ -834,7 +871,12 @@ impl Hbm {
             (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             let chord = (&y_new - &y).norm();
             if t[m + 1] * t_new[m + 1] < 0.0
-                && let Some((p, tl)) = self.locate_extremum(&y, &t, chord, &mut walk, opts)
+                && let Some((p, tl)) = {
+                    walk.central = true;
+                    let found = self.locate_extremum(&y, &t, chord, &mut walk, opts);
+                    walk.central = false;
+                    found
+                }
             {
                 // At the located point |dσ/dσ_arc| ≤ 1e-10; at a cusp dλ/dσ follows it to zero
                 // (the paper's rotor: 2e-11), elsewhere it stays of order one.
@@ -849,9 +891,12 @@ impl Hbm {
             if !inside(&walk, &y) {
                 break FoldCurveEnd::LeftBox;
             }
-            if iters <= 3 {
+            // The step rule counts a settled iterate as taken, so the curve's resolution does
+            // not depend on whether the last step was verified.
+            let effort = iters + usize::from(skipped);
+            if effort <= 3 {
                 ds = (ds * 1.5).min(opts.ds_max);
-            } else if iters >= 6 {
+            } else if effort >= 6 {
                 ds *= 0.7;
             }
         };
@@ -904,6 +949,7 @@ impl Hbm {
     ) -> Result<Corrected, HbmError> {
         let m = self.unknowns();
         let mut y = pred.clone();
+        let mut previous = f64::INFINITY;
         for it in 1..=opts.max_iter {
             let (mat, aug) = self.fold_matrix(&y, walk, t)?;
             let mut rhs = DVector::zeros(m + 2);
@@ -917,9 +963,11 @@ impl Hbm {
                 return Err(HbmError::NonFinite { order: y[m] });
             }
             y -= d;
-            if step <= opts.tol {
-                return Ok(Corrected { y, iterations: it, lu, aug });
+            let skipped = step > opts.tol;
+            if !skipped || settled(step, previous, opts.tol) {
+                return Ok(Corrected { y, iterations: it, skipped, lu, aug });
             }
+            previous = step;
         }
         Err(HbmError::NoConvergence { order: y[m], iterations: opts.max_iter, step: f64::NAN })
     }

@@ -775,6 +775,12 @@ fn end_words(c: &FoldCurve) -> String {
     .into()
 }
 
+/// Largest arclength step of a seed branch, twice the default: the seeds' crossings are found
+/// by sign changes of test functions at any step (`hbm::continuation`), and each seed is then
+/// solved exactly on its curve, so a coarser branch finds the same boundaries (on the paper's
+/// map the same points to the bit; BENCHMARKS.md has the cost).
+const SEED_DS_MAX: f64 = 0.2;
+
 /// The map: every boundary its seeds reach, with its codimension-two points; a seed branch or a
 /// walk that fails is listed and the rest kept.
 pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeResult, Vec<String>)> {
@@ -856,6 +862,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         refine_folds: false,
         one_sided: true,
         deadline: study.spec.integration.deadline,
+        ds_max: SEED_DS_MAX,
         ..ContinuationOptions::default()
     };
     let mut failures = Vec::new();
