@@ -861,6 +861,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         stability: false,
         refine_folds: false,
         one_sided: true,
+        corrector_tol: Some(super::hbm::GUESS_TOL),
         deadline: study.spec.integration.deadline,
         ds_max: SEED_DS_MAX,
         ..ContinuationOptions::default()
