@@ -549,11 +549,14 @@ impl Hbm {
         let (r, j, rl) = (hbm.rhat.clone(), hbm.jac.clone(), &hbm.gp * scale);
         let idx = &*block;
         let mb = idx.len();
-        let jb = DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]);
         let mut e = DVector::zeros(mb + 1);
         e[mb] = 1.0;
         // The bordered matrix of Jᵀ (borders swapped) is the transpose of J's: one LU for both.
-        let lu = Self::border(&jb, b, c).lu();
+        let lu = if mb == m {
+            Self::border(&j, b, c).lu()
+        } else {
+            Self::border(&DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]), b, c).lu()
+        };
         let sv = lu.solve(&e).ok_or(HbmError::Singular { order })?;
         let sw = solve_transposed(&lu, &e).ok_or(HbmError::Singular { order })?;
         let (vb, g) = (sv.rows(0, mb).clone_owned(), sv[mb]);
@@ -662,11 +665,23 @@ impl Hbm {
         let rs = hbm.gp.clone();
         let mb = block.len();
         let jb = DMatrix::from_fn(mb, mb, |a, b| hbm.jac[(block[a], block[b])]);
-        let svd = jb.svd(true, true);
-        let k = svd.singular_values.imin();
         let unit = DVector::from_element(mb, 1.0 / (mb as f64).sqrt());
-        let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
-        let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
+        // b and c only have to keep the bordered matrix regular: not orthogonal to J_b's left
+        // and right null vectors. A walk starts near a singular point, where one step of inverse
+        // iteration from a flat vector already points along them; the SVD (several times the
+        // cost of an LU) only where that step fails.
+        let lu = jb.clone().lu();
+        let inverse = |x: Option<DVector<f64>>| x.map(|x| x.normalize()).filter(|x| x.iter().all(|v| v.is_finite()));
+        let (b, c) = match (inverse(solve_transposed(&lu, &unit)), inverse(lu.solve(&unit))) {
+            (Some(b), Some(c)) => (b, c),
+            _ => {
+                let svd = jb.svd(true, true);
+                let k = svd.singular_values.imin();
+                let b = svd.u.as_ref().map_or_else(|| unit.clone(), |u| u.column(k).clone_owned());
+                let c = svd.v_t.as_ref().map_or(unit, |v| v.row(k).transpose());
+                (b, c)
+            }
+        };
         let pinned = self.pinned(test);
         Ok(Walk { plane, b, c, rs, block, pinned, family, built, central: false })
     }
