@@ -303,7 +303,7 @@ struct Corrected {
     aug: Augmented,
 }
 
-type Lu = nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
+type Lu = super::lu::DenseLu;
 
 /// The fold curve's Newton matrix `N = [[J, ∂R̂/∂λ, ∂R̂/∂σ], [∂g/∂x, ∂g/∂λ, ∂g/∂σ], [tᵀ]]`
 /// ready to solve: factorised whole, or, on a fold curve (the whole J tested, nothing pinned),
@@ -313,7 +313,7 @@ type Lu = nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>;
 /// `[v; g]`), the m + 2 equations reduce to three in (dλ, dσ, φ). That replaces the
 /// (m + 2)-square factorisation of every iterate by three solves with B.
 enum NewtonLu {
-    Whole(Lu),
+    Whole(nalgebra::linalg::LU<f64, nalgebra::Dyn, nalgebra::Dyn>),
     Eliminated(Box<Eliminated>),
 }
 
@@ -453,17 +453,6 @@ fn problem<'h>(
     }
 }
 
-/// x with `Aᵀ x = e` from A's LU factors: `PA = LU` gives `Aᵀ = Uᵀ Lᵀ P` (P orthogonal), so
-/// two triangular solves with the transposed factors and the inverse permutation.
-fn solve_transposed(lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>, e: &DVector<f64>) -> Option<DVector<f64>> {
-    let mut x = e.clone();
-    if !(lu.u().tr_solve_upper_triangular_mut(&mut x) && lu.l().tr_solve_lower_triangular_mut(&mut x)) {
-        return None;
-    }
-    lu.p().inv_permute_rows(&mut x);
-    Some(x)
-}
-
 /// Which matrix a curve keeps singular.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Singularity {
@@ -553,12 +542,12 @@ impl Hbm {
         e[mb] = 1.0;
         // The bordered matrix of Jᵀ (borders swapped) is the transpose of J's: one LU for both.
         let lu = if mb == m {
-            Self::border(&j, b, c).lu()
+            Lu::new(&Self::border(&j, b, c))
         } else {
-            Self::border(&DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]), b, c).lu()
+            Lu::new(&Self::border(&DMatrix::from_fn(mb, mb, |a, b| j[(idx[a], idx[b])]), b, c))
         };
         let sv = lu.solve(&e).ok_or(HbmError::Singular { order })?;
-        let sw = solve_transposed(&lu, &e).ok_or(HbmError::Singular { order })?;
+        let sw = lu.solve_transposed(&e).ok_or(HbmError::Singular { order })?;
         let (vb, g) = (sv.rows(0, mb).clone_owned(), sv[mb]);
         let wb = sw.rows(0, mb).clone_owned();
         // v and w in the whole space (zero off the block).
@@ -670,9 +659,9 @@ impl Hbm {
         // and right null vectors. A walk starts near a singular point, where one step of inverse
         // iteration from a flat vector already points along them; the SVD (several times the
         // cost of an LU) only where that step fails.
-        let lu = jb.clone().lu();
+        let lu = Lu::new(&jb);
         let inverse = |x: Option<DVector<f64>>| x.map(|x| x.normalize()).filter(|x| x.iter().all(|v| v.is_finite()));
-        let (b, c) = match (inverse(solve_transposed(&lu, &unit)), inverse(lu.solve(&unit))) {
+        let (b, c) = match (inverse(lu.solve_transposed(&unit)), inverse(lu.solve(&unit))) {
             (Some(b), Some(c)) => (b, c),
             _ => {
                 let svd = jb.svd(true, true);
@@ -708,7 +697,7 @@ impl Hbm {
             let mut rhs = DVector::zeros(m + 1);
             rhs.rows_mut(0, m).copy_from(&aug.r);
             rhs[m] = aug.g;
-            let d = mat.lu().solve(&rhs).ok_or(HbmError::Singular { order: at.order })?;
+            let d = Lu::new(&mat).solve(&rhs).ok_or(HbmError::Singular { order: at.order })?;
             let step = d.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order: at.order });
@@ -1153,7 +1142,7 @@ mod tests {
             let (rl, rs, gx, r) = (vec(&mut next), vec(&mut next), vec(&mut next), vec(&mut next));
             let t = DVector::from_fn(m + 2, |_, _| next());
             let (gl, gs, gres, tau) = (next(), next(), next(), next());
-            let bordered = Hbm::border(&j, &b, &c).lu();
+            let bordered = Lu::new(&Hbm::border(&j, &b, &c));
             let mut e = DVector::zeros(m + 1);
             e[m] = 1.0;
             let sv_ = bordered.solve(&e).unwrap();

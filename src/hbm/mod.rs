@@ -106,6 +106,7 @@ mod corrector;
 mod cyclic;
 mod fold2;
 mod free;
+mod lu;
 mod reaction;
 mod sample;
 mod solution;
