@@ -642,7 +642,8 @@ impl Hbm {
     /// stretch is wider than the tongue): then its magnitude is minimised by golden section
     /// between the two senses' states. A state where the test function has the other sign is
     /// inserted as a point, so the pair becomes two changes of sign between accepted points.
-    /// Segments with a fold are left alone.
+    /// Segments with a fold are left alone, and so are flips whose pair match is ambiguous or
+    /// whose senses are faint (`clear_flip`: clustered pairs).
     fn split_tongues(&mut self, su: &Setup, branch: &mut Branch, tests: &mut Tests, senses: &mut Senses) {
         let mut i = 0;
         while i + 1 < tests.len() && tests.len() <= branch.points.len() && senses.len() == tests.len() {
@@ -984,18 +985,39 @@ fn insert_point(
 /// conjugate (|vᴴw| or |vᵀw|, both unit vectors), if that overlap exceeds ½: the same pair at a
 /// nearby state, whichever member has Im μ > 0 there.
 fn same_pair<'a>(pairs: &'a [PairSense], side: f64, v: &DVector<nalgebra::Complex<f64>>) -> Option<&'a PairSense> {
-    let overlap = |w: &DVector<nalgebra::Complex<f64>>| {
-        let plain: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a.conj() * b).sum();
-        let conj: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
-        plain.norm().max(conj.norm())
-    };
     pairs
         .iter()
         .filter(|p| p.side == side && p.v.len() == v.len())
-        .map(|p| (overlap(&p.v), p))
+        .map(|p| (overlap(v, &p.v), p))
         .filter(|(o, _)| *o > 0.5)
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, p)| p)
+}
+
+/// |vᴴw| or |vᵀw|, whichever is larger: the overlap of two unit eigenvectors of a pair whatever
+/// their phase and whichever member of the conjugate pair each is.
+fn overlap(v: &DVector<nalgebra::Complex<f64>>, w: &DVector<nalgebra::Complex<f64>>) -> f64 {
+    let plain: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a.conj() * b).sum();
+    let conj: nalgebra::Complex<f64> = v.iter().zip(w.iter()).map(|(a, b)| a * b).sum();
+    plain.norm().max(conj.norm())
+}
+
+/// Whether the flip of sense from pair p to its match q (among `pairs`, the next point's pairs
+/// of the same block) is worth a search: the match is unambiguous (overlap at least 0.9, no
+/// other pair of that side above 0.5) and both senses are clear (|sense| ≥ 0.5). A cluster of
+/// nearly equal pairs, as slightly mistuned identical absorbers have (15 pairs within 1e-3 of
+/// each other), mixes its eigenvectors from point to point, so senses "flip" with no pair near
+/// the real axis: there the matches measured 0.54–0.99 with runners-up up to 0.69 and senses
+/// down to 6e-5, where every flip that held a tongue in the tests matched at ≥ 0.957 with
+/// runners-up ≤ 0.24 and senses ≥ 0.91 (BENCHMARKS.md, issue 26).
+fn clear_flip(pairs: &[PairSense], p: &PairSense, q: &PairSense) -> bool {
+    let mut overlaps: Vec<f64> =
+        pairs.iter().filter(|r| r.side == p.side && r.v.len() == p.v.len()).map(|r| overlap(&p.v, &r.v)).collect();
+    overlaps.sort_by(|a, b| b.total_cmp(a));
+    overlaps.first().is_some_and(|&o| o >= 0.9)
+        && overlaps.get(1).is_none_or(|&o| o <= 0.5)
+        && p.sense.abs() >= 0.5
+        && q.sense.abs() >= 0.5
 }
 
 /// A pair near ±1 at point i whose sense differs at the next point that holds it (within three
@@ -1018,7 +1040,7 @@ fn flipped(tests: &Tests, senses: &Senses, i: usize) -> Option<(usize, usize, Pa
                     break;
                 }
                 if let Some(q) = same_pair(&sb[k], p.side, &p.v) {
-                    if q.sense * p.sense < 0.0 {
+                    if q.sense * p.sense < 0.0 && clear_flip(&sb[k], p, q) {
                         return Some((j, k, p.clone(), span));
                     }
                     break;
