@@ -307,9 +307,6 @@ pub struct Hbm {
     rhat_at: Option<(Vec<f64>, At)>,
     /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples.
     upsampler: aft::Upsampler,
-    /// The same to the grid of the tree route's monodromy (`stability::Hbm::tree_monodromy`),
-    /// planned on its first use.
-    tree_upsampler: Option<aft::Upsampler>,
     rhat: DVector<f64>,
     jac: DMatrix<f64>,
     /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
@@ -573,7 +570,6 @@ impl Hbm {
             samples_at: None,
             rhat_at: None,
             upsampler: aft::Upsampler::new(opts.stability_samples.max(2)),
-            tree_upsampler: None,
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
             gp: DVector::zeros(n * nb),
