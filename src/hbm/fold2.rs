@@ -335,10 +335,7 @@ impl NewtonLu {
             NewtonLu::Whole(lu) => lu.solve(rhs),
             NewtonLu::Eliminated(e) => {
                 let m = e.v.len();
-                let mut top = DVector::zeros(m + 1);
-                top.rows_mut(0, m).copy_from(&rhs.rows(0, m));
-                let s0 = bordered.solve(&top)?;
-                let (u0, xi0) = (s0.rows(0, m), s0[m]);
+                let (u0, xi0) = bordered_solve(bordered, &rhs.rows(0, m))?;
                 let b = nalgebra::Vector3::new(-xi0, rhs[m] - e.gx.dot(&u0), rhs[m + 1] - e.tx.dot(&u0));
                 let z = e.small.solve(&b)?;
                 let mut out = DVector::zeros(m + 2);
@@ -357,14 +354,8 @@ impl NewtonLu {
     /// the whole space), with the tangent row t.
     fn eliminate(aug: &Augmented, t: &DVector<f64>) -> Option<Self> {
         let m = aug.r.len();
-        let side = |col: &DVector<f64>| -> Option<(DVector<f64>, f64)> {
-            let mut top = DVector::zeros(m + 1);
-            top.rows_mut(0, m).copy_from(col);
-            let s = aug.bordered.solve(&top)?;
-            Some((s.rows(0, m).clone_owned(), s[m]))
-        };
-        let (ul, xl) = side(&aug.rl)?;
-        let (us, xs) = side(&aug.rs)?;
+        let (ul, xl) = bordered_solve(&aug.bordered, &aug.rl.rows(0, m))?;
+        let (us, xs) = bordered_solve(&aug.bordered, &aug.rs.rows(0, m))?;
         let tx = t.rows(0, m).clone_owned();
         // J dx + b ξ = R̂ − ∂R̂/∂λ dλ − ∂R̂/∂σ dσ with ξ = ξ₀ − ξ_λ dλ − ξ_σ dσ + g φ held at
         // zero, and the rows of g and of the tangent.
@@ -383,6 +374,15 @@ impl NewtonLu {
             small,
         })))
     }
+}
+
+/// `[u; ξ] = B⁻¹ [f; 0]` with B's LU `bordered`.
+fn bordered_solve(bordered: &Lu, f: &nalgebra::DVectorView<'_, f64>) -> Option<(DVector<f64>, f64)> {
+    let m = f.len();
+    let mut top = DVector::zeros(m + 1);
+    top.rows_mut(0, m).copy_from(f);
+    let s = bordered.solve(&top)?;
+    Some((s.rows(0, m).clone_owned(), s[m]))
 }
 
 /// The unit tangent `[[augmented Jacobian], [rowᵀ]] z = e_last`, normalised, from the bordered
@@ -993,18 +993,18 @@ impl Hbm {
         Ok(FoldCurve { points, cusps, scale_extrema, end })
     }
 
-    /// The augmented Jacobian `[[J, ∂R̂/∂λ, ∂R̂/∂σ], [∂g/∂x, ∂g/∂λ, ∂g/∂σ]]` at y bordered below
-    /// by `row`, and the augmented system there.
-    fn fold_matrix(
-        &mut self,
-        y: &DVector<f64>,
-        walk: &mut Walk,
-        row: &DVector<f64>,
-    ) -> Result<(DMatrix<f64>, Augmented), HbmError> {
+    /// The augmented system at y = (x, λ, σ).
+    fn augmented_at(&mut self, y: &DVector<f64>, walk: &mut Walk) -> Result<Augmented, HbmError> {
         let m = self.unknowns();
         let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
         let (at, p) = walk.at(y[m], y[m + 1]);
-        let aug = self.augmented(&x, &at, p, walk)?;
+        self.augmented(&x, &at, p, walk)
+    }
+
+    /// The augmented Jacobian `[[J, ∂R̂/∂λ, ∂R̂/∂σ], [∂g/∂x, ∂g/∂λ, ∂g/∂σ]]` of `aug` bordered
+    /// below by `row`, factorised whole.
+    fn whole_newton(aug: &Augmented, row: &DVector<f64>) -> NewtonLu {
+        let m = aug.r.len();
         let mut mat = DMatrix::zeros(m + 2, m + 2);
         mat.view_mut((0, 0), (m, m)).copy_from(&aug.j);
         mat.view_mut((0, m), (m, 1)).copy_from(&aug.rl);
@@ -1013,7 +1013,7 @@ impl Hbm {
         mat[(m, m)] = aug.gl;
         mat[(m, m + 1)] = aug.gs;
         mat.view_mut((m + 1, 0), (1, m + 2)).copy_from(&row.transpose());
-        Ok((mat, aug))
+        NewtonLu::Whole(mat.lu())
     }
 
     /// The unit tangent of the fold curve at y, oriented along `row`.
@@ -1024,8 +1024,9 @@ impl Hbm {
         row: &DVector<f64>,
     ) -> Result<(DVector<f64>, Augmented), HbmError> {
         let m = self.unknowns();
-        let (mat, aug) = self.fold_matrix(y, walk, row)?;
-        let z = unit_tangent(&NewtonLu::Whole(mat.lu()), &aug.bordered, m).ok_or(HbmError::Singular { order: y[m] })?;
+        let aug = self.augmented_at(y, walk)?;
+        let z =
+            unit_tangent(&Self::whole_newton(&aug, row), &aug.bordered, m).ok_or(HbmError::Singular { order: y[m] })?;
         Ok((z, aug))
     }
 
@@ -1042,14 +1043,11 @@ impl Hbm {
         let mut previous = f64::INFINITY;
         let eliminate = walk.block.len() == m && walk.pinned.is_empty();
         for it in 1..=opts.max_iter {
-            let (lu, aug) = if eliminate {
-                let x: Vec<f64> = y.rows(0, m).iter().copied().collect();
-                let (at, p) = walk.at(y[m], y[m + 1]);
-                let aug = self.augmented(&x, &at, p, walk)?;
-                (NewtonLu::eliminate(&aug, t).ok_or(HbmError::Singular { order: y[m] })?, aug)
+            let aug = self.augmented_at(&y, walk)?;
+            let lu = if eliminate {
+                NewtonLu::eliminate(&aug, t).ok_or(HbmError::Singular { order: y[m] })?
             } else {
-                let (mat, aug) = self.fold_matrix(&y, walk, t)?;
-                (NewtonLu::Whole(mat.lu()), aug)
+                Self::whole_newton(&aug, t)
             };
             let mut rhs = DVector::zeros(m + 2);
             rhs.rows_mut(0, m).copy_from(&aug.r);
