@@ -208,3 +208,136 @@ fn a_bad_mechanism_parameter_is_refused_with_its_field() {
     ];
     refused(&base, cases);
 }
+
+/// The period doublings of the one-parameter order branch over 6.0–6.8 of the paper's rotor
+/// built with the pivot damping `c_p` (N·m·s/rad, from `CpvaParams`, not through the study's
+/// substitution) at 2000 N·m and 1000 rpm: Floquet stability at every point, crossings found by
+/// the continuation's own test functions at any step.
+fn damped_doublings(c_p: f64) -> Vec<f64> {
+    use kanedyn::hbm::BifurcationClass;
+    let params = kanedyn::cpva::CpvaParams { c_p, ..kanedyn::cpva::CpvaParams::canonical() };
+    let kane = Kane::new(&params.mechanism(None).unwrap()).unwrap();
+    let h = [Harmonic { multiple: 1.0, amplitude: 2000.0, phase: 0.0 }];
+    let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, HbmOptions::default()).unwrap();
+    let b = hbm.continue_in_order(6.0, 6.8, None, &ContinuationOptions::default()).unwrap();
+    let mut v: Vec<f64> =
+        b.bifurcations.iter().filter(|x| x.class == BifurcationClass::PeriodDoubling).map(|x| x.order).collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// The study text of the (order, pivot damping) plane over orders 6.0–6.8 at 2000 N·m, where the
+/// rotor's order-n motion pumps the pendulum at twice its eigen-order (3.19 free-spin) and a
+/// period-doubling tongue stands between about 6.35 and 6.41 (`tests/it/hbm_period_doubling.rs`).
+fn doubling_damping_study(name: &str, to: f64) -> String {
+    format!(
+        r#"Study(name: "{name}", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", rpm: 1000.0, order_min: 6.0, order_max: 6.8, torque: 2000.0,
+                            parameter: (name: "c_p", quantity: JointDamping("pivot"), from: 1e-4, to: {to:e}))])"#
+    )
+}
+
+/// (c) The period-doubling boundary on the (order, pivot damping) plane (the half-frequency
+/// problems rebuilt at each c_p): where it crosses the map's largest damping (`to` set to each
+/// reference value) it is the pair of period doublings of the one-parameter order branch of the
+/// rotor built with that damping (1e-6 in n, the tolerance of the torque plane's check).
+#[test]
+fn the_order_damping_period_doubling_curve_passes_through_the_branches_doublings() {
+    for (k, c_p) in [5e-4, 2e-3].into_iter().enumerate() {
+        let name = format!("pddamping{k}");
+        let (report, csv, json) = run_study(&name, &doubling_damping_study(&name, c_p));
+        assert!(report.failures.is_empty(), "{:?}", report.failures);
+        let r = &report.envelopes[0];
+        assert!(r.period_doubling_search.starts_with("searched"), "{}", r.period_doubling_search);
+        // The tongue closes far above these dampings, so inside the box its two edges may be
+        // two curves (joined beyond the box's top), each crossing the largest damping once.
+        let pd: Vec<_> = r.boundaries.iter().filter(|b| format!("{:?}", b.kind) == "PeriodDoubling").collect();
+        assert!(!pd.is_empty() && pd.len() == r.boundaries.len(), "{:?}", r.boundaries);
+        assert!(csv.lines().any(|l| l.starts_with("1,3,")), "CSV kind 3");
+        assert!(json.to_string().contains("PeriodDoubling"), "results.json names the boundary");
+        let mut map: Vec<f64> = pd.iter().flat_map(|b| b.at_second_max.clone()).collect();
+        map.sort_by(f64::total_cmp);
+        let branch = damped_doublings(c_p);
+        println!("c_p = {c_p}: map {map:?}, order branch {branch:?}");
+        assert_eq!(branch.len(), 2, "{branch:?}");
+        assert_eq!(map.len(), 2, "{map:?}");
+        for (m, b) in map.iter().zip(&branch) {
+            assert!((m - b).abs() <= 1e-6, "c_p = {c_p}: map {m} against the branch's {b}");
+        }
+    }
+}
+
+/// (d) The tongue closes as the damping grows: the map's period-doubling limit in c_p (the
+/// curve's turning point in the second parameter) against one-parameter order branches of
+/// rotors built with 1e-4 relative less damping (two doublings) and more (none). The linear
+/// Mathieu threshold (pump ∝ torque, threshold ∝ damping) puts it near 5e-4 × 2000/250.9, the
+/// canonical damping times the torque over the tip torque of the (order, torque) plane.
+#[test]
+fn the_order_damping_period_doubling_limit_agrees_with_order_branches() {
+    let (report, ..) = run_study("pdlimit", &doubling_damping_study("pdlimit", 6e-3));
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    let onsets: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "PeriodDoublingOnset").collect();
+    assert_eq!(onsets.len(), 1, "{:?}", r.points);
+    let c = onsets[0].second_value;
+    println!("map: tongue closes at c_p = {c:.8e} N·m·s/rad, n = {:.7}", onsets[0].value);
+    assert!((c / (5e-4 * 2000.0 / 250.9) - 1.0).abs() < 0.05, "{c}");
+    let (below, above) = (damped_doublings(c * (1.0 - 1e-4)), damped_doublings(c * (1.0 + 1e-4)));
+    println!("1e-4 below: {below:?}; above: {above:?}");
+    assert!(below.len() == 2 && above.is_empty(), "below {below:?}, above {above:?}");
+}
+
+/// (e) On the (order, rotor inertia) plane of the two identical pendulums (`cpva2.ron`, the
+/// cyclic route kept: the parameter is the rotor's, so the set stays identical) at 1000 N·m,
+/// the unison-loss boundary meets the jump boundary (`UnisonLossMeetsJump`, the determinant of
+/// the unison problem's Jacobian evaluated on the problem rebuilt at each inertia). Checked on
+/// one-parameter order branches of the general solver (both pendulums unknowns) of rotors whose
+/// inertia is set directly: at the point's inertia the branch's fold is at the point's order
+/// (1e-6); 0.5 % below and above it, the branch point nearest the fold lies on opposite sides
+/// of it along the branch.
+#[test]
+fn the_unison_loss_boundary_meets_the_jump_boundary_on_a_rotor_inertia_plane() {
+    use kanedyn::hbm::BifurcationClass;
+    let text = r#"Study(name: "meetj", mechanism: "cpva2.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", rpm: 1000.0, order_min: 2.6, order_max: 3.3, torque: 1000.0,
+                            parameter: (name: "J", quantity: BodyInertia("rotor"), from: 1.5, to: 30.0))])"#;
+    let (report, csv, _) = run_study("meetj", text);
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    assert!(r.route.starts_with("cyclic"), "{}", r.route);
+    let meets: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "UnisonLossMeetsJump").collect();
+    assert_eq!(meets.len(), 1, "{:?}", r.points);
+    let meet = meets[0];
+    println!("meeting at n {} J {} kg·m²", meet.value, meet.second_value);
+    assert!(csv.lines().any(|l| l.starts_with(&format!("{},14,", meet.boundary + 1))), "CSV kind 14");
+    let rotor_of = |j: f64| {
+        let mut mech = kanedyn::cpva::CpvaParams::canonical().with_pendulums(2).mechanism(None).unwrap();
+        let rotor = mech.body_index("rotor").unwrap();
+        mech.bodies[rotor].inertia.i_com = j;
+        Kane::new(&mech).unwrap()
+    };
+    let h = [Harmonic { multiple: 1.0, amplitude: 1000.0, phase: 0.0 }];
+    let window = (meet.value - 0.01, meet.value + 0.01);
+    // (fold order, whether the branch point nearest the fold comes before it along the branch)
+    let events = |j: f64, ds: f64| -> (f64, bool) {
+        let kane = rotor_of(j);
+        let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, HbmOptions::default()).unwrap();
+        let copts = ContinuationOptions { ds_max: ds, ds, ..Default::default() };
+        let b = hbm.continue_in_order(window.0, window.1, None, &copts).unwrap();
+        assert_eq!(b.folds.len(), 1, "J = {j}: {:?}", b.folds);
+        let fold = &b.folds[0];
+        let bp = b
+            .bifurcations
+            .iter()
+            .filter(|x| x.class == BifurcationClass::BranchPoint)
+            .min_by(|x, y| (x.order - fold.order).abs().total_cmp(&(y.order - fold.order).abs()))
+            .map_or(fold.after, |x| x.after);
+        (fold.order, bp < fold.after)
+    };
+    let (n_fold, _) = events(meet.second_value, 1e-3);
+    println!("fold at the meeting inertia: {n_fold}");
+    assert!((n_fold - meet.value).abs() < 1e-6, "{n_fold} vs {}", meet.value);
+    let (_, below) = events(meet.second_value * (1.0 - 5e-3), 1e-4);
+    let (_, above) = events(meet.second_value * (1.0 + 5e-3), 1e-4);
+    assert_ne!(below, above, "the branch point does not pass through the fold between the two inertias");
+}

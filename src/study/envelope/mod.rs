@@ -4,7 +4,8 @@
 //! codimension-two points where they end or turn. The first parameter is the excitation order n
 //! at a mean speed (or the speed at an order); the second the torque amplitude T of a single
 //! order, the common scale s of a multi-order set, or a mechanism parameter p at a fixed torque
-//! (the problem rebuilt at each p, `hbm::MechanismFamily`).
+//! (the problem rebuilt at each p, `hbm::MechanismFamily`; a second family rebuilds the problem
+//! of half the base frequency for the period-doubling curves).
 //!
 //! - **Jump boundary**: the fold curve. Inside its wedge three periodic states coexist at each
 //!   (n, T) and the response jumps at the wedge's edges; its cusp is the least torque at which a
@@ -221,7 +222,7 @@ pub struct EnvelopeResult {
     /// The codimension-two points.
     pub points: Vec<MapPoint>,
     /// Where period doublings were searched, in words: along the seed branches, or why not
-    /// (no linear parametric resonance near the map, or a mechanism-parameter plane).
+    /// (no linear parametric resonance near the map).
     pub period_doubling_search: String,
     /// Wall time of the whole map, s.
     pub time_s: f64,
@@ -636,12 +637,14 @@ fn walk_boundary(
 const DOUBLING_SUBSTEPS: usize = 10;
 
 /// The period doublings of the seed branch `branch` (on the problem at the base frequency, at
-/// scale `s`), each solved on the problem of half the base frequency `h2` with its test: where
+/// scale `s`, or at p = `s` of a mechanism family), each solved on the problem of half the base
+/// frequency `h2` (at that s or p; `family` the half-frequency problems' family) with its test: where
 /// the sign of a test's determinant (the odd-harmonic block, or its part of an identical set's
 /// representative) changes between two of the branch's points or interpolated states.
 fn doubling_seeds(
     h2: &mut Hbm,
     ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
     branch: &crate::hbm::Branch,
     s: f64,
     tests: &[Singularity],
@@ -661,7 +664,7 @@ fn doubling_seeds(
     for (k, &test) in tests.iter().enumerate() {
         for (i, w) in signs.windows(2).enumerate() {
             if w[0][k] * w[1][k] < 0.0
-                && let Ok(p) = h2.singular_at_with(ax.fold, None, test, s, &doubled[i])
+                && let Ok(p) = h2.singular_at_with(ax.fold, family, test, s, &doubled[i])
             {
                 seeds.push((test, p));
             }
@@ -682,9 +685,12 @@ const DOUBLING_MARGIN: f64 = 1.3;
 /// Mathieu tongue) or 3, and only where k·e/e_b is odd (e_b the base order: an even multiple
 /// makes the mode's motion repeat over T_b, a +1 tongue). Ok(words) when some resonance lies
 /// within [`DOUBLING_MARGIN`] of the map's orders (and when the linear model fails: then the
-/// search runs), Err(words) when none does and the search is skipped.
+/// search runs), Err(words) when none does and the search is skipped. `mechanisms`: the study's
+/// mechanism, or on a mechanism parameter's plane the mechanism at both ends of its range (each
+/// eigen-order's range spans both).
 fn doubling_screen(
-    study: &Study,
+    mechanisms: &[crate::model::mechanism::Mechanism],
+    spin_joint: &str,
     ax: &Axis,
     harmonics: &[Harmonic],
     ratio: f64,
@@ -696,10 +702,11 @@ fn doubling_screen(
         FoldPlane::Order => (ax.range, vec![ax.omega]),
         FoldPlane::Speed { order } => ((order, order), vec![ax.range.0, ax.range.1]),
     };
+    let cases = mechanisms.iter().flat_map(|m| speeds.iter().map(move |&omega| (m, omega)));
     let mut orders: Vec<(f64, f64)> = Vec::new();
-    for (i, &omega) in speeds.iter().enumerate() {
-        let modal = LinearModel::new(&study.mechanism, &study.spec.spin_joint, omega, None)
-            .and_then(|m| m.modes(Spin::Free, Damping::Undamped));
+    for (i, (mech, omega)) in cases.enumerate() {
+        let modal =
+            LinearModel::new(mech, spin_joint, omega, None).and_then(|m| m.modes(Spin::Free, Damping::Undamped));
         let Ok(modal) = modal else { return Ok(searched) };
         let vib = modal.modes.iter().filter(|m| m.kind == ModeKind::Vibration && m.order.is_finite());
         for (j, o) in vib.map(|m| m.order).enumerate() {
@@ -738,24 +745,42 @@ fn doubling_screen(
 /// the sign of that determinant changes there (the curve crosses the fold line of the
 /// response surface); each change between two of its points is bisected in the second
 /// parameter, the states solved on the curve at each value from the nearer point, until the
-/// bracket is [`MEET_TOL`] of the value wide. On a torque or scale plane only.
-fn meets_fold(hbm: &mut Hbm, ax: &Axis, test: Singularity, c: &FoldCurve) -> Vec<FoldCurvePoint> {
-    let signs: Vec<f64> = c.points.iter().map(|p| hbm.singularity_sign(&p.solution, Singularity::Jacobian)).collect();
+/// bracket is [`MEET_TOL`] of the value wide. On a mechanism parameter's plane (`family`) each
+/// state's determinant is that of the problem built at its own p (the layouts are the same, so
+/// the sign is continuous along the curve).
+fn meets_fold(
+    hbm: &mut Hbm,
+    ax: &Axis,
+    family: Option<&MechanismFamily<'_>>,
+    test: Singularity,
+    c: &FoldCurve,
+) -> Vec<FoldCurvePoint> {
+    let sign = |hbm: &mut Hbm, p: &FoldCurvePoint| -> Option<f64> {
+        match family {
+            None => Some(hbm.singularity_sign(&p.solution, Singularity::Jacobian)),
+            Some(f) => {
+                let mut at = (f.build)(p.parameter).ok()?;
+                at.set_torque_scale(f.scale).ok()?;
+                Some(at.singularity_sign(&p.solution, Singularity::Jacobian))
+            }
+        }
+    };
+    let signs: Vec<Option<f64>> = c.points.iter().map(|p| sign(hbm, p)).collect();
     let mut out = Vec::new();
     for (i, w) in signs.windows(2).enumerate() {
-        if w[0] * w[1] >= 0.0 {
+        let (Some(sign_a), Some(sign_b)) = (w[0], w[1]) else { continue };
+        if sign_a * sign_b >= 0.0 {
             continue;
         }
         let (mut a, mut b) = (c.points[i].clone(), c.points[i + 1].clone());
-        let sign_a = w[0];
         while (a.parameter - b.parameter).abs() > MEET_TOL * a.parameter.abs().max(b.parameter.abs()) {
             let mid = 0.5 * (a.parameter + b.parameter);
             let near = if (mid - a.parameter).abs() <= (mid - b.parameter).abs() { &a } else { &b };
-            let Ok(m) = hbm.singular_at_with(ax.fold, None, test, mid, &near.solution) else { break };
-            if hbm.singularity_sign(&m.solution, Singularity::Jacobian) == sign_a {
-                a = m;
-            } else {
-                b = m;
+            let Ok(m) = hbm.singular_at_with(ax.fold, family, test, mid, &near.solution) else { break };
+            match sign(hbm, &m) {
+                Some(s) if s == sign_a => a = m,
+                Some(_) => b = m,
+                None => break,
             }
         }
         out.push(b);
@@ -815,8 +840,15 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         }
     };
     let route = routed.route().to_string();
-    // The problem at a value of a mechanism parameter, on the route chosen.
-    let build = |p: f64| -> std::result::Result<Hbm, HbmError> {
+    // The problem of half the base frequency (the extra multiple at zero amplitude, twice the
+    // harmonics), on which period doublings are followed.
+    let ratio = routed.hbm().base_frequency(1.0) / routed.hbm().omega();
+    let mut halved = second.harmonics.clone();
+    halved.push(Harmonic { multiple: 0.5 * ratio, amplitude: 0.0, phase: 0.0 });
+    let opts2 = HbmOptions { harmonics: 2 * spec.harmonics, ..opts };
+    // The problem at a value of a mechanism parameter, on the route chosen, with the forcing
+    // and options given (the base frequency's, or half of it).
+    let build_with = |p: f64, forcing, opts| -> std::result::Result<Hbm, HbmError> {
         let par = spec.parameter.as_ref().ok_or_else(|| HbmError::Invalid("no mechanism parameter".into()))?;
         let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
         let k = Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?;
@@ -827,32 +859,31 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         };
         Ok(r.hbm().clone())
     };
-    let family = spec.parameter.as_ref().map(|par| MechanismFamily {
-        build: &build,
-        scale: 1.0,
-        reference: par.from.abs().max(par.to.abs()),
-    });
-    let fam = family.as_ref();
+    let build = |p: f64| build_with(p, forcing, opts);
+    let build_half = |p: f64| build_with(p, (&halved[..], &[][..]), opts2);
+    let reference = spec.parameter.as_ref().map(|par| par.from.abs().max(par.to.abs()));
+    let family = reference.map(|reference| MechanismFamily { build: &build, scale: 1.0, reference });
+    let family_half = reference.map(|reference| MechanismFamily { build: &build_half, scale: 1.0, reference });
+    let (fam, fam_half) = (family.as_ref(), family_half.as_ref());
     let hbm = routed.hbm_mut();
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
     tests.extend(hbm.unison_loss_tests().into_iter().map(|(l, t)| (BoundaryKind::UnisonLoss, Some(l), t)));
     let fopts = FoldCurveOptions { range: ax.range, scales: second.range, ..FoldCurveOptions::default() };
-    // The problem of half the base frequency (the extra multiple at zero amplitude, twice the
-    // harmonics), on which period doublings are followed; on a torque-scale plane only (a
-    // mechanism parameter's family builds its problems at the base frequency).
-    let screen = match fam {
-        Some(_) => Err("not searched on a mechanism parameter's plane".to_string()),
-        None => doubling_screen(study, &ax, &second.harmonics, hbm.base_frequency(1.0) / hbm.omega()),
+    // On a mechanism parameter's plane the linear screen looks at the mechanism at both ends of
+    // the range, and the half-frequency problems are the family's too.
+    let screened = match &spec.parameter {
+        None => vec![study.mechanism.clone()],
+        Some(par) => [par.from, par.to].iter().filter_map(|&p| mechanism_at(study, par, p).ok()).collect(),
     };
-    let mut half = match &screen {
-        Err(_) => None,
-        Ok(_) => {
-            let ratio = hbm.base_frequency(1.0) / hbm.omega();
-            let mut halved = second.harmonics.clone();
-            halved.push(Harmonic { multiple: 0.5 * ratio, amplitude: 0.0, phase: 0.0 });
-            let opts2 = HbmOptions { harmonics: 2 * spec.harmonics, ..opts };
-            RoutedHbm::new(&kane, study.spin, ax.omega, (&halved[..], &[][..]), &inputs, opts2).ok()
-        }
+    let screen = doubling_screen(&screened, &study.spec.spin_joint, &ax, &second.harmonics, ratio);
+    // The half-frequency problem the period-doubling curves are evaluated on (on a mechanism
+    // parameter's plane the one at its lower end, for the layout only).
+    let mut half: Option<Hbm> = match (&screen, &spec.parameter) {
+        (Err(_), _) => None,
+        (Ok(_), None) => RoutedHbm::new(&kane, study.spin, ax.omega, (&halved[..], &[][..]), &inputs, opts2)
+            .ok()
+            .map(|r| r.hbm().clone()),
+        (Ok(_), Some(par)) => build_half(par.from).ok(),
     };
     // The seed branches only supply starting points (each seed is solved exactly on its curve
     // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
@@ -924,8 +955,24 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 walked.push(w);
             }
         }
-        // Period doublings, on the problem of half the base frequency at the same scale.
-        if let Some(h2) = half.as_mut().map(RoutedHbm::hbm_mut)
+        // Period doublings, on the problem of half the base frequency at the same scale (or
+        // the family's at the same p).
+        let mut own_half;
+        let h2: Option<&mut Hbm> = match (fam_half, half.as_mut()) {
+            (_, None) => None,
+            (None, Some(h2)) => Some(h2),
+            (Some(f), Some(_)) => match (f.build)(s) {
+                Ok(h) => {
+                    own_half = h;
+                    Some(&mut own_half)
+                }
+                Err(e) => {
+                    failures.push(format!("{}: half-frequency problem at {}: {e}", spec.name, second.words(s)));
+                    None
+                }
+            },
+        };
+        if let Some(h2) = h2
             && h2.set_torque_scale(scale).is_ok()
         {
             // The set's label of a non-unison doubling (its test the set's representative's
@@ -933,14 +980,14 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             let mut halves = vec![(None, Singularity::HalfPeriod)];
             halves.extend(h2.unison_loss_tests().into_iter().map(|(l, t)| (Some(l), t.halved())));
             let tests: Vec<Singularity> = halves.iter().map(|h| h.1).collect();
-            for (test, seed) in doubling_seeds(h2, &ax, &branch, s, &tests) {
-                if covered(h2, &ax, None, &walked, test, &seed) {
+            for (test, seed) in doubling_seeds(h2, &ax, fam_half, &branch, s, &tests) {
+                if covered(h2, &ax, fam_half, &walked, test, &seed) {
                     continue;
                 }
                 let kind = BoundaryKind::PeriodDoubling;
                 let set = halves.iter().find(|h| h.1 == test).and_then(|h| h.0.clone());
                 let origin = origin(kind, &seed);
-                let w = walk_boundary(h2, &ax, None, &seed, (kind, set, test), &fopts, &mut failures, &origin);
+                let w = walk_boundary(h2, &ax, fam_half, &seed, (kind, set, test), &fopts, &mut failures, &origin);
                 walked.push(w);
             }
         }
@@ -949,9 +996,9 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let mut points = Vec::new();
     for (i, w) in walked.iter().enumerate() {
         // A period-doubling curve lives on the problem of half the base frequency.
-        let hbm: &mut Hbm = match (w.test, half.as_mut()) {
-            (t, Some(h2)) if t.on_half_period() => h2.hbm_mut(),
-            _ => &mut *hbm,
+        let (hbm, fam): (&mut Hbm, _) = match (w.test, half.as_mut()) {
+            (t, Some(h2)) if t.on_half_period() => (h2, fam_half),
+            _ => (&mut *hbm, fam),
         };
         let at_top = crossings_at(hbm, &ax, fam, w, second.range.1);
         for c in &w.curves {
@@ -963,8 +1010,8 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     second_value: second.value(p.parameter),
                 });
             }
-            if w.kind == BoundaryKind::UnisonLoss && fam.is_none() {
-                for p in meets_fold(hbm, &ax, w.test, c) {
+            if w.kind == BoundaryKind::UnisonLoss {
+                for p in meets_fold(hbm, &ax, fam, w.test, c) {
                     points.push(MapPoint {
                         kind: MapPointKind::UnisonLossMeetsJump,
                         boundary: i,
