@@ -227,11 +227,19 @@ pub struct MechanismFamily<'a> {
     /// The size of p, its unit (> 0): the arclength weighs p / reference like the order and the
     /// coefficients in rad, and the difference step is relative to it.
     pub reference: f64,
+    /// Whether p is the mean speed Ω itself (rad/s), on an order plane: the (n, Ω) plane at a
+    /// fixed torque. Each state is then evaluated at Ω = p (the problems are built there too),
+    /// and ∂R̂/∂Ω, ∂g/∂Ω are differences between Ω = p and p ± h like any other p's.
+    pub speed: bool,
 }
 
 impl std::fmt::Debug for MechanismFamily<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("MechanismFamily").field("scale", &self.scale).field("reference", &self.reference).finish()
+        f.debug_struct("MechanismFamily")
+            .field("scale", &self.scale)
+            .field("reference", &self.reference)
+            .field("speed", &self.speed)
+            .finish()
     }
 }
 
@@ -418,7 +426,10 @@ impl Walk<'_> {
     fn at(&self, lambda: f64, sigma: f64) -> (At, Option<f64>) {
         match self.family {
             None => (self.plane.at(lambda, sigma), None),
-            Some(f) => (self.plane.at(lambda, f.scale), Some(sigma * f.reference)),
+            Some(f) => {
+                let p = sigma * f.reference;
+                (on_family(self.plane.at(lambda, f.scale), f, p), Some(p))
+            }
         }
     }
 
@@ -438,6 +449,11 @@ impl Walk<'_> {
         p.parameter = self.second(sigma);
         p
     }
+}
+
+/// `at` with the family's p where p is a parameter of the evaluation (a speed family's Ω).
+fn on_family(at: At, family: &MechanismFamily<'_>, p: f64) -> At {
+    if family.speed { At { omega: p, ..at } } else { at }
 }
 
 /// The problem at p: `base` on a torque-scale plane (p None), else the family's, built if need be.
@@ -578,7 +594,7 @@ impl Hbm {
                 let hp = FD_STEP * f.reference;
                 let mut side = |q: f64| -> Result<(DVector<f64>, DMatrix<f64>), HbmError> {
                     let other = built.at(f, q)?;
-                    other.assemble(x, at, Some(param));
+                    other.assemble(x, &on_family(*at, f, q), Some(param));
                     Ok((other.rhat.clone(), other.jac.clone()))
                 };
                 let (r_up, j_up) = side(p + hp)?;
@@ -646,6 +662,11 @@ impl Hbm {
         at: &At,
         p: Option<f64>,
     ) -> Result<Walk<'a>, HbmError> {
+        if kind != FoldPlane::Order && family.is_some_and(|f| f.speed) {
+            return Err(HbmError::Invalid(
+                "a speed family needs an order plane (the speed is its second parameter)".into(),
+            ));
+        }
         let plane = self.plane(kind);
         let block = self.tested(test);
         let mut built = Built::default();
@@ -859,8 +880,11 @@ impl Hbm {
         free_lambda: bool,
     ) -> Result<FoldCurvePoint, HbmError> {
         let scale = family.map_or(second, |f| f.scale);
-        let at = At { order, omega, scale };
         let p = family.map(|_| second);
+        let at = match family {
+            Some(f) => on_family(At { order, omega, scale }, f, second),
+            None => At { order, omega, scale },
+        };
         let mut walk = self.walk(plane, test, family, x, &at, p)?;
         let (mut lambda, mut sigma) = (walk.plane.lambda(&at), walk.sigma(second));
         let it = self.fold_solve(&mut walk, x, (&mut lambda, &mut sigma), free_lambda)?;

@@ -197,7 +197,10 @@ fn a_bad_mechanism_parameter_is_refused_with_its_field() {
     let cases = [
         ("JointDamping(\"pivot\")", "JointDamping(\"hinge\")", "analyses[0].parameter.quantity"),
         ("JointDamping(\"pivot\")", "BodyMass(\"wheel\")", "analyses[0].parameter.quantity"),
-        ("JointDamping(\"pivot\")", "Rpm", "analyses[0].parameter.quantity"),
+        // The speed is a second parameter of its own, without the plane's `rpm`.
+        ("JointDamping(\"pivot\")", "Rpm", "analyses[0].rpm"),
+        ("JointDamping(\"pivot\")", "TorqueAmplitude", "analyses[0].parameter.quantity"),
+        ("JointDamping(\"pivot\")", "Order", "analyses[0].parameter.quantity"),
         ("to: 6e-3", "to: 1e-4", "analyses[0].parameter.to"),
         ("to: 6e-3", "to: 5e-5", "analyses[0].parameter.to"),
         ("from: 1e-4", "from: -1e-4", "analyses[0].parameter.from"),
@@ -340,4 +343,73 @@ fn the_unison_loss_boundary_meets_the_jump_boundary_on_a_rotor_inertia_plane() {
     let (_, below) = events(meet.second_value * (1.0 - 5e-3), 1e-4);
     let (_, above) = events(meet.second_value * (1.0 + 5e-3), 1e-4);
     assert_ne!(below, above, "the branch point does not pass through the fold between the two inertias");
+}
+
+/// The study text of the (order, speed) plane at 40 N·m over orders 2.9–3.3 and 600 rpm to
+/// `to` rpm (`extra` appended to the analysis).
+fn speed_study(name: &str, to: f64, extra: &str) -> String {
+    format!(
+        r#"Study(name: "{name}", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", order_min: 2.9, order_max: 3.3, torque: 40.0,
+                            parameter: (name: "N", quantity: Rpm, from: 600.0, to: {to:?}){extra})])"#
+    )
+}
+
+/// (f) The (order, speed) plane at a fixed torque (`quantity: Rpm`, each state evaluated at its
+/// own speed): where the jump boundary crosses the map's largest speed (`to` set to each
+/// reference value) it is the pair of folds of the one-parameter order branch at that speed,
+/// computed apart (1e-6); at 1000 rpm those are the issue's 2.9403761 and 3.1740911. At lower
+/// speeds the same torque drives the absorber harder (its forcing in the order domain falls as
+/// 1/Ω²), so the wedge widens as the speed falls.
+#[test]
+fn the_order_speed_fold_curve_passes_through_the_branches_folds() {
+    let mut widths = Vec::new();
+    for (k, rpm) in [1000.0, 1500.0].into_iter().enumerate() {
+        let name = format!("speed{k}");
+        let (report, csv, json) = run_study(&name, &speed_study(&name, rpm, ""));
+        assert!(report.failures.is_empty(), "{:?}", report.failures);
+        let r = &report.envelopes[0];
+        assert_eq!(csv.lines().next(), Some("boundary,kind,order,N_rpm"));
+        assert_eq!((r.second_unit.as_str(), r.second_range), ("rpm", [600.0, rpm]));
+        assert_eq!(json["analyses"][0]["result"]["second"], "N_rpm", "{}", json["analyses"][0]);
+        let mut map: Vec<f64> = r.boundaries.iter().flat_map(|b| b.at_second_max.clone()).collect();
+        map.sort_by(f64::total_cmp);
+        let kane = Kane::new(&kanedyn::cpva::CpvaParams::canonical().mechanism(None).unwrap()).unwrap();
+        let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+        let h = [Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.0 }];
+        let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(rpm), &h, opts).unwrap();
+        let copts = ContinuationOptions { stability: false, ds_max: 0.02, ..Default::default() };
+        let mut branch: Vec<f64> =
+            hbm.continue_in_order(2.9, 3.3, None, &copts).unwrap().folds.iter().map(|f| f.order).collect();
+        branch.sort_by(f64::total_cmp);
+        println!("{rpm} rpm: map {map:?}, order branch {branch:?}");
+        assert_eq!((map.len(), branch.len()), (2, 2), "{map:?} {branch:?}");
+        for (m, b) in map.iter().zip(&branch) {
+            assert!((m - b).abs() <= 1e-6, "{rpm} rpm: map {m} against the branch's {b}");
+        }
+        if rpm == 1000.0 {
+            assert!((map[0] - 2.9403761).abs() <= 1e-6 && (map[1] - 3.1740911).abs() <= 1e-6, "{map:?}");
+        }
+        widths.push(map[1] - map[0]);
+    }
+    assert!(widths[1] < widths[0], "{widths:?}");
+}
+
+/// Bad speed planes are refused at load with the field's path and the file's line.
+#[test]
+fn a_bad_speed_parameter_is_refused_with_its_field() {
+    let base = speed_study("badspeed", 1500.0, "");
+    let cases = [
+        ("from: 600.0", "from: 0.0", "analyses[0].parameter.from"),
+        ("to: 1500.0", "to: 500.0", "analyses[0].parameter.to"),
+        ("to: 1500.0", "to: 1e9", "analyses[0].parameter.to"),
+        ("torque: 40.0,", "torque: 40.0, rpm: 1000.0,", "analyses[0].rpm"),
+        ("to: 1500.0)", "to: 1500.0), seeds: [2000.0]", "analyses[0].seeds[0]"),
+        (
+            "order_min: 2.9, order_max: 3.3,",
+            "plane: Speed(order: 3.0, rpm_min: 500.0, rpm_max: 900.0),",
+            "analyses[0].parameter.quantity",
+        ),
+    ];
+    refused(&base, cases);
 }

@@ -124,6 +124,21 @@ fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
         if let Err(m) = crate::study::validate::limits::check_file_name(&p.name) {
             return Err(src.error(&c.at("parameter.name"), m));
         }
+        if p.quantity == crate::study::design::Quantity::Rpm {
+            // The (order, speed) plane at a fixed torque.
+            if e.plane != EnvelopePlane::Order {
+                return Err(src.error(
+                    &c.at("parameter.quantity"),
+                    "a `Speed` plane maps the speed already: map the speed against the order on an `Order` plane",
+                ));
+            }
+            rpm(src, &c.at("parameter.from"), p.from)?;
+            rpm(src, &c.at("parameter.to"), p.to)?;
+            if p.from >= p.to {
+                return Err(src.error(&c.at("parameter.to"), format!("need from < to, got {} and {}", p.from, p.to)));
+            }
+            return seeds_in("seeds", &e.seeds, (p.from, p.to), " rpm");
+        }
         crate::study::design::check_mechanism_quantity(
             src,
             &c.at("parameter.quantity"),
@@ -202,6 +217,15 @@ impl Analysis for EnvelopeSpec {
         let (src, e) = (c.src, self);
         require_steady_spin(c, "Envelope", &e.name, false)?;
         match e.plane {
+            EnvelopePlane::Order if e.speed_is_second() => {
+                if e.rpm != 0.0 {
+                    return Err(src.error(
+                        &c.at("rpm"),
+                        "the speed is this plane's second parameter (`parameter` with `quantity: Rpm`): drop `rpm`",
+                    ));
+                }
+                order_range(src, &c.at("order_min"), e.order_min, e.order_max)?;
+            }
             EnvelopePlane::Order => {
                 rpm(src, &c.at("rpm"), e.rpm)?;
                 order_range(src, &c.at("order_min"), e.order_min, e.order_max)?;

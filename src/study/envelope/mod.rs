@@ -193,7 +193,8 @@ pub struct EnvelopeResult {
     pub name: String,
     /// The plane's first parameter: `order` (at `held` rpm) or `speed_rpm` (at order `held`).
     pub parameter: String,
-    /// The other of mean speed (rpm) and order, held fixed.
+    /// The other of mean speed (rpm) and order, held fixed (0 on the (order, speed) plane, whose
+    /// second parameter is the speed).
     pub held: f64,
     /// The map's range of its first parameter (order, or rpm).
     pub range: [f64; 2],
@@ -231,11 +232,19 @@ pub struct EnvelopeResult {
 impl EnvelopeResult {
     /// "at R rpm" or "at order n", what the plane holds fixed.
     fn held_words(&self) -> String {
-        if self.parameter == "order" {
+        if self.speed_is_second() {
+            format!("at {}", self.fixed)
+        } else if self.parameter == "order" {
             format!("at {} rpm", num(self.held, 6))
         } else {
             format!("at order {}", num(self.held, 6))
         }
+    }
+
+    /// Whether the second parameter is the mean speed (the (order, speed) plane: nothing of
+    /// `held`, the torque in `fixed`).
+    fn speed_is_second(&self) -> bool {
+        self.second_unit == "rpm"
     }
 
     /// Whether the second parameter is a mechanism parameter (not a torque or a scale).
@@ -326,6 +335,11 @@ struct Second {
     harmonics: Vec<Harmonic>,
     /// Results' unit per unit of s: the reference torque of a single order (N·m), 1 for a set.
     per_scale: f64,
+    /// Whether s is the mean speed, rad/s (given in rpm).
+    speed: bool,
+    /// A mechanism parameter's range as written (a speed's would not come back exactly from
+    /// rad/s).
+    shown: Option<(f64, f64)>,
     /// The range of s.
     range: (f64, f64),
     /// The seed branches' values of s.
@@ -354,16 +368,21 @@ impl Second {
             } else {
                 (spec.load.clone(), "the torque set as written".to_string())
             };
+            // The continuation's p is Ω in rad/s for the speed, the quantity's unit otherwise.
+            let speed = spec.speed_is_second();
+            let si = |v: f64| if speed { rpm_to_rad_s(v) } else { v };
             // Evenly spaced, from the top down: a damping's jump lies at its low end.
-            let (lo, hi) = (par.from, par.to);
+            let (lo, hi) = (si(par.from), si(par.to));
             let seeds = if spec.seeds.is_empty() {
                 (0..SEEDS).map(|k| hi - (hi - lo) * k as f64 / (SEEDS - 1) as f64).collect()
             } else {
-                spec.seeds.clone()
+                spec.seeds.iter().map(|&v| si(v)).collect()
             };
             return Second {
                 harmonics,
                 per_scale: 1.0,
+                speed,
+                shown: Some((par.from, par.to)),
                 range: (lo, hi),
                 seeds,
                 column: if suffix.is_empty() { par.name.clone() } else { format!("{}_{suffix}", par.name) },
@@ -384,6 +403,8 @@ impl Second {
             Second {
                 harmonics: vec![Harmonic { multiple: 1.0, amplitude: t_ref, phase: 0.0 }],
                 per_scale: t_ref,
+                speed: false,
+                shown: None,
                 range: (spec.torque_min / t_ref, 1.0),
                 seeds: seeds.iter().map(|t| t / t_ref).collect(),
                 column: "torque_N_m".into(),
@@ -397,6 +418,8 @@ impl Second {
             Second {
                 harmonics: spec.load.clone(),
                 per_scale: 1.0,
+                speed: false,
+                shown: None,
                 range,
                 seeds: if spec.seeds.is_empty() { log_spaced(range.0, range.1) } else { spec.seeds.clone() },
                 column: SCALE_COLUMN.into(),
@@ -410,7 +433,7 @@ impl Second {
 
     /// A value of s in the results' unit.
     fn value(&self, s: f64) -> f64 {
-        s * self.per_scale
+        if self.speed { s * 60.0 / (2.0 * std::f64::consts::PI) } else { s * self.per_scale }
     }
 
     /// A value in the results' unit, in words.
@@ -686,21 +709,22 @@ const DOUBLING_MARGIN: f64 = 1.3;
 /// makes the mode's motion repeat over T_b, a +1 tongue). Ok(words) when some resonance lies
 /// within [`DOUBLING_MARGIN`] of the map's orders (and when the linear model fails: then the
 /// search runs), Err(words) when none does and the search is skipped. `mechanisms`: the study's
-/// mechanism, or on a mechanism parameter's plane the mechanism at both ends of its range (each
-/// eigen-order's range spans both).
+/// mechanism, or on a mechanism parameter's plane the mechanism at both ends of its range;
+/// `speeds`: the map's (rad/s); each eigen-order's range spans every pair of the two.
 fn doubling_screen(
     mechanisms: &[crate::model::mechanism::Mechanism],
     spin_joint: &str,
     ax: &Axis,
+    speeds: &[f64],
     harmonics: &[Harmonic],
     ratio: f64,
 ) -> std::result::Result<String, String> {
     use crate::linear::{Damping, LinearModel, ModeKind, Spin};
     let searched = "searched along the seed branches".to_string();
-    // The base order's range and the speeds the eigen-orders are taken at.
-    let (n, speeds) = match ax.fold {
-        FoldPlane::Order => (ax.range, vec![ax.omega]),
-        FoldPlane::Speed { order } => ((order, order), vec![ax.range.0, ax.range.1]),
+    // The base order's range (the eigen-orders are taken at each of `speeds`, rad/s).
+    let n = match ax.fold {
+        FoldPlane::Order => ax.range,
+        FoldPlane::Speed { order } => (order, order),
     };
     let cases = mechanisms.iter().flat_map(|m| speeds.iter().map(move |&omega| (m, omega)));
     let mut orders: Vec<(f64, f64)> = Vec::new();
@@ -814,7 +838,11 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     let inputs = study.excited_joints(&study.mechanism, &spec.excite);
     let second = Second::of(study, spec);
     let opts = HbmOptions { harmonics: spec.harmonics, stability_samples: 0, ..HbmOptions::default() };
-    let ax = Axis::of(spec);
+    let mut ax = Axis::of(spec);
+    if spec.speed_is_second() {
+        // The layout problem's speed (each state's own is the second parameter).
+        ax.omega = second.range.0;
+    }
     let forcing = (&second.harmonics[..], &[][..]);
     let (mut routed, general) = match &spec.parameter {
         None => (RoutedHbm::new(&kane, study.spin, ax.omega, forcing, &inputs, opts).map_err(hbm_error(study))?, false),
@@ -850,20 +878,27 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     // and options given (the base frequency's, or half of it).
     let build_with = |p: f64, forcing, opts| -> std::result::Result<Hbm, HbmError> {
         let par = spec.parameter.as_ref().ok_or_else(|| HbmError::Invalid("no mechanism parameter".into()))?;
-        let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
-        let k = Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?;
-        let r = if general {
-            RoutedHbm::new_general(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+        // The speed's problems share the study's mechanism; a mechanism parameter's are at the
+        // map's speed.
+        let (k, omega) = if spec.speed_is_second() {
+            (kane.clone(), p)
         } else {
-            RoutedHbm::new(&k, study.spin, ax.omega, forcing, &inputs, opts)?
+            let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
+            (Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?, ax.omega)
+        };
+        let r = if general {
+            RoutedHbm::new_general(&k, study.spin, omega, forcing, &inputs, opts)?
+        } else {
+            RoutedHbm::new(&k, study.spin, omega, forcing, &inputs, opts)?
         };
         Ok(r.hbm().clone())
     };
     let build = |p: f64| build_with(p, forcing, opts);
     let build_half = |p: f64| build_with(p, (&halved[..], &[][..]), opts2);
-    let reference = spec.parameter.as_ref().map(|par| par.from.abs().max(par.to.abs()));
-    let family = reference.map(|reference| MechanismFamily { build: &build, scale: 1.0, reference });
-    let family_half = reference.map(|reference| MechanismFamily { build: &build_half, scale: 1.0, reference });
+    let (reference, speed) = (second.range.0.abs().max(second.range.1.abs()), spec.speed_is_second());
+    let family = spec.parameter.as_ref().map(|_| MechanismFamily { build: &build, scale: 1.0, reference, speed });
+    let family_half =
+        spec.parameter.as_ref().map(|_| MechanismFamily { build: &build_half, scale: 1.0, reference, speed });
     let (fam, fam_half) = (family.as_ref(), family_half.as_ref());
     let hbm = routed.hbm_mut();
     let mut tests = vec![(BoundaryKind::Jump, None, Singularity::Jacobian)];
@@ -872,10 +907,15 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     // On a mechanism parameter's plane the linear screen looks at the mechanism at both ends of
     // the range, and the half-frequency problems are the family's too.
     let screened = match &spec.parameter {
-        None => vec![study.mechanism.clone()],
-        Some(par) => [par.from, par.to].iter().filter_map(|&p| mechanism_at(study, par, p).ok()).collect(),
+        Some(par) if !speed => [par.from, par.to].iter().filter_map(|&p| mechanism_at(study, par, p).ok()).collect(),
+        _ => vec![study.mechanism.clone()],
     };
-    let screen = doubling_screen(&screened, &study.spec.spin_joint, &ax, &second.harmonics, ratio);
+    let speeds = match ax.fold {
+        FoldPlane::Order if speed => vec![second.range.0, second.range.1],
+        FoldPlane::Order => vec![ax.omega],
+        FoldPlane::Speed { .. } => vec![ax.range.0, ax.range.1],
+    };
+    let screen = doubling_screen(&screened, &study.spec.spin_joint, &ax, &speeds, &second.harmonics, ratio);
     // The half-frequency problem the period-doubling curves are evaluated on (on a mechanism
     // parameter's plane the one at its lower end, for the layout only).
     let mut half: Option<Hbm> = match (&screen, &spec.parameter) {
@@ -883,7 +923,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         (Ok(_), None) => RoutedHbm::new(&kane, study.spin, ax.omega, (&halved[..], &[][..]), &inputs, opts2)
             .ok()
             .map(|r| r.hbm().clone()),
-        (Ok(_), Some(par)) => build_half(par.from).ok(),
+        (Ok(_), Some(_)) => build_half(second.range.0).ok(),
     };
     // The seed branches only supply starting points (each seed is solved exactly on its curve
     // by `singular_at`): guesses at a loose corrector tolerance with one-sided derivatives, as
@@ -1066,7 +1106,9 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             EnvelopePlane::Speed { order, .. } => order,
         },
         range: [ax.range.0 * ax.to_unit, ax.range.1 * ax.to_unit],
-        second_range: [second.value(second.range.0), second.value(second.range.1)],
+        second_range: second
+            .shown
+            .map_or([second.value(second.range.0), second.value(second.range.1)], |(lo, hi)| [lo, hi]),
         second: second.column.clone(),
         second_unit: second.unit.clone(),
         second_label: second.label.clone(),
@@ -1310,12 +1352,14 @@ fn markdown(r: &EnvelopeResult) -> String {
          plane by two-parameter continuation; figure `{}.svg`, points in `{}.csv` (kind 1: jump boundary, \
          2: unison-loss boundary, 3: period-doubling boundary, 10: cusp, 11: jump onset, 12: unison-loss \
          onset, 13: period-doubling onset, 14: unison loss meets jump).\n",
-        if r.parameter == "order" {
+        if r.speed_is_second() {
+            format!("At {}", r.fixed)
+        } else if r.parameter == "order" {
             format!("At {} rpm", num(r.held, 6))
         } else {
             format!("At order {}", num(r.held, 6))
         },
-        if r.fixed.is_empty() { String::new() } else { format!(" and {}", r.fixed) },
+        if r.fixed.is_empty() || r.speed_is_second() { String::new() } else { format!(" and {}", r.fixed) },
         if r.parameter == "order" { "orders" } else { "speeds" },
         num(r.range[0], 6),
         num(r.range[1], 6),

@@ -17,7 +17,9 @@ use serde::{Deserialize, Serialize};
 /// - the common scale s (dimensionless) of a multi-order set `load`, over
 ///   `scale_min`..`scale_max`: the excitation is `s Σ T_k sin(m_k nΩt + α_k)`;
 /// - a mechanism parameter (`parameter`, named as a design study names it) over its
-///   `from`..`to`, at the fixed single-order torque `torque` (N·m) or at the set `load` as given.
+///   `from`..`to`, at the fixed single-order torque `torque` (N·m) or at the set `load` as given;
+/// - on an `Order` plane, the mean speed (`parameter` with `quantity: Rpm`, rpm, `rpm` left
+///   out), at the fixed `torque` or `load`.
 ///
 /// The three are exclusive: fields of another are refused at their place in the file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -29,7 +31,7 @@ pub struct EnvelopeSpec {
     /// `order_min`..`order_max` at `rpm`).
     #[serde(default)]
     pub plane: EnvelopePlane,
-    /// Mean speed, rpm (an `Order` plane only).
+    /// Mean speed, rpm (an `Order` plane only; left out when the speed is the second parameter).
     #[serde(default)]
     pub rpm: f64,
     /// Lower end of the order range (an `Order` plane only).
@@ -93,8 +95,8 @@ pub struct EnvelopeParameter {
     /// Column name (letters, digits, `_`, `-`, `.`); the CSV column is `<name>_<unit>`.
     pub name: String,
     /// What is varied: a body's or joint's quantity (`JointDamping("pivot")`,
-    /// `TuningOrder("pivot")`, `BodyMass("pendulum")`, …), not the analysis's speed, torque or
-    /// order.
+    /// `TuningOrder("pivot")`, `BodyMass("pendulum")`, …), or on an `Order` plane `Rpm`, the
+    /// mean speed (rpm; the plane's `rpm` is then left out); not the torque or the order.
     pub quantity: crate::study::design::Quantity,
     /// Lower end of the range, in the quantity's unit.
     pub from: f64,
@@ -117,6 +119,14 @@ pub enum EnvelopePlane {
         /// Upper end of the speed range, rpm.
         rpm_max: f64,
     },
+}
+
+impl EnvelopeSpec {
+    /// Whether the plane's second parameter is the mean speed (`parameter` with `quantity: Rpm`,
+    /// the (order, speed) plane at a fixed torque).
+    pub(crate) fn speed_is_second(&self) -> bool {
+        self.parameter.as_ref().is_some_and(|p| p.quantity == crate::study::design::Quantity::Rpm)
+    }
 }
 
 fn default_harmonics() -> usize {
