@@ -64,13 +64,20 @@ const FD_STEP_ONE_SIDED: f64 = 1e-7;
 const NULL_TURN: f64 = 0.9;
 
 /// The plane of a fold curve: the torque scale s and either the excitation order n (at the
-/// problem's mean speed) or the mean speed Ω (at a fixed order).
+/// problem's mean speed) or the mean speed Ω (at a fixed order); or the torque scale against a
+/// [`MechanismFamily`]'s p at a fixed order and speed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FoldPlane {
     /// (n, s) at the problem's mean speed.
     Order,
     /// (Ω, s) at excitation order `order`.
     Speed {
+        /// The fixed excitation order n.
+        order: f64,
+    },
+    /// (s, p) at excitation order `order` and the problem's mean speed: the torque scale is the
+    /// first parameter, so the second must be a family's p.
+    Torque {
         /// The fixed excitation order n.
         order: f64,
     },
@@ -91,6 +98,7 @@ impl Plane {
         match self.kind {
             FoldPlane::Order => At { order: lambda, omega: self.omega, scale },
             FoldPlane::Speed { order } => At { order, omega: lambda * self.p_ref, scale },
+            FoldPlane::Torque { order } => At { order, omega: self.omega, scale: lambda },
         }
     }
 
@@ -98,6 +106,7 @@ impl Plane {
         match self.kind {
             FoldPlane::Order => at.order,
             FoldPlane::Speed { .. } => at.omega / self.p_ref,
+            FoldPlane::Torque { .. } => at.scale,
         }
     }
 
@@ -105,6 +114,15 @@ impl Plane {
         match self.kind {
             FoldPlane::Order => Parameter::Order,
             FoldPlane::Speed { order } => Parameter::Speed { order },
+            FoldPlane::Torque { order } => Parameter::TorqueScale { order },
+        }
+    }
+
+    /// ∂λ/∂(the parameter's own unit): Ω_ref on a speed plane (λ = Ω/Ω_ref), else 1.
+    fn per_unit(&self) -> f64 {
+        match self.kind {
+            FoldPlane::Speed { .. } => self.p_ref,
+            FoldPlane::Order | FoldPlane::Torque { .. } => 1.0,
         }
     }
 
@@ -548,7 +566,7 @@ impl Hbm {
         let order = at.order;
         let m = self.unknowns();
         let Walk { plane, b, c, rs, block, family, built, pinned, central } = walk;
-        let (param, scale) = (plane.param(), if plane.kind == FoldPlane::Order { 1.0 } else { plane.p_ref });
+        let (param, scale) = (plane.param(), plane.per_unit());
         let hbm = problem(self, built, *family, p)?;
         hbm.assemble(x, at, Some(param));
         let (r, j, rl) = (hbm.rhat.clone(), hbm.jac.clone(), &hbm.gp * scale);
@@ -662,10 +680,13 @@ impl Hbm {
         at: &At,
         p: Option<f64>,
     ) -> Result<Walk<'a>, HbmError> {
-        if kind != FoldPlane::Order && family.is_some_and(|f| f.speed) {
+        if matches!(kind, FoldPlane::Speed { .. }) && family.is_some_and(|f| f.speed) {
             return Err(HbmError::Invalid(
-                "a speed family needs an order plane (the speed is its second parameter)".into(),
+                "a speed family needs an order or torque plane (the speed is its second parameter)".into(),
             ));
+        }
+        if matches!(kind, FoldPlane::Torque { .. }) && family.is_none() {
+            return Err(HbmError::Invalid("a torque plane needs a family's parameter as its second".into()));
         }
         let plane = self.plane(kind);
         let block = self.tested(test);
@@ -817,11 +838,13 @@ impl Hbm {
         guess: &HbmSolution,
     ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
-        let order = match plane {
-            FoldPlane::Order => guess.order,
-            FoldPlane::Speed { order } => order,
+        let scale = family.map_or(second, |f| f.scale);
+        let at = match plane {
+            FoldPlane::Order => At { order: guess.order, omega: guess.omega, scale },
+            FoldPlane::Speed { order } => At { order, omega: guess.omega, scale },
+            FoldPlane::Torque { order } => At { order, omega: guess.omega, scale: guess.torque_scale },
         };
-        self.singular_solve(plane, family, test, &mut x, (order, guess.omega), second, true)
+        self.singular_solve(plane, family, test, &mut x, at, second, true)
     }
 
     /// The fold in `plane` at the value `value` of its first parameter (n, or Ω in rad/s)
@@ -859,15 +882,17 @@ impl Hbm {
         guess: &HbmSolution,
     ) -> Result<FoldCurvePoint, HbmError> {
         let mut x = self.unknowns_from(Some(guess));
-        let (order, omega) = match plane {
-            FoldPlane::Order => (value, guess.omega),
-            FoldPlane::Speed { order } => (order, value),
+        let scale = family.map_or(second, |f| f.scale);
+        let at = match plane {
+            FoldPlane::Order => At { order: value, omega: guess.omega, scale },
+            FoldPlane::Speed { order } => At { order, omega: value, scale },
+            FoldPlane::Torque { order } => At { order, omega: guess.omega, scale: value },
         };
-        self.singular_solve(plane, family, test, &mut x, (order, omega), second, false)
+        self.singular_solve(plane, family, test, &mut x, at, second, false)
     }
 
-    /// Newton's method on `R̂ = 0, g = 0` from x at (n, Ω) and the second parameter `second`,
-    /// the first parameter free when `free_lambda`, else the second.
+    /// Newton's method on `R̂ = 0, g = 0` from x at `at` (its first parameter's start) and the
+    /// second parameter `second`, the first parameter free when `free_lambda`, else the second.
     #[allow(clippy::too_many_arguments)]
     fn singular_solve(
         &mut self,
@@ -875,15 +900,14 @@ impl Hbm {
         family: Option<&MechanismFamily<'_>>,
         test: Singularity,
         x: &mut [f64],
-        (order, omega): (f64, f64),
+        at: At,
         second: f64,
         free_lambda: bool,
     ) -> Result<FoldCurvePoint, HbmError> {
-        let scale = family.map_or(second, |f| f.scale);
         let p = family.map(|_| second);
         let at = match family {
-            Some(f) => on_family(At { order, omega, scale }, f, second),
-            None => At { order, omega, scale },
+            Some(f) => on_family(at, f, second),
+            None => at,
         };
         let mut walk = self.walk(plane, test, family, x, &at, p)?;
         let (mut lambda, mut sigma) = (walk.plane.lambda(&at), walk.sigma(second));
@@ -944,6 +968,7 @@ impl Hbm {
             let first = match plane {
                 FoldPlane::Order => at.order,
                 FoldPlane::Speed { .. } => at.omega,
+                FoldPlane::Torque { .. } => at.scale,
             };
             (opts.range.0..=opts.range.1).contains(&first)
                 && (opts.scales.0..=opts.scales.1).contains(&walk.second(y[m + 1]))

@@ -413,3 +413,85 @@ fn a_bad_speed_parameter_is_refused_with_its_field() {
     ];
     refused(&base, cases);
 }
+
+/// The folds in torque (N·m) of the one-parameter torque branch at order 3.17 and 1000 rpm of
+/// the paper's rotor built with the pivot damping `c_p` (from `CpvaParams`), from 1 to 500 N·m.
+fn torque_folds(c_p: f64, ds_max: f64) -> Vec<f64> {
+    let params = kanedyn::cpva::CpvaParams { c_p, ..kanedyn::cpva::CpvaParams::canonical() };
+    let kane = Kane::new(&params.mechanism(None).unwrap()).unwrap();
+    let opts = HbmOptions { stability_samples: 0, ..HbmOptions::default() };
+    let h = [Harmonic { multiple: 1.0, amplitude: 500.0, phase: 0.0 }];
+    let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, opts).unwrap();
+    let copts = ContinuationOptions { stability: false, ds_max, ds: 0.01_f64.min(ds_max), ..Default::default() };
+    let b = hbm.continue_in(Parameter::TorqueScale { order: 3.17 }, 1.0 / 500.0, 1.0, None, &copts).unwrap();
+    let mut v: Vec<f64> = b.folds.iter().map(|f| f.parameter * 500.0).collect();
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// The study text of the (torque, pivot damping) plane at order 3.17 and 1000 rpm over
+/// 1–500 N·m and c_p from 1e-4 to `to`.
+fn torque_damping_study(name: &str, to: f64) -> String {
+    format!(
+        r#"Study(name: "{name}", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor",
+        analyses: [Envelope(name: "envelope", rpm: 1000.0, plane: Torque(order: 3.17, torque_min: 1.0, torque_max: 500.0),
+                            parameter: (name: "c_p", quantity: JointDamping("pivot"), from: 1e-4, to: {to:e}))])"#
+    )
+}
+
+/// (g) The (torque, pivot damping) plane at a fixed order and speed (`plane: Torque`, the torque
+/// scale as the continuation's first parameter): where its jump boundary crosses the map's
+/// largest damping it is the pair of folds of the one-parameter torque branch of the rotor
+/// built with that damping (1e-6 relative); and its cusp, where the jump at this order ends as
+/// the damping grows, lies inside a bracket of 1e-4 relative on such branches (two folds below,
+/// none above).
+#[test]
+fn the_torque_damping_plane_agrees_with_torque_branches() {
+    for (k, c_p) in [5e-4, 2e-3].into_iter().enumerate() {
+        let name = format!("torquedamping{k}");
+        let (report, csv, _) = run_study(&name, &torque_damping_study(&name, c_p));
+        assert!(report.failures.is_empty(), "{:?}", report.failures);
+        let r = &report.envelopes[0];
+        assert_eq!(csv.lines().next(), Some("boundary,kind,torque_N_m,c_p_Nms_per_rad"));
+        assert_eq!((r.parameter.as_str(), r.range), ("torque_N_m", [1.0, 500.0]));
+        let mut map: Vec<f64> = r.boundaries.iter().flat_map(|b| b.at_second_max.clone()).collect();
+        map.sort_by(f64::total_cmp);
+        let branch = torque_folds(c_p, 0.02);
+        println!("c_p = {c_p}: map {map:?} N·m, torque branch {branch:?} N·m");
+        assert_eq!((map.len(), branch.len()), (2, 2), "{map:?} {branch:?}");
+        for (m, b) in map.iter().zip(&branch) {
+            assert!((m / b - 1.0).abs() <= 1e-6, "c_p = {c_p}: map {m} against the branch's {b}");
+        }
+    }
+    let (report, ..) = run_study("torquecusp", &torque_damping_study("torquecusp", 6e-3));
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let r = &report.envelopes[0];
+    let cusps: Vec<_> = r.points.iter().filter(|p| format!("{:?}", p.kind) == "Cusp").collect();
+    assert_eq!(cusps.len(), 1, "{:?}", r.points);
+    let (t, c) = (cusps[0].value, cusps[0].second_value);
+    let (below, above) = (torque_folds(c * (1.0 - 1e-4), 0.002), torque_folds(c * (1.0 + 1e-4), 0.002));
+    println!("cusp at T = {t} N·m, c_p = {c:e}; 1e-4 below {below:?}, above {above:?}");
+    assert!(below.len() == 2 && above.is_empty(), "below {below:?}, above {above:?}");
+    assert!(below.iter().all(|b| (b / t - 1.0).abs() < 0.05), "{below:?} near the cusp's {t}");
+}
+
+/// Bad torque planes are refused at load with the field's path and the file's line.
+#[test]
+fn a_bad_torque_plane_is_refused_with_its_field() {
+    let base = torque_damping_study("badtorque", 6e-3);
+    let cases = [
+        ("torque_min: 1.0", "torque_min: 0.0", "analyses[0].plane.torque_min"),
+        ("torque_max: 500.0", "torque_max: 0.5", "analyses[0].plane.torque_min"),
+        ("order: 3.17", "order: -1.0", "analyses[0].plane.order"),
+        ("rpm: 1000.0,", "", "analyses[0].rpm"),
+        ("rpm: 1000.0,", "rpm: 1000.0, order_min: 2.9,", "analyses[0].order_min"),
+        ("rpm: 1000.0,", "rpm: 1000.0, torque: 40.0,", "analyses[0].torque"),
+        ("JointDamping(\"pivot\")", "Rpm", "analyses[0].parameter.quantity"),
+        (
+            "parameter: (name: \"c_p\", quantity: JointDamping(\"pivot\"), from: 1e-4, to: 6e-3)",
+            "harmonics: 10",
+            "analyses[0].plane",
+        ),
+    ];
+    refused(&base, cases);
+}

@@ -109,7 +109,19 @@ fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
             &["torque_min", "torque_max", "seed_torques", "scale_min", "scale_max"],
             "a mechanism parameter's plane holds the torque fixed (`torque`, or the set `load` as written)",
         )?;
+        let torque_plane = matches!(e.plane, EnvelopePlane::Torque { .. });
         match (e.load.is_empty(), e.torque) {
+            _ if torque_plane => {
+                if !e.load.is_empty() {
+                    return Err(src.error(&c.at("load"), "a `Torque` plane maps a single order's torque: no `load`"));
+                }
+                if e.torque != 0.0 {
+                    return Err(src.error(
+                        &c.at("torque"),
+                        "a `Torque` plane maps the torque over `plane: Torque(…, torque_min, torque_max)`: drop `torque`",
+                    ));
+                }
+            }
             (true, t) if !(pos(t) && t <= MAX_TORQUE_NM) => {
                 return Err(src.error(
                     &c.at("torque"),
@@ -249,11 +261,48 @@ impl Analysis for EnvelopeSpec {
                     ));
                 }
             }
+            EnvelopePlane::Torque { order: n, torque_min, torque_max } => {
+                rpm(src, &c.at("rpm"), e.rpm)?;
+                for (field, v) in [("order_min", e.order_min), ("order_max", e.order_max)] {
+                    if v != 0.0 {
+                        return Err(src.error(
+                            &c.at(field),
+                            "a `Torque` plane takes its order and torques in `plane: Torque(order, torque_min, torque_max)`",
+                        ));
+                    }
+                }
+                order(src, &c.at("plane.order"), n)?;
+                if !(pos(torque_min) && torque_min < torque_max && torque_max <= MAX_TORQUE_NM) {
+                    return Err(src.error(
+                        &c.at("plane.torque_min"),
+                        format!(
+                            "need 0 < torque_min < torque_max ≤ {MAX_TORQUE_NM:e} N·m, got {torque_min} and {torque_max}"
+                        ),
+                    ));
+                }
+                match &e.parameter {
+                    None => {
+                        return Err(src.error(
+                            &c.at("plane"),
+                            "a `Torque` plane maps the torque against a mechanism `parameter`: give one \
+                             (the order against the torque is an `Order` plane's)",
+                        ));
+                    }
+                    Some(p) if p.quantity == crate::study::design::Quantity::Rpm => {
+                        return Err(src.error(
+                            &c.at("parameter.quantity"),
+                            "the speed against the torque is a `Speed` plane's: `plane: Speed(order, rpm_min, rpm_max)`",
+                        ));
+                    }
+                    Some(_) => {}
+                }
+            }
         }
         check_second(c, e)?;
         let first = match e.plane {
             EnvelopePlane::Order => (e.order_min, e.order_max),
             EnvelopePlane::Speed { rpm_min, rpm_max, .. } => (rpm_min, rpm_max),
+            EnvelopePlane::Torque { torque_min, torque_max, .. } => (torque_min, torque_max),
         };
         if e.sections.len() > MAX_LIST {
             return Err(src.error(&c.at("sections"), format!("at most {MAX_LIST} values")));

@@ -2,10 +2,11 @@
 //! plane of two parameters, each a curve of codimension-one points followed by two-parameter
 //! continuation (`hbm::fold2`, the minimally augmented systems of Govaerts 2000, §4.3.2), with the
 //! codimension-two points where they end or turn. The first parameter is the excitation order n
-//! at a mean speed (or the speed at an order); the second the torque amplitude T of a single
-//! order, the common scale s of a multi-order set, or a mechanism parameter p at a fixed torque
-//! (the problem rebuilt at each p, `hbm::MechanismFamily`; a second family rebuilds the problem
-//! of half the base frequency for the period-doubling curves).
+//! at a mean speed (or the speed at an order, or the torque at an order and speed); the second
+//! the torque amplitude T of a single order, the common scale s of a multi-order set, the mean
+//! speed, or a mechanism parameter p at a fixed torque (the problem rebuilt at each p,
+//! `hbm::MechanismFamily`; a second family rebuilds the problem of half the base frequency for
+//! the period-doubling curves).
 //!
 //! - **Jump boundary**: the fold curve. Inside its wedge three periodic states coexist at each
 //!   (n, T) and the response jumps at the wedge's edges; its cusp is the least torque at which a
@@ -42,6 +43,9 @@ use schemars::JsonSchema;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// The CSV column of a single order's torque amplitude (the first or the second parameter).
+const TORQUE_COLUMN: &str = "torque_N_m";
 
 /// Default number of seed branches (torques evenly spaced in log T, both ends included).
 const SEEDS: usize = 5;
@@ -191,12 +195,13 @@ pub struct MapPoint {
 pub struct EnvelopeResult {
     /// The analysis's name.
     pub name: String,
-    /// The plane's first parameter: `order` (at `held` rpm) or `speed_rpm` (at order `held`).
+    /// The plane's first parameter: `order` (at `held` rpm), `speed_rpm` (at order `held`) or
+    /// `torque_N_m` (at order `held`, the speed in `fixed`).
     pub parameter: String,
     /// The other of mean speed (rpm) and order, held fixed (0 on the (order, speed) plane, whose
     /// second parameter is the speed).
     pub held: f64,
-    /// The map's range of its first parameter (order, or rpm).
+    /// The map's range of its first parameter (order, rpm or N·m).
     pub range: [f64; 2],
     /// The second parameter's CSV column: `torque_N_m` (a single order's amplitude),
     /// `scale_of_set` (the common scale of a multi-order set, dimensionless) or
@@ -249,21 +254,30 @@ impl EnvelopeResult {
 
     /// Whether the second parameter is a mechanism parameter (not a torque or a scale).
     fn on_mechanism(&self) -> bool {
-        !matches!(self.second.as_str(), "torque_N_m" | SCALE_COLUMN)
+        !matches!(self.second.as_str(), TORQUE_COLUMN | SCALE_COLUMN)
     }
 
     /// A value of the second parameter in words: `3.6 N·m`, `s = 0.93` or `c_p = 0.002 N·m·s/rad`.
     fn second_words(&self, v: f64, sig: usize) -> String {
         match self.second.as_str() {
-            "torque_N_m" => format!("{} N·m", num(v, sig)),
+            TORQUE_COLUMN => format!("{} N·m", num(v, sig)),
             SCALE_COLUMN => format!("s = {}", num(v, sig)),
             column => format!("{column} = {} {}", num(v, sig), self.second_unit),
         }
     }
 
-    /// A value of the first parameter in words: `n = 3.1` or `812 rpm`.
+    /// A value of the first parameter in words: `n = 3.1`, `812 rpm` or `40 N·m`.
     fn value_words(&self, v: f64, sig: usize) -> String {
-        if self.parameter == "order" { num(v, sig) } else { format!("{} rpm", num(v, sig)) }
+        format!("{}{}", num(v, sig), self.first_unit())
+    }
+
+    /// The first parameter's unit as a suffix: nothing for an order, ` rpm`, ` N·m`.
+    fn first_unit(&self) -> &'static str {
+        match self.parameter.as_str() {
+            "order" => "",
+            TORQUE_COLUMN => " N·m",
+            _ => " rpm",
+        }
     }
 
     /// Its CSV table: one row per boundary point, then one per codimension-two point; columns
@@ -288,9 +302,14 @@ impl EnvelopeResult {
         let mut t = Table::new(self.name.clone());
         t.push("boundary", "1", curve);
         t.push("kind", "1", kind);
-        t.push(self.parameter.clone(), if self.parameter == "order" { "1" } else { "rpm" }, order);
+        let unit = match self.parameter.as_str() {
+            "order" => "1",
+            TORQUE_COLUMN => "N·m",
+            _ => "rpm",
+        };
+        t.push(self.parameter.clone(), unit, order);
         // The table's units are static strings: the second's is one of the quantities' own.
-        const UNITS: [&str; 8] = ["N·m", "kg", "kg·m²", "m", "N·m/rad", "N/m", "N·s/m", "N·m·s/rad"];
+        const UNITS: [&str; 9] = ["N·m", "kg", "kg·m²", "m", "N·m/rad", "N/m", "N·s/m", "N·m·s/rad", "rpm"];
         let unit = UNITS.into_iter().find(|u| *u == self.second_unit).unwrap_or("1");
         t.push(self.second.clone(), unit, torque);
         t
@@ -362,7 +381,11 @@ impl Second {
                 .and_then(|j| study.mechanism.joint_index(j))
                 .is_some_and(|j| study.mechanism.joints[j].kind.slide_axis().is_some());
             let (suffix, unit) = (par.quantity.suffix(slide), par.quantity.unit(slide));
-            let (harmonics, fixed) = if spec.load.is_empty() {
+            let (harmonics, fixed) = if let EnvelopePlane::Torque { torque_max, .. } = spec.plane {
+                // The torque is the first parameter: the problem's s = 1 is the largest mapped.
+                let h = vec![Harmonic { multiple: 1.0, amplitude: torque_max, phase: 0.0 }];
+                (h, format!("{} rpm", num(spec.rpm, 6)))
+            } else if spec.load.is_empty() {
                 let h = vec![Harmonic { multiple: 1.0, amplitude: spec.torque, phase: 0.0 }];
                 (h, format!("torque {} N·m", num(spec.torque, 6)))
             } else {
@@ -407,7 +430,7 @@ impl Second {
                 shown: None,
                 range: (spec.torque_min / t_ref, 1.0),
                 seeds: seeds.iter().map(|t| t / t_ref).collect(),
-                column: "torque_N_m".into(),
+                column: TORQUE_COLUMN.into(),
                 unit: "N·m".into(),
                 label: "torque amplitude T, N·m".into(),
                 log: true,
@@ -439,7 +462,7 @@ impl Second {
     /// A value in the results' unit, in words.
     fn words(&self, v: f64) -> String {
         match self.column.as_str() {
-            "torque_N_m" => format!("{} N·m", num(v, 6)),
+            TORQUE_COLUMN => format!("{} N·m", num(v, 6)),
             SCALE_COLUMN => format!("scale {}", num(v, 6)),
             column => format!("{column} = {} {}", num(v, 6), self.unit),
         }
@@ -500,14 +523,23 @@ impl Axis {
                 omega: rpm_to_rad_s(rpm_min),
                 to_unit: 1.0 / rpm_to_rad_s(1.0),
             },
+            // The torque scale s of the largest torque mapped (its problem's T = torque_max).
+            EnvelopePlane::Torque { order, torque_min, torque_max } => Axis {
+                fold: FoldPlane::Torque { order },
+                param: Parameter::TorqueScale { order },
+                range: (torque_min / torque_max, 1.0),
+                omega: rpm_to_rad_s(spec.rpm),
+                to_unit: torque_max,
+            },
         }
     }
 
     /// A point's first parameter in the results' unit.
-    fn value(&self, order: f64, omega: f64) -> f64 {
+    fn value(&self, order: f64, omega: f64, scale: f64) -> f64 {
         match self.fold {
             FoldPlane::Order => order,
             FoldPlane::Speed { .. } => omega * self.to_unit,
+            FoldPlane::Torque { .. } => scale * self.to_unit,
         }
     }
 }
@@ -571,7 +603,7 @@ fn solved_crossings(
 fn crossings_at(hbm: &mut Hbm, ax: &Axis, family: Option<&MechanismFamily<'_>>, w: &Walked, s: f64) -> Vec<f64> {
     let solve = |near: &FoldCurvePoint| {
         let p = hbm.singular_at_with(ax.fold, family, w.test, s, &near.solution).ok()?;
-        Some(ax.value(p.order, p.omega))
+        Some(ax.value(p.order, p.omega, p.scale))
     };
     solved_crossings(w, |p| p.parameter - s, solve, SAME_CURVE * ax.range.1 * ax.to_unit)
 }
@@ -592,7 +624,7 @@ fn sections_at(
             hbm.singular_at_value_with(ax.fold, family, w.test, v / ax.to_unit, near.parameter, &near.solution).ok()?;
         (range.0..=range.1).contains(&p.parameter).then_some(p.parameter)
     };
-    solved_crossings(w, |p| ax.value(p.order, p.omega) - v, solve, SAME_CURVE * range.1.abs())
+    solved_crossings(w, |p| ax.value(p.order, p.omega, p.scale) - v, solve, SAME_CURVE * range.1.abs())
 }
 
 /// Whether `seed` lies on one of `walked` (same test): one of the curve's crossings of the
@@ -605,7 +637,7 @@ fn covered(
     test: Singularity,
     seed: &FoldCurvePoint,
 ) -> bool {
-    let v = ax.value(seed.order, seed.omega);
+    let v = ax.value(seed.order, seed.omega, seed.scale);
     walked.iter().filter(|w| w.test == test).any(|w| {
         crossings_at(hbm, ax, family, w, seed.parameter)
             .iter()
@@ -724,7 +756,7 @@ fn doubling_screen(
     // The base order's range (the eigen-orders are taken at each of `speeds`, rad/s).
     let n = match ax.fold {
         FoldPlane::Order => ax.range,
-        FoldPlane::Speed { order } => (order, order),
+        FoldPlane::Speed { order } | FoldPlane::Torque { order } => (order, order),
     };
     let cases = mechanisms.iter().flat_map(|m| speeds.iter().map(move |&omega| (m, omega)));
     let mut orders: Vec<(f64, f64)> = Vec::new();
@@ -912,7 +944,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     };
     let speeds = match ax.fold {
         FoldPlane::Order if speed => vec![second.range.0, second.range.1],
-        FoldPlane::Order => vec![ax.omega],
+        FoldPlane::Order | FoldPlane::Torque { .. } => vec![ax.omega],
         FoldPlane::Speed { .. } => vec![ax.range.0, ax.range.1],
     };
     let screen = doubling_screen(&screened, &study.spec.spin_joint, &ax, &speeds, &second.harmonics, ratio);
@@ -944,7 +976,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
     // it may start on a large state that never folds back (the Table 1 set at 500 rpm). If it
     // fails, from the other end.
     let ends = match ax.fold {
-        FoldPlane::Order => ax.range,
+        FoldPlane::Order | FoldPlane::Torque { .. } => ax.range,
         FoldPlane::Speed { .. } => (ax.range.1, ax.range.0),
     };
     for &s in &second.seeds {
@@ -981,7 +1013,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 "{}: {} boundary from {} at {}",
                 spec.name,
                 kind.words(),
-                num(ax.value(seed.order, seed.omega), 8),
+                num(ax.value(seed.order, seed.omega, seed.scale), 8),
                 second.words(second.value(s))
             )
         };
@@ -1046,7 +1078,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 points.push(MapPoint {
                     kind: MapPointKind::Cusp,
                     boundary: i,
-                    value: ax.value(p.order, p.omega),
+                    value: ax.value(p.order, p.omega, p.scale),
                     second_value: second.value(p.parameter),
                 });
             }
@@ -1055,7 +1087,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                     points.push(MapPoint {
                         kind: MapPointKind::UnisonLossMeetsJump,
                         boundary: i,
-                        value: ax.value(p.order, p.omega),
+                        value: ax.value(p.order, p.omega, p.scale),
                         second_value: second.value(p.parameter),
                     });
                 }
@@ -1069,7 +1101,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
                 points.push(MapPoint {
                     kind,
                     boundary: i,
-                    value: ax.value(p.order, p.omega),
+                    value: ax.value(p.order, p.omega, p.scale),
                     second_value: second.value(p.parameter),
                 });
             }
@@ -1089,7 +1121,7 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
             sections,
             kind: w.kind,
             set: w.set.clone(),
-            values: w.points.iter().map(|p| ax.value(p.order, p.omega)).collect(),
+            values: w.points.iter().map(|p| ax.value(p.order, p.omega, p.scale)).collect(),
             second_values: w.points.iter().map(|p| second.value(p.parameter)).collect(),
             at_second_max: at_top,
             ends: w.ends.clone(),
@@ -1100,12 +1132,16 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         parameter: match spec.plane {
             EnvelopePlane::Order => "order".into(),
             EnvelopePlane::Speed { .. } => "speed_rpm".into(),
+            EnvelopePlane::Torque { .. } => TORQUE_COLUMN.into(),
         },
         held: match spec.plane {
             EnvelopePlane::Order => spec.rpm,
-            EnvelopePlane::Speed { order, .. } => order,
+            EnvelopePlane::Speed { order, .. } | EnvelopePlane::Torque { order, .. } => order,
         },
-        range: [ax.range.0 * ax.to_unit, ax.range.1 * ax.to_unit],
+        range: match spec.plane {
+            EnvelopePlane::Torque { torque_min, torque_max, .. } => [torque_min, torque_max],
+            _ => [ax.range.0 * ax.to_unit, ax.range.1 * ax.to_unit],
+        },
         second_range: second
             .shown
             .map_or([second.value(second.range.0), second.value(second.range.1)], |(lo, hi)| [lo, hi]),
@@ -1331,7 +1367,12 @@ fn panel(r: &EnvelopeResult) -> Panel {
     }
     Panel {
         title: format!("Operating envelope {}", r.held_words()),
-        x_label: if r.parameter == "order" { "excitation order n" } else { "mean speed, rpm" }.into(),
+        x_label: match r.parameter.as_str() {
+            "order" => "excitation order n",
+            TORQUE_COLUMN => "torque amplitude T, N·m",
+            _ => "mean speed, rpm",
+        }
+        .into(),
         y_label: r.second_label.clone(),
         log_y: r.log_second,
         x_range: Some((r.range[0], r.range[1])),
@@ -1360,10 +1401,14 @@ fn markdown(r: &EnvelopeResult) -> String {
             format!("At order {}", num(r.held, 6))
         },
         if r.fixed.is_empty() || r.speed_is_second() { String::new() } else { format!(" and {}", r.fixed) },
-        if r.parameter == "order" { "orders" } else { "speeds" },
+        match r.parameter.as_str() {
+            "order" => "orders",
+            TORQUE_COLUMN => "torques",
+            _ => "speeds",
+        },
         num(r.range[0], 6),
         num(r.range[1], 6),
-        if r.parameter == "order" { "" } else { " rpm" },
+        r.first_unit(),
         r.second_label,
         num(r.second_range[0], 6),
         num(r.second_range[1], 6),
@@ -1385,7 +1430,11 @@ fn markdown(r: &EnvelopeResult) -> String {
         md,
         "| boundary | kind | points | range of the {} | {} at its largest | ends |\n|---|---|---|---|---|---|",
         r.second_label,
-        if r.parameter == "order" { "orders" } else { "speeds (rpm)" }
+        match r.parameter.as_str() {
+            "order" => "orders",
+            TORQUE_COLUMN => "torques (N·m)",
+            _ => "speeds (rpm)",
+        }
     );
     for (i, b) in r.boundaries.iter().enumerate() {
         let extra = || r.points.iter().filter(|p| p.boundary == i).map(|p| p.second_value);
@@ -1434,7 +1483,11 @@ fn markdown(r: &EnvelopeResult) -> String {
         let _ = writeln!(
             md,
             "Codimension-two points:\n\n| point | boundary | {} | {} | meaning |\n|---|---|---|---|---|",
-            if r.parameter == "order" { "order" } else { "speed (rpm)" },
+            match r.parameter.as_str() {
+                "order" => "order",
+                TORQUE_COLUMN => "torque (N·m)",
+                _ => "speed (rpm)",
+            },
             r.second_label
         );
         for p in &r.points {

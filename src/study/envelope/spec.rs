@@ -31,7 +31,8 @@ pub struct EnvelopeSpec {
     /// `order_min`..`order_max` at `rpm`).
     #[serde(default)]
     pub plane: EnvelopePlane,
-    /// Mean speed, rpm (an `Order` plane only; left out when the speed is the second parameter).
+    /// Mean speed, rpm (an `Order` or `Torque` plane; left out when the speed is the second
+    /// parameter).
     #[serde(default)]
     pub rpm: f64,
     /// Lower end of the order range (an `Order` plane only).
@@ -104,7 +105,8 @@ pub struct EnvelopeParameter {
     pub to: f64,
 }
 
-/// The first parameter of an envelope's plane (the second is the torque amplitude).
+/// The first parameter of an envelope's plane (the second is the torque amplitude, the scale of
+/// a set or a mechanism parameter).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub enum EnvelopePlane {
     /// The excitation order, over `order_min`..`order_max` at `rpm`.
@@ -118,6 +120,16 @@ pub enum EnvelopePlane {
         rpm_min: f64,
         /// Upper end of the speed range, rpm.
         rpm_max: f64,
+    },
+    /// The torque amplitude T of a single order over `torque_min`..`torque_max` (N·m) at the
+    /// excitation order `order` and the mean speed `rpm`, against a mechanism `parameter`.
+    Torque {
+        /// Excitation order n held fixed.
+        order: f64,
+        /// Smallest torque amplitude mapped, N·m.
+        torque_min: f64,
+        /// Largest torque amplitude mapped, N·m.
+        torque_max: f64,
     },
 }
 
