@@ -315,6 +315,9 @@ pub struct Hbm {
     /// integration from it (`stability::butcher6_steps`). None below seven coordinates (no tree
     /// route) or where the linearisation fails (then RK4 with Richardson's extrapolation).
     tree_rate: Option<(f64, f64)>,
+    /// The tree route's work arrays (M and B W⁻¹ at the samples, the interpolated series, the
+    /// instants), kept from one monodromy to the next.
+    tree_buffers: [Vec<f64>; 4],
     rhat: DVector<f64>,
     jac: DMatrix<f64>,
     /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
@@ -590,6 +593,7 @@ impl Hbm {
             upsampler: aft::Upsampler::new(opts.stability_samples.max(2)),
             tree_upsampler: None,
             tree_rate,
+            tree_buffers: Default::default(),
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
             gp: DVector::zeros(n * nb),

@@ -286,7 +286,15 @@ impl Hbm {
             .collect();
         // M = C W⁻¹ and B W⁻¹ at the N_t samples (row-major n × n each), and the union of their
         // and A's non-zero patterns over the samples.
-        let (mut m, mut bw) = (vec![0.0; nt * nn], vec![0.0; nt * nn]);
+        // The work arrays are kept between calls (`Hbm::tree_buffers`): fresh ones of this size
+        // are mapped anew by the allocator at every call, and their pages faulted in and zeroed.
+        let [mut m, mut bw, mut raw, mut inst] = std::mem::take(&mut self.tree_buffers);
+        let sized = |v: &mut Vec<f64>, len: usize| {
+            v.clear();
+            v.resize(len, 0.0);
+        };
+        sized(&mut m, nt * nn);
+        sized(&mut bw, nt * nn);
         let (mut a_pat, mut b_pat, mut m_pat) = (vec![false; nn], vec![false; nn], vec![false; nn]);
         for j in 0..nt {
             let abc = &self.samples[j * 3 * nn..(j + 1) * 3 * nn];
@@ -357,7 +365,8 @@ impl Hbm {
         let mut series = vec![0.0; nt];
         let mut spec = vec![Default::default(); self.aft.half_len()];
         let mut up = vec![0.0; ns];
-        let mut raw = vec![0.0; ns * width];
+        // Every entry of `raw` is written below; `inst` only where an instant is read.
+        raw.resize(ns * width, 0.0);
         for e in 0..width {
             for (j, v) in series.iter_mut().enumerate() {
                 *v = if e < na {
@@ -386,7 +395,7 @@ impl Hbm {
         // read two grid instants of the six per step (`BUTCHER6_C`: 1 and 5): those are not
         // factorised.
         let stride = na + nbz + l_count + n;
-        let mut inst = vec![0.0; ns * stride];
+        inst.resize(ns * stride, 0.0);
         let mut s = vec![0.0; nn];
         let read = |j: usize| match scheme {
             TreeScheme::Butcher6 { .. } => BUTCHER6_C.contains(&(j % 6)),
@@ -419,13 +428,18 @@ impl Hbm {
             }
         }
         let system = TreeSystem { n, winv_nz, a_nz, b_nz, pinv, perm, below, na, nbz, l_count };
-        let inst = Instants { values: &inst, stride, ns };
+        let instants = Instants { values: &inst, stride, ns };
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        let phi = if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the processor has AVX2 (detected just above).
-            return Some(unsafe { system.monodromy_avx2(&inst, period, scheme) });
-        }
-        Some(system.monodromy(&inst, period, scheme))
+            unsafe { system.monodromy_avx2(&instants, period, scheme) }
+        } else {
+            system.monodromy(&instants, period, scheme)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let phi = system.monodromy(&instants, period, scheme);
+        self.tree_buffers = [m, bw, raw, inst];
+        Some(phi)
     }
 }
 
