@@ -555,8 +555,15 @@ fn finish(
     };
     let (mut multipliers, schur) = eigen(reduced.clone()).ok_or(HbmError::Eigen { order, dim })?;
     multipliers.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
+    // The dense systems' pair vectors come from a dense LU (`pair_senses`): at their sizes it
+    // costs less than taking the Schur form's factors to complex numbers.
+    let schur = schur.filter(|_| dim > SCHUR_PAIRS_FROM);
     Ok((multipliers, Reduced { matrix: reduced, schur }))
 }
+
+/// Beyond this dimension of the reduced monodromy (the fixed-size dense route's largest, 12)
+/// the pairs' eigenvectors are found on the Schur form.
+const SCHUR_PAIRS_FROM: usize = 12;
 
 /// The reduced monodromy whose eigenvalues are the multipliers, with its real Schur form
 /// `Q T Qᵀ` when nalgebra's converged (T quasi-upper-triangular, so upper Hessenberg).
@@ -948,18 +955,7 @@ fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, period: f64
             }
         }
     }
-    let deriv = |kl: &[[f64; D]], phi: &[[f64; D]; D], out: &mut [[f64; D]; D]| {
-        for i in 0..nh {
-            out[i] = phi[nh + i];
-            let mut o = [0.0; D];
-            for (r, p) in kl[i].iter().zip(phi) {
-                for c in 0..D {
-                    o[c] -= r * p[c];
-                }
-            }
-            out[nh + i] = o;
-        }
-    };
+    let deriv = |kl: &[[f64; D]], phi: &[[f64; D]; D], out: &mut [[f64; D]; D]| fixed_deriv(kl, phi, out);
     let at = |j: usize| {
         let j = if j >= ns { j - ns } else { j };
         &kl[j * nh..(j + 1) * nh]
@@ -979,6 +975,26 @@ fn monodromy_fixed<const D: usize>(sys: &[f64], n: usize, ns: usize, period: f64
         out
     };
     (rk4(1), rk4(2))
+}
+
+/// `out = 𝒜Φ` for [`monodromy_fixed`]: the D/2 rows of `[K | L]` in `kl`.
+///
+/// NOTE: a function marked to be inlined, not the closure's own body, because the compiler
+/// stopped inlining that closure into the RK4 loop when the module around it grew: a call per
+/// derivative on the paper's rotor, measured by callgrind (`BENCHMARKS.md`).
+#[inline(always)]
+fn fixed_deriv<const D: usize>(kl: &[[f64; D]], phi: &[[f64; D]; D], out: &mut [[f64; D]; D]) {
+    let nh = D / 2;
+    for i in 0..nh {
+        out[i] = phi[nh + i];
+        let mut o = [0.0; D];
+        for (r, p) in kl[i].iter().zip(phi) {
+            for c in 0..D {
+                o[c] -= r * p[c];
+            }
+        }
+        out[nh + i] = o;
+    }
 }
 
 /// [`monodromy`] on row-major slices, any size.
@@ -1218,6 +1234,7 @@ mod tests {
             let period = 2.0 * PI / sol.base_frequency;
             let tree = hbm.stability(&sol).unwrap().multipliers;
             let scheme = hbm.tree_scheme(period, sol.omega);
+            println!("n = {order}: |λ|max T = {:.2}, {scheme:?}", hbm.tree_rate.unwrap().0 * period);
             assert_eq!(scheme, TreeScheme::Butcher6 { steps: 64 }, "{pendulums} pendulums at n = {order}");
             let old = hbm.block_multipliers(&all, Some(0), order, period, None).unwrap();
             let _ = dense.stability(&sol).unwrap();
@@ -1448,9 +1465,11 @@ mod tests {
         let flat: Vec<f64> = (0..d).flat_map(|i| (0..d).map(move |j| (i, j))).map(|(i, j)| m[(i, j)]).collect();
         // Read as four coordinates with the fourth angle removed (7 = 2·4 − 1 states), as the
         // cyclic spin angle is.
-        let (multipliers, reduced) = finish(flat, d, None, None, 3.0).unwrap();
+        let (multipliers, dense) = finish(flat, d, None, None, 3.0).unwrap();
+        // Below `SCHUR_PAIRS_FROM` `finish` leaves the Schur form out; here it is put back.
+        assert!(dense.schur.is_none());
+        let reduced = Reduced { matrix: dense.matrix.clone(), schur: eigen(dense.matrix.clone()).unwrap().1 };
         assert!(reduced.schur.is_some());
-        let dense = Reduced { matrix: reduced.matrix.clone(), schur: None };
         let (fast, slow) =
             (pair_senses(&reduced, &multipliers, 4, Some(3)), pair_senses(&dense, &multipliers, 4, Some(3)));
         assert_eq!(fast.len(), 3);
