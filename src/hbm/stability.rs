@@ -1272,15 +1272,15 @@ mod tests {
     /// A stiff mechanism on the tree route: the OpenTorsion marine plant with the README's
     /// pendulum (`examples/opentorsion_marine_cpva.ron`, 7 coordinates), 35.6 rpm, the
     /// propeller's fifth order at 10 % of full-power torque (`python/tests/test_opentorsion.py`).
-    /// Its turbine shafts vibrate far faster than the excitation (|λ|max T ≈ 60), so N_s/4 steps
+    /// Its turbine shafts vibrate far faster than the excitation (|λ|max T ≈ 90–115), so N_s/4 steps
     /// of Butcher's method leave its stability region (taken regardless, every point of this
     /// branch had multipliers of modulus 2.6–8.8). The scheme chosen must be RK4 with
     /// Richardson, and then give what the dense route gives with the same method at the same
     /// N_s (an independent code path: `[K | L] = C⁻¹[A | B]` in full) to 1e-9, every multiplier
     /// inside the unit circle as the tight dense route (N_s = 4096, steps 16× finer) finds them;
     /// Butcher's method forced to N_s/4 steps must be the unstable result this guards against.
-    /// (At N_s = 256 both routes damp the fast shaft modes too much: the tight route's largest
-    /// multipliers differ from theirs by up to ≈ 2 — printed — but the verdict is the same.)
+    /// (At N_s = 256 both routes get the fast shaft modes' multipliers wrong — the moduli are
+    /// printed beside the tight route's — but inside the unit circle, as the tight route's.)
     #[test]
     fn a_stiff_plant_on_the_tree_route_keeps_rk4_and_its_stable_multipliers() {
         let mech =
