@@ -133,6 +133,11 @@ impl Upsampler {
         Self { ns, inv, spec: vec![Complex::default(); ns / 2 + 1], scratch }
     }
 
+    /// The number of output samples N_s.
+    pub fn samples(&self) -> usize {
+        self.ns
+    }
+
     /// Values at the N_s instants of the interpolant of `nt` samples with normalised half
     /// spectrum `f` (as from [`Aft::spectrum`]), into `out`.
     pub fn run(&mut self, f: &[Complex<f64>], nt: usize, out: &mut [f64]) {

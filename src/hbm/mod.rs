@@ -307,6 +307,17 @@ pub struct Hbm {
     rhat_at: Option<(Vec<f64>, At)>,
     /// Trigonometric interpolation from the N_t residual samples to the N_s stability samples.
     upsampler: aft::Upsampler,
+    /// The same to the grid of the tree route's monodromy (`stability::Hbm::tree_monodromy`),
+    /// planned on its first use.
+    tree_upsampler: Option<aft::Upsampler>,
+    /// The largest eigenvalue modulus (1/s) of the mechanism linearised about its steady spin,
+    /// and the speed Ω₀ (rad/s) it was linearised at: the tree route's monodromy chooses its
+    /// integration from it (`stability::butcher6_steps`). None below seven coordinates (no tree
+    /// route) or where the linearisation fails (then RK4 with Richardson's extrapolation).
+    tree_rate: Option<(f64, f64)>,
+    /// The tree route's work arrays (M and B W⁻¹ at the samples, the interpolated series, the
+    /// instants), kept from one monodromy to the next.
+    tree_buffers: [Vec<f64>; 4],
     rhat: DVector<f64>,
     jac: DMatrix<f64>,
     /// ∂R̂/∂p of the last Jacobian assembly, for the parameter it was asked for.
@@ -533,6 +544,16 @@ impl Hbm {
             .filter_map(|j| j.coordinate.filter(|_| !j.couplings.is_empty()).map(|k| (k, j.couplings.clone())))
             .collect();
         let ev = Evaluator::new(kane, speeds, parents, (0..n * n).map(|i| w[(i / n, i % n)]).collect(), g);
+        let tree_rate = if 2 * n > 12 {
+            use crate::linear::{Damping, LinearModel, Spin};
+            LinearModel::new(mech, &mech.joints[spin_joint].name, omega, None)
+                .and_then(|m| m.fastest_rate(Spin::Free, Damping::Damped))
+                .ok()
+                .filter(|r| r.is_finite())
+                .map(|r| (r, omega))
+        } else {
+            None
+        };
         Ok(Self {
             couplings,
             non_unison: Vec::new(),
@@ -570,6 +591,9 @@ impl Hbm {
             samples_at: None,
             rhat_at: None,
             upsampler: aft::Upsampler::new(opts.stability_samples.max(2)),
+            tree_upsampler: None,
+            tree_rate,
+            tree_buffers: Default::default(),
             rhat: DVector::zeros(n * nb),
             jac: DMatrix::zeros(n * nb, n * nb),
             gp: DVector::zeros(n * nb),
