@@ -952,9 +952,7 @@ impl Hbm {
         // The tangent at the start, oriented by the requested direction of the second parameter.
         let mut e_s = DVector::zeros(m + 2);
         e_s[m + 1] = if up { 1.0 } else { -1.0 };
-        walk.central = true;
-        let (mut t, aug) = self.fold_tangent(&y, &mut walk, &e_s)?;
-        walk.central = false;
+        let (mut t, aug) = self.with_central(&mut walk, |h, w| h.fold_tangent(&y, w, &e_s))?;
         (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
         if t[m + 1] * e_s[m + 1] < 0.0 {
             t = -t;
@@ -1010,12 +1008,7 @@ impl Hbm {
             (walk.b, walk.c) = (aug.w.normalize(), aug.v.normalize());
             let chord = (&y_new - &y).norm();
             if t[m + 1] * t_new[m + 1] < 0.0
-                && let Some((p, tl)) = {
-                    walk.central = true;
-                    let found = self.locate_extremum(&y, &t, chord, &mut walk, opts);
-                    walk.central = false;
-                    found
-                }
+                && let Some((p, tl)) = self.with_central(&mut walk, |h, w| h.locate_extremum(&y, &t, chord, w, opts))
             {
                 // At the located point |dσ/dσ_arc| ≤ 1e-10; at a cusp dλ/dσ follows it to zero
                 // (the paper's rotor: 2e-11), elsewhere it stays of order one.
@@ -1063,6 +1056,15 @@ impl Hbm {
         mat[(m, m + 1)] = aug.gs;
         mat.view_mut((m + 1, 0), (1, m + 2)).copy_from(&row.transpose());
         NewtonLu::Whole(mat.lu())
+    }
+
+    /// `f` with the walk's ∂g/∂(x, λ, p) taken by central differences (the exact tangents that
+    /// locate a turning point of the second parameter), the walk's choice restored after.
+    fn with_central<R>(&mut self, walk: &mut Walk, f: impl FnOnce(&mut Self, &mut Walk) -> R) -> R {
+        let before = std::mem::replace(&mut walk.central, true);
+        let r = f(self, walk);
+        walk.central = before;
+        r
     }
 
     /// The unit tangent of the fold curve at y, oriented along `row`.

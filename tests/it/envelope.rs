@@ -208,7 +208,6 @@ fn the_speed_plane_envelope_is_made_of_speed_branch_folds() {
 fn the_unison_loss_boundary_meets_the_jump_boundary() {
     use crate::support::cpva_hbm::omega;
     use kanedyn::cpva::CpvaParams;
-    use kanedyn::hbm::BifurcationClass;
     use kanedyn::kane::Kane;
     let text = "Study(name: \"meet\", mechanism: \"cpva2.ron\", spin_joint: \"spin\", response_body: \"rotor\",\n\
                 analyses: [Envelope(name: \"envelope\", rpm: 1000.0, order_min: 2.6, order_max: 3.3, torque_min: 1.0, \
@@ -229,20 +228,7 @@ fn the_unison_loss_boundary_meets_the_jump_boundary() {
         let mut hbm = Hbm::new(&kane, 0, omega(), &single(torque), HbmOptions::default()).unwrap();
         let copts = ContinuationOptions { ds_max: 1e-4, ds: 1e-4, ..Default::default() };
         let b = hbm.continue_in_order(meet.value - 0.01, meet.value + 0.01, None, &copts).unwrap();
-        assert_eq!(b.folds.len(), 1, "{torque} N·m: {:?}", b.folds);
-        let fold = &b.folds[0];
-        let bp = b
-            .bifurcations
-            .iter()
-            .filter(|x| x.class == BifurcationClass::BranchPoint)
-            .min_by(|x, y| (x.order - fold.order).abs().total_cmp(&(y.order - fold.order).abs()))
-            .expect("a branch point");
-        println!(
-            "{torque} N·m: fold {} after {}, branch point {} after {}",
-            fold.order, fold.after, bp.order, bp.after
-        );
-        assert_ne!(bp.after, fold.after, "{torque} N·m: the step does not separate them");
-        (fold.order, bp.after < fold.after)
+        crate::support::two_pendulums::fold_and_side_of_branch_point(&b, &format!("{torque} N·m"))
     };
     let t = meet.second_value;
     let (n_fold, _) = {

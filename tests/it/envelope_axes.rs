@@ -300,7 +300,6 @@ fn the_order_damping_period_doubling_limit_agrees_with_order_branches() {
 /// of it along the branch.
 #[test]
 fn the_unison_loss_boundary_meets_the_jump_boundary_on_a_rotor_inertia_plane() {
-    use kanedyn::hbm::BifurcationClass;
     let text = r#"Study(name: "meetj", mechanism: "cpva2.ron", spin_joint: "spin", response_body: "rotor",
         analyses: [Envelope(name: "envelope", rpm: 1000.0, order_min: 2.6, order_max: 3.3, torque: 1000.0,
                             parameter: (name: "J", quantity: BodyInertia("rotor"), from: 1.5, to: 30.0))])"#;
@@ -327,15 +326,12 @@ fn the_unison_loss_boundary_meets_the_jump_boundary_on_a_rotor_inertia_plane() {
         let mut hbm = Hbm::new(&kane, 0, rpm_to_rad_s(1000.0), &h, HbmOptions::default()).unwrap();
         let copts = ContinuationOptions { ds_max: ds, ds, ..Default::default() };
         let b = hbm.continue_in_order(window.0, window.1, None, &copts).unwrap();
-        assert_eq!(b.folds.len(), 1, "J = {j}: {:?}", b.folds);
-        let fold = &b.folds[0];
-        let bp = b
-            .bifurcations
-            .iter()
-            .filter(|x| x.class == BifurcationClass::BranchPoint)
-            .min_by(|x, y| (x.order - fold.order).abs().total_cmp(&(y.order - fold.order).abs()))
-            .map_or(fold.after, |x| x.after);
-        (fold.order, bp < fold.after)
+        if ds > 1e-4 {
+            // At the meeting itself only the fold is asked for (the branch point sits on it).
+            assert_eq!(b.folds.len(), 1, "J = {j} kg·m²: {:?}", b.folds);
+            return (b.folds[0].order, false);
+        }
+        crate::support::two_pendulums::fold_and_side_of_branch_point(&b, &format!("J = {j} kg·m²"))
     };
     let (n_fold, _) = events(meet.second_value, 1e-3);
     println!("fold at the meeting inertia: {n_fold}");
