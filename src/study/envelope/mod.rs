@@ -912,16 +912,18 @@ pub(crate) fn compute(study: &Study, spec: &EnvelopeSpec) -> Result<(EnvelopeRes
         let par = spec.parameter.as_ref().ok_or_else(|| HbmError::Invalid("no mechanism parameter".into()))?;
         // The speed's problems share the study's mechanism; a mechanism parameter's are at the
         // map's speed.
+        let rebuilt;
         let (k, omega) = if spec.speed_is_second() {
-            (kane.clone(), p)
+            (&kane, p)
         } else {
             let mech = mechanism_at(study, par, p).map_err(|e| HbmError::Invalid(e.to_string()))?;
-            (Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?, ax.omega)
+            rebuilt = Kane::new(&mech).map_err(|e| HbmError::Invalid(format!("{} = {p}: {e}", par.name)))?;
+            (&rebuilt, ax.omega)
         };
         let r = if general {
-            RoutedHbm::new_general(&k, study.spin, omega, forcing, &inputs, opts)?
+            RoutedHbm::new_general(k, study.spin, omega, forcing, &inputs, opts)?
         } else {
-            RoutedHbm::new(&k, study.spin, omega, forcing, &inputs, opts)?
+            RoutedHbm::new(k, study.spin, omega, forcing, &inputs, opts)?
         };
         Ok(r.hbm().clone())
     };
