@@ -145,6 +145,7 @@ impl Model {
             tree: None,
             star: false,
             fast_star: None,
+            fast_axial: None,
             articulated: false,
             roller_of: None,
             n,
@@ -175,6 +176,7 @@ impl Model {
         k.roller_of = k.rollers_by_body();
         k.articulated = k.articulated_choice();
         k.fast_star = k.star_rhs();
+        k.fast_axial = k.axial_rhs();
         Ok((k, ws))
     }
 

@@ -106,6 +106,7 @@ macro_rules! with_literal_n {
 // The forms live in their own files; declared after the macro above so they can use it.
 pub mod absolute;
 pub mod articulated;
+mod axial;
 mod build;
 pub mod couplings;
 pub mod kinematics;
@@ -288,6 +289,9 @@ pub struct Model {
     /// The packed constants of the one-pass right-hand side of a rotor carrying leaves
     /// ([`star`]), used while `tree` is kept and the articulated route is not forced.
     fast_star: Option<star::Star>,
+    /// The constants of the one-pass right-hand side of bodies on one axis carrying leaves
+    /// ([`axial`]), taken where `fast_star` is not.
+    fast_axial: Option<axial::Axial>,
     /// True when the right-hand side takes the articulated-body route ([`articulated`]),
     /// which never forms M; it then ignores `tree`.
     articulated: bool,
@@ -410,6 +414,7 @@ impl Kane {
         let model = self.model_mut();
         model.tree = None;
         model.articulated = false;
+        model.fast_axial = None;
     }
 
     /// True when the right-hand side takes the one-pass evaluation and solve of a rotor carrying
@@ -418,15 +423,16 @@ impl Kane {
     /// no gravity, point forces or couplings); [`Kane::use_dense_factorisation`] and
     /// [`Kane::use_articulated_bodies`] turn it off.
     pub fn solves_rotor_and_leaves(&self) -> bool {
-        let m = &self.model;
-        m.fast_star.is_some() && m.tree.is_some() && !m.articulated
+        self.model.fast_star.is_some() && self.model.solves_star()
     }
 
     /// Makes the right-hand side form M and solve it along the tree ([`crate::kane::tree`])
     /// where it would take the articulated-body route (for checks and benchmarks of the routes
     /// against each other); the dense LDLᵀ where the tree's factorisation does not pay.
     pub fn use_mass_matrix(&mut self) {
-        self.model_mut().articulated = false;
+        let model = self.model_mut();
+        model.articulated = false;
+        model.fast_axial = None;
     }
 
     /// Makes the right-hand side take the articulated-body route ([`crate::kane::articulated`])
@@ -437,8 +443,21 @@ impl Kane {
         if !self.model.articulated_applies() {
             return false;
         }
-        self.model_mut().articulated = true;
+        let model = self.model_mut();
+        model.articulated = true;
+        model.fast_axial = None;
         true
+    }
+
+    /// True when the right-hand side takes the one-pass evaluation and solve of bodies on one
+    /// axis carrying leaves ([`crate::kane`]'s `axial` form: the pair form, every inertial
+    /// coupling between a body and a leaf pivoted off its axis, as on an elastic crankshaft with
+    /// pendulums; chosen at build where the rotor-and-leaves pass does not apply);
+    /// [`Kane::use_dense_factorisation`], [`Kane::use_mass_matrix`] and
+    /// [`Kane::use_articulated_bodies`] turn it off.
+    pub fn solves_axial(&self) -> bool {
+        let m = &self.model;
+        m.fast_axial.is_some() && !m.solves_star()
     }
 
     /// True when the right-hand side solves by the articulated-body algorithm
@@ -641,6 +660,11 @@ impl Model {
         !self.couplings.is_empty()
     }
 
+    /// True when the rotor-and-leaves pass ([`star`]) serves the right-hand side, if built.
+    fn solves_star(&self) -> bool {
+        self.fast_star.is_some() && !self.articulated && self.tree.is_some()
+    }
+
     /// True when `Model::residual_jacobian` applies: absolute angular velocities on a tree of
     /// revolute joints (the pair form), no gravity, no point forces.
     pub fn has_residual_jacobian(&self) -> bool {
@@ -666,8 +690,10 @@ impl Model {
         self.check_lengths(x, xdot)?;
         // NOTE: dispatched on n itself (not on a copy of it), for the same reason.
         let n = self.n;
-        let out = if let Some(star) = self.fast_star.as_ref().filter(|_| !self.articulated && self.tree.is_some()) {
+        let out = if let Some(star) = self.fast_star.as_ref().filter(|_| self.solves_star()) {
             self.rhs_star(star, ws, t, x, xdot)
+        } else if let Some(ax) = &self.fast_axial {
+            self.rhs_axial(ax, ws, t, x, xdot)
         } else if self.articulated {
             self.rhs_articulated(ws, t, x, xdot)
         } else if self.nb == n {
