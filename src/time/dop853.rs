@@ -5,11 +5,11 @@
 //! of our own: see the module doc of `integrate`.
 
 use crate::error::EngineError;
+use crate::time::dp8::{Dp8, Outcome};
 use crate::time::run::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
-use differential_equations::interpolate::Interpolation;
 use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
 use differential_equations::ode::{ODE, OrdinaryNumericalMethod};
-use differential_equations::status::Status;
+use differential_equations::tolerance::Tolerance;
 use differential_equations::traits::State;
 use std::cell::{Cell, RefCell};
 
@@ -44,6 +44,118 @@ impl<const N: usize> Slab for [f64; N] {
     }
 }
 
+/// A fixed-size state whose vector operations the crate's DOP853 step inlines.
+///
+/// NOTE: the crate's `[f64; N]` state forms every stage term by an out-of-line `add_scaled`
+/// (assert, loop, return): about 200 calls per step, 31 % of the 16-disk shaft's 60 s sweep
+/// (34 states; BENCHMARKS.md, "Stiff shafts"). The same element-wise operations written here
+/// `#[inline(always)]` give the same bits (the error norm's sum runs in the same order) without
+/// the calls. Used for the longer states only, so the small mechanisms' runs are as before.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Stages<const N: usize>([f64; N]);
+
+impl<const N: usize> State<f64> for Stages<N> {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        N
+    }
+    #[inline(always)]
+    fn get_component(&self, index: usize) -> f64 {
+        self.0[index]
+    }
+    #[inline(always)]
+    fn set_component(&mut self, index: usize, value: f64) {
+        self.0[index] = value;
+    }
+    #[inline(always)]
+    fn map_components_mut<F: FnMut(usize, &mut f64)>(&mut self, mut f: F) {
+        for (i, v) in self.0.iter_mut().enumerate() {
+            f(i, v);
+        }
+    }
+    #[inline(always)]
+    fn zeros_like(&self) -> Self {
+        Self([0.0; N])
+    }
+    #[inline(always)]
+    fn zeros() -> Self {
+        Self([0.0; N])
+    }
+    #[inline(always)]
+    fn mul_add_assign(&mut self, alpha: f64, other: &Self) {
+        for (s, o) in self.0.iter_mut().zip(&other.0) {
+            *s += alpha * *o;
+        }
+    }
+    #[inline(always)]
+    fn scale_mut(&mut self, alpha: f64) {
+        for s in &mut self.0 {
+            *s *= alpha;
+        }
+    }
+    #[inline(always)]
+    fn add_scaled(&mut self, alpha: f64, other: &Self) -> &mut Self {
+        self.mul_add_assign(alpha, other);
+        self
+    }
+    #[inline(always)]
+    fn scale_by(&mut self, alpha: f64) -> &mut Self {
+        self.scale_mut(alpha);
+        self
+    }
+    #[inline(always)]
+    fn fill(&mut self, value: f64) {
+        self.0 = [value; N];
+    }
+    #[inline(always)]
+    fn copy_from_state(&mut self, other: &Self) {
+        self.0 = other.0;
+    }
+    #[inline(always)]
+    fn plus_scaled(&self, alpha: f64, other: &Self) -> Self {
+        let mut out = *self;
+        out.mul_add_assign(alpha, other);
+        out
+    }
+    #[inline(always)]
+    fn minus(&self, other: &Self) -> Self {
+        self.plus_scaled(-1.0, other)
+    }
+    #[inline(always)]
+    fn diff_norm_squared(&self, other: &Self) -> f64 {
+        self.0.iter().zip(&other.0).fold(0.0, |sum, (a, b)| {
+            let d = *a - *b;
+            sum + d * d
+        })
+    }
+    #[inline(always)]
+    fn error_norm(&self, y_new: &Self, err: &Self, atol: &Tolerance<f64>, rtol: &Tolerance<f64>) -> f64 {
+        // Hairer's weighted sum of squares, `Σ (err_i / (atol_i + rtol_i max(|y_i|, |y_new,i|)))²`,
+        // summed in index order.
+        let mut sum = 0.0;
+        for i in 0..N {
+            let sk = atol[i] + rtol[i] * self.0[i].abs().max(y_new.0[i].abs());
+            let e = err.0[i] / sk;
+            sum += e * e;
+        }
+        sum
+    }
+}
+
+impl<const N: usize> Slab for Stages<N> {
+    fn from_slice(x: &[f64]) -> Self {
+        let mut a = [0.0; N];
+        a.copy_from_slice(x);
+        Self(a)
+    }
+    fn slice(&self) -> &[f64] {
+        &self.0
+    }
+    fn slice_mut(&mut self) -> &mut [f64] {
+        &mut self.0
+    }
+}
+
 impl Slab for Vec<f64> {
     fn from_slice(x: &[f64]) -> Self {
         x.to_vec()
@@ -71,6 +183,9 @@ pub(super) struct System<'a> {
     pub(super) evals: Cell<usize>,
     pub(super) fault: RefCell<Option<Fault>>,
     recent: RefCell<Recent>,
+    /// Whether evaluations are kept in `recent` (the start's, the implicit method's); the DOP853
+    /// steps hand their end derivative over themselves ([`Dp8::fsal`]).
+    keep: Cell<bool>,
 }
 
 impl<'a> System<'a> {
@@ -80,13 +195,13 @@ impl<'a> System<'a> {
             evals: Cell::new(0),
             fault: RefCell::new(None),
             recent: RefCell::new(Recent::new(n)),
+            keep: Cell::new(true),
         }
     }
 }
 
-/// The last four derivative evaluations `(t, ẋ)`, oldest overwritten first. An accepted DOP853
-/// step ends with f(t_new, x_new) (FSAL) followed by exactly three dense-output stages, so the
-/// derivative at the step's end is the fourth-latest entry; [`dense_sample`] needs it.
+/// The last four derivative evaluations kept `(t, ẋ)` (`System::keep`), oldest overwritten
+/// first: f(t0, x0) at the start, which the crate's `init` evaluates last.
 struct Recent {
     t: [f64; 4],
     xdot: [Vec<f64>; 4],
@@ -126,10 +241,11 @@ impl<Y: Slab> ODE<f64, Y> for System<'_> {
             Ok(()) if !out.iter().all(|v| v.is_finite()) => Some(Fault::NonFinite { t }),
             Ok(()) => None,
         };
+        // NOTE: the DOP853 stages are not copied (3 % of the 16-disk shaft's sweep).
         if fault.is_some() {
             out.fill(f64::NAN);
             *self.fault.borrow_mut() = fault;
-        } else {
+        } else if self.keep.get() {
             self.recent.borrow_mut().push(t, out);
         }
     }
@@ -211,7 +327,7 @@ impl Sampler<'_> {
 /// point: `P(s) = P_crate(1 − s) + A(s) − A(1 − s) = P_crate(1 − s) + (2s − 1)(c1 + s·s1·c3)`, with
 /// `c1 = y − y_prev` and `c3 = 2c1 − h(f_prev + f)` from the derivatives at the step's two ends.
 pub(crate) fn dense_sample<Y: Slab>(
-    solver: &mut Dop853<Y>,
+    solver: &Dp8<Y>,
     f_prev: &[f64],
     f: &[f64],
     tk: f64,
@@ -222,7 +338,7 @@ pub(crate) fn dense_sample<Y: Slab>(
     let s = ((tk - t0) / h).clamp(0.0, 1.0);
     let s1 = 1.0 - s;
     let mirror = (t0 + s1 * h).clamp(t0, t1);
-    let crate_value = solver.interpolate(mirror).map_err(|e| format!("{e:?}"))?;
+    let crate_value = solver.interpolate(mirror)?;
     let (y0, y1, p) = (solver.y_prev().slice(), solver.y().slice(), crate_value.slice());
     for i in 0..out.len() {
         let c1 = y1[i] - y0[i];
@@ -275,7 +391,10 @@ pub(crate) fn run<Y: Slab>(
     }
     // init ends with f(t0, x0).
     end_derivative(&sys, 1, t0, x0, &mut f_prev).map_err(|f| fail(f, t0, with_evals(stats)))?;
-    solver.set_status(Status::Solving);
+    // The steps from here are our own (`dp8`): the crate's, with the dense output formed only
+    // where a sample falls; they hand over their end derivative themselves.
+    let mut solver = Dp8::after_init(&solver, Y::from_slice(&f_prev));
+    sys.keep.set(false);
     if clock.due(t0).is_some() {
         sampler.deliver(&sys, &mut stats, 0, t0, x0).map_err(|f| fail(f, t0, with_evals(stats)))?;
         clock.next = 1;
@@ -325,24 +444,27 @@ pub(crate) fn run<Y: Slab>(
             {
                 travel_retries += 1;
                 travel_fault = Some(fault);
-                solver.set_status(Status::RejectedStep);
+                solver.set_rejected();
                 solver.set_h(0.25 * h);
                 continue;
             }
             return Err(fail(fault, t, with_evals(stats)));
         }
         (travel_retries, travel_fault) = (0, None);
-        if let Err(e) = res {
-            let stats = with_evals(stats);
-            use differential_equations::error::Error as E;
-            return Err(match e {
-                E::MaxSteps { .. } => IntegrateError::MaxSteps { max_steps: opts.max_steps, t_reached: t, stats },
-                E::StepSize { .. } => IntegrateError::StepSizeUnderflow { t_reached: t, h, stats },
-                E::Stiffness { .. } => IntegrateError::Stiff { t_reached: t, stats },
-                other => IntegrateError::Solver { message: format!("{other:?}"), t_reached: t, stats },
-            });
-        }
-        if matches!(solver.status(), Status::RejectedStep) {
+        let outcome = match res {
+            Ok(o) => o,
+            Err(e) => {
+                let stats = with_evals(stats);
+                use differential_equations::error::Error as E;
+                return Err(match e {
+                    E::MaxSteps { .. } => IntegrateError::MaxSteps { max_steps: opts.max_steps, t_reached: t, stats },
+                    E::StepSize { .. } => IntegrateError::StepSizeUnderflow { t_reached: t, h, stats },
+                    E::Stiffness { .. } => IntegrateError::Stiff { t_reached: t, stats },
+                    other => IntegrateError::Solver { message: format!("{other:?}"), t_reached: t, stats },
+                });
+            }
+        };
+        if outcome == Outcome::Rejected {
             stats.rejected += 1;
             continue;
         }
@@ -357,11 +479,14 @@ pub(crate) fn run<Y: Slab>(
             });
         }
         if clock.due(t_new).is_some() {
-            // FSAL evaluation, then the three dense-output stages.
-            end_derivative(&sys, 4, t_new, solver.y().slice(), &mut f_end)
-                .map_err(|f| fail(f, t, with_evals(stats)))?;
+            f_end.copy_from_slice(solver.fsal().slice());
+            // The three dense-output stages, for this step's samples.
+            solver.dense(&sys);
+            if let Some(fault) = sys.fault.borrow_mut().take() {
+                return Err(fail(fault, t_new, with_evals(stats)));
+            }
             while let Some(tk) = clock.due(t_new) {
-                dense_sample(&mut solver, &f_prev, &f_end, tk, &mut xk).map_err(|message| IntegrateError::Solver {
+                dense_sample(&solver, &f_prev, &f_end, tk, &mut xk).map_err(|message| IntegrateError::Solver {
                     message,
                     t_reached: t_new,
                     stats: with_evals(stats),
@@ -373,8 +498,7 @@ pub(crate) fn run<Y: Slab>(
             }
             std::mem::swap(&mut f_prev, &mut f_end);
         } else {
-            end_derivative(&sys, 4, t_new, solver.y().slice(), &mut f_prev)
-                .map_err(|f| fail(f, t, with_evals(stats)))?;
+            f_prev.copy_from_slice(solver.fsal().slice());
         }
     }
     // Samples at t1 that rounding put a hair beyond the last step take the final state.

@@ -61,12 +61,19 @@ where
     let rhs: &mut DynRhs = &mut rhs;
     let on_sample: &mut dyn FnMut(&Sample<'_>) = &mut on_sample;
     macro_rules! dispatch {
-        ($($n:literal)*) => {
+        ($($n:literal)*; $($e:literal)*) => {
             match x0.len() {
                 $($n => match opts.method {
                     Method::Dop853 => run::<[f64; $n]>(rhs, x0, t0, t1, opts, on_sample),
                     Method::Radau5 => crate::time::radau::run::<[f64; $n]>(rhs, x0, t0, t1, opts, on_sample),
                 },)*
+                // NOTE: a mechanism's state is [q; u], of even length: DOP853 on fixed-size states
+                // up to 33 coordinates too (a 16-disk shaft with a pendulum, 32 pendulums), where
+                // the crate's per-stage clones of a `Vec` state were 16 % of a sweep's time and its
+                // out-of-line stage sums another 31 % (BENCHMARKS.md, "Stiff shafts"); the
+                // implicit method keeps its dynamic state there (its step is dominated by its
+                // linear algebra).
+                $($e if opts.method == Method::Dop853 => run::<crate::time::dop853::Stages<$e>>(rhs, x0, t0, t1, opts, on_sample),)*
                 _ => match opts.method {
                     Method::Dop853 => run::<Vec<f64>>(rhs, x0, t0, t1, opts, on_sample),
                     Method::Radau5 => crate::time::radau::run::<crate::time::radau::DynState>(rhs, x0, t0, t1, opts, on_sample),
@@ -74,7 +81,7 @@ where
             }
         };
     }
-    dispatch!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+    dispatch!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16; 18 20 22 24 26 28 30 32 34 36 38 40 42 44 46 48 50 52 54 56 58 60 62 64 66)
 }
 
 fn check_input(x0: &[f64], t0: f64, t1: f64, opts: &IntegrateOptions) -> Result<(), IntegrateError> {

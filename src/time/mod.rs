@@ -6,6 +6,7 @@
 //! gives (`run.rs`, re-exported by [`integrate`]).
 
 mod dop853;
+mod dp8;
 pub mod drive_laws;
 pub mod integrate;
 pub mod probe;
