@@ -34,11 +34,18 @@ pub(crate) enum Outcome {
 /// DOP853 stepped by hand (see the module doc).
 pub(crate) struct Dp8<Y: Slab> {
     c: [f64; I],
-    a: [[f64; I]; I],
-    b: [f64; S],
-    bh: [f64; S],
-    er: [f64; S],
-    bi: [[f64; I]; I],
+    /// The tableau's non-zero coefficients, `(stage, coefficient)`: the stage sums of row i of
+    /// A, the solution's weights, the error estimators' and the dense output's rows.
+    ///
+    /// NOTE: a term with a zero coefficient adds ±0 to every entry, which changes no value (at
+    /// most the sign of a zero): DOP853's tableau is a third zeros (stages 2–5 feed neither the
+    /// solution nor most later stages), and skipping them was a quarter of the step's and the
+    /// dense output's arithmetic on 32 pendulums (BENCHMARKS.md, "Stiff shafts").
+    a: Vec<Vec<(usize, f64)>>,
+    b: Vec<(usize, f64)>,
+    bh: Vec<(usize, f64)>,
+    er: Vec<(usize, f64)>,
+    bi: Vec<Vec<(usize, f64)>>,
     rtol: Tolerance<f64>,
     atol: Tolerance<f64>,
     h_min: f64,
@@ -73,13 +80,15 @@ impl<Y: Slab> Dp8<Y> {
     pub(crate) fn after_init(solver: &Dop853<Y>, f0: Y) -> Self {
         let tab = ButcherTableau::<f64, S, I>::dop853();
         let zero = solver.y().zeros_like();
+        let nz = |row: &[f64]| row.iter().copied().enumerate().filter(|&(_, v)| v != 0.0).collect::<Vec<_>>();
+        let bi = tab.bi.expect("DOP853 has a dense output");
         Self {
             c: tab.c,
-            a: tab.a,
-            b: tab.b,
-            bh: tab.bh.expect("DOP853 has a lower-order solution"),
-            er: tab.er.expect("DOP853 has an error estimator"),
-            bi: tab.bi.expect("DOP853 has a dense output"),
+            a: (0..I).map(|i| nz(&tab.a[i][..i])).collect(),
+            b: nz(&tab.b),
+            bh: nz(&tab.bh.expect("DOP853 has a lower-order solution")),
+            er: nz(&tab.er.expect("DOP853 has an error estimator")),
+            bi: bi.iter().map(|row| nz(row)).collect(),
             rtol: solver.rtol.clone(),
             atol: solver.atol.clone(),
             h_min: solver.h_min,
@@ -150,27 +159,27 @@ impl<Y: Slab> Dp8<Y> {
         let mut y_stage = self.y.zeros_like();
         for i in 1..S {
             y_stage = self.y.clone();
-            for j in 0..i {
-                y_stage.add_scaled(self.a[i][j] * h, &self.k[j]);
+            for &(j, a) in &self.a[i] {
+                y_stage.add_scaled(a * h, &self.k[j]);
             }
             ode.diff(t + self.c[i] * h, &y_stage, &mut self.k[i]);
         }
         let ysti = y_stage;
         let mut yseg = self.y.zeros_like();
-        for i in 0..S {
-            yseg.add_scaled(self.b[i], &self.k[i]);
+        for &(i, b) in &self.b {
+            yseg.add_scaled(b, &self.k[i]);
         }
         let y_new = self.y.plus_scaled(h, &yseg);
         let t_new = t + h;
         let n = self.y.len();
         let mut err_state = self.y.zeros_like();
-        for (j, e) in self.er.iter().enumerate() {
-            err_state.add_scaled(*e, &self.k[j]);
+        for &(j, e) in &self.er {
+            err_state.add_scaled(e, &self.k[j]);
         }
         let mut err = self.y.error_norm(&y_new, &err_state, &self.atol, &self.rtol);
         let mut err2_state = yseg.clone();
-        for (j, e) in self.bh.iter().enumerate() {
-            err2_state.add_scaled(-*e, &self.k[j]);
+        for &(j, e) in &self.bh {
+            err2_state.add_scaled(-e, &self.k[j]);
         }
         let err2 = self.y.error_norm(&y_new, &err2_state, &self.atol, &self.rtol);
         let mut deno = err + 0.01 * err2;
@@ -241,15 +250,15 @@ impl<Y: Slab> Dp8<Y> {
         self.k[S] = self.fsal.clone();
         for i in S + 1..I {
             let mut y_stage = self.y_prev.clone();
-            for j in 0..i {
-                y_stage.add_scaled(self.a[i][j] * h, &self.k[j]);
+            for &(j, a) in &self.a[i] {
+                y_stage.add_scaled(a * h, &self.k[j]);
             }
             ode.diff(t + self.c[i] * h, &y_stage, &mut self.k[i]);
         }
         for i in 4..8 {
             self.cont[i].fill(0.0);
-            for j in 0..I {
-                self.cont[i].add_scaled(self.bi[i][j], &self.k[j]);
+            for &(j, b) in &self.bi[i] {
+                self.cont[i].add_scaled(b, &self.k[j]);
             }
             self.cont[i].scale_by(h);
         }
