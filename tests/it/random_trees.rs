@@ -951,6 +951,20 @@ fn star_spec(seed: u64, n: usize) -> MechanismSpec {
             loads.push(LoadSpec::GroundDamper { body: name(i), c: rng.random_range(0.0..1.0) });
         }
     }
+    swept(format!("star{seed}"), bodies, joints, loads, "j0", &format!("j{}", n / 2))
+}
+
+/// A mechanism in absolute speeds without gravity from its parts, with an order sweep's torque
+/// (n 2.9–3.3 over 60 s, 40 N·m at 1000 rpm, mean 3 N·m) on joint `swept` and a constant 0.7 N·m
+/// on joint `held`.
+fn swept(
+    name: String,
+    bodies: Vec<BodySpec>,
+    joints: Vec<JointSpec>,
+    mut loads: Vec<LoadSpec>,
+    swept: &str,
+    held: &str,
+) -> MechanismSpec {
     let harmonic = Excitation {
         mean: 3.0,
         rpm: 1000.0,
@@ -958,11 +972,11 @@ fn star_spec(seed: u64, n: usize) -> MechanismSpec {
         harmonics: vec![Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.3 }],
         ramp_s: 0.0,
     };
-    loads.push(LoadSpec::JointTorque { joint: "j0".into(), excitation: harmonic });
-    loads.push(LoadSpec::JointTorque { joint: format!("j{}", n / 2), excitation: Excitation::constant(0.7) });
+    loads.push(LoadSpec::JointTorque { joint: swept.into(), excitation: harmonic });
+    loads.push(LoadSpec::JointTorque { joint: held.into(), excitation: Excitation::constant(0.7) });
     MechanismSpec {
         base: None,
-        name: format!("star{seed}"),
+        name,
         speeds: Speeds::AbsoluteAngularVelocities,
         gravity: (0.0, 0.0),
         bodies,
@@ -1092,35 +1106,16 @@ fn axial_tree(seed: u64, disks: usize, leaves: usize, chain: bool) -> MechanismS
             loads.push(LoadSpec::GroundDamper { body: b.name.clone().unwrap(), c: rng.random_range(0.0..1.0) });
         }
     }
-    let harmonic = Excitation {
-        mean: 3.0,
-        rpm: 1000.0,
-        order: Order::Sweep { from: 2.9, to: 3.3, duration_s: 60.0 },
-        harmonics: vec![Harmonic { multiple: 1.0, amplitude: 40.0, phase: 0.3 }],
-        ramp_s: 0.0,
-    };
-    loads.push(LoadSpec::JointTorque { joint: "s0".into(), excitation: harmonic });
-    loads.push(LoadSpec::JointTorque { joint: "pj0".into(), excitation: Excitation::constant(0.7) });
-    MechanismSpec {
-        base: None,
-        name: format!("axial{seed}"),
-        speeds: Speeds::AbsoluteAngularVelocities,
-        gravity: (0.0, 0.0),
-        bodies,
-        joints,
-        loads,
-        gears: Vec::new(),
-    }
+    swept(format!("axial{seed}"), bodies, joints, loads, "s0", "pj0")
 }
 
 /// Issue 30: the one-pass right-hand side of bodies on one axis carrying leaves (`kane::axial`)
 /// against the dense LDLᵀ and the articulated-body route, on random trees of 3–40 disks with
 /// 1–8 leaves (branched, leaves with and without a disk of their own) and on chains of 6–21
 /// disks with a pendulum at the end (the chain's vector pass, every remainder of its four-body
-/// rounds): q̇ equal to
-/// the bit (the same subtraction), u̇ within 1e-12 of its largest entry (the routes sum in
-/// different orders, and rounding grows with M's condition), at random states with angles of
-/// any size.
+/// rounds): q̇ equal to the bit (the same subtraction), u̇ within 1e-12 of its largest entry (the
+/// routes sum in different orders, and rounding grows with M's condition), at random states with
+/// angles of any size.
 #[test]
 fn the_axial_pass_equals_the_dense_factorisation_and_the_articulated_route() {
     let mut worst: f64 = 0.0;
