@@ -1,8 +1,9 @@
-//! The DOP853 driver loop behind [`crate::time::integrate::integrate`]: the crate's
-//! `init`/`step`/`interpolate` stepped by hand, with the right-hand side's errors and non-finite
-//! values caught between steps, the step counters kept on failure, and the fixed-rate sampler
-//! over the step's dense output (with the interpolant correction of [`dense_sample`]). Why a loop
-//! of our own: see the module doc of `integrate`.
+//! The DOP853 driver loop behind [`crate::time::integrate::integrate`]: the crate's `init`,
+//! then the steps of [`super::dp8`] (the crate's step with the dense output formed only where a
+//! sample falls), with the right-hand side's errors and non-finite values caught between steps,
+//! the step counters kept on failure, and the fixed-rate sampler over the step's dense output
+//! (with the interpolant correction of [`dense_sample`]). Why a loop of our own: see the module
+//! doc of `integrate`.
 
 use crate::error::EngineError;
 use crate::time::dp8::{Dp8, Outcome};

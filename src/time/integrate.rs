@@ -24,7 +24,9 @@
 //! Why a driver loop of our own around the crate's `init`/`step`/`interpolate` instead of its
 //! `IVP::solve`: `solve` keeps a `Solution` and drops the step statistics when it fails, its ODE
 //! trait cannot report an error from the right-hand side, and it clones the state twice per step.
-//! The loop (private module `driver`) is the crate's `solve_ode` minus those three things.
+//! The loop (private module `dop853`) is the crate's `solve_ode` minus those three things; its
+//! steps (private module `dp8`) are the crate's, with the dense output formed only for the steps
+//! a sample falls in.
 
 pub use crate::time::run::{
     IntegrateError, IntegrateOptions, IntegrateStats, Integrated, IntegratorChoice, Method, Sample,
