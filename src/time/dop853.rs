@@ -184,8 +184,8 @@ pub(super) struct System<'a> {
     pub(super) evals: Cell<usize>,
     pub(super) fault: RefCell<Option<Fault>>,
     recent: RefCell<Recent>,
-    /// Whether evaluations are kept in `recent` (the start's, the implicit method's); the DOP853
-    /// steps hand their end derivative over themselves ([`Dp8::fsal`]).
+    /// Whether evaluations are kept in `recent`: only during the crate's `init` (the DOP853 steps
+    /// hand their end derivative over themselves, [`Dp8::fsal`]; the implicit route reads none).
     keep: Cell<bool>,
 }
 
@@ -196,35 +196,31 @@ impl<'a> System<'a> {
             evals: Cell::new(0),
             fault: RefCell::new(None),
             recent: RefCell::new(Recent::new(n)),
-            keep: Cell::new(true),
+            keep: Cell::new(false),
         }
     }
 }
 
-/// The last four derivative evaluations kept `(t, ẋ)` (`System::keep`), oldest overwritten
-/// first: f(t0, x0) at the start, which the crate's `init` evaluates last.
+/// The last derivative evaluation kept `(t, ẋ)` (`System::keep`): f(t0, x0), which the crate's
+/// `init` evaluates last.
 struct Recent {
-    t: [f64; 4],
-    xdot: [Vec<f64>; 4],
-    count: usize,
+    t: f64,
+    xdot: Vec<f64>,
 }
 
 impl Recent {
     fn new(n: usize) -> Self {
-        Self { t: [f64::NAN; 4], xdot: std::array::from_fn(|_| vec![0.0; n]), count: 0 }
+        Self { t: f64::NAN, xdot: vec![0.0; n] }
     }
 
     fn push(&mut self, t: f64, xdot: &[f64]) {
-        let i = self.count % 4;
-        self.t[i] = t;
-        self.xdot[i].copy_from_slice(xdot);
-        self.count += 1;
+        self.t = t;
+        self.xdot.copy_from_slice(xdot);
     }
 
-    /// The entry `back` evaluations ago (1 = latest), if it was at time `t`.
-    fn at(&self, back: usize, t: f64) -> Option<&[f64]> {
-        let i = self.count.checked_sub(back)? % 4;
-        (self.t[i] == t).then_some(self.xdot[i].as_slice())
+    /// The kept evaluation, if it was at time `t`.
+    fn at(&self, t: f64) -> Option<&[f64]> {
+        (self.t == t).then_some(self.xdot.as_slice())
     }
 }
 
@@ -383,7 +379,9 @@ pub(crate) fn run<Y: Slab>(
     };
 
     let y0 = Y::from_slice(x0);
+    sys.keep.set(true);
     let init = solver.init(&sys, t0, t1, &y0);
+    sys.keep.set(false);
     if let Some(fault) = sys.fault.borrow_mut().take() {
         return Err(fail(fault, t0, with_evals(stats)));
     }
@@ -391,11 +389,10 @@ pub(crate) fn run<Y: Slab>(
         return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: with_evals(stats) });
     }
     // init ends with f(t0, x0).
-    end_derivative(&sys, 1, t0, x0, &mut f_prev).map_err(|f| fail(f, t0, with_evals(stats)))?;
+    end_derivative(&sys, t0, x0, &mut f_prev).map_err(|f| fail(f, t0, with_evals(stats)))?;
     // The steps from here are our own (`dp8`): the crate's, with the dense output formed only
     // where a sample falls; they hand over their end derivative themselves.
     let mut solver = Dp8::after_init(&solver, Y::from_slice(&f_prev));
-    sys.keep.set(false);
     if clock.due(t0).is_some() {
         sampler.deliver(&sys, &mut stats, 0, t0, x0).map_err(|f| fail(f, t0, with_evals(stats)))?;
         clock.next = 1;
@@ -513,10 +510,10 @@ pub(crate) fn run<Y: Slab>(
     Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: with_evals(stats) })
 }
 
-/// Copies ẋ at `(t, x)` (the solver's current point) into `out`: the `back`-th latest evaluation
-/// when it was made at t (always, by the structure of the crate's DOP853), else one extra call.
-fn end_derivative(sys: &System<'_>, back: usize, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), Fault> {
-    if let Some(d) = sys.recent.borrow().at(back, t) {
+/// Copies ẋ at `(t, x)` (the solver's start) into `out`: the kept evaluation when it was made at
+/// t (always, by the structure of the crate's `init`), else one extra call.
+fn end_derivative(sys: &System<'_>, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), Fault> {
+    if let Some(d) = sys.recent.borrow().at(t) {
         out.copy_from_slice(d);
         return Ok(());
     }

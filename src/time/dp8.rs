@@ -75,8 +75,8 @@ pub(crate) struct Dp8<Y: Slab> {
 }
 
 impl<Y: Slab> Dp8<Y> {
-    /// The stepper continuing from the crate's solver just after its `init` at `t0`, whose state
-    /// is `y0` and derivative there `f0`.
+    /// The stepper continuing from the crate's solver just after its `init` (its point, first
+    /// step, tolerances, bounds and step-size rule), with `f0` the derivative at that point.
     pub(crate) fn after_init(solver: &Dop853<Y>, f0: Y) -> Self {
         let tab = ButcherTableau::<f64, S, I>::dop853();
         let zero = solver.y().zeros_like();
