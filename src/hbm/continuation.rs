@@ -590,7 +590,8 @@ impl Hbm {
     /// period doubling, a short loss of unison) leaves its test function with one sign at every
     /// accepted point, but with a deep minimum of its magnitude at the point nearest the
     /// stretch. Where a test function's magnitude at an accepted point is below a quarter of
-    /// both neighbours' (same sign at all three), its minimum over the two segments around the
+    /// both neighbours' (same sign at all three), and its factor nearest to zero
+    /// ([`nearest_factor`]) below half of theirs, its minimum over the two segments around the
     /// point is searched (golden section in arclength, states from [`Branch::interpolate`]
     /// solved at the fixed parameter, 16 evaluations at most); a state where the function has
     /// the other sign is inserted as a point, so that the pair shows as two changes of sign
@@ -617,6 +618,17 @@ impl Hbm {
                 i += 1;
                 continue;
             };
+            // A product over many multipliers (33 on 16 pendulums: 528 factors in the
+            // Neimark–Sacker test) dips by far more than this from the small motions of factors
+            // nowhere near zero; a pair that passes through its critical value and back drags its
+            // own factor down with it. So the nearest factor must dip too (by half the depth: a
+            // conjugate pair's two factors have the same magnitude and make the product's dip
+            // twice its own).
+            let nearest = |k: usize| nearest_factor(&branch.points[k], j);
+            if nearest(i) + 0.5 * DEPTH >= nearest(i - 1).min(nearest(i + 1)) {
+                i += 1;
+                continue;
+            }
             let sign = b[j].0;
             // t in [0, 2]: segment i−1 for t < 1, segment i beyond; t = 1 is point i.
             let at = |t: f64| if t < 1.0 { (i - 1, t) } else { (i, t - 1.0) };
@@ -662,6 +674,14 @@ impl Hbm {
                 // The points in between hold the pair on the real axis: the tongue, if any, is
                 // around the one where the test function is least.
                 let m = (1..span).min_by(|&a, &b| tests[i + a].1[j].1.total_cmp(&tests[i + b].1[j].1)).unwrap_or(1);
+                // The golden section needs a bracket: a least value inside. Where an end point is
+                // lower the pair's test function falls towards it and no tongue lies inside the
+                // stretch (clustered pairs of mistuned absorbers meet on the real axis inside the
+                // unit circle like this; the searches found nothing).
+                if tests[i + m].1[j].1 >= tests[i].1[j].1.min(tests[i + span].1[j].1) {
+                    i += 1;
+                    continue;
+                }
                 let at = |t: f64| {
                     let k = (t.floor() as usize).min(span - 1);
                     (i + k, t - k as f64)
@@ -1082,6 +1102,27 @@ fn test_functions(p: &BranchPoint) -> Vec<(f64, f64)> {
         ));
     }
     out
+}
+
+/// ln of the smallest factor's magnitude in test function j of [`test_functions`] at `p` (the
+/// multiplier, or product of two, nearest to its critical value); +∞ when `p` has none.
+fn nearest_factor(p: &BranchPoint, j: usize) -> f64 {
+    let Some(st) = &p.solution.stability else { return f64::INFINITY };
+    let (Some(block), kind) = (j.checked_sub(1).map(|k| k / 3), j.checked_sub(1).map_or(0, |k| k % 3)) else {
+        return f64::INFINITY;
+    };
+    let Some(b) = st.blocks.get(block) else { return f64::INFINITY };
+    let mu = &b.multipliers;
+    let one = nalgebra::Complex::new(1.0, 0.0);
+    let least = match kind {
+        0 => mu.iter().map(|m| (m - one).norm()).fold(f64::INFINITY, f64::min),
+        1 => mu.iter().map(|m| (m + one).norm()).fold(f64::INFINITY, f64::min),
+        _ => (0..mu.len())
+            .flat_map(|a| (a + 1..mu.len()).map(move |c| (a, c)))
+            .map(|(a, c)| (mu[a] * mu[c] - one).norm())
+            .fold(f64::INFINITY, f64::min),
+    };
+    least.ln()
 }
 
 /// Where a test function is suspected to dip through zero and back between `b` and `c` (both
