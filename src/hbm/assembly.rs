@@ -25,11 +25,6 @@ impl Hbm {
         let w0 = self.ratio * order * omega;
         let tm = x[spin * nb] * self.t_scale;
         self.rhat.fill(0.0);
-        if jacobian.is_some() {
-            // On the storage slice (a memset): nalgebra's `fill` walks a strided iterator element
-            // by element, which on 16 absorbers (357² entries) was half of the assembly's time.
-            self.jac.as_mut_slice().fill(0.0);
-        }
         // Synthesis of p, ṗ, p̈ at every sample by inverse real FFTs.
         for k in 0..n {
             let c = &x[k * nb..(k + 1) * nb];
@@ -140,6 +135,15 @@ impl Hbm {
         // most of them for a rotor with many absorbers) has a zero spectrum and leaves its block
         // zero, as `assemble` filled it: no FFT, and the block is skipped below.
         let mut zero = std::mem::take(&mut self.zero_series);
+        // The Jacobian is not cleared as a whole (a memset of 357² entries on 16 absorbers, most
+        // of them in blocks that stay zero): every block written here is written whole, and a
+        // block that was written by the last assembly and is zero now is cleared below. On the
+        // first assembly every zero block is cleared (the matrix starts zero anyway).
+        let was_zero: Vec<bool> = if zero.len() == 3 * nn {
+            (0..nn).map(|e| zero[e] && zero[nn + e] && zero[2 * nn + e]).collect()
+        } else {
+            vec![false; nn]
+        };
         zero.resize(3 * nn, false);
         for sidx in 0..3 * nn {
             let mut any = false;
@@ -171,6 +175,12 @@ impl Hbm {
             for k in 0..n {
                 let (alpha, beta, gamma) = (i * n + k, nn + i * n + k, 2 * nn + i * n + k);
                 if zero[alpha] && zero[beta] && zero[gamma] {
+                    if !was_zero[alpha] {
+                        for b in 0..nb {
+                            let c = (k * nb + b) * dim + i * nb;
+                            jac[c..c + nb].fill(0.0);
+                        }
+                    }
                     continue;
                 }
                 // Column-major storage: the rows (i, ·) of column (k, b) start at base(b).

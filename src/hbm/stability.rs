@@ -284,6 +284,11 @@ impl Hbm {
                 (v != 0.0).then_some((i, k, v))
             })
             .collect();
+        // W⁻¹'s non-zeros row by row (in the order of `winv_nz`).
+        let mut winv_rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for &(l, k, v) in &winv_nz {
+            winv_rows[l].push((k, v));
+        }
         // M = C W⁻¹ and B W⁻¹ at the N_t samples (row-major n × n each), and the union of their
         // and A's non-zero patterns over the samples.
         // The work arrays are kept between calls (`Hbm::tree_buffers`): fresh ones of this size
@@ -305,8 +310,7 @@ impl Hbm {
                     if b == 0.0 && c == 0.0 {
                         continue;
                     }
-                    for &(r, k, v) in winv_nz.iter().filter(|e| e.0 == l) {
-                        debug_assert_eq!(r, l);
+                    for &(k, v) in &winv_rows[l] {
                         bj[i * n + k] += b * v;
                         mj[i * n + k] += c * v;
                     }
