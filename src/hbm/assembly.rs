@@ -133,7 +133,7 @@ impl Hbm {
         let width = 4 * hh + 1;
         // A series that is zero at every sample (a pair of coordinates the tree does not couple:
         // most of them for a rotor with many absorbers) has a zero spectrum and leaves its block
-        // zero, as `assemble` filled it: no FFT, and the block is skipped below.
+        // zero: no FFT, and the block is skipped below (cleared if the last assembly wrote it).
         let mut zero = std::mem::take(&mut self.zero_series);
         // The Jacobian is not cleared as a whole (a memset of 357² entries on 16 absorbers, most
         // of them in blocks that stay zero): every block written here is written whole, and a

@@ -110,6 +110,8 @@ impl BlockLu {
     /// Block elimination of `[[j S, col], [rowᵀ]]` (S = diag(`scale`) scales the columns of j;
     /// neither is there when `border` is None) with
     /// `n` diagonal blocks of size `nb` in `j`, the block `keep` never eliminated on its own.
+    /// `maybe`: where given, block (i, k) is known to be zero unless `maybe[i·n + k]` (it is
+    /// then not read; the others are tested entry by entry as without it).
     /// None when no block can be eliminated with less fill than the dense LU (the caller then
     /// factorises densely) or an eliminated block is refused (module docs).
     pub(super) fn new(
@@ -118,6 +120,7 @@ impl BlockLu {
         n: usize,
         nb: usize,
         keep: usize,
+        maybe: Option<&[bool]>,
     ) -> Option<Self> {
         let nblk = n + usize::from(border.is_some());
         let mut sizes = vec![nb; n];
@@ -130,6 +133,9 @@ impl BlockLu {
         let (rows, all) = (j.nrows(), j.as_slice());
         for bi in 0..n {
             for bk in 0..n {
+                if maybe.is_some_and(|m| !m[bi * n + bk]) {
+                    continue;
+                }
                 // Column by column (contiguous in the column-major storage), each column's test
                 // without early exit so that it is vectorised: most blocks of a tree are zero and
                 // are read whole (an element-wise `any` over the view was 90 % of this function).
@@ -293,7 +299,8 @@ mod tests {
         full.view_mut((m, 0), (1, m + 1)).copy_from(&row.transpose());
         let r = DVector::from_fn(m + 1, |i, _| (i as f64).cos());
         let ones = vec![1.0; m];
-        let block = BlockLu::new(&j, Some((&col, &row, &ones)), n, nb, 0).expect("an arrow is eliminated by blocks");
+        let block =
+            BlockLu::new(&j, Some((&col, &row, &ones)), n, nb, 0, None).expect("an arrow is eliminated by blocks");
         assert_eq!(block.steps.len(), n - 2);
         let (xb, xd) = (block.solve(&r).unwrap(), full.clone().lu().solve(&r).unwrap());
         assert!((&xb - &xd).amax() < 1e-12 * xd.amax(), "{:e}", (&xb - &xd).amax());
@@ -302,6 +309,6 @@ mod tests {
         assert!(sb == sd && abs_diff_eq!(lb, ld, epsilon = 1e-12 * ld.abs().max(1.0)), "{sb} {lb} vs {sd} {ld}");
         // A full pattern has nothing to eliminate.
         let dense = DMatrix::from_fn(m, m, |r, c| f(r, c) + if r == c { 4.0 } else { 0.0 });
-        assert!(BlockLu::new(&dense, None, n, nb, 0).is_none());
+        assert!(BlockLu::new(&dense, None, n, nb, 0, None).is_none());
     }
 }
