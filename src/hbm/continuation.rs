@@ -64,8 +64,9 @@
 //! golden section on the test function's magnitude finds the tongue; that state is inserted as
 //! a point, so the tongue's two edges are sign changes between accepted points (pairs met on the
 //! real axis inside the unit circle flip the sense too and cost a search that finds nothing).
-//! Last, where a test function's magnitude has a deep minimum at an accepted point, the two
-//! segments around it are searched the same way by golden section.
+//! Last, where a test function's magnitude has a deep minimum at an accepted point, and so has
+//! its factor nearest to zero, the two segments around it are searched the same way by golden
+//! section. A golden section over several points needs a least value inside them.
 //!
 //! Crossings are bracketed by the count of multipliers outside the unit circle (bisection along
 //! the segment); a branch point is then located on det ∂R̂/∂x, which vanishes there exactly for
