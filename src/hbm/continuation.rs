@@ -66,7 +66,7 @@
 //! real axis inside the unit circle flip the sense too and cost a search that finds nothing).
 //! Last, where a test function's magnitude has a deep minimum at an accepted point, and so has
 //! its factor nearest to zero, the two segments around it are searched the same way by golden
-//! section. A golden section over several points needs a least value inside them.
+//! section.
 //!
 //! Crossings are bracketed by the count of multipliers outside the unit circle (bisection along
 //! the segment); a branch point is then located on det ∂R̂/∂x, which vanishes there exactly for
@@ -675,14 +675,6 @@ impl Hbm {
                 // The points in between hold the pair on the real axis: the tongue, if any, is
                 // around the one where the test function is least.
                 let m = (1..span).min_by(|&a, &b| tests[i + a].1[j].1.total_cmp(&tests[i + b].1[j].1)).unwrap_or(1);
-                // The golden section needs a bracket: a least value inside. Where an end point is
-                // lower the pair's test function falls towards it and no tongue lies inside the
-                // stretch (clustered pairs of mistuned absorbers meet on the real axis inside the
-                // unit circle like this; the searches found nothing).
-                if tests[i + m].1[j].1 >= tests[i].1[j].1.min(tests[i + span].1[j].1) {
-                    i += 1;
-                    continue;
-                }
                 let at = |t: f64| {
                     let k = (t.floor() as usize).min(span - 1);
                     (i + k, t - k as f64)
