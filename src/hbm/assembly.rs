@@ -137,13 +137,9 @@ impl Hbm {
         let mut zero = std::mem::take(&mut self.zero_series);
         // The Jacobian is not cleared as a whole (a memset of 357² entries on 16 absorbers, most
         // of them in blocks that stay zero): every block written here is written whole, and a
-        // block that was written by the last assembly and is zero now is cleared below. On the
-        // first assembly every zero block is cleared (the matrix starts zero anyway).
-        let was_zero: Vec<bool> = if zero.len() == 3 * nn {
-            (0..nn).map(|e| zero[e] && zero[nn + e] && zero[2 * nn + e]).collect()
-        } else {
-            vec![false; nn]
-        };
+        // block not written now is cleared unless `zero_blocks` marks it zero already.
+        let mut zero_blocks = std::mem::take(&mut self.zero_blocks);
+        zero_blocks.resize(nn, false);
         zero.resize(3 * nn, false);
         for sidx in 0..3 * nn {
             let mut any = false;
@@ -175,14 +171,17 @@ impl Hbm {
             for k in 0..n {
                 let (alpha, beta, gamma) = (i * n + k, nn + i * n + k, 2 * nn + i * n + k);
                 if zero[alpha] && zero[beta] && zero[gamma] {
-                    if !was_zero[alpha] {
+                    if !zero_blocks[alpha] {
                         for b in 0..nb {
                             let c = (k * nb + b) * dim + i * nb;
                             jac[c..c + nb].fill(0.0);
                         }
                     }
+                    // The spin column's blocks get the mean torque's entry below.
+                    zero_blocks[alpha] = k != spin;
                     continue;
                 }
+                zero_blocks[alpha] = false;
                 // Column-major storage: the rows (i, ·) of column (k, b) start at base(b).
                 let base = |b: usize| (k * nb + b) * dim + i * nb;
                 if k != spin {
@@ -225,6 +224,7 @@ impl Hbm {
             }
         }
         self.zero_series = zero;
+        self.zero_blocks = zero_blocks;
     }
 }
 

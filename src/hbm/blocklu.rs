@@ -110,8 +110,8 @@ impl BlockLu {
     /// Block elimination of `[[j S, col], [rowᵀ]]` (S = diag(`scale`) scales the columns of j;
     /// neither is there when `border` is None) with
     /// `n` diagonal blocks of size `nb` in `j`, the block `keep` never eliminated on its own.
-    /// `maybe`: where given, block (i, k) is known to be zero unless `maybe[i·n + k]` (it is
-    /// then not read; the others are tested entry by entry as without it).
+    /// `zero`: where given, the blocks (i, k) known to be zero (`zero[i·n + k]`), which are not
+    /// read; the others are tested entry by entry as without it.
     /// None when no block can be eliminated with less fill than the dense LU (the caller then
     /// factorises densely) or an eliminated block is refused (module docs).
     pub(super) fn new(
@@ -120,7 +120,7 @@ impl BlockLu {
         n: usize,
         nb: usize,
         keep: usize,
-        maybe: Option<&[bool]>,
+        zero: Option<&[bool]>,
     ) -> Option<Self> {
         let nblk = n + usize::from(border.is_some());
         let mut sizes = vec![nb; n];
@@ -133,7 +133,7 @@ impl BlockLu {
         let (rows, all) = (j.nrows(), j.as_slice());
         for bi in 0..n {
             for bk in 0..n {
-                if maybe.is_some_and(|m| !m[bi * n + bk]) {
+                if zero.is_some_and(|z| z[bi * n + bk]) {
                     continue;
                 }
                 // Column by column (contiguous in the column-major storage), each column's test

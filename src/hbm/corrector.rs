@@ -97,22 +97,16 @@ impl Hbm {
     pub(super) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
         if self.n > 6 {
             let col = border.map(|(su, _)| &self.gp * su.p_ref);
-            // The blocks the last assembly wrote (`spectral_jacobian` keeps every other one
-            // zero), and the spin column's, which holds the mean torque's entries: reading the
-            // other blocks of 357² entries (16 absorbers) only to find them zero was a quarter
-            // of the factorisation.
-            let nn = self.n * self.n;
-            let zero = &self.zero_series;
-            let maybe: Option<Vec<bool>> = (zero.len() == 3 * nn).then(|| {
-                (0..nn).map(|e| e % self.n == self.spin || !(zero[e] && zero[nn + e] && zero[2 * nn + e])).collect()
-            });
-            let maybe = maybe.as_deref();
+            // The blocks the last assembly left zero are not read: reading them (most of 357²
+            // entries on 16 absorbers) only to find them zero was a quarter of the
+            // factorisation.
+            let zero = Some(&self.zero_blocks[..]);
             let block = match (&col, border) {
                 (Some(col), Some((su, row))) => {
                     let scale: Vec<f64> = (0..self.n * self.nb).map(|i| 1.0 / su.w(i)).collect();
-                    BlockLu::new(&self.jac, Some((col, row, &scale)), self.n, self.nb, self.spin, maybe)
+                    BlockLu::new(&self.jac, Some((col, row, &scale)), self.n, self.nb, self.spin, zero)
                 }
-                _ => BlockLu::new(&self.jac, None, self.n, self.nb, self.spin, maybe),
+                _ => BlockLu::new(&self.jac, None, self.n, self.nb, self.spin, zero),
             };
             if let Some(b) = block {
                 return Factor::Block(Box::new(b));

@@ -295,6 +295,11 @@ pub struct Hbm {
     unfolded: Vec<(f64, f64)>,
     /// Which of those series were zero at every sample in the last assembly.
     zero_series: Vec<bool>,
+    /// Which n × n blocks of `jac` are zero (left unwritten by the last Jacobian assembly; a
+    /// block of the spin column holds a mean-torque entry and is never marked): the next
+    /// assembly clears only the blocks it does not write and that are not marked, and the block
+    /// LU does not read the marked ones.
+    zero_blocks: Vec<bool>,
     q: Vec<f64>,
     qd: Vec<f64>,
     qdd: Vec<f64>,
@@ -583,6 +588,7 @@ impl Hbm {
             spectra: vec![Complex::default(); 3 * n * n * (nt / 2 + 1)],
             unfolded: vec![(0.0, 0.0); 3 * n * n * (4 * opts.harmonics + 1)],
             zero_series: vec![false; 3 * n * n],
+            zero_blocks: vec![false; n * n],
             q: vec![0.0; n],
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
