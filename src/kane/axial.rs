@@ -317,12 +317,12 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_chain_vector_pass_equals_the_scalar_loop() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        use crate::kane::vector_tests::{avx2, series};
+        if !avx2() {
             return;
         }
-        let val = |i: usize, a: f64| ((i as f64 + 1.0) * a).sin() * (1.0 + a);
         for n in 2..=14 {
-            let per = |a: f64| (0..n).map(|i| val(i, a)).collect::<Vec<f64>>();
+            let per = |a: f64| series(n, a);
             let (k, q0, c, cg, q, u) = (per(2.1), per(0.2), per(0.9), per(0.4), per(1.1), per(5.7));
             let consts = [&k[..], &q0[..], &c[..], &cg[..]];
             let mut a = (vec![0.0; n], vec![0.0; n]);

@@ -120,6 +120,21 @@ pub mod reference;
 mod small;
 mod small_rates;
 mod star;
+
+/// The inputs of the vectorised passes' bit-equality tests (`axial`, `star`): `len` smooth,
+/// distinct values per seed `a`, and whether the processor runs the AVX2 builds at all.
+#[cfg(all(test, target_arch = "x86_64"))]
+mod vector_tests {
+    /// `((i + 1) a).sin() (1 + a)` for i < `len`.
+    pub(super) fn series(len: usize, a: f64) -> Vec<f64> {
+        (0..len).map(|i| ((i as f64 + 1.0) * a).sin() * (1.0 + a)).collect()
+    }
+
+    /// True where the AVX2 builds can be run and compared.
+    pub(super) fn avx2() -> bool {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+}
 pub mod tree;
 
 /// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).

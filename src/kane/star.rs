@@ -299,12 +299,12 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn vector_passes_equal_the_scalar_loops() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        use crate::kane::vector_tests::{avx2, series};
+        if !avx2() {
             return;
         }
-        let val = |i: usize, a: f64| ((i as f64 + 1.0) * a).sin() * (1.0 + a);
         for m in 4..=13 {
-            let per = |a: f64| (0..=m).map(|i| val(i, a)).collect::<Vec<f64>>();
+            let per = |a: f64| series(m + 1, a);
             let star = Star {
                 alpha: per(0.7),
                 beta: per(1.3),
