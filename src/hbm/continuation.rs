@@ -34,7 +34,11 @@
 //! Folds are the points where `dλ/ds` changes sign: there the branch turns back in p and a sweep
 //! in p jumps, so the fold orders of an order branch are the jump orders of the paper's up- and
 //! down-sweeps (Figs. 3, 4). Each detected fold is refined by a bracketing secant search
-//! (Illinois) on `dλ/ds = 0` along the arclength.
+//! (Illinois) on `dλ/ds = 0` along the arclength. A fold's own real multiplier passes +1 there,
+//! so a second crossing of +1 in the fold's step (a loss of unison beside the fold) leaves
+//! Π(μ − 1) with one sign at both ends; it shows instead as an even change of the count of
+//! multipliers outside the unit circle across the step, and a state between it and the fold is
+//! searched for and inserted as a point (`Hbm::fold_partner`).
 //!
 //! Events at any step. Each point carries test functions: dλ/ds, and per Floquet block the
 //! products Π(μ − 1), Π(μ + 1) and Π_{i<j}(μ_i μ_j − 1), whose sign changes mark a fold or
@@ -243,6 +247,54 @@ impl Hbm {
             ill.update(s, f);
         }
         best
+    }
+
+    /// A crossing of +1 in the same segment as a fold, which the sign changes cannot show: the
+    /// fold's own real multiplier passes +1 there, so the count of multipliers outside the unit
+    /// circle changes by an odd number across a segment holding the fold alone; an even change
+    /// (none, or two) means another real multiplier crossed +1 in the segment too (a loss of
+    /// unison beside the fold), and the two cancel in Π(μ − 1). The states on either side of
+    /// the refined fold `yf`, ever closer to it (a quarter of the way to the segment's end, then
+    /// a sixteenth, …, 1/256; pseudo-arclength corrections along the chord), are searched for
+    /// one whose count differs from its end's: the other crossing lies between that end and
+    /// it. That state, returned as a point with its pair senses and whether it lies before the
+    /// fold, is then inserted, so the crossing is a change between accepted points and located
+    /// and classified as any other. None when the counts change by an odd number, or no such
+    /// state is found (the crossing then stays unseen, as before).
+    #[allow(clippy::type_complexity)]
+    fn fold_partner(
+        &mut self,
+        su: &Setup,
+        (a, pa): (&Cursor, &BranchPoint),
+        (yb, pb): (&DVector<f64>, &BranchPoint),
+        yf: &DVector<f64>,
+        s: f64,
+    ) -> Option<(BranchPoint, Vec<Vec<PairSense>>, bool)> {
+        let count = |p: &BranchPoint| p.solution.stability.as_ref().map(|st| st.outside());
+        let (na, nb) = (count(pa)?, count(pb)?);
+        if (na + nb) % 2 == 1 {
+            return None;
+        }
+        let m = self.unknowns();
+        for frac in [0.25, 1.0 / 16.0, 1.0 / 64.0, 1.0 / 256.0] {
+            for (end, n_end, before) in [(&a.y, na, true), (yb, nb, false)] {
+                let d = end - yf;
+                let norm = d.norm();
+                if !(norm > 0.0 && norm.is_finite()) {
+                    continue;
+                }
+                let pred = yf + &d * frac;
+                let Ok((y, it)) = self.correct(su, &pred, &(&d / norm), self.opts.max_iter) else { continue };
+                let order = su.at(y[m]).order;
+                self.assemble(&su.x_of(y.as_slice(), m), &su.at(y[m]), Some(su.param));
+                let Ok(t) = self.tangent(su, &a.t, order) else { continue };
+                let Ok(p) = self.branch_point(su, &y, Some(&t), s + (&y - &a.y).norm(), it, true) else { continue };
+                if count(&p).is_some_and(|c| c != n_end) {
+                    return Some((p, std::mem::take(&mut self.pair_senses), before));
+                }
+            }
+        }
+        None
     }
 
     /// Continues the periodic solution from order `n_from` towards `n_to` at the problem's mean
@@ -523,8 +575,14 @@ impl Hbm {
                 let kind = if cur.t[m] > 0.0 { FoldKind::Maximum } else { FoldKind::Minimum };
                 let refined =
                     if copts.refine_folds { self.refine_fold(&su, &cur, chord, t[m], &mut newton) } else { None };
+                let mut partner = None;
                 let fold = match refined {
                     Some((yf, tf)) => {
+                        if copts.stability
+                            && let Some(last) = points.last()
+                        {
+                            partner = self.fold_partner(&su, (&cur, last), (&y, &cand), &yf, s);
+                        }
                         let p = self.branch_point(&su, &yf, None, 0.0, 0, false)?;
                         let mut critical = su.x_of(tf.as_slice(), m);
                         critical[self.spin * self.nb] = 0.0;
@@ -555,6 +613,15 @@ impl Hbm {
                     }
                 };
                 folds.push(fold);
+                // A second crossing of +1 in the fold's segment becomes a segment of its own.
+                if let Some((point, ps, before)) = partner {
+                    if before && let Some(f) = folds.last_mut() {
+                        f.after += 1;
+                    }
+                    tests.push((point.arclength, test_functions(&point)));
+                    senses.push(ps);
+                    points.push(point);
+                }
             }
             s += chord;
             last_chord = chord;

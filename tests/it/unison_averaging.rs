@@ -90,3 +90,38 @@ fn as_the_coupling_vanishes_unison_is_lost_at_the_fold_of_averaging() {
     assert!(last < 0.01, "{last}");
     assert!(gap < 1e-4, "{gap}");
 }
+
+/// A loss of unison beside a fold, found at any step limit. At the weakest coupling above
+/// (Ĩ × 100, 2500 N·m) the +1 point lies 1.3e-5 in n from the fold, and a step that holds both
+/// shows no sign change of Π(μ − 1): the fold's own multiplier passes +1 there too. The count
+/// of multipliers outside the unit circle then changes by an even number across a segment with
+/// a fold, which the continuation takes as a second crossing and splits off
+/// (`fold_partner`). Before that rule, `ds_max` 0.05 lost the point (the step happened to hold
+/// both); the point and the fold must come out the same, to 1e-6 in n, at 0.1, 0.05 and 0.02
+/// (the other test's localisation of the same point is checked against averaging above).
+#[test]
+fn the_loss_of_unison_beside_the_fold_is_found_at_any_step() {
+    let base = CpvaParams::canonical();
+    let p = CpvaParams { i_tilde: base.i_tilde * 100.0, c_r: base.c_r * 100.0, c_p: base.c_p * 0.01, ..base }
+        .with_pendulums(2);
+    let kane = Kane::new(&p.mechanism(None).unwrap()).unwrap();
+    let mut hbm = Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions::default()).unwrap();
+    let mut found: Vec<(f64, f64)> = Vec::new();
+    for ds_max in [0.1, 0.05, 0.02] {
+        let copts = ContinuationOptions { ds_max, ..ContinuationOptions::default() };
+        let b = hbm.continue_in_order(2.8, 3.3, None, &copts).unwrap();
+        let [fold] = b.folds.iter().map(|f| f.order).collect::<Vec<_>>()[..] else { panic!("{ds_max}: {:?}", b.folds) };
+        let near: Vec<f64> = b
+            .bifurcations
+            .iter()
+            .filter(|x| x.class == BifurcationClass::BranchPoint && (x.order - fold).abs() < 1e-3)
+            .map(|x| x.order)
+            .collect();
+        println!("ds_max {ds_max}: fold {fold:.8}, +1 beside it {near:?}");
+        assert_eq!(near.len(), 1, "ds_max {ds_max}: {near:?}");
+        found.push((fold, near[0]));
+    }
+    for &(fold, point) in &found[1..] {
+        assert!((fold - found[0].0).abs() < 1e-6 && (point - found[0].1).abs() < 1e-6, "{found:?}");
+    }
+}
