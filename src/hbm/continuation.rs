@@ -285,6 +285,10 @@ impl Hbm {
                 }
                 let pred = yf + &d * frac;
                 let Ok((y, it)) = self.correct(su, &pred, &(&d / norm), self.opts.max_iter) else { continue };
+                // A corrector that left the segment's neighbourhood found another sheet.
+                if (&y - &pred).norm() > norm {
+                    continue;
+                }
                 let order = su.at(y[m]).order;
                 self.assemble(&su.x_of(y.as_slice(), m), &su.at(y[m]), Some(su.param));
                 let Ok(t) = self.tangent(su, &a.t, order) else { continue };
