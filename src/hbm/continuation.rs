@@ -261,7 +261,6 @@ impl Hbm {
     /// fold, is then inserted, so the crossing is a change between accepted points and located
     /// and classified as any other. None when the counts change by an odd number, or no such
     /// state is found (the crossing then stays unseen, as before).
-    #[allow(clippy::type_complexity)]
     fn fold_partner(
         &mut self,
         su: &Setup,
@@ -269,7 +268,7 @@ impl Hbm {
         (yb, pb): (&DVector<f64>, &BranchPoint),
         yf: &DVector<f64>,
         s: f64,
-    ) -> Option<(BranchPoint, Vec<Vec<PairSense>>, bool)> {
+    ) -> Option<(BranchPoint, PairSenses, bool)> {
         let count = |p: &BranchPoint| p.solution.stability.as_ref().map(|st| st.outside());
         let (na, nb) = (count(pa)?, count(pb)?);
         if (na + nb) % 2 == 1 {

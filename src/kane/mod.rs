@@ -120,6 +120,7 @@ pub mod reference;
 mod small;
 mod small_rates;
 mod star;
+pub mod tree;
 
 /// The inputs of the vectorised passes' bit-equality tests (`axial`, `star`): `len` smooth,
 /// distinct values per seed `a`, and whether the processor runs the AVX2 builds at all.
@@ -135,7 +136,6 @@ mod vector_tests {
         std::arch::is_x86_feature_detected!("avx2")
     }
 }
-pub mod tree;
 
 /// Largest number of speeds served by the fixed-size right-hand sides ([`small`], [`small_rates`]).
 const SMALL: usize = 6;
