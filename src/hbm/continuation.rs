@@ -809,7 +809,7 @@ impl Hbm {
     ) -> Option<(BranchPoint, PairSenses)> {
         let guess = branch.interpolate(seg, sigma)?;
         let lambda = su.param.value(&guess) / su.p_ref;
-        let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+        let sol = self.solve_within(&su.at(lambda), Some(&guess), self.stall_floor()).ok()?;
         let y = self.y_of(su, &sol);
         let (sa, sb) = (branch.points[seg].arclength, branch.points[seg + 1].arclength);
         let point = self.branch_point(su, &y, None, sa + sigma * (sb - sa), sol.iterations, true).ok()?;
@@ -894,7 +894,7 @@ impl Hbm {
                 let mid = 0.5 * (lo + hi);
                 let Some(guess) = branch.interpolate(i, mid) else { break };
                 let lambda = su.param.value(&guess) / su.p_ref;
-                let Ok(sol) = self.solve_at(&su.at(lambda), Some(&guess)) else { break };
+                let Ok(sol) = self.solve_within(&su.at(lambda), Some(&guess), self.stall_floor()) else { break };
                 let Ok(st) = self.stability(&sol) else { break };
                 if st.outside() == before {
                     lo = mid;
@@ -916,6 +916,15 @@ impl Hbm {
         }
     }
 
+    /// The step below which a Newton solve that stopped contracting is taken as converged while
+    /// locating an event ([`Hbm::solve_within`]): 1000 times the tolerance. Beside a branch
+    /// point the steps stall at 1e-10–1e-9 (a tolerance of 1e-10); a state that close decides a
+    /// count of multipliers or the sign of a determinant as well as a converged one, where a
+    /// failed solve used to end the bisection with the bracket as wide as it then was.
+    fn stall_floor(&self) -> f64 {
+        1e3 * self.opts.tol
+    }
+
     /// The solution at fraction σ of segment i, solved at the interpolated parameter, and the
     /// sign and ln |·| of the determinant there of the whole ∂R̂/∂x (`block` None) or of the rows
     /// and columns of one non-unison set of the cyclic route (`block` Some(k): the Galerkin form
@@ -931,7 +940,7 @@ impl Hbm {
     ) -> Option<(HbmSolution, f64, f64)> {
         let guess = branch.interpolate(i, sigma)?;
         let lambda = su.param.value(&guess) / su.p_ref;
-        let sol = self.solve_at(&su.at(lambda), Some(&guess)).ok()?;
+        let sol = self.solve_within(&su.at(lambda), Some(&guess), self.stall_floor()).ok()?;
         let x = self.unknowns_from(Some(&sol));
         self.assemble(&x, &su.at(lambda), Some(su.param));
         let (sign, log) = match block {
@@ -982,22 +991,104 @@ impl Hbm {
         None
     }
 
-    /// det ∂R̂/∂x = 0 inside [lo, hi] of segment i (a bracket of the multiplier count's
-    /// bisection): the cubic through the determinant at lo, hi and one bracket width beyond each,
+    /// The sign of det ∂R̂/∂x at fraction σ of segment i (solved at the interpolated parameter).
+    fn determinant_sign(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<f64> {
+        self.determinant_at(su, branch, i, sigma, None).map(|(_, sign, _)| sign)
+    }
+
+    /// A bracket [lo, hi] of segment i (fractions) across which det ∂R̂/∂x changes sign, grown
+    /// from the multiplier count's bracket (lo, hi) when the determinant has one sign there: the
+    /// count comes from the monodromy, whose error (~1e-7 in the multipliers) can put its
+    /// crossing ~1e-6 in the order away from the determinant's root, and a bracket of 1e-11
+    /// then misses it. The bracket grows fourfold on each side until one side changes sign (at
+    /// most 24 times, to the segment's ends), then is shrunk by bisection back to the width it
+    /// started with, or until a solve beside the root fails. None when no sign change is found.
+    fn determinant_bracket(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
+        let (s_lo, s_hi) = (self.determinant_sign(su, branch, i, lo)?, self.determinant_sign(su, branch, i, hi)?);
+        if s_lo != s_hi {
+            return Some((lo, hi));
+        }
+        let w0 = (hi - lo).max(1e-14);
+        let (mut a, mut b) = (lo, hi);
+        let mut bracket = None;
+        for k in 1..=24 {
+            let w = w0 * 4f64.powi(k);
+            let (na, nb) = ((lo - w).max(0.0), (hi + w).min(1.0));
+            // A solve that fails (stalls right beside the root) leaves that side where it was:
+            // the next, wider end brackets the root instead.
+            if na < a {
+                match self.determinant_sign(su, branch, i, na) {
+                    Some(sign) if sign != s_lo => {
+                        bracket = Some((na, a));
+                        break;
+                    }
+                    Some(_) => a = na,
+                    None => {}
+                }
+            }
+            if nb > b {
+                match self.determinant_sign(su, branch, i, nb) {
+                    Some(sign) if sign != s_lo => {
+                        bracket = Some((b, nb));
+                        break;
+                    }
+                    Some(_) => b = nb,
+                    None => {}
+                }
+            }
+            if a <= 0.0 && b >= 1.0 {
+                break;
+            }
+        }
+        let (mut a, mut b) = bracket?;
+        let s_a = self.determinant_sign(su, branch, i, a)?;
+        while b - a > w0 {
+            let m = 0.5 * (a + b);
+            // Right beside the root the solve may stall above its floor: the cubic through the
+            // samples around the bracket reaches in from there.
+            let Some(sign) = self.determinant_sign(su, branch, i, m) else { break };
+            if sign == s_a {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        Some((a, b))
+    }
+
+    /// det ∂R̂/∂x = 0 near [lo, hi] of segment i (a bracket of the multiplier count's
+    /// bisection, moved to the determinant's own sign change by [`Hbm::determinant_bracket`]):
+    /// the cubic through the determinant at lo, hi and one bracket width beyond each,
     /// as a function of the parameter, and its root in the bracket; the order and parameter
     /// there. Newton at fixed parameter does not converge to 1e-10 right at the branch point (its
     /// Jacobian is singular there), so the determinant is sampled where it does and interpolated
     /// in between: over a bracket of ~1e-6 of the segment it is linear to many digits. None when
-    /// the determinant has the same sign at lo and hi, or a solve fails.
+    /// no sign change is found near the bracket, or a solve at a node fails.
     fn root_of_determinant(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
+        let (lo, hi) = self.determinant_bracket(su, branch, i, lo, hi)?;
         let w = hi - lo;
+        // Two nodes beside the bracket, inside the segment and distinct from the bracket's ends
+        // (clamping lo − w or hi + w to the segment's end repeated a node, and the cubic through
+        // a repeated node is not defined).
+        let outer: Vec<f64> = [lo - w, hi + w, lo - 2.0 * w, hi + 2.0 * w, lo + w / 3.0, lo + 2.0 * w / 3.0]
+            .into_iter()
+            .filter(|s| (0.0..=1.0).contains(s))
+            .take(2)
+            .collect();
+        let [a, b] = outer[..] else { return None };
+        let mut nodes = [a, b, lo, hi];
+        nodes.sort_by(f64::total_cmp);
         let mut samples = Vec::with_capacity(4);
-        for sigma in [lo - w, lo, hi, hi + w] {
-            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma.clamp(0.0, 1.0), None)?;
+        for sigma in nodes {
+            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma, None)?;
             samples.push((su.lambda(&sol), sign, log, sol.order));
         }
-        let (l_lo, l_hi) = (samples[1].0, samples[2].0);
-        if samples[1].1 == samples[2].1 || l_lo == l_hi {
+        let (Some(ilo), Some(ihi)) = (nodes.iter().position(|&x| x == lo), nodes.iter().position(|&x| x == hi)) else {
+            return None;
+        };
+        let (l_lo, l_hi) = (samples[ilo].0, samples[ihi].0);
+        let repeated = samples.windows(2).any(|p| p[0].0 == p[1].0);
+        if samples[ilo].1 == samples[ihi].1 || repeated {
             return None;
         }
         // Values relative to the largest magnitude, so that the interpolation sees O(1) numbers.
@@ -1031,7 +1122,7 @@ impl Hbm {
         }
         let lambda = 0.5 * (a + b);
         // The order: n itself on an order branch, the fixed order otherwise.
-        let order = if su.param == Parameter::Order { lambda } else { samples[1].3 };
+        let order = if su.param == Parameter::Order { lambda } else { samples[ilo].3 };
         Some((order, lambda * su.p_ref))
     }
 }

@@ -793,6 +793,21 @@ impl Hbm {
 
     /// Newton's method at fixed parameters.
     fn solve_at(&mut self, at: &At, guess: Option<&HbmSolution>) -> Result<HbmSolution, HbmError> {
+        self.solve_within(at, guess, self.opts.tol)
+    }
+
+    /// Newton's method at fixed parameters that also accepts an iterate whose steps stopped
+    /// contracting (a step at least half the one before) once they are below `floor` (≥ the
+    /// tolerance): beside a branch point ∂R̂/∂x is nearly singular, so rounding leaves steps of
+    /// ~1e-10 that no iteration reduces, while the state is as accurate as the problem allows
+    /// there. For locating events (the state only decides a count or a sign), never for the
+    /// points of a branch.
+    pub(super) fn solve_within(
+        &mut self,
+        at: &At,
+        guess: Option<&HbmSolution>,
+        floor: f64,
+    ) -> Result<HbmSolution, HbmError> {
         let order = at.order;
         self.check_base(order)?;
         let mut x = self.unknowns_from(guess);
@@ -800,6 +815,7 @@ impl Hbm {
         for it in 1..=self.opts.max_iter {
             self.assemble(&x, at, Some(Parameter::Order));
             let dx = self.factor(None).solve(&self.rhat).ok_or(HbmError::Singular { order })?;
+            let last = step;
             step = dx.amax();
             if !step.is_finite() {
                 return Err(HbmError::NonFinite { order });
@@ -807,7 +823,7 @@ impl Hbm {
             for (xi, d) in x.iter_mut().zip(dx.iter()) {
                 *xi -= d;
             }
-            if step <= self.opts.tol {
+            if step <= self.opts.tol || (step <= floor && step >= 0.5 * last) {
                 return Ok(self.solution_from(&x, at, it));
             }
         }

@@ -125,3 +125,49 @@ fn the_loss_of_unison_beside_the_fold_is_found_at_any_step() {
         assert!((fold - found[0].0).abs() < 1e-6 && (point - found[0].1).abs() < 1e-6, "{found:?}");
     }
 }
+
+/// The other +1 point of the same rotor, at low amplitude (A ≈ 0.004, n ≈ 2.80885), was
+/// located by the step: 2.8088512 at `ds_max` 0.1, 2.8088553 at 0.05 and 2.8094053 at 0.01.
+/// Beside a branch point the solve at fixed order stalls with steps of 2e-10–7e-7 above the
+/// 1e-10 tolerance, which ended the bisection with whatever bracket it had, and the
+/// determinant's root was then sought only inside that bracket (or through a repeated node
+/// when the bracket reached the segment's end). Now the location must not depend on the step
+/// to 1e-9 in n (the corrector's tolerance bounds it; measured spread 0), and the monodromy, an
+/// independent route, must put one more multiplier outside the unit circle on one side of it
+/// than on the other: at 2e-6 either side (its ~1e-7 error in the multipliers moves its own
+/// crossing by ~1e-6, the bound of the module docs).
+#[test]
+fn the_low_amplitude_loss_of_unison_does_not_depend_on_the_step() {
+    let base = CpvaParams::canonical();
+    let p = CpvaParams { i_tilde: base.i_tilde * 100.0, c_r: base.c_r * 100.0, c_p: base.c_p * 0.01, ..base }
+        .with_pendulums(2);
+    let kane = Kane::new(&p.mechanism(None).unwrap()).unwrap();
+    let mut hbm = Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions::default()).unwrap();
+    let mut check =
+        Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions { tol: 1e-8, ..HbmOptions::default() }).unwrap();
+    let mut found = Vec::new();
+    for ds_max in [0.1, 0.05, 0.01] {
+        let copts = ContinuationOptions { ds_max, ..ContinuationOptions::default() };
+        let b = hbm.continue_in_order(2.8, 3.3, None, &copts).unwrap();
+        let low: Vec<(f64, usize)> = b
+            .bifurcations
+            .iter()
+            .filter(|x| x.class == BifurcationClass::BranchPoint && x.order < 2.9)
+            .map(|x| (x.order, x.after))
+            .collect();
+        println!("ds_max {ds_max}: low-amplitude +1 points {low:?}");
+        let [(n, after)] = low[..] else { panic!("ds_max {ds_max}: {low:?}") };
+        // The branch passes n twice (below and above its fold): start from its own segment.
+        let g = b.points[after].solution.clone();
+        // Solved to 1e-8: this light pivot damping leaves ∂R̂/∂x so ill-conditioned along the
+        // low-amplitude stretch that Newton's steps stall at ~5e-9 even 1e-5 from the point.
+        let mut outside = |at: f64| {
+            let sol = check.solve(at, Some(&g)).unwrap();
+            check.stability(&sol).unwrap().outside()
+        };
+        let (below, above) = (outside(n - 2e-6), outside(n + 2e-6));
+        assert_eq!(below.abs_diff(above), 1, "ds_max {ds_max}: {below} outside below {n}, {above} above");
+        found.push(n);
+    }
+    assert!(found.iter().all(|n| (n - found[0]).abs() < 1e-9), "{found:?}");
+}
