@@ -10,6 +10,7 @@
 //! - at held spin the pendulum is a plain pendulum: order / n_t = π / (2K(sin(A/2))), K by the
 //!   arithmetic–geometric mean.
 
+use crate::support::scratch;
 use kanedyn::study::{FreeOscillationResult, LoadOptions, RunOptions, Study, StudyReport, run};
 use std::f64::consts::PI;
 
@@ -27,9 +28,8 @@ fn load(tag: &str, mechanism: &str, analyses: &str) -> Study {
 /// Runs `analyses` as [`load`] reads them.
 fn run_free(tag: &str, mechanism: &str, analyses: &str) -> (Study, StudyReport) {
     let study = load(tag, mechanism, analyses);
-    let out = std::env::temp_dir().join(format!("kanedyn_backbone_{tag}_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let out = scratch("backbone");
+    let report = run(&study, &RunOptions { out: Some(out.path().to_path_buf()), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     (study, report)
 }
@@ -205,10 +205,10 @@ fn the_maps_example_shows_the_free_rotor_backbone() {
         .replace("name: \"cpva_maps\"", "name: \"bb_maps\"");
     let src = kanedyn::io::Source::from_text("examples/bb_maps.ron", &text);
     let study = Study::from_source(src, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("kanedyn_backbone_maps_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
+    let tmp = scratch("backbone-maps");
+    let out = tmp.path();
+    let report = run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: false }).unwrap();
     let svg = std::fs::read_to_string(out.join("bb_maps/forced_backbone.svg")).unwrap();
-    std::fs::remove_dir_all(&out).ok();
     assert!(svg.contains("backbone `backbone` (free rotor, pivot_1)"));
     let r = report.free.iter().find(|r| r.name == "backbone").unwrap();
     let single = r#"FreeOscillation(name: "f", rpm: 1000.0, joint: "pivot", amplitudes: [0.5])"#;
@@ -253,8 +253,8 @@ fn bad_backbones_are_refused_with_their_field() {
     let e = load("cpva.ron", &format!("{forced}, {good}")).expect_err("backbone before").to_string();
     assert!(e.contains("analyses[0].backbone") && e.contains("no FreeOscillation named `f`"), "{e}");
     // A point force on the pendulum acts from outside: no free rotor (the held spin is fine).
-    let dir = std::env::temp_dir().join(format!("kanedyn_backbone_bad_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("backbone-bad");
+    let dir = tmp.path();
     let cpva = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva.ron"))
         .unwrap()
         .replace(
@@ -273,5 +273,4 @@ fn bad_backbones_are_refused_with_their_field() {
     let e = study("Free").expect_err("free with a point force").to_string();
     assert!(e.contains("analyses[0].spin") && e.contains("s.ron:") && e.contains("point force"), "{e}");
     study("Held").unwrap_or_else(|e| panic!("{e}"));
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -10,6 +10,8 @@ use kanedyn::model::joint::JointSpec;
 use kanedyn::model::mechanism::Mechanism;
 use std::path::Path;
 
+use crate::support::scratch;
+
 fn ron_files(dir: &str) -> Vec<std::path::PathBuf> {
     let d = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
     let mut v: Vec<_> = std::fs::read_dir(&d)
@@ -106,8 +108,8 @@ fn the_embedded_catalog_is_the_top_level_folders() {
 /// does not exist is a located error listing the parts there are.
 #[test]
 fn catalog_parts_load_from_anywhere_and_unknown_ones_are_located() {
-    let dir = std::env::temp_dir().join(format!("kanedyn-catalog-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("catalog");
+    let dir = tmp.path();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(root.join("examples/cpva.ron")).unwrap();
     assert!(text.contains("part: \"catalog:bodies/flywheel_rotor.ron\""));
@@ -120,7 +122,6 @@ fn catalog_parts_load_from_anywhere_and_unknown_ones_are_located() {
     let bad = text.replace("catalog:bodies/cpva_pendulum.ron", "catalog:bodies/cpva_pendulm.ron");
     std::fs::write(dir.join("bad.ron"), &bad).unwrap();
     let e = format!("{:#}", Mechanism::from_file(&dir.join("bad.ron")).unwrap_err());
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(e.contains("bad.ron:9:") && e.contains("bodies[1].part"), "{e}");
     assert!(e.contains("no part `bodies/cpva_pendulm.ron` in the shipped catalog"), "{e}");
     assert!(e.contains("bodies/cpva_pendulum.ron"), "{e}");

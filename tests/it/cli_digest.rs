@@ -4,18 +4,11 @@
 
 use crate::support::cli::kanedyn;
 use crate::support::examples::copy_cpva;
+use crate::support::scratch;
 use std::path::{Path, PathBuf};
 
 /// The digest's line budget (issue 31: a screenful, ending with the report's path).
 const MAX_LINES: usize = 25;
-
-/// An empty scratch folder for one test (a previous run's files must not pass for this one's).
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_digest_{tag}_{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// Runs `kanedyn run study --out out extra…`: (success, stdout lines, stderr).
 fn run(study: &Path, out: &Path, extra: &[&str]) -> (bool, Vec<String>, String) {
@@ -27,7 +20,8 @@ fn run(study: &Path, out: &Path, extra: &[&str]) -> (bool, Vec<String>, String) 
 
 #[test]
 fn the_paper_study_prints_a_digest_ending_with_the_report_path() {
-    let out = scratch("paper");
+    let tmp = scratch("digest-paper");
+    let out = tmp.path().to_path_buf();
     let (ok, lines, err) = run(Path::new("examples/cpva_paper.ron"), &out, &[]);
     assert!(ok, "{err}");
     assert!(lines.len() <= MAX_LINES, "{} lines:\n{}", lines.len(), lines.join("\n"));
@@ -53,12 +47,12 @@ fn the_paper_study_prints_a_digest_ending_with_the_report_path() {
     assert!(hbm.contains("4 branches, 155 points (114 stable, 41 unstable), 5 folds"), "{hbm}");
     // No table reaches the terminal by default.
     assert!(!lines.iter().any(|l| l.starts_with('|')), "{lines:?}");
-    std::fs::remove_dir_all(&out).ok();
 }
 
 #[test]
 fn verbose_prints_the_summary_tables_before_the_digest() {
-    let out = scratch("verbose");
+    let tmp = scratch("digest-verbose");
+    let out = tmp.path().to_path_buf();
     let (ok, lines, err) = run(Path::new("examples/cpva_paper.ron"), &out, &["--verbose"]);
     assert!(ok, "{err}");
     let summary = std::fs::read_to_string(out.join("cpva_paper/summary.md")).unwrap();
@@ -70,12 +64,12 @@ fn verbose_prints_the_summary_tables_before_the_digest() {
     assert!(printed.contains(summary.trim_end()), "the summary is not printed whole");
     assert!(lines.len() > 100, "{} lines", lines.len());
     assert_eq!(PathBuf::from(lines.last().unwrap()), out.join("cpva_paper/report.html"));
-    std::fs::remove_dir_all(&out).ok();
 }
 
 #[test]
 fn a_failing_analysis_is_in_the_digest_with_its_place_in_the_file() {
-    let dir = scratch("failure");
+    let tmp = scratch("digest-failure");
+    let dir = tmp.path().to_path_buf();
     copy_cpva(&dir);
     let study = dir.join("iso.ron");
     std::fs::write(
@@ -111,12 +105,12 @@ fn a_failing_analysis_is_in_the_digest_with_its_place_in_the_file() {
     assert!(lines.iter().any(|l| l.starts_with("  Campbell `after`: 1 mode")), "{lines:?}");
     let page = PathBuf::from(lines.last().unwrap());
     assert!(page.ends_with("iso/report.html") && page.is_file(), "{page:?}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn more_analyses_than_fit_are_folded_into_one_line() {
-    let dir = scratch("fold");
+    let tmp = scratch("digest-fold");
+    let dir = tmp.path().to_path_buf();
     copy_cpva(&dir);
     let campbells: Vec<String> = (0..40)
         .map(|k| format!("        Campbell(name: \"c{k}\", rpm_min: 0.0, rpm_max: 2000.0, points: 3),"))
@@ -140,12 +134,12 @@ fn more_analyses_than_fit_are_folded_into_one_line() {
     assert_eq!(shown, 21, "{lines:?}");
     assert!(lines.contains(&"  … and 19 more analyses: see summary.md".to_string()), "{lines:?}");
     assert!(PathBuf::from(lines.last().unwrap()).is_file());
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn many_failures_are_cut_to_a_few_lines_and_counted() {
-    let dir = scratch("failures");
+    let tmp = scratch("digest-failures");
+    let dir = tmp.path().to_path_buf();
     copy_cpva(&dir);
     // Each harmonic balance diverges from its lower end: one failure per analysis.
     let diverging: Vec<String> = (0..8)
@@ -178,5 +172,4 @@ fn many_failures_are_cut_to_a_few_lines_and_counted() {
     }
     assert_eq!(lines[at + 5], "  … and 4 more failures: see summary.md");
     assert!(PathBuf::from(lines.last().unwrap()).ends_with("mf/report.html"));
-    std::fs::remove_dir_all(&dir).ok();
 }

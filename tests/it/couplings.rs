@@ -4,6 +4,7 @@
 //! their generalized forces, the linear model's local stiffness, and harmonic balance against
 //! steady time integration.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::hbm::{Hbm, HbmOptions, HbmSolution};
 use kanedyn::io::{ReadPolicy, Source};
@@ -413,9 +414,8 @@ fn the_dmf_example_loads_with_its_arc_spring() {
 
 /// Writes `text` to a fresh file and returns the load error.
 fn error_of(dir: &str, text: &str) -> String {
-    let d = std::env::temp_dir().join(format!("kanedyn-couplings-{}-{dir}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join("m.ron");
+    let tmp = scratch(&format!("couplings-{dir}"));
+    let p = tmp.path().join("m.ron");
     std::fs::write(&p, text).unwrap();
     match Mechanism::from_file(&p) {
         Ok(_) => panic!("expected an error for:\n{text}"),
@@ -441,7 +441,8 @@ const GOOD: &str = r#"Mechanism(
 
 #[test]
 fn bad_couplings_are_located() {
-    let p = std::env::temp_dir().join(format!("kanedyn-couplings-good-{}.ron", std::process::id()));
+    let tmp = scratch("couplings-good");
+    let p = tmp.path().join("good.ron");
     std::fs::write(&p, GOOD).unwrap();
     Mechanism::from_file(&p).unwrap();
     for (name, from, to, parts) in [
@@ -561,8 +562,8 @@ fn a_study_warns_when_the_coupling_harmonics_have_not_converged() {
     // The DMF with friction near Coulomb's (ε = 0.2 rad/s against relative rates of several
     // rad/s), balanced with 4 harmonics only: the summary must say the coupling force has not
     // converged.
-    let dir = std::env::temp_dir().join(format!("kanedyn_couplings_study_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("couplings-study");
+    let dir = tmp.path();
     // The arc spring comes from the shipped catalog.
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
     std::fs::copy(root.join("dmf.ron"), dir.join("dmf.ron")).unwrap();
@@ -581,7 +582,6 @@ fn a_study_warns_when_the_coupling_harmonics_have_not_converged() {
     let study = kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
     let opts = kanedyn::study::RunOptions { out: Some(dir.join("out")), progress: false };
     let report = kanedyn::study::run(&study, &opts).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     println!("{}", report.summary);
     assert!(
         report.summary.contains("harmonic content has not converged at H = 4"),

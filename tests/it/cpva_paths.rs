@@ -3,6 +3,7 @@
 //! whole periods), and the free-oscillation analysis against closed forms (the circle's
 //! `π / (2K(sin(φ₀/2)))`, the epicycloid's constant ñ).
 
+use crate::support::scratch;
 use approx::abs_diff_eq;
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, HbmSolution};
 use kanedyn::kane::Kane;
@@ -114,9 +115,11 @@ fn harmonic_balance_on_an_epicycloid_absorber_matches_time_integration() {
     assert!(worst > 0.0 && worst < 5e-3, "HBM and time integration differ by {worst:e}");
 }
 
-/// A scratch folder holding the example's path mechanisms and a study with `analyses` over them.
-fn scratch_study(tag: &str, analyses: &str) -> (kanedyn::study::Study, std::path::PathBuf) {
-    let dir = std::env::temp_dir().join(format!("kanedyn_cpva_paths_{tag}_{}", std::process::id()));
+/// A scratch folder holding the example's path mechanisms and a study with `analyses` over them
+/// (the study's outputs go there too, so the caller keeps the folder to the end of its checks).
+fn scratch_study(tag: &str, analyses: &str) -> (kanedyn::study::Study, tempfile::TempDir) {
+    let tmp = scratch(&format!("cpva-paths-{tag}"));
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("paths")).unwrap();
     for f in ["circle.ron", "epicycloid.ron", "overtuned.ron"] {
         let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paths").join(f);
@@ -124,7 +127,7 @@ fn scratch_study(tag: &str, analyses: &str) -> (kanedyn::study::Study, std::path
     }
     let text = format!("Study(name: \"s\", mechanism: \"paths/circle.ron\", analyses: [\n{analyses}\n])");
     std::fs::write(dir.join("s.ron"), text).unwrap();
-    (kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}")), dir)
+    (kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}")), tmp)
 }
 
 /// K(k), the complete elliptic integral of the first kind of modulus k, by the arithmetic–
@@ -152,7 +155,7 @@ fn free_oscillation_orders_equal_the_closed_forms() {
     let angles = [30.0f64, 60.0, 90.0, 120.0];
     let amps: Vec<String> = angles.iter().map(|a| format!("{}", l * a.to_radians())).collect();
     let s_max = 0.18520936507683606 / (3.11 * (1.0f64 + 3.11 * 3.11).sqrt());
-    let (study, dir) = scratch_study(
+    let (study, tmp) = scratch_study(
         "free",
         &format!(
             r#"Compare(name: "c", mechanisms: [(label: "circle", mechanism: "paths/circle.ron")],
@@ -163,6 +166,7 @@ fn free_oscillation_orders_equal_the_closed_forms() {
             [0.01, 0.25, 0.5, 0.75, 0.9].map(|f| format!("{}", f * s_max)).join(", ")
         ),
     );
+    let dir = tmp.path();
     let report =
         kanedyn::study::run(&study, &kanedyn::study::RunOptions { out: Some(dir.join("out")), progress: false })
             .unwrap();
@@ -227,7 +231,8 @@ fn at_order(down: &[(f64, f64)], o: f64) -> f64 {
 fn the_path_comparison_example_shows_the_tautochrone_without_hysteresis() {
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/cpva_paths.ron");
     let study = kanedyn::study::Study::from_file(&file).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("kanedyn_cpva_paths_example_{}", std::process::id()));
+    let tmp = scratch("cpva-paths-example");
+    let out = tmp.path().to_path_buf();
     let report =
         kanedyn::study::run(&study, &kanedyn::study::RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
@@ -291,5 +296,4 @@ fn the_path_comparison_example_shows_the_tautochrone_without_hysteresis() {
             assert!(spread <= 1e-6, "{}: {spread:e}", r.name);
         }
     }
-    let _ = std::fs::remove_dir_all(out);
 }

@@ -7,13 +7,14 @@
 //! `C_modal = M Φ diag(2ζω) Φᵀ M` from this test's own eigen-solve of (M, K); and the engine's
 //! order torques by a plain DFT of `Engine::torque` over its 720° cycle.
 
+use crate::support::scratch;
 use approx::{assert_abs_diff_eq, assert_relative_eq};
 use kanedyn::combustion::{Engine, EngineSpec};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::study::{AmplitudeLaw, RunOptions, Study, StudyReport, run};
 use nalgebra::{Complex, DMatrix, DVector, SymmetricEigen};
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use tempfile::TempDir;
 
 type C = Complex<f64>;
 
@@ -35,10 +36,8 @@ const SHAFT: &str = r#"Mechanism(
     ],
 )"#;
 
-fn folder(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_damping_laws_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn folder(tag: &str) -> TempDir {
+    scratch(&format!("damping-laws-{tag}"))
 }
 
 fn run_study(dir: &std::path::Path, text: &str) -> StudyReport {
@@ -88,7 +87,8 @@ fn hand_response(w: f64, c_shaft: f64, zeta: f64, torque_at_shaft: bool) -> C {
 /// form (measured to 1e-12 digits printed; bound 1e-9).
 #[test]
 fn added_modal_damping_matches_the_hand_built_damping_matrix() {
-    let dir = folder("add");
+    let tmp = folder("add");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), SHAFT).unwrap();
     let report = run_study(
         &dir,
@@ -171,7 +171,6 @@ fn added_modal_damping_matches_the_hand_built_damping_matrix() {
         "{}",
         report.summary
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Amplitude laws in speed: ∝ rpm² gives the factor (rpm/rpm_ref)² exactly in the law and, the
@@ -190,7 +189,9 @@ fn amplitude_laws_scale_the_excited_share_with_speed() {
     assert_eq!(table.factor(2000.0), Some(2.0));
     assert_eq!(table.factor(499.0), None);
 
-    let dir = folder("laws");
+    let tmp = folder("laws");
+
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), SHAFT).unwrap();
     let speeds = r#"speeds: [(rpm: 700.0, harmonics: [(multiple: 1.0, amplitude: 50.0)]),
                         (rpm: 1000.0, harmonics: [(multiple: 1.0, amplitude: 50.0)]),
@@ -280,7 +281,6 @@ fn amplitude_laws_scale_the_excited_share_with_speed() {
         println!("{e}");
         assert!(e.contains(&format!("{name}:2:")) && e.contains(words), "{e}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// An inline four whose inertia torque makes order 2 depend on speed.
@@ -313,7 +313,8 @@ fn dft_order(engine: &Engine, omega: f64, k: f64) -> f64 {
 /// T_k, bound 1e-9 of it (the issue's).
 #[test]
 fn multi_order_reports_the_engine_order_torques_per_speed() {
-    let dir = folder("engine");
+    let tmp = folder("engine");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), SHAFT).unwrap();
     std::fs::write(dir.join("four.ron"), INLINE_FOUR).unwrap();
     let rpms = [1500.0, 3000.0, 6000.0];
@@ -355,7 +356,6 @@ fn multi_order_reports_the_engine_order_torques_per_speed() {
     assert!(worst <= 1e-9 * top, "{worst:e}");
     assert!(report.summary.contains("The engine's order torques T_k at each speed"), "{}", report.summary);
     assert!(report.summary.contains("| rpm | T order 2 (N·m) | T order 4 (N·m) |"), "{}", report.summary);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// One rigid rotor on the spin joint with a small loss to ground.
@@ -371,7 +371,8 @@ const ROTOR: &str = r#"Mechanism(
 /// bound as the MultiOrder's: 1e-9 of the largest T_k; rounding is what remains).
 #[test]
 fn a_run_up_reports_the_engine_order_torques_per_block_speed() {
-    let dir = folder("runup");
+    let tmp = folder("runup");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("rotor.ron"), ROTOR).unwrap();
     std::fs::write(dir.join("four.ron"), INLINE_FOUR).unwrap();
     let report = run_study(
@@ -407,5 +408,4 @@ fn a_run_up_reports_the_engine_order_torques_per_block_speed() {
     let start = dft_order(&engine, t.rpm_start * PI / 30.0, 2.0);
     let line = format!("| {:.1} | {:.4} |", t.rpm_start, start);
     assert!(report.summary.contains(&line), "{line} in {}", report.summary);
-    std::fs::remove_dir_all(&dir).ok();
 }

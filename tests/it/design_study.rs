@@ -3,6 +3,7 @@
 //! one failed case that costs the others nothing, one case run by index equal to the full run,
 //! the plan scaled by the cases, and bad input located at file, line:column and field.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::{inertia_ratio, rotor_order, tuning_order};
 use kanedyn::error::Error;
@@ -11,7 +12,7 @@ use kanedyn::study::design::{self, CaseStatus, DesignSpec, case_values};
 use kanedyn::study::{AnalysisSpec, LoadOptions, RunOptions, Study, run};
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{RngCore, SeedableRng};
-use std::path::PathBuf;
+use tempfile::TempDir;
 
 /// A study of `examples/cpva.ron` (the paper's rotor-CPVA) holding the given analyses, as if it
 /// were the file `examples/design_test.ron` (never written: its mechanism resolves from there).
@@ -32,8 +33,8 @@ fn design(study: &Study) -> &DesignSpec {
     }
 }
 
-fn out_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("kanedyn_design_{tag}_{}", std::process::id()))
+fn out_dir(tag: &str) -> TempDir {
+    scratch(&format!("design-{tag}"))
 }
 
 #[test]
@@ -205,7 +206,8 @@ fn a_failed_case_is_reported_and_the_others_keep_their_results() {
         ),"#,
     );
     let study = load(&text).unwrap_or_else(|e| panic!("{e}"));
-    let out = out_dir("forced");
+    let tmp = out_dir("forced");
+    let out = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     let r = &report.designs[0];
     assert_eq!(r.cases.len(), 8);
@@ -252,7 +254,6 @@ fn a_failed_case_is_reported_and_the_others_keep_their_results() {
     // The figure: the failed cases' NaN results are left out, the others drawn.
     let svg = std::fs::read_to_string(out.join("design_test").join("forced.svg")).unwrap();
     assert!(svg.starts_with("<svg") && svg.contains("Design study `forced`: 8 cases"));
-    std::fs::remove_dir_all(&out).ok();
 
     // One case by index, alone and sequentially, equals its row of the parallel run bit for bit.
     let spec = design(&study);
@@ -345,9 +346,9 @@ fn bad_design_input_is_located_at_its_field() {
 #[test]
 fn the_example_design_study_runs_complete() {
     let study = Study::from_file(std::path::Path::new("examples/design_study.ron")).unwrap();
-    let out = out_dir("example");
+    let tmp = out_dir("example");
+    let out = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     assert_eq!(report.designs.len(), 2);
     assert_eq!(report.designs[0].cases.len(), 15);
@@ -380,7 +381,8 @@ fn cpva_text(m: f64, i_b: f64, l: f64, r: f64, k: f64, c: f64) -> String {
 fn every_quantity_substitutes_as_if_written_in_the_files() {
     // One case of every quantity against the same harmonic balance of a study whose files hold
     // these numbers: the substitution is checked by the loader's independent route.
-    let dir = out_dir("substitution");
+    let tmp = out_dir("substitution");
+    let dir = tmp.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     let (m, i_b, l, r, k, c, rpm, t_n) = (5.0, 2.0e-4, 0.016, 0.18, 0.5, 1e-3, 1200.0, 30.0);
     let base = cpva_text(6.0, 2.16e-4, 0.0152093650768, 0.17, 0.0, 5e-4);
@@ -409,7 +411,6 @@ fn every_quantity_substitutes_as_if_written_in_the_files() {
     let opts = RunOptions { out: Some(dir.join("out")), progress: false };
     let d = run(&Study::from_file(&dir.join("design.ron")).unwrap(), &opts).unwrap();
     let p = run(&Study::from_file(&dir.join("plain.ron")).unwrap(), &opts).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     assert!(d.failures.is_empty() && p.failures.is_empty(), "{:?} {:?}", d.failures, p.failures);
     let row = &d.designs[0].cases[0];
     let cols = &d.designs[0].results;
@@ -455,9 +456,9 @@ fn order_and_speed_substitute_into_a_torque_continuation_bit_for_bit() {
     for (row, order) in rows.iter().zip([3.05, 3.2]) {
         assert_eq!(row.status, CaseStatus::Ok, "{}", row.error);
         let plain = load(&study_text(&format!("        {},", torque(order, 900.0)))).unwrap();
-        let out = out_dir(&format!("torque_{order}"));
+        let tmp = out_dir(&format!("torque_{order}"));
+        let out = tmp.path().to_path_buf();
         let p = run(&plain, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-        std::fs::remove_dir_all(&out).ok();
         let peak = p.hbm.iter().flat_map(|b| b.accel[0].iter().copied()).fold(f64::NAN, f64::max);
         assert_eq!(row.results[0].to_bits(), peak.to_bits(), "order {order}");
     }

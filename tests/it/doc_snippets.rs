@@ -161,8 +161,8 @@ fn check(dir: &Path, snippet: &str) -> Result<(), String> {
 
 #[test]
 fn every_ron_snippet_of_the_documentation_loads() {
-    let scratch = std::env::temp_dir().join(format!("kanedyn-doc-snippets-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&scratch);
+    let tmp = crate::support::scratch("doc-snippets");
+    let scratch = tmp.path().to_path_buf();
     examples::copy_dir(Path::new("examples"), &scratch);
     let (mut checked, mut failures) = (0, Vec::new());
     for doc in documents() {
@@ -174,7 +174,6 @@ fn every_ron_snippet_of_the_documentation_loads() {
             }
         }
     }
-    let _ = std::fs::remove_dir_all(&scratch);
     assert!(failures.is_empty(), "{} of {checked} snippets fail:\n{}", failures.len(), failures.join("\n"));
     // The README's two and the guide's: a guard against the scan finding nothing.
     assert!(checked >= 20, "only {checked} RON snippets found");
@@ -184,8 +183,8 @@ fn every_ron_snippet_of_the_documentation_loads() {
 /// mechanism that claims to be an example file it differs from is refused.
 #[test]
 fn a_wrong_snippet_is_refused() {
-    let scratch = std::env::temp_dir().join(format!("kanedyn-doc-snippets-bad-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&scratch);
+    let tmp = crate::support::scratch("doc-snippets-bad");
+    let scratch = tmp.path().to_path_buf();
     examples::copy_dir(Path::new("examples"), &scratch);
     let cpva = std::fs::read_to_string("examples/cpva.ron").unwrap();
     let claimed = format!("// examples/cpva.ron, changed\n{}", cpva.replace("c: 5e-3", "c: 5e-2"));
@@ -200,5 +199,4 @@ fn a_wrong_snippet_is_refused() {
     }
     // The same claim with the example's own text is accepted.
     assert_eq!(check(&scratch, &format!("// examples/cpva.ron, as is\n{cpva}")), Ok(()));
-    let _ = std::fs::remove_dir_all(&scratch);
 }

@@ -4,6 +4,7 @@
 //! time-domain steady state (DOP853 run, order tracking over the last window) and harmonic balance
 //! (Fourier series); the spring torque is the complex stiffness times the twist.
 
+use crate::support::scratch;
 use kanedyn::hbm::{Hbm, HbmOptions};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Excitation, Harmonic, Order};
@@ -46,15 +47,14 @@ const STUDY: &str = r#"Study(
 
 #[test]
 fn every_element_is_reported_and_both_routes_agree() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_elements_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("elements");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), MECHANISM).unwrap();
     std::fs::write(dir.join("s.ron"), STUDY).unwrap();
     let study = Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let csv = std::fs::read_to_string(dir.join("out/truck/multi.csv")).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     println!("{}", report.summary);
 
     let s = &report.multi[0].speeds[0];

@@ -13,7 +13,7 @@ use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
 use kanedyn::study::body_accel;
 use kanedyn::study::{RunOptions, Study, run};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// An inline four (crank throws 0°, 180°, 180°, 0°): its reciprocating-inertia torque has order 2
 /// of about 4·½ m r² Ω² = 2.4e-3 Ω² N·m, which passes its gas torque's order 2 on the way up.
@@ -37,12 +37,12 @@ const J: f64 = 20.0;
 const C: f64 = 0.01;
 
 /// A fresh folder holding the rotor and the inline four, named for the test.
-fn folder(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_engine_excitation_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+fn folder(tag: &str) -> tempfile::TempDir {
+    let tmp = crate::support::scratch(&format!("engine-excitation-{tag}"));
+    let dir = tmp.path();
     std::fs::write(dir.join("rotor.ron"), ROTOR).unwrap();
     std::fs::write(dir.join("four.ron"), INLINE_FOUR).unwrap();
-    dir
+    tmp
 }
 
 fn load_engine(file: &Path) -> Engine {
@@ -72,9 +72,9 @@ fn order_of(engine: &Engine, omega: f64, k: f64) -> (f64, f64) {
 /// `harmonics()` alike; and `split_harmonics` is its gas part plus Ω² times its inertia part.
 #[test]
 fn the_oscillating_series_is_the_engine_torque_at_any_speed() {
-    let dir = folder("series");
+    let tmp = folder("series");
+    let dir = tmp.path().to_path_buf();
     let engine = load_engine(&dir.join("four.ron"));
-    std::fs::remove_dir_all(&dir).ok();
     let full = engine.oscillating_series(0.5, 1023.5).unwrap();
     let few = engine.oscillating_series(2.0, 8.0).unwrap();
     assert_eq!(few.orders(), vec![2.0, 4.0, 6.0, 8.0]);
@@ -116,7 +116,8 @@ fn the_oscillating_series_is_the_engine_torque_at_any_speed() {
 /// speed, while T_2 changes several-fold over the run (a fixed amplitude would be that far off).
 #[test]
 fn a_run_up_follows_the_engine_orders_with_speed() {
-    let dir = folder("runup");
+    let tmp = folder("runup");
+    let dir = tmp.path().to_path_buf();
     let study_file = dir.join("study.ron");
     std::fs::write(
         &study_file,
@@ -143,7 +144,6 @@ fn a_run_up_follows_the_engine_orders_with_speed() {
     let study = Study::from_file(&study_file).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     let engine = load_engine(&dir.join("four.ron"));
-    std::fs::remove_dir_all(&dir).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let mut worst: f64 = 0.0;
     let mut t2 = Vec::new();
@@ -191,7 +191,8 @@ fn a_run_up_follows_the_engine_orders_with_speed() {
 /// (ω = kΩ) with T_k from the DFT at that point's speed; an `excite` share scales it.
 #[test]
 fn harmonic_balance_in_speed_follows_the_engine_on_a_rigid_rotor() {
-    let dir = folder("hbm_rigid");
+    let tmp = folder("hbm_rigid");
+    let dir = tmp.path().to_path_buf();
     let study_file = dir.join("study.ron");
     std::fs::write(
         &study_file,
@@ -213,7 +214,6 @@ fn harmonic_balance_in_speed_follows_the_engine_on_a_rigid_rotor() {
     let study = Study::from_file(&study_file).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     let engine = load_engine(&dir.join("four.ron"));
-    std::fs::remove_dir_all(&dir).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let mut worst: f64 = 0.0;
     let mut points = 0;
@@ -294,7 +294,8 @@ fn harmonic_balance_in_speed_matches_fixed_speed_solves_on_the_cpva() {
 /// field) or in the engine file.
 #[test]
 fn bad_engine_excitations_are_located() {
-    let dir = folder("bad");
+    let tmp = folder("bad");
+    let dir = tmp.path().to_path_buf();
     let case = |analysis: &str| -> String {
         let file = dir.join("study.ron");
         std::fs::write(
@@ -365,6 +366,5 @@ fn bad_engine_excitations_are_located() {
     // An engine file that cannot be built is located in the engine file.
     std::fs::write(dir.join("short_rod.ron"), INLINE_FOUR.replace("rod_m: 0.15", "rod_m: 0.04")).unwrap();
     let msg = case(&transient("(file: \"short_rod.ron\")", torque));
-    std::fs::remove_dir_all(&dir).ok();
     assert!(msg.contains("short_rod.ron:") && msg.contains("field `rod_m`"), "{msg}");
 }

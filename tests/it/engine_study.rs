@@ -4,6 +4,7 @@
 //! twin at 1400 rpm used to end without a measurement: the steady-state search corrected the
 //! integrator's tiny mean-speed drift every window and restarted its windows each time.
 
+use crate::support::scratch;
 use kanedyn::combustion::{Engine, EngineSpec};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::study::{AnalysisSpec, RunOptions, Study, run};
@@ -21,9 +22,9 @@ fn engine_orders_drive_the_multi_order_study() {
         let got: Vec<(f64, f64)> = p.harmonics.iter().map(|h| (h.multiple, h.amplitude)).collect();
         assert_eq!(got, vec![(1.0, series.amplitude(3.0)), (2.0, series.amplitude(6.0))], "{} rpm", p.rpm);
     }
-    let dir = std::env::temp_dir().join(format!("kanedyn_engine_study_{}", std::process::id()));
+    let tmp = scratch("engine-study");
+    let dir = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     // The locked twin: rotor (3.4435 kg·m²) with the pendulum welded at φ = 0, its centre of mass
     // R + L from the axis, and the rotor's loss c_r = 5e-3 N·m·s/rad.

@@ -6,6 +6,7 @@
 //! is exactly).
 
 use crate::support::cpva_hbm::{cpva_hbm, single};
+use crate::support::scratch;
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions};
 use kanedyn::study::{EnvelopeResult, LoadOptions, RunOptions, Study, StudyReport, run};
 use std::path::Path;
@@ -16,13 +17,13 @@ use std::path::Path;
 fn run_study(name: &str, text: &str, tag: &str) -> (StudyReport, String, String, serde_json::Value) {
     let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), text);
     let study = Study::from_source(src, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("kanedyn_envelope_{tag}_{name}_{}", std::process::id()));
+    let tmp = scratch(&format!("envelope-{tag}-{name}"));
+    let out = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     let dir = out.join(name);
     let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     let (csv, svg) = (read("envelope.csv"), read("envelope.svg"));
     let json: serde_json::Value = serde_json::from_str(&read("results.json")).unwrap();
-    std::fs::remove_dir_all(&out).ok();
     (report, csv, svg, json)
 }
 

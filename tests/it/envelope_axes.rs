@@ -2,6 +2,7 @@
 //! of a multi-order set and a mechanism parameter, each checked through the study file against
 //! one-parameter branches that share none of the two-parameter machinery.
 
+use crate::support::scratch;
 use kanedyn::hbm::{ContinuationOptions, Hbm, HbmOptions, Parameter};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::{Harmonic, rpm_to_rad_s};
@@ -12,12 +13,12 @@ use kanedyn::study::{LoadOptions, RunOptions, Study, StudyReport, run};
 fn run_study(name: &str, text: &str) -> (StudyReport, String, serde_json::Value) {
     let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), text);
     let study = Study::from_source(src, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("kanedyn_envelope_axes_{name}_{}", std::process::id()));
+    let tmp = scratch(&format!("envelope-axes-{name}"));
+    let out = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     let dir = out.join(name);
     let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
     let (csv, json) = (read("envelope.csv"), read("results.json"));
-    std::fs::remove_dir_all(&out).ok();
     (report, csv, serde_json::from_str(&json).unwrap())
 }
 

@@ -13,6 +13,7 @@
 //! study exciting the shaft joint (and the spin and shaft joints together, with a share and a
 //! phase) must all give it.
 
+use crate::support::scratch;
 use kanedyn::study::{RunOptions, Study, run};
 use nalgebra::Complex as Cx;
 
@@ -75,8 +76,8 @@ fn closed_form(w: f64, t_spin: C, t_shaft: C) -> C {
 
 #[test]
 fn torques_at_any_joint_give_the_closed_form_in_every_analysis() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_excite_at_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("excite-at");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), MECHANISM).unwrap();
     std::fs::write(dir.join("s.ron"), STUDY).unwrap();
     let study = Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
@@ -165,13 +166,12 @@ fn torques_at_any_joint_give_the_closed_form_in_every_analysis() {
         // of a line on a whole number of cycles); measured 1e-7. Bound 1e-5.
         assert!(e(time[m]) <= 1e-5, "{}", e(time[m]));
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn a_bad_excite_entry_is_located() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_excite_bad_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("excite-bad");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), MECHANISM).unwrap();
     for (entry, words) in [
         (r#"(joint: "nope")"#, "unknown joint"),
@@ -186,5 +186,4 @@ fn a_bad_excite_entry_is_located() {
         println!("{e}");
         assert!(e.contains("s.ron:2:") && e.contains("analyses[0].excite[") && e.contains(words), "{e}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -4,8 +4,10 @@
 //! whole-pixel coordinates with 23–36 % of the points repeating the one before (staircases when
 //! zoomed). The SVG text is read back here as a viewer would see it.
 
+use crate::support::scratch;
 use kanedyn::study::{AnalysisSpec, RunOptions, Study, run};
 use std::path::{Path, PathBuf};
+use tempfile::TempDir;
 
 /// The text contents of the SVG's `<text>` elements, trimmed.
 fn texts(svg: &str) -> Vec<String> {
@@ -101,14 +103,14 @@ fn the_truck_campbell_marks_every_crossing_and_names_every_line() {
         [AnalysisSpec::Campbell(c)] => c.orders.clone(),
         _ => panic!("one Campbell analysis"),
     };
-    let dir = std::env::temp_dir().join(format!("kanedyn_figures_truck_{}", std::process::id()));
+    let tmp = scratch("figures-truck");
+    let dir = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let svg = std::fs::read_to_string(find(&dir, "campbell.svg")).unwrap();
     let csv = std::fs::read_to_string(find(&dir, "campbell_crossings.csv")).unwrap();
     let table = std::fs::read_to_string(find(&dir, "campbell.csv")).unwrap();
     check_vector(&find(&dir, "campbell.svg"));
-    std::fs::remove_dir_all(&dir).ok();
     let texts = texts(&svg);
 
     // Crossings: the speed rounded to whole rpm; two crossings at the same whole rpm need two
@@ -154,7 +156,8 @@ fn the_truck_campbell_marks_every_crossing_and_names_every_line() {
 #[test]
 fn the_paper_study_figures_have_sub_pixel_coordinates_and_no_repeated_points() {
     let study = Study::from_file(Path::new("examples/cpva_paper.ron")).unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("kanedyn_figures_paper_{}", std::process::id()));
+    let tmp = scratch("figures-paper");
+    let dir = tmp.path().to_path_buf();
     run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
     let files = svgs(&dir);
     assert!(files.len() >= 5, "{files:?}");
@@ -163,7 +166,6 @@ fn the_paper_study_figures_have_sub_pixel_coordinates_and_no_repeated_points() {
         println!("{}: {n} points", f.file_name().unwrap().to_string_lossy());
         assert!(n > 100, "{}: only {n} points", f.display());
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// One panel's axes as the SVG records them for its readers (`g.kd-panel`: the pixel columns
@@ -271,13 +273,12 @@ fn column(csv: &(Vec<String>, Vec<Vec<f64>>), name: &str) -> Vec<f64> {
 }
 
 /// The paper study (examples/cpva_paper.ron) with only the analyses `keep` says, run into a
-/// fresh folder; returns the study's output folder.
-fn run_only(file: &str, tag: &str, keep: impl Fn(&AnalysisSpec) -> bool) -> PathBuf {
+/// fresh folder; returns the study's output folder (removed when the guard drops).
+fn run_only(file: &str, tag: &str, keep: impl Fn(&AnalysisSpec) -> bool) -> TempDir {
     let mut study = Study::from_file(Path::new(file)).unwrap_or_else(|e| panic!("{e}"));
     study.spec.analyses.retain(keep);
-    let dir = std::env::temp_dir().join(format!("kanedyn_figures_{tag}_{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
-    let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
+    let dir = scratch(&format!("figures-{tag}"));
+    let report = run(&study, &RunOptions { out: Some(dir.path().to_path_buf()), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     dir
 }
@@ -289,13 +290,13 @@ fn run_only(file: &str, tag: &str, keep: impl Fn(&AnalysisSpec) -> bool) -> Path
 /// not at 800: results.json's `hbm_lower_fold`) is marked and named at 600 rpm on the main order.
 #[test]
 fn the_multi_order_figure_marks_its_sampled_speeds_and_the_jump() {
-    let dir = run_only("examples/cpva_paper.ron", "multi", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let tmp = run_only("examples/cpva_paper.ron", "multi", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let dir = tmp.path().to_path_buf();
     let svg = std::fs::read_to_string(find(&dir, "multi_order.svg")).unwrap();
     let csv = csv_columns(&find(&dir, "multi_order.csv"));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(find(&dir, "results.json")).unwrap()).unwrap();
     check_vector(&find(&dir, "multi_order.svg"));
-    std::fs::remove_dir_all(&dir).ok();
     let (axes, dots) = (panels(&svg), circles(&svg));
     let response = &axes[0];
     assert!(response.y_label.ends_with("rad/s²"), "{response:?}");
@@ -337,12 +338,12 @@ fn the_multi_order_figure_marks_its_sampled_speeds_and_the_jump() {
 /// clutch's main and second order at the CSV's time-domain values, a marker at each speed.
 #[test]
 fn the_truck_multi_order_figure_plots_the_input_shaft_torque_in_newton_metres() {
-    let dir = run_only("examples/truck_study.ron", "truck_orders", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let tmp = run_only("examples/truck_study.ron", "truck_orders", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let dir = tmp.path().to_path_buf();
     let svg = std::fs::read_to_string(find(&dir, "orders.svg")).unwrap();
     let csv = csv_columns(&find(&dir, "orders.csv"));
     check_vector(&find(&dir, "orders.svg"));
     let summary = std::fs::read_to_string(find(&dir, "summary.md")).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     // The linear model overstates the response (friction and the arc spring's stages act in the
     // nonlinear runs only): the summary says so, at the speed of the largest factor in the CSV.
     let (lin, td, rpms) = (column(&csv, "linear_1x_rad_s2"), column(&csv, "amp_1x_rad_s2"), column(&csv, "rpm"));
@@ -372,13 +373,13 @@ fn the_truck_multi_order_figure_plots_the_input_shaft_torque_in_newton_metres() 
 /// its order to five significant digits, and each sweep jump of the summary is marked.
 #[test]
 fn the_harmonic_balance_figure_marks_and_names_every_fold_and_jump() {
-    let dir = run_only("examples/cpva_paper.ron", "hbm", |a| {
+    let tmp = run_only("examples/cpva_paper.ron", "hbm", |a| {
         matches!(a, AnalysisSpec::OrderSweep(_) | AnalysisSpec::HarmonicBalance(_))
     });
+    let dir = tmp.path().to_path_buf();
     let svg = std::fs::read_to_string(find(&dir, "hbm.svg")).unwrap();
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(find(&dir, "results.json")).unwrap()).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     let (axes, dots, texts) = (panels(&svg), circles(&svg), texts(&svg));
     assert_eq!(axes.len(), 2, "one panel per amplitude, 40 and 500 N·m");
     let branches =
@@ -419,9 +420,10 @@ fn the_harmonic_balance_figure_marks_and_names_every_fold_and_jump() {
 /// files and so stay as written).
 #[test]
 fn legend_entries_with_a_value_carry_its_unit() {
-    let dir = run_only("examples/cpva_paper.ron", "legends", |a| {
+    let tmp = run_only("examples/cpva_paper.ron", "legends", |a| {
         matches!(a, AnalysisSpec::LinearResponse(_) | AnalysisSpec::Campbell(_))
     });
+    let dir = tmp.path().to_path_buf();
     let mut valued = 0;
     for f in svgs(&dir) {
         let svg = std::fs::read_to_string(&f).unwrap();
@@ -438,7 +440,6 @@ fn legend_entries_with_a_value_carry_its_unit() {
             valued += 1;
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
     // The three variants in the response panel's legend and again in the elements' ("pivot (c_p = …)").
     assert_eq!(valued, 6, "figure2's three c_p variants, twice");
 }
@@ -451,10 +452,10 @@ fn legend_entries_with_a_value_carry_its_unit() {
 /// only pass through the 901 sampled speeds.
 #[test]
 fn the_marine_gearbox_figure_plots_the_propeller_shaft_torque() {
-    let dir = run_only("examples/marine_gearbox.ron", "marine", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let tmp = run_only("examples/marine_gearbox.ron", "marine", |a| matches!(a, AnalysisSpec::MultiOrder(_)));
+    let dir = tmp.path().to_path_buf();
     let svg = std::fs::read_to_string(find(&dir, "propeller_torque.svg")).unwrap();
     let csv = csv_columns(&find(&dir, "propeller_torque.csv"));
-    std::fs::remove_dir_all(&dir).ok();
     let axes = panels(&svg);
     let torque = axes.iter().find(|a| a.y_label.contains("N·m")).unwrap_or_else(|| panic!("no axis in N·m: {axes:?}"));
     let top =

@@ -4,6 +4,7 @@
 //! unconstrained tree on random trees (T built here from the file's couplings, the tree loaded
 //! without them), located input errors, and a study on a geared mechanism.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
@@ -16,7 +17,7 @@ use kanedyn::time::integrate::{IntegrateOptions, integrate};
 use nalgebra::{DMatrix, DVector};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 fn load(text: &str) -> Mechanism {
     Mechanism::from_source(&Source::from_text("gears.ron", text), &ReadPolicy::within(Path::new("")))
@@ -397,16 +398,11 @@ fn reduced_equations_are_the_textbook_reduction_on_random_trees() {
     assert!(checked >= 30, "only {checked} trees had couplings");
 }
 
-fn write(dir: &str, text: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("kanedyn-gears-{}-{dir}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join("m.ron");
-    std::fs::write(&p, text).unwrap();
-    p
-}
-
 fn error_of(dir: &str, text: &str) -> String {
-    match Mechanism::from_file(&write(dir, text)) {
+    let tmp = scratch(&format!("gears-{dir}"));
+    let p = tmp.path().join("m.ron");
+    std::fs::write(&p, text).unwrap();
+    match Mechanism::from_file(&p) {
         Ok(_) => panic!("expected an error for:\n{text}"),
         Err(e) => e.to_string(),
     }
@@ -543,13 +539,13 @@ fn locking_a_geared_joint_locks_its_train() {
 #[test]
 fn geared_driveline_study_runs() {
     let study = Study::from_file(Path::new("examples/geared_driveline.ron")).unwrap_or_else(|e| panic!("{e}"));
-    let out = std::env::temp_dir().join(format!("kanedyn_geared_{}", std::process::id()));
+    let tmp = scratch("geared");
+    let out = tmp.path().to_path_buf();
     let r = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     assert!(r.failures.is_empty(), "{:?}", r.failures);
     for f in &r.files {
         assert!(f.exists(), "{} not written", f.display());
     }
-    std::fs::remove_dir_all(&out).ok();
     // The absorber's tuning order is the pendulum's own (eq. 15), whatever the gears downstream.
     let lin = &r.linear[0];
     let nt = lin.n_t.unwrap();
@@ -568,8 +564,8 @@ fn geared_driveline_study_runs() {
 /// mesh column.
 #[test]
 fn a_study_reports_driven_joints_through_their_gear() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_geared_reports_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("geared-reports");
+    let dir = tmp.path().to_path_buf();
     // The example with its catalog parts written inline (parts must sit below the file).
     let mech = std::fs::read_to_string("examples/geared_cpva.ron")
         .unwrap()
@@ -596,7 +592,6 @@ fn a_study_reports_driven_joints_through_their_gear() {
         assert!(r.failures.is_empty(), "{:?}", r.failures);
         reports.push(r);
     }
-    std::fs::remove_dir_all(&dir).ok();
     let (wheel, rotor) = (&reports[0].hbm[0], &reports[1].hbm[0]);
     assert_eq!(wheel.order, rotor.order);
     let omega = 1000.0 * std::f64::consts::PI / 30.0;
@@ -628,7 +623,8 @@ fn a_study_reports_driven_joints_through_their_gear() {
 #[test]
 fn the_cli_runs_and_checks_the_geared_example() {
     let bin = env!("CARGO_BIN_EXE_kanedyn");
-    let out = std::env::temp_dir().join(format!("kanedyn_geared_cli_{}", std::process::id()));
+    let tmp = scratch("geared-cli");
+    let out = tmp.path().to_path_buf();
     let run = std::process::Command::new(bin)
         .args(["run", "examples/geared_driveline.ron", "--out"])
         .arg(&out)
@@ -636,7 +632,6 @@ fn the_cli_runs_and_checks_the_geared_example() {
         .unwrap();
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     assert!(out.join("geared_driveline/summary.md").exists());
-    std::fs::remove_dir_all(&out).ok();
     let check = std::process::Command::new(bin).args(["check", "examples/geared_cpva.ron"]).output().unwrap();
     let text = String::from_utf8_lossy(&check.stdout);
     assert!(check.status.success());

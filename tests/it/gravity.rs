@@ -6,6 +6,7 @@
 //! order in g/(R Ω²), which falls as Ω⁻⁴. The periodic solution's base period is one revolution
 //! (the multiple 1/3 joins the excitation's); it is checked against a steady time run.
 
+use crate::support::scratch;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{Hbm, HbmOptions, HbmSolution};
 use kanedyn::kane::Kane;
@@ -146,8 +147,8 @@ fn vertical(example: &str, to: &std::path::Path) {
 /// Newton tolerance; an order continuation with gravity is refused with a located error.
 #[test]
 fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_gravity_study_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("gravity-study");
+    let dir = tmp.path().to_path_buf();
     vertical("cpva4.ron", &dir.join("m.ron"));
     // Its catalog parts come from the shipped catalog.
     let study_text = |parameter: &str| {
@@ -199,8 +200,8 @@ fn a_study_continues_a_gravity_loaded_rotor_in_speed() {
 /// revolution and whose differenced monodromy is the least accurate).
 #[test]
 fn coexisting_orbits_under_gravity_are_found_and_classified() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_gravity_orbits_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("gravity-orbits");
+    let dir = tmp.path().to_path_buf();
     vertical("cpva.ron", &dir.join("m.ron"));
     std::fs::write(
         dir.join("s.ron"),
@@ -282,5 +283,4 @@ fn coexisting_orbits_under_gravity_are_found_and_classified() {
         verdicts.push(shooting_max < 1.0);
     }
     assert_eq!(verdicts, vec![true, false, true], "low and high stable, the middle one not");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -184,10 +184,10 @@ fn four_absorbers_cancel_the_rotors_order_1_gravity_response() {
 
 /// A folder holding `examples/cpva.ron` in a vertical plane (gravity (0, −9.81) m/s²) with its
 /// catalog parts, and the study `text` as `s.ron`.
-fn study_dir(tag: &str, text: &str) -> std::path::PathBuf {
+fn study_dir(tag: &str, text: &str) -> tempfile::TempDir {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
-    let dir = std::env::temp_dir().join(format!("kanedyn_gravity_linear_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::support::scratch(&format!("gravity-linear-{tag}"));
+    let dir = tmp.path();
     let mech = std::fs::read_to_string(root.join("cpva.ron")).unwrap().replacen(
         "speeds: AbsoluteAngularVelocities,",
         "speeds: AbsoluteAngularVelocities,\n    gravity: (0.0, -9.81),",
@@ -196,7 +196,7 @@ fn study_dir(tag: &str, text: &str) -> std::path::PathBuf {
     assert!(mech.contains("gravity: (0.0, -9.81)"));
     std::fs::write(dir.join("m.ron"), mech).unwrap();
     std::fs::write(dir.join("s.ron"), text).unwrap();
-    dir
+    tmp
 }
 
 const MULTI: &str = r#"MultiOrder(name: "multi", order: 3.0, multiples: [1.0, 2.0, 0.3333333333333333], linear: true,
@@ -219,7 +219,8 @@ fn a_study_reports_the_gravity_forced_linear_response() {
             Campbell(name: "campbell", rpm_min: 0.0, rpm_max: 2000.0, points: 11, orders: [1.0, 3.0]),
         ])"#
     );
-    let dir = study_dir("run", &text);
+    let tmp = study_dir("run", &text);
+    let dir = tmp.path().to_path_buf();
     let study = kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
     let out = dir.join("out");
     let report = kanedyn::study::run(&study, &kanedyn::study::RunOptions { out: Some(out.clone()), progress: false })
@@ -281,7 +282,6 @@ fn a_study_reports_the_gravity_forced_linear_response() {
             assert!(!bad, "{} holds a NaN or inf", f.display());
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// MultiOrder's steady time runs and its order-continued harmonic balance assume a steady spin:
@@ -290,15 +290,15 @@ fn a_study_reports_the_gravity_forced_linear_response() {
 fn multi_order_time_runs_with_gravity_are_refused_at_their_field() {
     for (field, extra) in [("time_domain", ""), ("hbm", "time_domain: false, hbm: true,")] {
         let multi = MULTI.replacen("time_domain: false,", extra, 1);
-        let dir =
+        let tmp =
             study_dir(field, &format!(r#"Study(name: "g", mechanism: "m.ron", lock: ["pivot"], analyses: [{multi}])"#));
+        let dir = tmp.path();
         let err = kanedyn::study::Study::from_file(&dir.join("s.ron")).unwrap_err().to_string();
         println!("{err}");
         assert!(
             err.contains("s.ron:") && err.contains(&format!("analyses[0].{field}")) && err.contains("gravity"),
             "{err}"
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 }
 

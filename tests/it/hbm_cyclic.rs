@@ -11,6 +11,7 @@
 //! - a mistuned set, gravity: the general route.
 
 use crate::support::cpva_hbm;
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use cpva_hbm::{cpva_hbm, omega, single};
@@ -299,9 +300,9 @@ fn a_study_reports_its_route_per_branch() {
     for mech in ["cpva4.ron", "cpva.ron"] {
         let src = Source::from_text("examples/cyclic_route_test.ron", &text(mech));
         let study = Study::from_source(src, &LoadOptions::default()).unwrap();
-        let out = std::env::temp_dir().join(format!("kanedyn_cyclic_{mech}_{}", std::process::id()));
+        let tmp = scratch(&format!("cyclic-{mech}"));
+        let out = tmp.path().to_path_buf();
         let r = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-        std::fs::remove_dir_all(&out).ok();
         runs.push(r);
     }
     let (four, one) = (&runs[0], &runs[1]);
@@ -414,7 +415,8 @@ fn a_declared_route_is_checked_and_taken() {
 )"#
         )
     };
-    let dir = std::env::temp_dir().join(format!("kanedyn_declared_route_{}", std::process::id()));
+    let tmp = scratch("declared-route");
+    let dir = tmp.path().to_path_buf();
     crate::support::examples::copy_dir(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"), &dir);
     let four = std::fs::read_to_string(dir.join("cpva4.ron")).unwrap();
     let mistuned = four.replacen("mass: 1.5,", "mass: 1.500001,", 1);
@@ -447,5 +449,4 @@ fn a_declared_route_is_checked_and_taken() {
             assert_abs_diff_eq!(x, y, epsilon = 1e-7);
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

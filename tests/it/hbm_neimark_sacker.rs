@@ -5,6 +5,7 @@
 //! order n; continued down from n = 3.4, its high-amplitude branch loses stability to a complex
 //! pair of multipliers near n = 2.995 (the absorber's swing beats against the shaft mode).
 
+use crate::support::scratch;
 use crate::support::shooting::shooting_multipliers;
 use crate::support::wound_shaft::WOUND;
 use kanedyn::hbm::{BifurcationClass, ContinuationOptions, Hbm, HbmOptions};
@@ -20,8 +21,8 @@ use std::f64::consts::PI;
 /// thirty times the differenced monodromy's accuracy (~1e-6).
 #[test]
 fn a_neimark_sacker_point_is_a_complex_pair_through_the_unit_circle_of_shooting() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_ns_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("ns");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), WOUND).unwrap();
     let mech = Mechanism::from_file(&dir.join("m.ron")).unwrap();
     let spin = mech.joint_index("spin").unwrap();
@@ -67,5 +68,4 @@ fn a_neimark_sacker_point_is_a_complex_pair_through_the_unit_circle_of_shooting(
     assert_eq!(outside[1].len(), 2, "a pair outside below it: {:?}", outside[1]);
     let (a, b) = (outside[1][0], outside[1][1]);
     assert!(a.im.abs() > 0.01 && (a - b.conj()).norm() <= 1e-9 * a.norm(), "a complex pair: {a} {b}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

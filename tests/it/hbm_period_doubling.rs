@@ -10,6 +10,7 @@
 //! (≈ 4e-4 wide in n at this torque and pivot damping), and regains it at the tongue's far side.
 
 use crate::support::cpva_hbm;
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use crate::support::shooting::{shooting_multipliers, time_run_defects};
@@ -413,8 +414,7 @@ fn envelope_map(name: &str, mechanism: &str, orders: (f64, f64), torques: (f64, 
     );
     let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), &text);
     let study = Study::from_source(src, &LoadOptions::default()).unwrap();
-    let out = std::env::temp_dir().join(format!("kanedyn_{name}_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&out).ok();
-    report
+    let tmp = scratch(name);
+    let out = tmp.path().to_path_buf();
+    run(&study, &RunOptions { out: Some(out), progress: false }).unwrap()
 }

@@ -5,6 +5,7 @@
 //! time integration started on it, and returns to unison at the second.
 
 use crate::support::cpva_hbm::{RPM, omega, single};
+use crate::support::scratch;
 use crate::support::shooting::time_run_defects;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::hbm::{BifurcationClass, Branch, BranchEnd, ContinuationOptions, Hbm, HbmOptions, Parameter, Symmetry};
@@ -117,10 +118,9 @@ fn run_switch_study_in(
     );
     let src = kanedyn::io::Source::from_text(&format!("examples/{name}.ron"), &text);
     let study = Study::from_source(src, &LoadOptions::default()).map_err(|e| e.to_string())?;
-    let out = std::env::temp_dir().join(format!("kanedyn_switch_{name}_{}", std::process::id()));
-    let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).map_err(|e| e.to_string());
-    std::fs::remove_dir_all(&out).ok();
-    report
+    let tmp = scratch(&format!("switch-{name}"));
+    let out = tmp.path().to_path_buf();
+    run(&study, &RunOptions { out: Some(out), progress: false }).map_err(|e| e.to_string())
 }
 
 /// `switch: true` in a study: at 500 N·m two switched rows (route `general`) start at the

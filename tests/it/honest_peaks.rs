@@ -22,11 +22,11 @@ const K_SHAFT: f64 = 5.0e4;
 const RPM: f64 = 1000.0;
 const TORQUE: f64 = 40.0;
 
-fn folder(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_honest_peaks_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+fn folder(tag: &str) -> tempfile::TempDir {
+    let tmp = crate::support::scratch(&format!("honest-peaks-{tag}"));
+    let dir = tmp.path();
     std::fs::write(dir.join("m.ron"), WOUND).unwrap();
-    dir
+    tmp
 }
 
 /// On both stable states of the absorber's jump region (n = 3.02, high and low branch), the
@@ -35,7 +35,8 @@ fn folder(tag: &str) -> std::path::PathBuf {
 /// the shaft's includes its mean wind-up −cΩ/k (to 1e-9 relative).
 #[test]
 fn harmonic_balance_extremes_equal_a_period_of_the_time_equations_on_both_branches() {
-    let dir = folder("hbm");
+    let tmp = folder("hbm");
+    let dir = tmp.path().to_path_buf();
     let mech = Mechanism::from_file(&dir.join("m.ron")).unwrap();
     let spin = mech.joint_index("spin").unwrap();
     let omega = RPM * PI / 30.0;
@@ -103,7 +104,6 @@ fn harmonic_balance_extremes_equal_a_period_of_the_time_equations_on_both_branch
         pendulum_peaks[0].max(pendulum_peaks[1]) > 2.0 * pendulum_peaks[0].min(pendulum_peaks[1]),
         "{pendulum_peaks:?}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The study reports the extremes at every point of a harmonic-balance branch, in a steady time
@@ -112,7 +112,8 @@ fn harmonic_balance_extremes_equal_a_period_of_the_time_equations_on_both_branch
 /// the linear response, to the steady run's 1e-4), and the CSV columns carry them.
 #[test]
 fn the_study_reports_honest_extremes_everywhere() {
-    let dir = folder("study");
+    let tmp = folder("study");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(
         dir.join("s.ron"),
         r#"Study(name: "s", mechanism: "m.ron", spin_joint: "spin", response_body: "rotor", elements: ["shaft", "pivot"],
@@ -159,5 +160,4 @@ fn the_study_reports_honest_extremes_everywhere() {
     {
         assert!(head.split(',').any(|c| c == col), "{col} missing from {head}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,6 +4,7 @@
 //! a compound pendulum on a held rotor, `n_t² = m R L / (I_G + m L²)` (the paper's eq. 15 with
 //! the pendulum's own inertia), written out here; and the text of the outputs themselves.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::PathBuf;
@@ -42,8 +43,8 @@ fn mechanism() -> String {
 /// Runs a study of one LinearResponse with `lock` on the two-group mechanism; the summary and
 /// the files' text.
 fn run_linear(tag: &str, lock: &str) -> (String, Vec<(PathBuf, String)>) {
-    let dir = std::env::temp_dir().join(format!("kanedyn_honest_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch(&format!("honest-{tag}"));
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), mechanism()).unwrap();
     let study = format!(
         r#"Study(name: "s", mechanism: "m.ron", lock: [{lock}],
@@ -54,7 +55,6 @@ fn run_linear(tag: &str, lock: &str) -> (String, Vec<(PathBuf, String)>) {
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let files = report.files.iter().map(|f| (f.clone(), std::fs::read_to_string(f).unwrap_or_default())).collect();
-    std::fs::remove_dir_all(&dir).ok();
     (report.summary, files)
 }
 

@@ -3,16 +3,13 @@
 
 use kanedyn::io::{ReadPolicy, Source, line_col, locate};
 use kanedyn::model::mechanism::{Mechanism, MechanismSpec};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 /// A fresh, empty temporary folder for one test.
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("kanedyn-hardening-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn folder(name: &str) -> tempfile::TempDir {
+    crate::support::scratch(&format!("hardening-{name}"))
 }
 
 /// A one-body mechanism whose body is the catalog part `part`.
@@ -42,7 +39,8 @@ const SECRET: &str = "root:x:0:0:hunter2:/root:/bin/bash\n";
 fn parts_outside_the_mechanism_folder_are_refused_alike_whether_or_not_they_exist() {
     // Used to: read any file a part path named, `/etc/passwd` or `../../x`, and say whether it
     // existed ("No such file" against a parse error), so a study file could probe the disk.
-    let root = tmp("escape");
+    let tmp = folder("escape");
+    let root = tmp.path().to_path_buf();
     let dir = root.join("mech");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(root.join("outside.ron"), "Body(mass: 1.0, inertia: 1.0)").unwrap();
@@ -75,7 +73,8 @@ fn parts_outside_the_mechanism_folder_are_refused_alike_whether_or_not_they_exis
 #[test]
 fn a_symbolic_link_out_of_the_folder_is_refused() {
     // Used to: follow `part: "link.ron"` wherever the link pointed.
-    let root = tmp("symlink");
+    let tmp = folder("symlink");
+    let root = tmp.path().to_path_buf();
     let dir = root.join("mech");
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(root.join("secret.ron"), "Body(mass: 1.0, inertia: 1.0)").unwrap();
@@ -92,7 +91,8 @@ fn a_symbolic_link_out_of_the_folder_is_refused() {
 
 #[test]
 fn resolve_answers_before_looking_and_canonicalises_after() {
-    let dir = tmp("resolve");
+    let tmp = folder("resolve");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("a.ron"), "").unwrap();
     let policy = ReadPolicy::within(&dir);
     assert_eq!(policy.resolve(&dir, "x/../a.ron").unwrap(), std::fs::canonicalize(dir.join("a.ron")).unwrap());
@@ -108,7 +108,8 @@ fn resolve_answers_before_looking_and_canonicalises_after() {
 fn large_and_special_files_are_refused_without_reading_them_whole() {
     // Used to: `read_to_string` whatever was named, so `/dev/zero` (or a FIFO, or a huge file)
     // exhausted memory or hung.
-    let dir = tmp("size");
+    let tmp = folder("size");
+    let dir = tmp.path().to_path_buf();
     let p = dir.join("big.ron");
     std::fs::write(&p, vec![b' '; 101]).unwrap();
     let policy = ReadPolicy::within(&dir).with_max_file_bytes(100);
@@ -138,7 +139,8 @@ fn large_and_special_files_are_refused_without_reading_them_whole() {
 fn a_file_of_another_kind_is_not_echoed() {
     // Used to: "expected struct `Mechanism` but found `root`", and for a part the same with the
     // first word of whatever file the part path named.
-    let dir = tmp("echo");
+    let tmp = folder("echo");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), SECRET).unwrap();
     let msg = Mechanism::from_file(&dir.join("m.ron")).unwrap_err().to_string();
     assert_mentions(&msg, &["m.ron:1:1", "not a `Mechanism` file: it must begin with `Mechanism(`"]);
@@ -162,7 +164,8 @@ fn a_file_of_another_kind_is_not_echoed() {
 #[test]
 fn invalid_utf8_is_reported_once_with_its_position() {
     // Used to: "stream did not contain valid UTF-8: stream did not contain valid UTF-8", no line.
-    let dir = tmp("utf8");
+    let tmp = folder("utf8");
+    let dir = tmp.path().to_path_buf();
     let p = dir.join("m.ron");
     std::fs::write(&p, b"Mechanism(\n  name: \"\xff\")").unwrap();
     let msg = Mechanism::from_file(&p).unwrap_err().to_string();

@@ -11,6 +11,7 @@
 //! cpm; the vibratory propeller-shaft torque under the fifth-order propeller torque peaks near
 //! 4.72e5 N·m at 35.59 rpm (the book's Fig. 8.10-5, and OpenTorsion's reproduction of it).
 
+use crate::support::scratch;
 use approx::assert_relative_eq;
 use kanedyn::linear::{Damping, LinearModel, Spin};
 use kanedyn::model::mechanism::Mechanism;
@@ -148,7 +149,8 @@ fn free_modes_equal_the_book_and_the_hand_reduced_matrices() {
 /// 35.59 rpm (within 1 %, and within one grid step of the speed).
 #[test]
 fn the_example_gives_the_books_propeller_shaft_torque() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_marine_{}", std::process::id()));
+    let tmp = scratch("marine");
+    let dir = tmp.path().to_path_buf();
     let study = Study::from_file(Path::new("examples/marine_gearbox.ron")).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
@@ -188,7 +190,6 @@ fn the_example_gives_the_books_propeller_shaft_torque() {
     assert!((top.rpm - 35.59).abs() <= 0.1, "{}", top.rpm);
     let summary = std::fs::read_to_string(dir.join("marine_gearbox/summary.md")).unwrap();
     assert!(summary.contains("| `propeller_shaft` | 4.71689e5 | 35.6 |"), "{summary}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A loop of meshes whose ratios disagree has no rigid rotation: a located error naming the mesh,
@@ -196,8 +197,8 @@ fn the_example_gives_the_books_propeller_shaft_torque() {
 /// is refused at its field (on a rigidly geared joint, as the example's pinions, it is accepted).
 #[test]
 fn a_gear_loop_without_rigid_rotation_and_a_massless_free_body_are_refused() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_marine_bad_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("marine-bad");
+    let dir = tmp.path().to_path_buf();
     let loop_mech = r#"Mechanism(
     name: "loop",
     speeds: JointRates,
@@ -232,7 +233,6 @@ fn a_gear_loop_without_rigid_rotation_and_a_massless_free_body_are_refused() {
     let err = Mechanism::from_file(&dir.join("massless.ron")).unwrap_err().to_string();
     println!("{err}");
     assert!(err.contains("bodies[1]") && err.contains("no mass and no inertia"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The paper's CPVA flywheel driving a wheel through a compliant mesh (3.2 : 1, 2e5 N·m/rad) and
@@ -274,8 +274,8 @@ fn harmonic_balance_of_a_meshed_train_is_a_periodic_orbit_of_the_time_equations(
     use kanedyn::kane::Kane;
     use kanedyn::model::excitation::{Excitation, Harmonic, Order};
     use kanedyn::time::integrate::{IntegrateOptions, integrate};
-    let dir = std::env::temp_dir().join(format!("kanedyn_meshed_hbm_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("meshed-hbm");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), MESHED_CPVA).unwrap();
     let mech = Mechanism::from_file(&dir.join("m.ron")).unwrap();
     let spin = mech.joint_index("spin").unwrap();
@@ -326,7 +326,6 @@ fn harmonic_balance_of_a_meshed_train_is_a_periodic_orbit_of_the_time_equations(
         assert_eq!(mu.len(), d - 1);
         assert!(worst <= 1e-5, "{worst:e}");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A Campbell diagram in the high-pressure turbine's own speed and orders (`speed_of` its
@@ -336,8 +335,8 @@ fn harmonic_balance_of_a_meshed_train_is_a_periodic_orbit_of_the_time_equations(
 /// spin (a shaft's twist) is refused at `speed_of`.
 #[test]
 fn a_campbell_diagram_in_a_turbines_speed() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_marine_turbine_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("marine-turbine");
+    let dir = tmp.path().to_path_buf();
     std::fs::copy("examples/marine_driveline.ron", dir.join("m.ron")).unwrap();
     let study = |speed_of: &str| {
         format!(
@@ -365,5 +364,4 @@ fn a_campbell_diagram_in_a_turbines_speed() {
     std::fs::write(dir.join("bad.ron"), study("hp_turbine_shaft")).unwrap();
     let err = Study::from_file(&dir.join("bad.ron")).unwrap_err().to_string();
     assert!(err.contains("speed_of") && err.contains("hp_turbine_shaft"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

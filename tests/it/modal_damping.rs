@@ -5,6 +5,7 @@
 //! `J_a J_c ω⁴ − (J_a k_c + J_c (k_a + k_c)) ω² + k_a k_c = 0`.
 
 use crate::support::branched;
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use branched::{closed_form_rad_s, drivetrain};
@@ -68,8 +69,8 @@ fn a_campbell_diagram_takes_modal_damping() {
 /// ratio or an empty list are located errors.
 #[test]
 fn a_study_states_its_modal_damping_and_refuses_conflicts() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_modal_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("modal");
+    let dir = tmp.path().to_path_buf();
     let mech = std::fs::read_to_string("examples/cpva.ron").unwrap();
     // Its parts come from the shipped catalog.
     std::fs::write(dir.join("cpva.ron"), mech).unwrap();
@@ -98,7 +99,6 @@ fn a_study_states_its_modal_damping_and_refuses_conflicts() {
         let e = kanedyn::study::Study::from_file(&dir.join(name)).unwrap_err().to_string();
         assert!(e.contains(&format!("{name}:2:")) && e.contains("modal_damping") && e.contains(words), "{e}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Modal damping added to the mechanism's own dampers (issue 29, item 2): the eigenvalues of the

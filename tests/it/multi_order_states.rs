@@ -5,6 +5,7 @@
 //! every crossing of the operating order solved at the full tolerance.
 
 use crate::support::cpva_hbm;
+use crate::support::scratch;
 use kanedyn::hbm::{ContinuationOptions, HbmOptions, HbmSolution};
 use kanedyn::study::{RunOptions, Study, run};
 
@@ -13,8 +14,8 @@ use kanedyn::study::{RunOptions, Study, run};
 /// not.
 #[test]
 fn the_multi_order_states_are_the_three_states_of_a_fine_branch() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_multi_states_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch("multi-states");
+    let dir = tmp.path().to_path_buf();
     let mech = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cpva.ron")).unwrap();
     std::fs::write(dir.join("cpva.ron"), mech).unwrap();
     let study = String::from(
@@ -26,7 +27,6 @@ fn the_multi_order_states_are_the_three_states_of_a_fine_branch() {
     std::fs::write(dir.join("s.ron"), study).unwrap();
     let study = Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let states = &report.multi[0].speeds[0].hbm;
 

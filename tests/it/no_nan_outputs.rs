@@ -4,6 +4,7 @@
 //! each example study writes.
 
 use crate::support::examples;
+use crate::support::scratch;
 
 use examples::copy_dir;
 use kanedyn::study::{RunOptions, Study, run};
@@ -37,7 +38,8 @@ fn no_example_study_writes_nan_or_inf() {
         if path.extension().is_none_or(|e| e != "ron") || !text.lines().any(|l| l.starts_with("Study(")) {
             continue;
         }
-        let out = std::env::temp_dir().join(format!("kanedyn_nonan_{}_{}", std::process::id(), scanned));
+        let tmp = scratch("nonan");
+        let out = tmp.path().to_path_buf();
         let study = Study::from_file(&path).unwrap();
         let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
         assert!(report.failures.is_empty(), "{}: {:?}", path.display(), report.failures);
@@ -48,7 +50,6 @@ fn no_example_study_writes_nan_or_inf() {
                 scanned += 1;
             }
         }
-        std::fs::remove_dir_all(&out).ok();
     }
     println!("{scanned} files scanned");
     assert!(scanned >= 20, "expected the outputs of the three example studies, scanned {scanned}");
@@ -63,8 +64,8 @@ fn no_example_study_writes_nan_or_inf() {
 /// design study). Every file each writes is scanned, figures included.
 #[test]
 fn no_failing_study_writes_nan_or_inf() {
-    let root = std::env::temp_dir().join(format!("kanedyn_nonan_fail_{}", std::process::id()));
-    std::fs::remove_dir_all(&root).ok();
+    let tmp = scratch("nonan-fail");
+    let root = tmp.path().to_path_buf();
     copy_dir(Path::new("examples"), &root);
     let studies = [
         (
@@ -121,7 +122,6 @@ fn no_failing_study_writes_nan_or_inf() {
             scanned += 1;
         }
     }
-    std::fs::remove_dir_all(&root).ok();
     println!("{scanned} files of failing studies scanned");
     assert!(scanned >= 25, "scanned only {scanned} files");
 }

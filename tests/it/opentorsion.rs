@@ -8,13 +8,13 @@
 //! of Gunter & Chen's Example 8.1 as a TORS file is compared with kanedyn's own hand-written
 //! model of it (examples/marine_driveline.ron).
 
-use crate::support::cli;
+use crate::support::{cli, scratch};
 use kanedyn::error::Error;
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::linear::{Damping, LinearModel, Spin};
 use kanedyn::model::mechanism::Mechanism;
 use kanedyn::opentorsion::convert;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The converted mechanism of a TORS text, loaded.
 fn load(tors: &str) -> (String, Mechanism) {
@@ -117,12 +117,12 @@ fn marine_plant_equals_the_checked_in_ron_and_the_hand_written_model() {
     let (ok, stdout, stderr) = cli::kanedyn(&["import", "examples/opentorsion_marine.json"]);
     assert!(ok, "{stderr}");
     assert_eq!(stdout, ron);
-    let out = std::env::temp_dir().join(format!("kanedyn-import-{}.ron", std::process::id()));
+    let tmp = scratch("import");
+    let out = tmp.path().join("import.ron");
     let (ok, _, stderr) =
         cli::kanedyn(&["import", "examples/opentorsion_marine.json", "-o", out.to_str().unwrap(), "--name", "x"]);
     assert!(ok, "{stderr}");
     assert_eq!(std::fs::read_to_string(&out).unwrap(), ron.replace("name: \"opentorsion_marine\"", "name: \"x\""));
-    let _ = std::fs::remove_file(out);
 }
 
 /// Where an error is: (file, line, column, field) of an input error.
@@ -170,20 +170,13 @@ fn bad_tors_files_give_located_errors() {
     assert_eq!((path.as_str(), at.map(|a| a.0)), ("structure[0][1]", Some(2)), "{msg}");
     assert!(msg.contains("unknown component `b`"), "{msg}");
     // The CLI says it on stderr with the location, and fails.
-    let dir = scratch("cli");
+    let tmp = scratch("overlay-cli");
+    let dir = tmp.path().to_path_buf();
     let bad = dir.join("bad.json");
     std::fs::write(&bad, "{\"components\": [\n}").unwrap();
     let (ok, _, stderr) = cli::kanedyn(&["import", bad.to_str().unwrap()]);
     assert!(!ok);
     assert!(stderr.contains("bad.json:2:1"), "{stderr}");
-}
-
-/// A fresh scratch folder for one test.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn-overlay-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// The README's overlay (examples/opentorsion_marine_cpva.ron): at most 15 lines, it adds
@@ -206,7 +199,8 @@ fn overlay_adds_an_absorber_to_the_imported_plant() {
 
 #[test]
 fn bad_overlays_give_located_errors() {
-    let dir = scratch("bad");
+    let tmp = scratch("overlay-bad");
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("base.ron"), std::fs::read_to_string("examples/opentorsion_marine.ron").unwrap()).unwrap();
     let overlay = |name: &str, text: &str| {
         let p = dir.join(name);
@@ -283,7 +277,6 @@ fn bad_overlays_give_located_errors() {
     );
     assert_eq!(path, "base", "{msg}");
     assert!(msg.contains("outside"), "{msg}");
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// A shaft line whose middle node lies between two gear stages (so it turns on a bearing of its

@@ -6,6 +6,7 @@
 //! physics is wrong (e.g. a sign error in the pendulum's centrifugal term removes the absorber
 //! notch, a wrong mean torque drifts the speed and moves every order).
 
+use crate::support::scratch;
 use approx::abs_diff_eq;
 use kanedyn::signal::OrderTrace;
 use kanedyn::study::{Direction, RunOptions, Study, StudyReport, SweepRun, run};
@@ -18,9 +19,9 @@ fn report() -> &'static StudyReport {
     static R: OnceLock<StudyReport> = OnceLock::new();
     R.get_or_init(|| {
         let study = Study::from_file(Path::new("examples/cpva_paper.ron")).expect("study loads");
-        let out = std::env::temp_dir().join(format!("kanedyn_paper_{}", std::process::id()));
+        let tmp = scratch("paper");
+        let out = tmp.path().to_path_buf();
         let r = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).expect("study runs");
-        std::fs::remove_dir_all(&out).ok();
         assert!(r.failures.is_empty(), "failures: {:?}", r.failures);
         r
     })

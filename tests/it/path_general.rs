@@ -6,6 +6,7 @@
 //! at held spin, the compound pendulum's exact frequency (elliptic integral) for the nonlinear
 //! coefficient, and located errors for bad input.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::error::EngineError;
 use kanedyn::io::{ReadPolicy, Source};
@@ -449,8 +450,8 @@ fn body_probes_below_a_turning_path_are_refused() {
 /// located error at `response_body`, naming the path joint.
 #[test]
 fn a_response_body_on_a_turning_path_is_a_located_study_error() {
-    let dir = std::env::temp_dir().join(format!("kanedyn-turning-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = scratch("turning");
+    let dir = tmp.path().to_path_buf();
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::copy("examples/paths/circle.ron", dir.join("circle.ron")).unwrap();
     let study = "Study(\n    name: \"turning\",\n    mechanism: \"circle.ron\",\n    spin_joint: \"spin\",\n    \
@@ -459,5 +460,4 @@ fn a_response_body_on_a_turning_path_is_a_located_study_error() {
     let Err(err) = kanedyn::study::Study::from_file(&dir.join("study.ron")) else { panic!("accepted") };
     let err = err.to_string();
     assert!(err.contains("study.ron:5:") && err.contains("response_body") && err.contains("`path`"), "{err}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

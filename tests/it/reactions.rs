@@ -3,6 +3,7 @@
 //! its spring, damper and applied torque), and the rattle threshold of a pendulum absorber under
 //! gravity in a study run-up.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::io::{ReadPolicy, Source};
 use kanedyn::kane::Kane;
@@ -130,8 +131,8 @@ fn revolute_moments_are_the_joint_torques_at_random_states() {
 /// speed gained in one revolution (about 1 rpm). Returns (speed before, speed after, √(g/r_c)),
 /// rpm, and the largest pivot swing, rad.
 fn rattle(tag: &str, pivot_spring: &str) -> (f64, f64, f64, f64) {
-    let dir = std::env::temp_dir().join(format!("kanedyn_reactions_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch(&format!("reactions-{tag}"));
+    let dir = tmp.path().to_path_buf();
     std::fs::write(
         dir.join("m.ron"),
         format!(

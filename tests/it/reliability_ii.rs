@@ -6,21 +6,21 @@ use crate::support::examples;
 use examples::copy_dir;
 use kanedyn::study::Study;
 use std::path::{Path, PathBuf};
+use tempfile::TempDir;
 
 /// A scratch copy of `examples/`, so a study written into it finds the example mechanisms by
 /// relative path; removed when dropped.
-struct Scratch(PathBuf);
+struct Scratch(TempDir);
 
 impl Scratch {
     fn new(tag: &str) -> Self {
-        let root = std::env::temp_dir().join(format!("kanedyn_rel2_{tag}_{}", std::process::id()));
-        std::fs::remove_dir_all(&root).ok();
-        copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"), &root);
+        let root = crate::support::scratch(&format!("rel2-{tag}"));
+        copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("examples"), root.path());
         Scratch(root)
     }
     /// Writes `bad.ron` (or another file) into the scratch folder and returns its path.
     fn write(&self, file: &str, text: &str) -> PathBuf {
-        let p = self.0.join(file);
+        let p = self.0.path().join(file);
         std::fs::write(&p, text).unwrap();
         p
     }
@@ -30,12 +30,6 @@ impl Scratch {
             Ok(_) => panic!("expected an error for\n{text}"),
             Err(e) => e.to_string(),
         }
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        std::fs::remove_dir_all(&self.0).ok();
     }
 }
 
@@ -249,7 +243,7 @@ fn pressure_table(seam: f64) -> String {
 #[test]
 fn a_pressure_table_that_does_not_close_is_refused() {
     let s = Scratch::new("seam");
-    std::fs::create_dir_all(s.0.join("engines")).unwrap();
+    std::fs::create_dir_all(s.0.path().join("engines")).unwrap();
     let study = |engine: &str| {
         format!(
             "Study(name: \"s\", mechanism: \"cpva.ron\", analyses: [MultiOrder(name: \"m\", order: 3.0, \
@@ -297,7 +291,7 @@ fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
     let study = Study::from_file_with(&path, &LoadOptions { limits, ..LoadOptions::default() }).unwrap();
     let planned = study.plan().analyses[1].cpu_s;
     let start = std::time::Instant::now();
-    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let report = run(&study, &RunOptions { out: Some(s.0.path().join("out")), progress: false }).unwrap();
     let took = start.elapsed().as_secs_f64();
     println!("transient planned at {planned:.2} s CPU; study stopped after {took:.2} s; {:?}", report.failures);
     // The transient alone is planned at several seconds; stopped at 0.3 s the study ends well
@@ -308,7 +302,7 @@ fn the_watchdog_stops_an_overrunning_analysis_and_keeps_the_others() {
     let f = &report.failures[0];
     assert!(f.starts_with("Transient `long` (") && f.contains("w.ron:7:9"), "{f}");
     assert!(f.contains("stopped by the watchdog") && f.contains("time budget of 0.3 s"), "{f}");
-    let dir = s.0.join("out").join("w");
+    let dir = s.0.path().join("out").join("w");
     for file in ["before.csv", "before.svg", "after_as_built.csv", "after.svg", "summary.md"] {
         assert!(dir.join(file).exists(), "{file} missing");
     }
@@ -344,7 +338,7 @@ fn the_watchdog_stops_campbell_linear_response_and_harmonic_balance() {
     let plan = study.plan();
     let planned: Vec<f64> = plan.analyses.iter().map(|a| a.cpu_s).collect();
     let start = std::time::Instant::now();
-    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let report = run(&study, &RunOptions { out: Some(s.0.path().join("out")), progress: false }).unwrap();
     let took = start.elapsed().as_secs_f64();
     println!("planned {planned:?} s; study took {took:.2} s; {:#?}", report.failures);
     // The linear response of 10⁶ orders takes about 1 s (plan 2.3 s); the others are planned
@@ -367,7 +361,7 @@ fn the_watchdog_stops_campbell_linear_response_and_harmonic_balance() {
     assert!(named("Campbell", "camp", 6).contains("rpm after"));
     assert!(named("LinearResponse", "lin", 7).contains("order"));
     assert!(named("HarmonicBalance", "hbm", 8).contains("stopped by the watchdog at order"));
-    let dir = s.0.join("out").join("w");
+    let dir = s.0.path().join("out").join("w");
     for file in ["after_as_built.csv", "after.svg", "summary.md"] {
         assert!(dir.join(file).exists(), "{file} missing");
     }
@@ -394,7 +388,7 @@ fn a_branch_stopped_short_of_its_range_is_a_located_failure() {
 )
 "#;
     let study = Study::from_file(&s.write("st.ron", text)).unwrap();
-    let report = run(&study, &RunOptions { out: Some(s.0.join("out")), progress: false }).unwrap();
+    let report = run(&study, &RunOptions { out: Some(s.0.path().join("out")), progress: false }).unwrap();
     println!("{:#?}", report.failures);
     assert_eq!(report.failures.len(), 2, "{:?}", report.failures);
     for (f, from) in report.failures.iter().zip(["3.3", "2.9"]) {
@@ -420,7 +414,7 @@ fn a_busy_output_folder_is_named() {
     let s = Scratch::new("busy");
     let path = s.write("b.ron", &circle_study(FREE).replace("name: \"s\"", "name: \"b\""));
     let study = Study::from_file(&path).unwrap();
-    let out = s.0.join("out");
+    let out = s.0.path().join("out");
     std::fs::create_dir_all(&out).unwrap();
     let lock = std::fs::OpenOptions::new().create(true).truncate(false).write(true).open(out.join(".b.lock")).unwrap();
     lock.lock().unwrap();
@@ -444,7 +438,7 @@ fn a_busy_output_folder_is_named() {
 #[test]
 fn a_refused_input_file_is_located_at_the_field_that_names_it() {
     let s = Scratch::new("wholefile");
-    std::fs::create_dir_all(s.0.join("adir")).unwrap();
+    std::fs::create_dir_all(s.0.path().join("adir")).unwrap();
     s.write("big.ron", &" ".repeat(2_000_000));
     for (file, why) in [("adir", "not a regular file (a folder)"), ("big.ron", "more than the limit")] {
         let e = s.load_error(&format!(

@@ -6,13 +6,16 @@
 
 use crate::support::examples;
 
+use crate::support::scratch;
 use examples::copy_cpva;
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::{Path, PathBuf};
+use tempfile::TempDir;
 
-fn run_study(tag: &str, analyses: &str) -> (kanedyn::study::StudyReport, String, PathBuf) {
-    let dir = std::env::temp_dir().join(format!("kanedyn_report_{tag}_{}", std::process::id()));
-    copy_cpva(&dir);
+fn run_study(tag: &str, analyses: &str) -> (kanedyn::study::StudyReport, String, TempDir) {
+    let tmp = scratch(&format!("report-{tag}"));
+    let dir = tmp.path();
+    copy_cpva(dir);
     let file = dir.join("s.ron");
     std::fs::write(
         &file,
@@ -24,12 +27,12 @@ fn run_study(tag: &str, analyses: &str) -> (kanedyn::study::StudyReport, String,
     let page =
         report.files.iter().find(|f| f.file_name().is_some_and(|n| n == "report.html")).expect("report.html written");
     let html = std::fs::read_to_string(page).unwrap();
-    (report, html, dir)
+    (report, html, tmp)
 }
 
 #[test]
 fn the_page_holds_every_table_figure_and_file() {
-    let (report, html, dir) = run_study(
+    let (report, html, _folder) = run_study(
         "ok",
         r#"LinearResponse(name: "lin", rpm: 1000.0, from: 0.9, to: 1.2, points: 31),
            Campbell(name: "camp", rpm_min: 0.0, rpm_max: 2000.0, points: 11)"#,
@@ -64,12 +67,11 @@ fn the_page_holds_every_table_figure_and_file() {
         assert!(html[i..].starts_with("http://www.w3.org/2000/svg"), "a URL: {}", &html[i..i + 60]);
     }
     assert!(!html.contains("class=\"failures\""));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn failures_come_first() {
-    let (report, html, dir) = run_study(
+    let (report, html, _folder) = run_study(
         "fail",
         r#"LinearResponse(name: "before", rpm: 1000.0, from: 0.9, to: 1.1, points: 11),
            HarmonicBalance(name: "diverges", rpm: 1000.0, order_min: 2.9, order_max: 3.3, amplitudes: [1e6],
@@ -80,7 +82,6 @@ fn failures_come_first() {
     let summary = html.find("<h1>").expect("the summary's heading");
     assert!(failures < summary, "failures before the summary");
     assert!(html.contains("HarmonicBalance `diverges`") || html.contains("HarmonicBalance <code>diverges</code>"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Each analysis has a section of its own that holds its heading, its figures and their
@@ -88,7 +89,7 @@ fn failures_come_first() {
 /// file's name, and no figure of one analysis sits in another's section.
 #[test]
 fn every_figure_sits_under_its_analysis_with_a_caption() {
-    let (report, html, dir) = run_study(
+    let (report, html, _folder) = run_study(
         "sections",
         r#"LinearResponse(name: "lin", rpm: 1000.0, from: 0.9, to: 1.2, points: 31),
            Campbell(name: "camp", rpm_min: 0.0, rpm_max: 2000.0, points: 11)"#,
@@ -118,7 +119,6 @@ fn every_figure_sits_under_its_analysis_with_a_caption() {
             assert!(!section.contains(&format!("href=\"{other}\"")), "{other} in {name}'s section");
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Debian's `chromium` (or `chromium-browser`), or None after saying so; None is refused when
@@ -165,11 +165,12 @@ fn text_of(dom: &str, open: &str) -> String {
 #[test]
 fn the_page_renders_in_a_headless_browser() {
     let Some(browser) = chromium() else { return };
-    let (report, html, dir) = run_study(
+    let (report, html, tmp) = run_study(
         "browser",
         r#"LinearResponse(name: "lin", rpm: 1000.0, from: 0.9, to: 1.2, points: 31),
            Campbell(name: "camp", rpm_min: 0.0, rpm_max: 2000.0, points: 11)"#,
     );
+    let dir = tmp.path().to_path_buf();
     let probe = r#"<body>
 <script>
 var problems = [];
@@ -197,7 +198,6 @@ window.addEventListener('load', function () {
         assert!(s[0].as_f64().unwrap() > 100.0 && s[1].as_f64().unwrap() > 100.0, "figure size {s}");
     }
     assert_eq!(check["problems"].as_array().unwrap().len(), 0, "{}", check["problems"]);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Four numbers of a `viewBox`.
@@ -286,13 +286,13 @@ fn csvs_of(files: &[PathBuf], figure: &str) -> Vec<PathBuf> {
 #[test]
 fn zoom_and_hover_work_in_a_headless_browser() {
     let Some(browser) = chromium() else { return };
-    let (report, html, dir) = run_study(
+    let (report, html, tmp) = run_study(
         "zoom",
         r#"LinearResponse(name: "lin", rpm: 1000.0, from: 0.9, to: 1.2, points: 31),
            Campbell(name: "camp", rpm_min: 0.0, rpm_max: 2000.0, points: 11)"#,
     );
+    let dir = tmp.path().to_path_buf();
     check_zoom_and_hover(browser, &html, &dir, &csvs_of(&report.files, "figure-lin"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// The shipped studies' pages: the paper study's and the truck study's `report.html` stay
@@ -301,10 +301,13 @@ fn zoom_and_hover_work_in_a_headless_browser() {
 /// 40 rows) fold: in the browser the eleventh row is hidden until the fold's `<details>` opens.
 #[test]
 fn the_example_reports_stay_small_zoom_and_fold() {
-    let mut pages = Vec::new();
+    // The folders outlive the loop: the browser checks below open the pages written there.
+    let (mut pages, mut folders) = (Vec::new(), Vec::new());
     for (example, tag) in [("examples/cpva_paper.ron", "paper"), ("examples/truck_study.ron", "truck")] {
         let study = Study::from_file(Path::new(example)).unwrap_or_else(|e| panic!("{e}"));
-        let dir = std::env::temp_dir().join(format!("kanedyn_report_{tag}_{}", std::process::id()));
+        let tmp = scratch(&format!("report-{tag}"));
+        let dir = tmp.path().to_path_buf();
+        folders.push(tmp);
         let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
         assert!(report.failures.is_empty(), "{:?}", report.failures);
         let page = report.files.iter().find(|f| f.file_name().is_some_and(|n| n == "report.html")).unwrap().clone();
@@ -340,8 +343,5 @@ window.addEventListener('load', function () {
         assert!(fold["rows"].as_u64().unwrap() > 40);
         assert_eq!(fold["closed"].as_u64().unwrap(), 10, "{fold}");
         assert_eq!(fold["open"], fold["rows"], "{fold}");
-    }
-    for (_, _, dir) in pages {
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -134,7 +134,8 @@ fn files(dir: &Path) -> Vec<String> {
 
 #[test]
 fn two_runs_write_the_same_files_apart_from_timings() {
-    let scratch = std::env::temp_dir().join(format!("kanedyn-reproducible-{}", std::process::id()));
+    let tmp = crate::support::scratch("reproducible");
+    let scratch = tmp.path().to_path_buf();
     for study in ["examples/cpva_paper.ron", "examples/design_study.ron"] {
         let (a, b) = (run(study, &scratch.join("a")), run(study, &scratch.join("b")));
         assert_eq!(files(&a), files(&b), "{study}: different files");
@@ -152,7 +153,6 @@ fn two_runs_write_the_same_files_apart_from_timings() {
         }
         assert!(compared >= 5, "{study}: only {compared} files");
     }
-    let _ = std::fs::remove_dir_all(&scratch);
 }
 
 /// The masks hide the times and nothing else: a changed result in a timed table still differs.

@@ -4,13 +4,15 @@
 
 use crate::support::examples;
 
+use crate::support::scratch;
 use examples::copy_cpva;
 use kanedyn::study::{RunOptions, Study, run};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempfile::TempDir;
 
-fn out_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("kanedyn_results_json_{tag}_{}", std::process::id()))
+fn out_dir(tag: &str) -> TempDir {
+    scratch(&format!("results-json-{tag}"))
 }
 
 /// Every number in `v`, with its JSON path.
@@ -27,7 +29,8 @@ fn numbers(v: &Value, path: &str, out: &mut Vec<(String, f64)>) {
 /// there; returns the document.
 fn check_study(study_file: &Path, tag: &str) -> Value {
     let study = Study::from_file(study_file).unwrap();
-    let out = out_dir(tag);
+    let tmp = out_dir(tag);
+    let out = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     let dir = out.join(&study.spec.name);
     let json = dir.join("results.json");
@@ -126,7 +129,6 @@ fn check_study(study_file: &Path, tag: &str) -> Value {
         };
         assert_eq!(a["status"], expected, "{}", a["name"]);
     }
-    std::fs::remove_dir_all(&out).ok();
     doc
 }
 
@@ -158,7 +160,8 @@ fn every_example_study_writes_strict_results_json_equal_to_its_csvs() {
 /// still strict JSON equal to the CSVs.
 #[test]
 fn a_failing_analysis_is_reported_and_the_others_kept() {
-    let dir = out_dir("iso_src");
+    let tmp = out_dir("iso_src");
+    let dir = tmp.path().to_path_buf();
     copy_cpva(&dir);
     let file = dir.join("iso.ron");
     std::fs::write(
@@ -178,7 +181,6 @@ fn a_failing_analysis_is_reported_and_the_others_kept() {
     )
     .unwrap();
     let doc = check_study(&file, "iso");
-    std::fs::remove_dir_all(&dir).ok();
     assert_eq!(doc["status"], "partial");
     let a = &doc["analyses"];
     assert_eq!((a[0]["status"].as_str(), a[2]["status"].as_str()), (Some("complete"), Some("complete")));

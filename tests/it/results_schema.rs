@@ -4,6 +4,7 @@
 //! against it, and documents broken in the ways a writer or a hand edit could break them must not.
 
 use crate::support::cli::kanedyn;
+use crate::support::scratch;
 use kanedyn::study::{RunOptions, Study, run};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -77,8 +78,8 @@ fn the_schema_names_every_kind_and_describes_every_field() {
 #[test]
 fn a_partial_results_json_validates_against_the_schema() {
     // A harmonic balance that diverges from one end: its entry is `partial`, the document too.
-    let dir = std::env::temp_dir().join(format!("kanedyn_results_schema_partial_{}", std::process::id()));
-    std::fs::remove_dir_all(&dir).ok();
+    let tmp = scratch("results-schema-partial");
+    let dir = tmp.path().to_path_buf();
     crate::support::examples::copy_cpva(&dir);
     let study = dir.join("iso.ron");
     std::fs::write(
@@ -91,7 +92,6 @@ fn a_partial_results_json_validates_against_the_schema() {
     )
     .unwrap();
     let doc = results_json(&study, &dir.join("out"));
-    std::fs::remove_dir_all(&dir).ok();
     assert_eq!(doc["status"], "partial");
     assert_eq!(doc["analyses"][1]["status"], "partial");
     assert_eq!(doc["analyses"][1]["failures"].as_array().map(Vec::len), Some(1));
@@ -124,8 +124,8 @@ fn kinds_in(entries: &Value, into: &mut Vec<String>) {
 #[test]
 fn every_example_results_json_validates_against_the_schema() {
     let v = validator();
-    let out = std::env::temp_dir().join(format!("kanedyn_results_schema_{}", std::process::id()));
-    std::fs::remove_dir_all(&out).ok();
+    let tmp = scratch("results-schema");
+    let out = tmp.path().to_path_buf();
     let studies = example_studies();
     assert!(studies.len() >= 9, "{studies:?}");
     let mut kinds = Vec::new();
@@ -149,7 +149,6 @@ fn every_example_results_json_validates_against_the_schema() {
     for kind in kanedyn::study::AnalysisSpec::kinds() {
         assert!(kinds.iter().any(|k| k == kind), "no example has a {kind} analysis: its layout is unchecked");
     }
-    std::fs::remove_dir_all(&out).ok();
 
     // Broken documents fail, so the check above is not vacuous.
     let doc = paper.expect("examples/cpva_paper.ron is an example");

@@ -1,19 +1,19 @@
 //! Bad input gives a clear error naming the file, the line:column and the field, never a panic.
 
+use crate::support::scratch;
 use kanedyn::model::mechanism::Mechanism;
 use std::path::{Path, PathBuf};
 
-/// Writes `text` to a fresh file in a per-test temporary folder and returns its path.
-fn write(dir: &str, name: &str, text: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("kanedyn-ron-errors-{}-{dir}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    let p = d.join(name);
+/// Writes `text` to the file `name` in `dir` (a test's scratch folder) and returns its path.
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p
 }
 
 fn error_of(dir: &str, text: &str) -> String {
-    let p = write(dir, "m.ron", text);
+    let tmp = scratch(&format!("ron-errors-{dir}"));
+    let p = write(tmp.path(), "m.ron", text);
     match Mechanism::from_file(&p) {
         Ok(_) => panic!("expected an error for:\n{text}"),
         Err(e) => e.to_string(),
@@ -42,7 +42,8 @@ fn assert_mentions(msg: &str, parts: &[&str]) {
 
 #[test]
 fn the_good_file_loads() {
-    let p = write("good", "m.ron", GOOD);
+    let tmp = scratch("ron-errors-good");
+    let p = write(tmp.path(), "m.ron", GOOD);
     let m = Mechanism::from_file(&p).unwrap();
     assert_eq!(m.ndof(), 2);
 }
@@ -143,10 +144,11 @@ fn missing_and_bad_parts_name_the_part() {
         &GOOD.replace(r#"Body(name: "rotor", mass: 10.0, inertia: 1.0)"#, r#"Body(name: "rotor", part: "nope.ron")"#),
     );
     assert_mentions(&msg, &["m.ron:4:", "bodies[0].part", "nope.ron"]);
-    let part = write("part-bad", "p.ron", "Body(mass: -3.0)");
+    let tmp = scratch("ron-errors-part-bad");
+    let part = write(tmp.path(), "p.ron", "Body(mass: -3.0)");
     assert!(part.exists());
     let p = write(
-        "part-bad",
+        tmp.path(),
         "m.ron",
         &GOOD.replace(r#"Body(name: "rotor", mass: 10.0, inertia: 1.0)"#, r#"Body(name: "rotor", part: "p.ron")"#),
     );

@@ -14,7 +14,7 @@ use kanedyn::model::math::Vec2;
 use kanedyn::model::mechanism::Mechanism;
 use kanedyn::model::shape::{PlacedShape, ShapeSpec};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 const TOL: f64 = 1e-12;
 
@@ -189,7 +189,8 @@ fn catalog_flywheel_and_an_override_of_its_density() {
     let m = rho * t * PI * (ro * ro - ri * ri);
     assert_props("steel flywheel", steel, m, (0.0, 0.0), m * (ro * ro + ri * ri) / 2.0, ro);
     // Through a mechanism, overriding the density (aluminium) scales mass and inertia alike.
-    let dir = tmp("override");
+    let tmp = folder("override");
+    let dir = tmp.path();
     std::fs::copy(root.join("bodies/steel_disc_flywheel.ron"), dir.join("fw.ron")).unwrap();
     let mech = dir.join("m.ron");
     std::fs::write(
@@ -203,10 +204,8 @@ fn catalog_flywheel_and_an_override_of_its_density() {
     assert_props("aluminium flywheel", alu, m * k, (0.0, 0.0), steel.i_com * k, ro);
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("kanedyn-shapes-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn folder(name: &str) -> tempfile::TempDir {
+    crate::support::scratch(&format!("shapes-{name}"))
 }
 
 /// 1-based line:column of the first occurrence of `marker` in `text`.
@@ -381,7 +380,8 @@ fn unknown_shape_fields_are_rejected_with_their_line() {
 
 #[test]
 fn mechanism_errors_carry_the_body_path() {
-    let dir = tmp("mech");
+    let tmp = folder("mech");
+    let dir = tmp.path();
     let text = r#"Mechanism(
     name: "m",
     bodies: [

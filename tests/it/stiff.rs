@@ -5,13 +5,11 @@
 
 use kanedyn::study::{RunOptions, Study, run};
 use kanedyn::time::integrate::{IntegrateError, IntegrateOptions, Method, integrate};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A folder of its own for one test.
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_stiff_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn folder(tag: &str) -> tempfile::TempDir {
+    crate::support::scratch(&format!("stiff-{tag}"))
 }
 
 /// Two unit masses, each on a spring k1 to ground, joined by a spring k2, with dampers c1 to ground
@@ -144,7 +142,8 @@ fn traces(report: &kanedyn::study::StudyReport) -> Vec<(String, Vec<f64>)> {
 /// 32×), and the results say which ran and why.
 #[test]
 fn implicit_sweep_on_the_elastic_shaft_matches_a_tight_explicit_reference() {
-    let dir = scratch("sweep");
+    let tmp = folder("sweep");
+    let dir = tmp.path().to_path_buf();
     let opts = RunOptions { out: Some(dir.join("out")), progress: false };
     let mut runs = Vec::new();
     for (tag, settings) in [
@@ -186,7 +185,8 @@ fn implicit_sweep_on_the_elastic_shaft_matches_a_tight_explicit_reference() {
 /// shorter than accuracy asks at rtol 1e-6).
 #[test]
 fn auto_picks_explicit_for_the_paper_rotor_and_implicit_for_a_very_stiff_shaft() {
-    let dir = scratch("auto");
+    let tmp = folder("auto");
+    let dir = tmp.path().to_path_buf();
     let opts = RunOptions { out: Some(dir.join("out")), progress: false };
     // A 3 s sweep is enough to see the choice.
     let study = shaft_sweep(&dir, "stiffer", "rtol: 1e-6, atol: 1e-6", 1.8e8);
@@ -217,7 +217,8 @@ fn auto_picks_explicit_for_the_paper_rotor_and_implicit_for_a_very_stiff_shaft()
 /// An unknown integrator is refused with the file, line:column and field.
 #[test]
 fn an_unknown_integrator_is_a_located_error() {
-    let dir = scratch("bad");
+    let tmp = folder("bad");
+    let dir = tmp.path().to_path_buf();
     std::fs::copy(concat!(env!("CARGO_MANIFEST_DIR"), "/benches/studies/cpva1.ron"), dir.join("cpva1.ron")).unwrap();
     std::fs::write(
         dir.join("s.ron"),

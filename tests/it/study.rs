@@ -1,13 +1,15 @@
 //! Study files: the examples load and run, the linear study reproduces the closed forms of the
 //! paper, and bad study input gives errors naming the file, line:column and field.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::cpva::{CpvaParams, rotor_order};
 use kanedyn::study::{RunOptions, Study, run};
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempfile::TempDir;
 
-fn out_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!("kanedyn_study_{tag}_{}", std::process::id()))
+fn out_dir(tag: &str) -> TempDir {
+    scratch(&format!("study-{tag}"))
 }
 
 #[test]
@@ -27,12 +29,12 @@ fn every_example_study_loads() {
 #[test]
 fn linear_study_gives_the_closed_forms() {
     let study = Study::from_file(Path::new("examples/cpva_linear.ron")).unwrap();
-    let out = out_dir("linear");
+    let tmp = out_dir("linear");
+    let out = tmp.path().to_path_buf();
     let r = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).unwrap();
     for f in &r.files {
         assert!(f.exists(), "{} not written", f.display());
     }
-    std::fs::remove_dir_all(&out).ok();
     let lin = &r.linear[0];
     let p = CpvaParams::canonical();
     let (it, nt) = (p.i_tilde, p.n_t);
@@ -63,20 +65,18 @@ fn linear_study_gives_the_closed_forms() {
 /// A temp folder holding the example mechanism `cpva.ron` (its parts from the shipped catalog),
 /// so a study written there may name it by relative path (studies may only read inside their
 /// tree).
-fn with_mechanism(tag: &str) -> PathBuf {
+fn with_mechanism(tag: &str) -> TempDir {
     let dir = out_dir(tag);
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::copy("examples/cpva.ron", dir.join("cpva.ron")).unwrap();
+    std::fs::copy("examples/cpva.ron", dir.path().join("cpva.ron")).unwrap();
     dir
 }
 
 fn study_error(name: &str, text: &str) -> String {
-    let dir = with_mechanism(&format!("err_{name}"));
+    let tmp = with_mechanism(&format!("err_{name}"));
+    let dir = tmp.path().to_path_buf();
     let p = dir.join("s.ron");
     std::fs::write(&p, text.replace("MECH", "cpva.ron")).unwrap();
-    let e = Study::from_file(&p).err().unwrap_or_else(|| panic!("{name}: expected an error")).to_string();
-    std::fs::remove_dir_all(&dir).ok();
-    e
+    Study::from_file(&p).err().unwrap_or_else(|| panic!("{name}: expected an error")).to_string()
 }
 
 const GOOD: &str = r#"Study(
@@ -112,7 +112,8 @@ fn bad_study_input_names_the_place() {
 
 #[test]
 fn cli_run_writes_outputs_and_fails_cleanly_on_bad_input() {
-    let out = out_dir("cli");
+    let tmp = out_dir("cli");
+    let out = tmp.path().to_path_buf();
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_kanedyn"))
         .args(["run", "examples/shaft_campbell.ron", "--out"])
         .arg(&out)
@@ -121,7 +122,6 @@ fn cli_run_writes_outputs_and_fails_cleanly_on_bad_input() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(out.join("shaft_campbell/summary.md").exists());
     assert!(out.join("shaft_campbell/campbell.svg").exists());
-    std::fs::remove_dir_all(&out).ok();
     let o =
         std::process::Command::new(env!("CARGO_BIN_EXE_kanedyn")).args(["run", "examples/cpva.ron"]).output().unwrap();
     assert!(!o.status.success());
@@ -148,7 +148,8 @@ fn harmonic_balance_in_speed_and_torque() {
     ],
 )
 "#;
-    let dir = with_mechanism("hbm_param");
+    let tmp = with_mechanism("hbm_param");
+    let dir = tmp.path().to_path_buf();
     let p = dir.join("s.ron");
     std::fs::write(&p, text.replace("MECH", "cpva.ron")).unwrap();
     let study = Study::from_file(&p).unwrap();
@@ -156,7 +157,6 @@ fn harmonic_balance_in_speed_and_torque() {
     for f in &r.files {
         assert!(f.exists(), "{} not written", f.display());
     }
-    std::fs::remove_dir_all(&dir).ok();
     let near = |folds: Vec<f64>, target: f64| folds.into_iter().any(|f| abs_diff_eq!(f / target, 1.0, epsilon = 1e-3));
     let torque: Vec<f64> = r.hbm.iter().filter(|b| b.amplitude.is_nan()).flat_map(|b| b.folds.clone()).collect();
     assert!(near(torque.clone(), 40.0), "torque folds {torque:?}");

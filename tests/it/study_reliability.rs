@@ -6,32 +6,26 @@ use approx::abs_diff_eq;
 use kanedyn::study::{RunOptions, Study, run};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use tempfile::TempDir;
 
 /// A scratch copy of `examples/` (with its catalog parts), so studies written here find the
-/// example mechanisms by relative path.
-struct Scratch(PathBuf);
+/// example mechanisms by relative path; removed when dropped.
+struct Scratch(TempDir);
 
 impl Scratch {
     fn new(tag: &str) -> Self {
-        let root = std::env::temp_dir().join(format!("kanedyn_rel_{tag}_{}", std::process::id()));
-        std::fs::remove_dir_all(&root).ok();
-        copy_dir(Path::new(env!("CARGO_MANIFEST_DIR")), &root, &["examples", "bodies", "joints"]);
+        let root = crate::support::scratch(&format!("rel-{tag}"));
+        copy_dir(Path::new(env!("CARGO_MANIFEST_DIR")), root.path(), &["examples", "bodies", "joints"]);
         Scratch(root)
     }
     /// Writes a study into the scratch `examples/` folder and returns its path.
     fn study(&self, file: &str, text: &str) -> PathBuf {
-        let p = self.0.join("examples").join(file);
+        let p = self.0.path().join("examples").join(file);
         std::fs::write(&p, text).unwrap();
         p
     }
     fn out(&self) -> PathBuf {
-        self.0.join("out")
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        std::fs::remove_dir_all(&self.0).ok();
+        self.0.path().join("out")
     }
 }
 
@@ -202,7 +196,7 @@ fn study_and_analysis_names_cannot_leave_the_output_folder() {
         let text = study_with(&SWEEP.replace("name: \"a\"", &format!("name: \"{name}\"")));
         assert_located(&load_error(&s, &text), "analyses[0].name");
     }
-    assert!(!s.0.join("x").exists() && !Path::new("/tmp/x/summary.md").exists());
+    assert!(!s.0.path().join("x").exists() && !Path::new("/tmp/x/summary.md").exists());
     // Used to: an amplitude of 1e-300 made a 300-digit file name, too long to write.
     let p = s.study("tiny.ron", &study_with(&SWEEP.replace("[40.0]", "[1e-300]")));
     let report = run(&Study::from_file(&p).unwrap(), &RunOptions { out: Some(s.out()), progress: false }).unwrap();
@@ -343,7 +337,7 @@ fn nonsense_values_are_refused_at_load() {
 #[test]
 fn steady_spin_analyses_under_gravity_are_refused() {
     let s = Scratch::new("gravity");
-    let mech = std::fs::read_to_string(s.0.join("examples/cpva.ron")).unwrap();
+    let mech = std::fs::read_to_string(s.0.path().join("examples/cpva.ron")).unwrap();
     let with_g = mech.replacen("gravity: (0.0, 0.0)", "gravity: (0.0, -9.81)", 1);
     let with_g = if with_g == mech {
         mech.replacen(
@@ -355,7 +349,7 @@ fn steady_spin_analyses_under_gravity_are_refused() {
         with_g
     };
     assert_ne!(with_g, mech, "could not add gravity to the example");
-    std::fs::write(s.0.join("examples/cpva_g.ron"), with_g).unwrap();
+    std::fs::write(s.0.path().join("examples/cpva_g.ron"), with_g).unwrap();
     let m =
         r#"MultiOrder(name: "m", order: 3.0, speeds: [(rpm: 1000.0, harmonics: [(multiple: 1.0, amplitude: 100.0)])])"#;
     let e = load_error(&s, &study_with(m).replace("cpva.ron", "cpva_g.ron"));

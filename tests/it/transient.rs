@@ -14,7 +14,8 @@ use kanedyn::model::excitation::Excitation;
 use kanedyn::study::{RunOptions, Study, StudyReport, run};
 use kanedyn::time::integrate::{IntegrateOptions, integrate};
 use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use tempfile::TempDir;
 
 // The canonical rotor-CPVA (bodies/*.ron): rotor inertia, pendulum mass, centre of mass
 // from the pivot, inertia about it, pivot radius, dampers.
@@ -41,20 +42,20 @@ fn mechanism() -> String {
     )
 }
 
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("kanedyn_transient_{tag}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn folder(tag: &str) -> TempDir {
+    crate::support::scratch(&format!("transient-{tag}"))
 }
 
-fn study(tag: &str, analyses: &str) -> (Study, PathBuf) {
-    let dir = scratch(tag);
+/// The study and the folder it sits in (the caller's outputs go there too).
+fn study(tag: &str, analyses: &str) -> (Study, TempDir) {
+    let tmp = folder(tag);
+    let dir = tmp.path();
     std::fs::write(dir.join("m.ron"), mechanism()).unwrap();
     let text = format!(
         "Study(name: \"s\", mechanism: \"m.ron\", integration: (rtol: 1e-11, atol: 1e-11, sample_hz: 2000.0),\n    analyses: [\n{analyses}\n    ],\n)"
     );
     std::fs::write(dir.join("s.ron"), text).unwrap();
-    (Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}")), dir)
+    (Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}")), tmp)
 }
 
 fn run_study(s: &Study, dir: &Path) -> StudyReport {
@@ -65,11 +66,12 @@ fn run_study(s: &Study, dir: &Path) -> StudyReport {
 
 #[test]
 fn a_free_transient_equals_the_run_started_by_hand() {
-    let (s, dir) = study(
+    let (s, tmp) = study(
         "free",
         r#"Transient(name: "free", duration_s: 10.0, speed: Free(rpm: 1000.0),
                      angles: [("pivot", 0.3)], rates: [("pivot", 2.0)])"#,
     );
+    let dir = tmp.path().to_path_buf();
     let report = run_study(&s, &dir);
     let r = &report.transient[0];
 
@@ -112,19 +114,19 @@ fn a_free_transient_equals_the_run_started_by_hand() {
     // The pendulum swings from its initial angle (a start-up from 0.3 rad): the element's largest
     // excursion is at least where it started.
     assert!(r.elements[0].peak >= 0.3);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn a_prescribed_speed_leaves_the_pendulum_of_eq_7_and_its_drive_torque() {
     // The spin held at 1000 rpm; a torque of order 3 (locked to the crank angle θ = Ωt) acts at
     // the pivot, between rotor and pendulum.
-    let (s, dir) = study(
+    let (s, tmp) = study(
         "held",
         r#"Transient(name: "held", duration_s: 5.0, speed: Prescribed(rpm_from: 1000.0, rpm_to: 1000.0),
                      angles: [("pivot", 0.1)],
                      torques: [(joint: "pivot", order: 3.0, harmonics: [(multiple: 1.0, amplitude: 0.5, phase: 0.2)])])"#,
     );
+    let dir = tmp.path().to_path_buf();
     let report = run_study(&s, &dir);
     let r = &report.transient[0];
     let omega = 1000.0 * PI / 30.0;
@@ -173,12 +175,12 @@ fn a_prescribed_speed_leaves_the_pendulum_of_eq_7_and_its_drive_torque() {
     assert!(e_phi <= 1e-8, "{e_phi:e}");
     assert!(e_rpm <= 1e-6, "{e_rpm:e}");
     assert!(e_drive <= 1e-6 * peak, "{e_drive:e}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn a_run_up_map_peaks_where_the_campbell_table_crosses_the_shaft_mode() {
-    let dir = scratch("runup");
+    let tmp = folder("runup");
+    let dir = tmp.path().to_path_buf();
     let s = Study::from_file(Path::new("examples/shaft_runup.ron")).unwrap();
     let report = run_study(&s, &dir);
     let c = &report.campbell[0];
@@ -206,7 +208,6 @@ fn a_run_up_map_peaks_where_the_campbell_table_crosses_the_shaft_mode() {
     }
     // The ramp was followed (the governor holds the mean speed on it): it ends within 2 %.
     assert_abs_diff_eq!(r.rpm_end, 1200.0, epsilon = 24.0);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -241,7 +242,8 @@ fn bad_transient_input_is_located() {
         ),
     ];
     for (k, (analysis, field, words)) in cases.iter().enumerate() {
-        let dir = scratch(&format!("bad{k}"));
+        let tmp = folder(&format!("bad{k}"));
+        let dir = tmp.path().to_path_buf();
         std::fs::write(dir.join("m.ron"), mechanism()).unwrap();
         std::fs::write(
             dir.join("s.ron"),
@@ -252,7 +254,6 @@ fn bad_transient_input_is_located() {
         println!("{e}");
         assert!(e.contains("s.ron:3:"), "{e}");
         assert!(e.contains(field) && e.contains(words), "{e}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 }
 
@@ -263,9 +264,8 @@ fn bad_transient_input_is_located() {
 /// failure.
 #[test]
 fn a_release_too_short_for_a_map_exits_zero_with_its_series_and_peaks() {
-    let dir = std::env::temp_dir().join(format!("kanedyn_release_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = crate::support::scratch("release");
+    let dir = tmp.path().to_path_buf();
     std::fs::copy("examples/dmf.ron", dir.join("dmf.ron")).unwrap();
     std::fs::write(
         dir.join("release.ron"),
@@ -282,7 +282,6 @@ fn a_release_too_short_for_a_map_exits_zero_with_its_series_and_peaks() {
     let series = dir.join("out/release/release_series.csv");
     let ok = out.status.success();
     let listed = std::fs::read_dir(dir.join("out/release")).map(|d| d.count()).unwrap_or(0);
-    let _ = std::fs::remove_dir_all(&dir);
     assert!(ok, "exit {:?}: {}\n{summary}", out.status.code(), String::from_utf8_lossy(&out.stderr));
     assert!(summary.contains("Note: no order–rpm map"), "{summary}");
     assert!(!summary.contains("Failures"), "{summary}");

@@ -4,6 +4,7 @@
 //! the steady response (harmonic balance, time integration, and for the elements' torques the
 //! sampled coupling law against the time-domain torque) agree at every speed.
 
+use crate::support::scratch;
 use approx::abs_diff_eq;
 use kanedyn::linear::LinearModel;
 use kanedyn::model::mechanism::Mechanism;
@@ -57,9 +58,9 @@ fn the_mean_torque_winds_the_driveline_as_a_loaded_chain() {
 #[test]
 fn harmonic_balance_and_time_runs_agree_on_the_driveline() {
     let study = Study::from_file(Path::new("examples/truck_study.ron")).unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("kanedyn_truck_{}", std::process::id()));
+    let tmp = scratch("truck");
+    let dir = tmp.path().to_path_buf();
     let report = run(&study, &RunOptions { out: Some(dir.clone()), progress: false }).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
     let multi = &report.multi[0];
     let (mut worst, mut worst_torque): (f64, f64) = (0.0, 0.0);

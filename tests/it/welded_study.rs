@@ -4,9 +4,10 @@
 //! into the rotor (a welded body is its merged inertia, tests/it/joint_kinds.rs): every analysis
 //! must give the same numbers.
 
+use crate::support::scratch;
 use approx::{abs_diff_eq, assert_abs_diff_eq};
 use kanedyn::study::{RunOptions, Study, StudyReport, run};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Canonical rotor inertia (bodies/flywheel_rotor.ron), kg·m², split into a core and a
 /// hub on the axis below.
@@ -70,14 +71,13 @@ const STUDY: &str = r#"Study(
 )"#;
 
 fn run_study(welded: bool) -> StudyReport {
-    let dir: PathBuf = std::env::temp_dir().join(format!("kanedyn_welded_{welded}_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = scratch(&format!("welded-{welded}"));
+    let dir = tmp.path().to_path_buf();
     std::fs::write(dir.join("m.ron"), mechanism(welded)).unwrap();
     std::fs::write(dir.join("s.ron"), STUDY).unwrap();
     let study = Study::from_file(&dir.join("s.ron")).unwrap_or_else(|e| panic!("{e}"));
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     assert!(report.failures.is_empty(), "{:?}", report.failures);
-    std::fs::remove_dir_all(&dir).ok();
     report
 }
 
