@@ -302,31 +302,21 @@ fn load_corpus(root: &Path) -> Vec<Seed> {
     seeds
 }
 
-/// A temporary copy of the example tree, removed on drop.
+/// A temporary copy of the example tree, removed on drop (a unique name per tree, so runs in
+/// parallel never share one).
 struct TempTree {
-    root: PathBuf,
+    dir: tempfile::TempDir,
 }
 
 impl TempTree {
     fn new(repo: &Path) -> Self {
-        static N: AtomicUsize = AtomicUsize::new(0);
-        let root = std::env::temp_dir().join(format!(
-            "kanedyn-fuzz-{}-{}",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
-        ));
+        let root = tempfile::Builder::new().prefix("kanedyn-fuzz-").tempdir().expect("create temporary folder");
         for dir in TREE {
             if repo.join(dir).is_dir() {
-                copy_dir(&repo.join(dir), &root.join(dir));
+                copy_dir(&repo.join(dir), &root.path().join(dir));
             }
         }
-        Self { root }
-    }
-}
-
-impl Drop for TempTree {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.root);
+        Self { dir: root }
     }
 }
 
@@ -447,7 +437,7 @@ impl Fuzz {
     /// Loads `text` as a file of `seed`'s kind; `tag` makes temporary file names unique.
     fn target(&self, seed: usize, text: &str, tag: &str) -> Result<(), String> {
         let s = &self.seeds[seed];
-        let at = self.tree.root.join(&s.rel);
+        let at = self.tree.dir.path().join(&s.rel);
         match s.kind {
             Kind::Mechanism => load_mechanism(&at, text),
             Kind::Study => load_study(&at.with_file_name(format!("fuzz_study_{tag}.ron")), text),

@@ -81,9 +81,9 @@ fn study_text(rng: &mut Rng) -> String {
 }
 
 fn fuzz(seed: u64, executions: usize) {
-    let root = std::env::temp_dir().join(format!("kanedyn_fuzz_runs_{}_{seed}", std::process::id()));
-    std::fs::remove_dir_all(&root).ok();
-    copy_dir(Path::new("examples"), &root);
+    let tmp = tempfile::Builder::new().prefix(&format!("kanedyn-fuzz-runs-{seed}-")).tempdir().unwrap();
+    let root = tmp.path();
+    copy_dir(Path::new("examples"), root);
     let only: Option<usize> = std::env::var("KANEDYN_FUZZ_ONLY").ok().and_then(|v| v.parse().ok());
     let limits = Limits { max_cpu_s: 60.0, watchdog: Watchdog { factor: 3.0, floor_s: 1.0 }, ..Limits::default() };
     let opts = LoadOptions { limits, ..LoadOptions::default() };
@@ -123,7 +123,6 @@ fn fuzz(seed: u64, executions: usize) {
         }
         ran += 1;
     }
-    std::fs::remove_dir_all(&root).ok();
     println!(
         "seed {seed}: {executions} executions, {refused} refused at load, {ran} runs ({watchdog} analyses stopped by \
          the watchdog), slowest {slowest:.2} s"
