@@ -713,8 +713,8 @@ mod tests {
 
     #[test]
     fn writes_an_svg_with_all_styles_and_a_log_axis() {
-        let dir = std::env::temp_dir().join(format!("kanedyn_plot_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new().prefix("kanedyn-plot-").tempdir().unwrap();
+        let dir = tmp.path();
         let x: Vec<f64> = (0..50).map(|i| 2.9 + 0.008 * i as f64).collect();
         let s = |style, color, f: fn(f64) -> f64| Series {
             label: format!("{style:?}"),
@@ -742,7 +742,6 @@ mod tests {
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.starts_with("<svg"));
         assert!(text.contains("order n") && text.contains("Dashed") && text.contains("n_t"));
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A curve rising into the upper right sends the legend to the empty upper left; with every
@@ -785,8 +784,8 @@ mod tests {
     /// first point back (linear x, logarithmic y), and no marker text is left in the file.
     #[test]
     fn groups_carry_the_axes_mapping() {
-        let dir = std::env::temp_dir().join(format!("kanedyn_plot_groups_{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new().prefix("kanedyn-plot-groups-").tempdir().unwrap();
+        let dir = tmp.path();
         let x: Vec<f64> = (0..40).map(|i| 1.0 + 0.05 * i as f64).collect();
         let y: Vec<f64> = x.iter().map(|v| v.powi(3)).collect();
         let series = Series { label: "cubic \"c\"".into(), x: x.clone(), y: y.clone(), ..Series::default() };
@@ -817,7 +816,6 @@ mod tests {
         let yv = ys[0] * (ys[1] / ys[0]).powf((first[1] - pys[0]) / (pys[1] - pys[0]));
         assert!((xv - x[0]).abs() < 1e-4, "{xv}");
         assert!((yv / y[0] - 1.0).abs() < 1e-3, "{yv}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -100,8 +100,9 @@ mod tests {
         let plan = study.plan();
         assert_eq!((plan.analyses[0].kind, plan.analyses[0].runs), ("Toy", 1));
 
-        let out = std::env::temp_dir().join(format!("kanedyn-toy-{}", std::process::id()));
-        let report = run(&study, &RunOptions { out: Some(out.clone()), progress: false }).expect("the toy runs");
+        let tmp = tempfile::Builder::new().prefix("kanedyn-toy-").tempdir().unwrap();
+        let out = tmp.path();
+        let report = run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: false }).expect("the toy runs");
         assert!(report.failures.is_empty(), "{:?}", report.failures);
         assert!(report.summary.contains("## Toy `twice`\n\nTwice 3.5 is 7.\n"), "{}", report.summary);
         let csv = std::fs::read_to_string(out.join("toy_study/twice.csv")).expect("the toy's CSV");
@@ -112,7 +113,6 @@ mod tests {
         assert_eq!((entry["kind"].as_str(), entry["status"].as_str()), (Some("Toy"), Some("complete")));
         assert_eq!(entry["result"]["doubled"].as_f64(), Some(7.0));
         assert_eq!(entry["tables"][0]["columns"][0]["values"][0].as_f64(), Some(7.0));
-        std::fs::remove_dir_all(&out).unwrap();
     }
 
     #[test]
