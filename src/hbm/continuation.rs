@@ -74,7 +74,10 @@
 //!
 //! Crossings are bracketed by the count of multipliers outside the unit circle (bisection along
 //! the segment); a branch point is then located on det ∂R̂/∂x, which vanishes there exactly for
-//! the truncated problem.
+//! the truncated problem, at its own sign change (searched outward from the count's bracket when
+//! the monodromy's error put the count's crossing beside it). Beside a branch point Newton's
+//! steps at fixed parameter stall above the tolerance; while locating, a solve whose steps stop
+//! contracting below 1000× the tolerance is taken as converged (`Hbm::solve_within`).
 
 use super::blocklu::Factor;
 use super::branch::bifurcations;
