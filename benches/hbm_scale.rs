@@ -10,7 +10,14 @@
 //! cargo bench --bench hbm_scale
 //! HBM_SCALE_ONLY=16 cargo bench --bench hbm_scale     # the 16 pendulums once (for a profiler)
 //! HBM_SCALE_RUNS=1 cargo bench --bench hbm_scale      # fewer repetitions (default 3)
+//! HBM_SCALE_FLOOR=1 cargo bench --bench hbm_scale     # and the per-point floor (below)
 //! ```
+//!
+//! The floor: the work every accepted point of a branch with events at any step must do, summed
+//! over the 16-pendulum branches' points and set against the one-pendulum branches — its Floquet
+//! analysis (`stability` called a second time at the point, so the Jacobian it reuses is not
+//! counted) and one Newton solve from the converged point (one Jacobian, one factorisation, the
+//! tangent's share), each timed alone.
 
 #[path = "../tests/it/support/cpva_hbm.rs"]
 mod cpva_hbm;
@@ -31,11 +38,13 @@ struct Run {
     points: usize,
     newton: usize,
     events: Vec<String>,
+    /// The floor's two parts summed over the points (s): Floquet analyses, converged re-solves.
+    floor: (f64, f64),
 }
 
 impl Run {
     fn new() -> Self {
-        Self { best: f64::INFINITY, points: 0, newton: 0, events: Vec::new() }
+        Self { best: f64::INFINITY, points: 0, newton: 0, events: Vec::new(), floor: (0.0, 0.0) }
     }
 
     fn record(&mut self, seconds: f64, b: &Branch) {
@@ -56,7 +65,7 @@ fn one_pendulum(from: f64, to: f64, runs: usize) -> Run {
     r
 }
 
-fn mistuned(from: f64, to: f64, runs: usize) -> Run {
+fn mistuned(from: f64, to: f64, runs: usize, floor: bool) -> Run {
     let mut mech = CpvaParams::canonical().with_pendulums(PENDULUMS).mechanism(None).unwrap();
     for j in 0..PENDULUMS {
         let body = mech.body_index(&format!("pendulum_{}", j + 1)).unwrap();
@@ -71,6 +80,18 @@ fn mistuned(from: f64, to: f64, runs: usize) -> Run {
         let t0 = Instant::now();
         let b = hbm.continue_in_order(from, to, None, &ContinuationOptions::default()).unwrap();
         r.record(t0.elapsed().as_secs_f64(), &b);
+        if floor {
+            r.floor = (0.0, 0.0);
+            for p in &b.points {
+                hbm.stability(&p.solution).unwrap();
+                let t = Instant::now();
+                hbm.stability(&p.solution).unwrap();
+                r.floor.0 += t.elapsed().as_secs_f64();
+                let t = Instant::now();
+                hbm.solve(p.order, Some(&p.solution)).unwrap();
+                r.floor.1 += t.elapsed().as_secs_f64();
+            }
+        }
     }
     r
 }
@@ -78,9 +99,13 @@ fn mistuned(from: f64, to: f64, runs: usize) -> Run {
 fn main() {
     let only16 = std::env::var("HBM_SCALE_ONLY").is_ok_and(|v| v == "16");
     let runs: usize = std::env::var("HBM_SCALE_RUNS").ok().and_then(|v| v.parse().ok()).unwrap_or(3);
+    let floor = std::env::var("HBM_SCALE_FLOOR").is_ok();
     let (mut t1, mut t16) = (0.0, 0.0);
+    let (mut floor16, mut points16) = ((0.0, 0.0), 0);
     for (from, to) in [(2.9, 3.3), (3.3, 2.9)] {
-        let m = mistuned(from, to, if only16 { 1 } else { runs });
+        let m = mistuned(from, to, if only16 { 1 } else { runs }, floor);
+        floor16 = (floor16.0 + m.floor.0, floor16.1 + m.floor.1);
+        points16 += m.points;
         println!(
             "hbm_scale: {PENDULUMS} mistuned, {from} → {to}: {} points, {} corrector iterations, {:.1} ms \
              ({:.2} ms/point); {}",
@@ -112,5 +137,16 @@ fn main() {
     }
     if !only16 {
         println!("hbm_scale: both directions, {PENDULUMS} mistuned / 1 pendulum: {:.1}", t16 / t1);
+        if floor {
+            let per = |s: f64| s * 1e3 / points16 as f64;
+            println!(
+                "hbm_scale: floor over the {points16} points: Floquet {:.2} ms/point, one solve {:.2} ms/point; \
+                 their sum / 1 pendulum's branches: {:.1} ({:.1} at 100 points per branch)",
+                per(floor16.0),
+                per(floor16.1),
+                (floor16.0 + floor16.1) / t1,
+                (floor16.0 + floor16.1) / t1 * 200.0 / points16 as f64
+            );
+        }
     }
 }
