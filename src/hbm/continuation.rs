@@ -1019,27 +1019,20 @@ impl Hbm {
             let (na, nb) = ((lo - w).max(0.0), (hi + w).min(1.0));
             // A solve that fails (stalls right beside the root) leaves that side where it was:
             // the next, wider end brackets the root instead.
-            if na < a {
-                match self.determinant_sign(su, branch, i, na) {
+            for (end, held) in [(na, &mut a), (nb, &mut b)] {
+                if end == *held {
+                    continue;
+                }
+                match self.determinant_sign(su, branch, i, end) {
                     Some(sign) if sign != s_lo => {
-                        bracket = Some((na, a));
+                        bracket = Some((end.min(*held), end.max(*held)));
                         break;
                     }
-                    Some(_) => a = na,
+                    Some(_) => *held = end,
                     None => {}
                 }
             }
-            if nb > b {
-                match self.determinant_sign(su, branch, i, nb) {
-                    Some(sign) if sign != s_lo => {
-                        bracket = Some((b, nb));
-                        break;
-                    }
-                    Some(_) => b = nb,
-                    None => {}
-                }
-            }
-            if a <= 0.0 && b >= 1.0 {
+            if bracket.is_some() || (a <= 0.0 && b >= 1.0) {
                 break;
             }
         }

@@ -101,10 +101,7 @@ fn as_the_coupling_vanishes_unison_is_lost_at_the_fold_of_averaging() {
 /// (the other test's localisation of the same point is checked against averaging above).
 #[test]
 fn the_loss_of_unison_beside_the_fold_is_found_at_any_step() {
-    let base = CpvaParams::canonical();
-    let p = CpvaParams { i_tilde: base.i_tilde * 100.0, c_r: base.c_r * 100.0, c_p: base.c_p * 0.01, ..base }
-        .with_pendulums(2);
-    let kane = Kane::new(&p.mechanism(None).unwrap()).unwrap();
+    let kane = heavy_two_pendulums();
     let mut hbm = Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions::default()).unwrap();
     let mut found: Vec<(f64, f64)> = Vec::new();
     for ds_max in [0.1, 0.05, 0.02] {
@@ -138,10 +135,7 @@ fn the_loss_of_unison_beside_the_fold_is_found_at_any_step() {
 /// crossing by ~1e-6, the bound of the module docs).
 #[test]
 fn the_low_amplitude_loss_of_unison_does_not_depend_on_the_step() {
-    let base = CpvaParams::canonical();
-    let p = CpvaParams { i_tilde: base.i_tilde * 100.0, c_r: base.c_r * 100.0, c_p: base.c_p * 0.01, ..base }
-        .with_pendulums(2);
-    let kane = Kane::new(&p.mechanism(None).unwrap()).unwrap();
+    let kane = heavy_two_pendulums();
     let mut hbm = Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions::default()).unwrap();
     let mut check =
         Hbm::new(&kane, 0, omega(), &single(2500.0), HbmOptions { tol: 1e-8, ..HbmOptions::default() }).unwrap();
@@ -170,4 +164,13 @@ fn the_low_amplitude_loss_of_unison_does_not_depend_on_the_step() {
         found.push(n);
     }
     assert!(found.iter().all(|n| (n - found[0]).abs() < 1e-9), "{found:?}");
+}
+
+/// The paper's rotor with Ĩ × 100 (its loss with it, so the rotor's damping ratio stays) and the
+/// pivot damping / 100, its pendulum split in two: the rotor of the two tests above.
+fn heavy_two_pendulums() -> Kane {
+    let base = CpvaParams::canonical();
+    let p = CpvaParams { i_tilde: base.i_tilde * 100.0, c_r: base.c_r * 100.0, c_p: base.c_p * 0.01, ..base }
+        .with_pendulums(2);
+    Kane::new(&p.mechanism(None).unwrap()).unwrap()
 }
