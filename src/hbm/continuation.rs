@@ -994,9 +994,11 @@ impl Hbm {
         None
     }
 
-    /// The sign of det ∂R̂/∂x at fraction σ of segment i (solved at the interpolated parameter).
-    fn determinant_sign(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<f64> {
-        self.determinant_at(su, branch, i, sigma, None).map(|(_, sign, _)| sign)
+    /// det ∂R̂/∂x at fraction σ of segment i (solved at the interpolated parameter), as a
+    /// [`DetSample`].
+    fn determinant_sample(&mut self, su: &Setup, branch: &Branch, i: usize, sigma: f64) -> Option<DetSample> {
+        let (sol, sign, log) = self.determinant_at(su, branch, i, sigma, None)?;
+        Some(DetSample { sigma, lambda: su.lambda(&sol), sign, log, order: sol.order })
     }
 
     /// A bracket [lo, hi] of segment i (fractions) across which det ∂R̂/∂x changes sign, grown
@@ -1005,14 +1007,23 @@ impl Hbm {
     /// crossing ~1e-6 in the order away from the determinant's root, and a bracket of 1e-11
     /// then misses it. The bracket grows fourfold on each side until one side changes sign (at
     /// most 24 times, to the segment's ends), then is shrunk by bisection back to the width it
-    /// started with, or until a solve beside the root fails. None when no sign change is found.
-    fn determinant_bracket(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
-        let (s_lo, s_hi) = (self.determinant_sign(su, branch, i, lo)?, self.determinant_sign(su, branch, i, hi)?);
-        if s_lo != s_hi {
-            return Some((lo, hi));
+    /// started with, or until a solve beside the root fails. Its two ends' samples; None when no
+    /// sign change is found.
+    fn determinant_bracket(
+        &mut self,
+        su: &Setup,
+        branch: &Branch,
+        i: usize,
+        lo: f64,
+        hi: f64,
+    ) -> Option<(DetSample, DetSample)> {
+        let (s_lo, s_hi) = (self.determinant_sample(su, branch, i, lo)?, self.determinant_sample(su, branch, i, hi)?);
+        if s_lo.sign != s_hi.sign {
+            return Some((s_lo, s_hi));
         }
+        let sign = s_lo.sign;
         let w0 = (hi - lo).max(1e-14);
-        let (mut a, mut b) = (lo, hi);
+        let (mut a, mut b) = (s_lo, s_hi);
         let mut bracket = None;
         for k in 1..=24 {
             let w = w0 * 4f64.powi(k);
@@ -1020,30 +1031,28 @@ impl Hbm {
             // A solve that fails (stalls right beside the root) leaves that side where it was:
             // the next, wider end brackets the root instead.
             for (end, held) in [(na, &mut a), (nb, &mut b)] {
-                if end == *held {
+                if end == held.sigma {
                     continue;
                 }
-                match self.determinant_sign(su, branch, i, end) {
-                    Some(sign) if sign != s_lo => {
-                        bracket = Some((end.min(*held), end.max(*held)));
+                match self.determinant_sample(su, branch, i, end) {
+                    Some(x) if x.sign != sign => {
+                        bracket = Some(if end < held.sigma { (x, *held) } else { (*held, x) });
                         break;
                     }
-                    Some(_) => *held = end,
+                    Some(x) => *held = x,
                     None => {}
                 }
             }
-            if bracket.is_some() || (a <= 0.0 && b >= 1.0) {
+            if bracket.is_some() || (a.sigma <= 0.0 && b.sigma >= 1.0) {
                 break;
             }
         }
         let (mut a, mut b) = bracket?;
-        let s_a = self.determinant_sign(su, branch, i, a)?;
-        while b - a > w0 {
-            let m = 0.5 * (a + b);
+        while b.sigma - a.sigma > w0 {
             // Right beside the root the solve may stall above its floor: the cubic through the
             // samples around the bracket reaches in from there.
-            let Some(sign) = self.determinant_sign(su, branch, i, m) else { break };
-            if sign == s_a {
+            let Some(m) = self.determinant_sample(su, branch, i, 0.5 * (a.sigma + b.sigma)) else { break };
+            if m.sign == a.sign {
                 a = m;
             } else {
                 b = m;
@@ -1061,35 +1070,31 @@ impl Hbm {
     /// in between: over a bracket of ~1e-6 of the segment it is linear to many digits. None when
     /// no sign change is found near the bracket, or a solve at a node fails.
     fn root_of_determinant(&mut self, su: &Setup, branch: &Branch, i: usize, lo: f64, hi: f64) -> Option<(f64, f64)> {
-        let (lo, hi) = self.determinant_bracket(su, branch, i, lo, hi)?;
+        let (s_lo, s_hi) = self.determinant_bracket(su, branch, i, lo, hi)?;
+        let (lo, hi) = (s_lo.sigma, s_hi.sigma);
         let w = hi - lo;
         // Two nodes beside the bracket, inside the segment and distinct from the bracket's ends
         // (clamping lo − w or hi + w to the segment's end repeated a node, and the cubic through
         // a repeated node is not defined).
-        let outer: Vec<f64> = [lo - w, hi + w, lo - 2.0 * w, hi + 2.0 * w, lo + w / 3.0, lo + 2.0 * w / 3.0]
+        let mut samples = vec![s_lo, s_hi];
+        for sigma in [lo - w, hi + w, lo - 2.0 * w, hi + 2.0 * w, lo + w / 3.0, lo + 2.0 * w / 3.0]
             .into_iter()
             .filter(|s| (0.0..=1.0).contains(s))
             .take(2)
-            .collect();
-        let [a, b] = outer[..] else { return None };
-        let mut nodes = [a, b, lo, hi];
-        nodes.sort_by(f64::total_cmp);
-        let mut samples = Vec::with_capacity(4);
-        for sigma in nodes {
-            let (sol, sign, log) = self.determinant_at(su, branch, i, sigma, None)?;
-            samples.push((su.lambda(&sol), sign, log, sol.order));
+        {
+            samples.push(self.determinant_sample(su, branch, i, sigma)?);
         }
-        let (Some(ilo), Some(ihi)) = (nodes.iter().position(|&x| x == lo), nodes.iter().position(|&x| x == hi)) else {
+        if samples.len() < 4 {
             return None;
-        };
-        let (l_lo, l_hi) = (samples[ilo].0, samples[ihi].0);
-        let repeated = samples.windows(2).any(|p| p[0].0 == p[1].0);
-        if samples[ilo].1 == samples[ihi].1 || repeated {
+        }
+        samples.sort_by(|x, y| x.sigma.total_cmp(&y.sigma));
+        let (l_lo, l_hi) = (s_lo.lambda, s_hi.lambda);
+        if samples.windows(2).any(|p| p[0].lambda == p[1].lambda) {
             return None;
         }
         // Values relative to the largest magnitude, so that the interpolation sees O(1) numbers.
-        let reference = samples.iter().map(|x| x.2).fold(f64::NEG_INFINITY, f64::max);
-        let pts: Vec<(f64, f64)> = samples.iter().map(|&(l, sg, lg, _)| (l, sg * (lg - reference).exp())).collect();
+        let reference = samples.iter().map(|x| x.log).fold(f64::NEG_INFINITY, f64::max);
+        let pts: Vec<(f64, f64)> = samples.iter().map(|x| (x.lambda, x.sign * (x.log - reference).exp())).collect();
         let cubic = |l: f64| {
             pts.iter()
                 .enumerate()
@@ -1118,9 +1123,20 @@ impl Hbm {
         }
         let lambda = 0.5 * (a + b);
         // The order: n itself on an order branch, the fixed order otherwise.
-        let order = if su.param == Parameter::Order { lambda } else { samples[ilo].3 };
+        let order = if su.param == Parameter::Order { lambda } else { s_lo.order };
         Some((order, lambda * su.p_ref))
     }
+}
+
+/// det ∂R̂/∂x at fraction `sigma` of a segment: the scaled parameter λ of the state solved there,
+/// the determinant's sign and ln |det|, and the order.
+#[derive(Debug, Clone, Copy)]
+struct DetSample {
+    sigma: f64,
+    lambda: f64,
+    sign: f64,
+    log: f64,
+    order: f64,
 }
 
 /// Each accepted point's arclength and [`test_functions`].
