@@ -13,12 +13,16 @@
 //! and leaves the dense stages to [`Dp8::dense`], called by the driver when a sample falls in
 //! the step. The crate's `init` still chooses the first step.
 
-use super::dop853::{Dop853, Slab, System};
+use super::system::{Slab, System};
 use differential_equations::error::Error;
+use differential_equations::methods::{DormandPrince, ExplicitRungeKutta, Ordinary};
 use differential_equations::ode::{ODE, OrdinaryNumericalMethod};
 use differential_equations::tableau::ButcherTableau;
 use differential_equations::tolerance::Tolerance;
 use differential_equations::utils::constrain_step_size;
+
+/// The crate's DOP853 for state type `Y`: order 8, 12 stages, 16 with the dense-output stages.
+pub(crate) type Dop853<Y> = ExplicitRungeKutta<Ordinary, DormandPrince, f64, Y, 8, 12, 16>;
 
 /// Stages of the method, and with the dense output's.
 const S: usize = 12;

@@ -33,7 +33,8 @@ pub use crate::time::run::{
 };
 
 use crate::error::EngineError;
-use crate::time::dop853::{DynRhs, run};
+use crate::time::dop853::run;
+use crate::time::system::DynRhs;
 
 /// Integrates `ẋ = rhs(t, x)` from `x(t0) = x0` to `t1 > t0` with DOP853 and calls `on_sample` at
 /// every sample time (see [`IntegrateOptions::sample_rate_hz`]), in increasing time.
@@ -75,7 +76,7 @@ where
                 // out-of-line stage sums another 31 % (BENCHMARKS.md, "Stiff shafts"); the
                 // implicit method keeps its dynamic state there (its step is dominated by its
                 // linear algebra).
-                $($e if opts.method == Method::Dop853 => run::<crate::time::dop853::Stages<$e>>(rhs, x0, t0, t1, opts, on_sample),)*
+                $($e if opts.method == Method::Dop853 => run::<crate::time::system::Stages<$e>>(rhs, x0, t0, t1, opts, on_sample),)*
                 _ => match opts.method {
                     Method::Dop853 => run::<Vec<f64>>(rhs, x0, t0, t1, opts, on_sample),
                     Method::Radau5 => crate::time::radau::run::<crate::time::radau::DynState>(rhs, x0, t0, t1, opts, on_sample),

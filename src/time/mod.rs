@@ -2,8 +2,9 @@
 //! ([`integrate`]), the probes that turn sampled states into named signals and the one
 //! `simulate` ([`probe`]), and steady-state detection by windows ([`steady`]). Beside them: the
 //! drive laws of driven runs (torques locked to a crank angle, a prescribed speed:
-//! [`drive_laws`]), the DOP853 stepping loop (`dop853.rs`) and what one integration run takes and
-//! gives (`run.rs`, re-exported by [`integrate`]).
+//! [`drive_laws`]), the DOP853 stepping loop (`dop853.rs`, its step in `dp8.rs`), the Radau IIA
+//! loop (`radau.rs`), the state and right-hand-side plumbing both loops share (`system.rs`), and
+//! what one integration run takes and gives (`run.rs`, re-exported by [`integrate`]).
 
 mod dop853;
 mod dp8;
@@ -13,3 +14,4 @@ pub mod probe;
 mod radau;
 mod run;
 pub mod steady;
+mod system;

@@ -23,36 +23,13 @@
 //! The dense output is the collocation polynomial of the last step (Hairer's CONTR5), exact at
 //! both ends of the step.
 
-use crate::time::dop853::{Clock, DynRhs, Fault, Sampler, Slab, System};
 use crate::time::run::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
+use crate::time::system::{Clock, DynRhs, Fault, Sampler, Slab, System};
 use differential_equations::error::Error as E;
 use differential_equations::interpolate::Interpolation;
-use differential_equations::linalg::Matrix;
 use differential_equations::methods::{ImplicitRungeKutta, Ordinary, Radau};
-use differential_equations::ode::{ODE, OrdinaryNumericalMethod};
+use differential_equations::ode::OrdinaryNumericalMethod;
 use differential_equations::status::Status;
-
-/// The Jacobian by forward differences (see the module docs), counted in the right-hand-side
-/// evaluations; a fault inside leaves NaN in the matrix and the fault in its slot.
-pub(super) fn jacobian<Y: Slab>(sys: &System<'_>, t: f64, y: &Y, j: &mut Matrix<f64>) {
-    let n = y.slice().len();
-    let mut f0 = Y::from_slice(y.slice());
-    let mut f1 = Y::from_slice(y.slice());
-    let mut yp = Y::from_slice(y.slice());
-    ODE::<f64, Y>::diff(sys, t, y, &mut f0);
-    for c in 0..n {
-        let x = y.slice()[c];
-        let delta = (f64::EPSILON * x.abs().max(1e-5)).sqrt();
-        yp.slice_mut()[c] = x + delta;
-        // Divide by the increment actually taken (x + δ rounds).
-        let d = yp.slice()[c] - x;
-        ODE::<f64, Y>::diff(sys, t, &yp, &mut f1);
-        for r in 0..n {
-            j[(r, c)] = (f1.slice()[r] - f0.slice()[r]) / d;
-        }
-        yp.slice_mut()[c] = x;
-    }
-}
 
 /// Integrates with Radau IIA (see the module docs); the arguments and results are those of the
 /// DOP853 loop.
