@@ -433,34 +433,145 @@ fn undamped(mech: &Mechanism) -> Mechanism {
     m
 }
 
+/// The spin joint named `spin_joint` (its joint index and coordinate): a rotating root joint
+/// that nothing holds to ground (no spring, staged spring or end stops).
+fn spin_of(mech: &Mechanism, spin_joint: &str) -> LinResult<(usize, usize)> {
+    let sj = joint_of(mech, spin_joint)?;
+    if mech.joints[sj].parent.is_some() {
+        return Err(LinearError::SpinNotRoot { mechanism: mech.name.clone(), joint: spin_joint.into() });
+    }
+    let Some(s) = mech.coordinate(sj).filter(|_| mech.joints[sj].kind.rotates()) else {
+        return Err(LinearError::Invalid(format!("spin joint `{spin_joint}` does not rotate: it cannot spin")));
+    };
+    if let Some(sp) = mech.joints[sj].spring
+        && sp.stiffness != 0.0
+    {
+        return Err(LinearError::SpinSpring {
+            mechanism: mech.name.clone(),
+            joint: spin_joint.into(),
+            stiffness: sp.stiffness,
+        });
+    }
+    // A staged spring or end stops on the spin joint hold it to ground as a spring does.
+    let c = &mech.joints[sj].couplings;
+    let held = c.stages.as_ref().map(|st| st.drive[0].stiffness).or(c.stops.map(|st| st.stiffness));
+    if let Some(stiffness) = held {
+        return Err(LinearError::SpinSpring { mechanism: mech.name.clone(), joint: spin_joint.into(), stiffness });
+    }
+    Ok((sj, s))
+}
+
+/// Newton for the relative equilibrium at speed `omega` of spin coordinate `s` (`spin`): the
+/// other coordinates `q` (updated in place from the guess) and the mean spin torque T_m that
+/// together make the accelerations vanish at the speeds `u`. Returns (T_m, the residual
+/// acceleration, the iterations); no convergence (or NaN) is an error.
+fn relative_equilibrium(
+    kane: &mut Kane,
+    mech: &Mechanism,
+    q: &mut [f64],
+    u: &[f64],
+    g_s: &DVector<f64>,
+    spin: (usize, f64),
+) -> LinResult<(f64, f64, usize)> {
+    let n = q.len();
+    let (s, omega_rad_s) = spin;
+    // Newton on z = [q_j (j ≠ s); T_m] for r(z) = F(q, u⁰) + T_m g_s = 0.
+    let others: Vec<usize> = (0..n).filter(|&j| j != s).collect();
+    let scale = 1.0 + omega_rad_s * omega_rad_s;
+    let mut t_m = 0.0;
+    let mut iterations = 0;
+    let accel = |kane: &mut Kane, q: &[f64], t_m: f64| -> LinResult<(DVector<f64>, f64)> {
+        let r = kane.forcing(0.0, q, u).clone() + g_s * t_m;
+        let chol = kane
+            .mass_matrix(q)
+            .clone()
+            .cholesky()
+            .ok_or_else(|| LinearError::MassMatrix { mechanism: mech.name.clone() })?;
+        let udot = chol.solve(&r);
+        Ok((r, udot.amax()))
+    };
+    let (mut r, mut residual) = accel(kane, q, t_m)?;
+    while residual > NEWTON_TIGHT * scale && iterations < NEWTON_MAX_ITER {
+        let mut jac = DMatrix::zeros(n, n);
+        for (c, &j) in others.iter().enumerate() {
+            let q0 = q[j];
+            q[j] = q0 + H_NEWTON;
+            let fp = kane.forcing(0.0, q, u).clone();
+            q[j] = q0 - H_NEWTON;
+            let fm = kane.forcing(0.0, q, u).clone();
+            q[j] = q0;
+            jac.set_column(c, &((fp - fm) / (2.0 * H_NEWTON)));
+        }
+        jac.set_column(n - 1, g_s);
+        // The pseudo-inverse takes the minimum-norm step along neutral directions (a
+        // pendulum at Ω = 0, a second free root) instead of failing.
+        let svd = bounded::svd(jac, true, true)?;
+        let eps = 1e-13 * svd.singular_values.max();
+        let step = svd.solve(&(-&r), eps).map_err(|e| LinearError::Invalid(format!("internal: {e}")))?;
+        for (c, &j) in others.iter().enumerate() {
+            q[j] += step[c];
+        }
+        t_m += step[n - 1];
+        iterations += 1;
+        let small = others.iter().enumerate().all(|(c, _)| step[c].abs() <= 1e-15)
+            && step[n - 1].abs() <= 1e-15 * (1.0 + t_m.abs());
+        (r, residual) = accel(kane, q, t_m)?;
+        if small {
+            break;
+        }
+    }
+    // NaN must fail too.
+    if residual.is_nan() || residual > NEWTON_ACCEPT * scale {
+        return Err(LinearError::NoEquilibrium {
+            mechanism: mech.name.clone(),
+            omega: omega_rad_s,
+            residual,
+            iterations,
+        });
+    }
+    Ok((t_m, residual, iterations))
+}
+
+/// The order-one generalized force of gravity and world-frame point forces on the linearised
+/// mechanism (zero without them), and whether any acts.
+fn gravity_forcing(
+    mech: &Mechanism,
+    model_mech: &Mechanism,
+    rotation: &[f64],
+    s: usize,
+    q: &[f64],
+    u: &[f64],
+) -> LinResult<(DVector<C64>, bool)> {
+    let n = q.len();
+    // Gravity forces the rotation at order 1 (its mean is zero, so the equilibrium above,
+    // found without it, is the one to expand about).
+    let gravity_loaded = mech.loads.needs_world_orientation();
+    if gravity_loaded && rotation.iter().enumerate().any(|(k, &z)| k != s && z != 0.0) {
+        return Err(LinearError::WorldOrientation {
+            mechanism: mech.name.clone(),
+            detail: "joints geared or meshed to the spin joint turn at their own rates, so gravity forces \
+                         several orders"
+                .into(),
+        });
+    }
+    let gravity_force = if gravity_loaded {
+        let mut loaded = model_mech.clone();
+        loaded.loads.gravity = mech.loads.gravity;
+        loaded.loads.point_forces.clone_from(&mech.loads.point_forces);
+        gravity::order_one_force(&loaded, model_mech, q, u, s)?
+    } else {
+        DVector::from_element(n, C64::new(0.0, 0.0))
+    };
+    Ok((gravity_force, gravity_loaded))
+}
+
 impl LinearModel {
     /// Linearises `mech` about a steady spin of joint `spin_joint` at `omega_rad_s`, the other
     /// coordinates at the relative equilibrium found by Newton from `guess` (all n coordinates;
     /// the spin entry is ignored; default all 0).
     pub fn new(mech: &Mechanism, spin_joint: &str, omega_rad_s: f64, guess: Option<&[f64]>) -> LinResult<Self> {
         let n = mech.ndof();
-        let sj = joint_of(mech, spin_joint)?;
-        if mech.joints[sj].parent.is_some() {
-            return Err(LinearError::SpinNotRoot { mechanism: mech.name.clone(), joint: spin_joint.into() });
-        }
-        let Some(s) = mech.coordinate(sj).filter(|_| mech.joints[sj].kind.rotates()) else {
-            return Err(LinearError::Invalid(format!("spin joint `{spin_joint}` does not rotate: it cannot spin")));
-        };
-        if let Some(sp) = mech.joints[sj].spring
-            && sp.stiffness != 0.0
-        {
-            return Err(LinearError::SpinSpring {
-                mechanism: mech.name.clone(),
-                joint: spin_joint.into(),
-                stiffness: sp.stiffness,
-            });
-        }
-        // A staged spring or end stops on the spin joint hold it to ground as a spring does.
-        let c = &mech.joints[sj].couplings;
-        let held = c.stages.as_ref().map(|st| st.drive[0].stiffness).or(c.stops.map(|st| st.stiffness));
-        if let Some(stiffness) = held {
-            return Err(LinearError::SpinSpring { mechanism: mech.name.clone(), joint: spin_joint.into(), stiffness });
-        }
+        let (sj, s) = spin_of(mech, spin_joint)?;
         let rotation = mech.rigid_rotation(sj).map_err(LinearError::Invalid)?;
         if !omega_rad_s.is_finite() {
             return Err(LinearError::Invalid(format!("spin speed must be finite, got {omega_rad_s} rad/s")));
@@ -479,61 +590,7 @@ impl LinearModel {
         let mut u = vec![0.0; n];
         prepared.speeds.u_from_qdot(&parents, &qdot0, &mut u);
         let g_s: DVector<f64> = w_inv.row(s).transpose();
-
-        // Newton on z = [q_j (j ≠ s); T_m] for r(z) = F(q, u⁰) + T_m g_s = 0.
-        let others: Vec<usize> = (0..n).filter(|&j| j != s).collect();
-        let scale = 1.0 + omega_rad_s * omega_rad_s;
-        let mut t_m = 0.0;
-        let mut iterations = 0;
-        let accel = |kane: &mut Kane, q: &[f64], t_m: f64| -> LinResult<(DVector<f64>, f64)> {
-            let r = kane.forcing(0.0, q, &u).clone() + &g_s * t_m;
-            let chol = kane
-                .mass_matrix(q)
-                .clone()
-                .cholesky()
-                .ok_or_else(|| LinearError::MassMatrix { mechanism: mech.name.clone() })?;
-            let udot = chol.solve(&r);
-            Ok((r, udot.amax()))
-        };
-        let (mut r, mut residual) = accel(&mut kane, &q, t_m)?;
-        while residual > NEWTON_TIGHT * scale && iterations < NEWTON_MAX_ITER {
-            let mut jac = DMatrix::zeros(n, n);
-            for (c, &j) in others.iter().enumerate() {
-                let q0 = q[j];
-                q[j] = q0 + H_NEWTON;
-                let fp = kane.forcing(0.0, &q, &u).clone();
-                q[j] = q0 - H_NEWTON;
-                let fm = kane.forcing(0.0, &q, &u).clone();
-                q[j] = q0;
-                jac.set_column(c, &((fp - fm) / (2.0 * H_NEWTON)));
-            }
-            jac.set_column(n - 1, &g_s);
-            // The pseudo-inverse takes the minimum-norm step along neutral directions (a
-            // pendulum at Ω = 0, a second free root) instead of failing.
-            let svd = bounded::svd(jac, true, true)?;
-            let eps = 1e-13 * svd.singular_values.max();
-            let step = svd.solve(&(-&r), eps).map_err(|e| LinearError::Invalid(format!("internal: {e}")))?;
-            for (c, &j) in others.iter().enumerate() {
-                q[j] += step[c];
-            }
-            t_m += step[n - 1];
-            iterations += 1;
-            let small = others.iter().enumerate().all(|(c, _)| step[c].abs() <= 1e-15)
-                && step[n - 1].abs() <= 1e-15 * (1.0 + t_m.abs());
-            (r, residual) = accel(&mut kane, &q, t_m)?;
-            if small {
-                break;
-            }
-        }
-        // NaN must fail too.
-        if residual.is_nan() || residual > NEWTON_ACCEPT * scale {
-            return Err(LinearError::NoEquilibrium {
-                mechanism: mech.name.clone(),
-                omega: omega_rad_s,
-                residual,
-                iterations,
-            });
-        }
+        let (t_m, residual, iterations) = relative_equilibrium(&mut kane, mech, &mut q, &u, &g_s, (s, omega_rad_s))?;
         kane.set_joint_torque(sj, Excitation::constant(t_m));
         let mass = kane.mass_matrix(&q).clone();
         let (f_q, f_u) = forcing_jacobians(&mut kane, &q, &u);
@@ -545,25 +602,7 @@ impl LinearModel {
             .loads
             .joint_torques
             .push(crate::model::loads::JointTorque { joint: sj, excitation: Excitation::constant(t_m) });
-        // Gravity forces the rotation at order 1 (its mean is zero, so the equilibrium above,
-        // found without it, is the one to expand about).
-        let gravity_loaded = mech.loads.needs_world_orientation();
-        if gravity_loaded && rotation.iter().enumerate().any(|(k, &z)| k != s && z != 0.0) {
-            return Err(LinearError::WorldOrientation {
-                mechanism: mech.name.clone(),
-                detail: "joints geared or meshed to the spin joint turn at their own rates, so gravity forces \
-                         several orders"
-                    .into(),
-            });
-        }
-        let gravity_force = if gravity_loaded {
-            let mut loaded = model_mech.clone();
-            loaded.loads.gravity = mech.loads.gravity;
-            loaded.loads.point_forces.clone_from(&mech.loads.point_forces);
-            gravity::order_one_force(&loaded, &model_mech, &q, &u, s)?
-        } else {
-            DVector::from_element(n, C64::new(0.0, 0.0))
-        };
+        let (gravity_force, gravity_loaded) = gravity_forcing(mech, &model_mech, &rotation, s, &q, &u)?;
         Ok(LinearModel {
             mech: model_mech,
             op: OperatingPoint {

@@ -164,157 +164,23 @@ impl LinearModel {
         let (sm, qi, ui) = self.state_matrix(spin, damping)?;
         let lambdas = eigenvalues(&sm)?;
         let scale = lambdas.iter().map(|l| l.norm()).fold(omega.abs(), f64::max).max(f64::MIN_POSITIVE);
-        let is_real = |l: &C64| l.im.abs() <= REAL_TOL * scale;
-        let mut reals: Vec<f64> = lambdas.iter().filter(|l| is_real(l)).map(|l| l.re).collect();
-        reals.sort_by(f64::total_cmp);
-        // (representative, partner, kind)
-        let mut picks: Vec<(C64, C64, ModeKind)> = Vec::new();
-        if spin == Spin::Free
-            && let Some((i, _)) = reals.iter().enumerate().min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-        {
-            let l = reals.remove(i);
-            picks.push((C64::new(l, 0.0), C64::new(l, 0.0), ModeKind::SpinSpeed));
-        }
-        for l in lambdas.iter().filter(|l| !is_real(l) && l.im > 0.0) {
-            picks.push((*l, l.conj(), ModeKind::Vibration));
-        }
-        for pair in reals.chunks(2) {
-            let (a, b) = (pair[0], *pair.get(1).unwrap_or(&pair[0]));
-            let (rep, other) = if a.abs() <= b.abs() { (a, b) } else { (b, a) };
-            picks.push((C64::new(rep, 0.0), C64::new(other, 0.0), ModeKind::Vibration));
-        }
+        let picks = pick_roots(&lambdas, scale, spin);
         let second = self.second_order(damping);
         let (mq, kq) = (&second.m, &second.k);
         // The joint that owns each coordinate names the modes.
         let joints: Vec<String> = (0..n).map(|k| self.mech.joints[self.mech.joint_of(k)].name.clone()).collect();
-        let nb = self.mech.bodies.len();
         let bodies: Vec<String> = self.mech.bodies.iter().map(|b| b.name.clone()).collect();
         let mut rigid = Vec::new();
         let mut modes = Vec::new();
         if spin == Spin::Free {
-            let shape_q: Vec<C64> = self.op.rotation.iter().map(|&z| C64::new(z, 0.0)).collect();
-            let mut share: Vec<f64> = (0..n).map(|j| self.op.rotation[j].powi(2) * mq[(j, j)]).collect();
-            normalise(&mut share);
-            rigid.push(Mode {
-                kind: ModeKind::SpinAngle,
-                eigenvalue: C64::new(0.0, 0.0),
-                partner: C64::new(0.0, 0.0),
-                natural_frequency_rad_s: 0.0,
-                damped_frequency_rad_s: 0.0,
-                frequency_hz: 0.0,
-                order: 0.0,
-                damping_ratio: f64::NAN,
-                shape_q,
-                shape_qdot: vec![C64::new(0.0, 0.0); n],
-                shape_u: vec![C64::new(0.0, 0.0); n],
-                coordinate_share: share,
-                body_energy_share: vec![0.0; nb],
-                strain_share: vec![0.0; n],
-                label: joints[s].clone(),
-            });
+            rigid.push(self.spin_angle_mode(mq, &joints));
         }
         let mut used: Vec<C64> = Vec::new();
         for (rep, partner, kind) in picks {
             let k = used.iter().filter(|u| (**u - rep).norm() <= REPEAT_TOL * scale).count();
             used.push(rep);
-            let v = null_vector(&sm, rep, k);
-            let nq = qi.len();
-            let mut q = vec![C64::new(0.0, 0.0); n];
-            let mut u = vec![C64::new(0.0, 0.0); n];
-            for (a, &j) in qi.iter().enumerate() {
-                q[j] = v[a];
-            }
-            for (a, &j) in ui.iter().enumerate() {
-                u[j] = v[nq + a];
-            }
-            if spin == Spin::Free && kind == ModeKind::Vibration && rep.norm() > 0.0 {
-                // θ̇* = u_s*: the spin angle's part of the eigenvector.
-                q[s] = u[s] / rep;
-                // Back from the deviations p to the coordinates: q*_j = p_j + z_j θ*.
-                let theta = q[s];
-                for (j, &z) in self.op.rotation.iter().enumerate() {
-                    if j != s {
-                        q[j] += z * theta;
-                    }
-                }
-            }
-            let mut qdot = vec![C64::new(0.0, 0.0); n];
-            for k in 0..n {
-                for r in 0..n {
-                    qdot[k] += u[r] * self.w_inv[(k, r)];
-                }
-            }
-            // Scale: largest q̇ entry made 1; for a zero-frequency mode (q̇ = λq ≈ 0, only rounding
-            // left in q̇) the displacement q stands in for q̇ in the scaling and the shares.
-            let moving = rep.norm() > REPEAT_TOL * scale || kind == ModeKind::SpinSpeed;
-            let basis = if moving { &qdot } else { &q };
-            let pivot = basis
-                .iter()
-                .copied()
-                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-                .filter(|p| p.norm() > 0.0)
-                .unwrap_or(C64::new(1.0, 0.0));
-            for x in q.iter_mut().chain(u.iter_mut()).chain(qdot.iter_mut()) {
-                *x /= pivot;
-            }
-            let basis = if moving { &qdot } else { &q };
-            let mut share: Vec<f64> = (0..n).map(|j| basis[j].norm_sqr() * mq[(j, j)]).collect();
-            normalise(&mut share);
-            let mut energy: Vec<f64> = (0..nb)
-                .map(|j| {
-                    let (pv, pw) = &self.partials[j];
-                    let (mut vx, mut vy, mut w) = (C64::new(0.0, 0.0), C64::new(0.0, 0.0), C64::new(0.0, 0.0));
-                    for r in 0..n {
-                        vx += u[r] * pv[r].x;
-                        vy += u[r] * pv[r].y;
-                        w += u[r] * pw[r];
-                    }
-                    let b = &self.mech.bodies[j].inertia;
-                    0.5 * (b.mass * (vx.norm_sqr() + vy.norm_sqr()) + b.i_com * w.norm_sqr())
-                })
-                .collect();
-            normalise(&mut energy);
-            // Potential energy by coordinate (diagonal part; a tree's springs and pendulums
-            // each sit on their own coordinate).
-            // A mode whose diagonal potential energy is not positive overall (a pendulum
-            // standing inward, a rigid mode) is named by its kinetic share instead.
-            let mut strain: Vec<f64> = (0..n).map(|j| kq[(j, j)] * q[j].norm_sqr()).collect();
-            let stiff = strain.iter().sum::<f64>() > 0.0;
-            strain.iter_mut().for_each(|e| *e = e.max(0.0));
-            if stiff {
-                normalise(&mut strain);
-            } else {
-                strain.fill(0.0);
-            }
-            let argmax = |v: &[f64]| v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
-            let top = if stiff { argmax(&strain) } else { argmax(&share) };
-            // A compliant mesh (or a shaft between two meshes) holds its strain between two
-            // coordinates: it names the mode when it holds more than any coordinate's own spring.
-            let label = if stiff { self.strain_label(&q, kq, &joints) } else { joints[top].clone() };
-            let (wn, zeta) = if rep.im != 0.0 {
-                (rep.norm(), if rep.norm() > 0.0 { -rep.re / rep.norm() } else { f64::NAN })
-            } else {
-                let wn = (rep.re * partner.re).abs().sqrt();
-                (wn, if wn > 0.0 { -(rep.re + partner.re) / (2.0 * wn) } else { f64::NAN })
-            };
-            let wd = rep.im.abs();
-            let mode = Mode {
-                kind,
-                eigenvalue: rep,
-                partner,
-                natural_frequency_rad_s: wn,
-                damped_frequency_rad_s: wd,
-                frequency_hz: wd / (2.0 * PI),
-                order: if omega != 0.0 { wd / omega.abs() } else { f64::NAN },
-                damping_ratio: zeta,
-                shape_q: q,
-                shape_qdot: qdot,
-                shape_u: u,
-                coordinate_share: share,
-                body_energy_share: energy,
-                strain_share: strain,
-                label,
-            };
+            let shape = self.mode_shape(&sm, (&qi, &ui), rep, k, kind == ModeKind::Vibration && spin == Spin::Free);
+            let mode = self.mode_from_shape(shape, (rep, partner, kind), scale, (mq, kq), &joints);
             if kind == ModeKind::SpinSpeed {
                 let mut mode = mode;
                 mode.shape_q[s] = C64::new(0.0, 0.0);
@@ -328,6 +194,202 @@ impl LinearModel {
         let stable = lambdas.iter().all(|l| l.re <= 1e-9 * scale);
         Ok(Modal { omega, spin, damping, joints, bodies, rigid, modes, stable })
     }
+
+    /// The rigid rotation of the free spin (λ = 0): the rotation pattern `z` as its shape.
+    fn spin_angle_mode(&self, mq: &DMatrix<f64>, joints: &[String]) -> Mode {
+        let n = self.ndof();
+        let nb = self.mech.bodies.len();
+        let shape_q: Vec<C64> = self.op.rotation.iter().map(|&z| C64::new(z, 0.0)).collect();
+        let mut share: Vec<f64> = (0..n).map(|j| self.op.rotation[j].powi(2) * mq[(j, j)]).collect();
+        normalise(&mut share);
+        Mode {
+            kind: ModeKind::SpinAngle,
+            eigenvalue: C64::new(0.0, 0.0),
+            partner: C64::new(0.0, 0.0),
+            natural_frequency_rad_s: 0.0,
+            damped_frequency_rad_s: 0.0,
+            frequency_hz: 0.0,
+            order: 0.0,
+            damping_ratio: f64::NAN,
+            shape_q,
+            shape_qdot: vec![C64::new(0.0, 0.0); n],
+            shape_u: vec![C64::new(0.0, 0.0); n],
+            coordinate_share: share,
+            body_energy_share: vec![0.0; nb],
+            strain_share: vec![0.0; n],
+            label: joints[self.op.spin_coordinate].clone(),
+        }
+    }
+
+    /// The shape `(q, u, q̇)` of the mode at root `rep`: the k-th null vector of `S − λI` over
+    /// the kept coordinates and speeds `kept`, unscaled. With `free_vibration` (a vibration
+    /// mode of the free spin) the spin angle and the rotation pattern are put back.
+    fn mode_shape(
+        &self,
+        sm: &DMatrix<f64>,
+        kept: (&[usize], &[usize]),
+        rep: C64,
+        k: usize,
+        free_vibration: bool,
+    ) -> (Vec<C64>, Vec<C64>, Vec<C64>) {
+        let n = self.ndof();
+        let s = self.op.spin_coordinate;
+        let (qi, ui) = kept;
+        let v = null_vector(sm, rep, k);
+        let nq = qi.len();
+        let mut q = vec![C64::new(0.0, 0.0); n];
+        let mut u = vec![C64::new(0.0, 0.0); n];
+        for (a, &j) in qi.iter().enumerate() {
+            q[j] = v[a];
+        }
+        for (a, &j) in ui.iter().enumerate() {
+            u[j] = v[nq + a];
+        }
+        if free_vibration && rep.norm() > 0.0 {
+            // θ̇* = u_s*: the spin angle's part of the eigenvector.
+            q[s] = u[s] / rep;
+            // Back from the deviations p to the coordinates: q*_j = p_j + z_j θ*.
+            let theta = q[s];
+            for (j, &z) in self.op.rotation.iter().enumerate() {
+                if j != s {
+                    q[j] += z * theta;
+                }
+            }
+        }
+        let mut qdot = vec![C64::new(0.0, 0.0); n];
+        for k in 0..n {
+            for r in 0..n {
+                qdot[k] += u[r] * self.w_inv[(k, r)];
+            }
+        }
+        (q, u, qdot)
+    }
+
+    /// The mode at `root = (rep, partner, kind)` from its unscaled shape: scaled, with its
+    /// coordinate, kinetic-energy and strain shares, frequencies, damping ratio and label.
+    fn mode_from_shape(
+        &self,
+        shape: (Vec<C64>, Vec<C64>, Vec<C64>),
+        root: (C64, C64, ModeKind),
+        scale: f64,
+        (mq, kq): (&DMatrix<f64>, &DMatrix<f64>),
+        joints: &[String],
+    ) -> Mode {
+        let n = self.ndof();
+        let omega = self.op.omega;
+        let (rep, partner, kind) = root;
+        let (mut q, mut u, mut qdot) = shape;
+        // Scale: largest q̇ entry made 1; for a zero-frequency mode (q̇ = λq ≈ 0, only rounding
+        // left in q̇) the displacement q stands in for q̇ in the scaling and the shares.
+        let moving = rep.norm() > REPEAT_TOL * scale || kind == ModeKind::SpinSpeed;
+        let basis = if moving { &qdot } else { &q };
+        let pivot = basis
+            .iter()
+            .copied()
+            .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+            .filter(|p| p.norm() > 0.0)
+            .unwrap_or(C64::new(1.0, 0.0));
+        for x in q.iter_mut().chain(u.iter_mut()).chain(qdot.iter_mut()) {
+            *x /= pivot;
+        }
+        let basis = if moving { &qdot } else { &q };
+        let mut share: Vec<f64> = (0..n).map(|j| basis[j].norm_sqr() * mq[(j, j)]).collect();
+        normalise(&mut share);
+        let energy = self.kinetic_shares(&u);
+        let (strain, stiff) = strain_shares(kq, &q);
+        let argmax = |v: &[f64]| v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(j, _)| j);
+        let top = if stiff { argmax(&strain) } else { argmax(&share) };
+        // A compliant mesh (or a shaft between two meshes) holds its strain between two
+        // coordinates: it names the mode when it holds more than any coordinate's own spring.
+        let label = if stiff { self.strain_label(&q, kq, joints) } else { joints[top].clone() };
+        let (wn, zeta) = if rep.im != 0.0 {
+            (rep.norm(), if rep.norm() > 0.0 { -rep.re / rep.norm() } else { f64::NAN })
+        } else {
+            let wn = (rep.re * partner.re).abs().sqrt();
+            (wn, if wn > 0.0 { -(rep.re + partner.re) / (2.0 * wn) } else { f64::NAN })
+        };
+        let wd = rep.im.abs();
+        Mode {
+            kind,
+            eigenvalue: rep,
+            partner,
+            natural_frequency_rad_s: wn,
+            damped_frequency_rad_s: wd,
+            frequency_hz: wd / (2.0 * PI),
+            order: if omega != 0.0 { wd / omega.abs() } else { f64::NAN },
+            damping_ratio: zeta,
+            shape_q: q,
+            shape_qdot: qdot,
+            shape_u: u,
+            coordinate_share: share,
+            body_energy_share: energy,
+            strain_share: strain,
+            label,
+        }
+    }
+
+    /// Each body's share of the mode's kinetic energy, from the speeds' shape `u`.
+    fn kinetic_shares(&self, u: &[C64]) -> Vec<f64> {
+        let n = self.ndof();
+        let nb = self.mech.bodies.len();
+        let mut energy: Vec<f64> = (0..nb)
+            .map(|j| {
+                let (pv, pw) = &self.partials[j];
+                let (mut vx, mut vy, mut w) = (C64::new(0.0, 0.0), C64::new(0.0, 0.0), C64::new(0.0, 0.0));
+                for r in 0..n {
+                    vx += u[r] * pv[r].x;
+                    vy += u[r] * pv[r].y;
+                    w += u[r] * pw[r];
+                }
+                let b = &self.mech.bodies[j].inertia;
+                0.5 * (b.mass * (vx.norm_sqr() + vy.norm_sqr()) + b.i_com * w.norm_sqr())
+            })
+            .collect();
+        normalise(&mut energy);
+        energy
+    }
+}
+
+/// The roots that make modes, each as (representative, partner, kind): with a free spin the real
+/// root nearest 0 is the spin speed; each complex pair (Im λ > 0 representing it) and each pair
+/// of the remaining real roots (sorted, the smaller in magnitude representing) is a vibration.
+fn pick_roots(lambdas: &[C64], scale: f64, spin: Spin) -> Vec<(C64, C64, ModeKind)> {
+    let is_real = |l: &C64| l.im.abs() <= REAL_TOL * scale;
+    let mut reals: Vec<f64> = lambdas.iter().filter(|l| is_real(l)).map(|l| l.re).collect();
+    reals.sort_by(f64::total_cmp);
+    let mut picks: Vec<(C64, C64, ModeKind)> = Vec::new();
+    if spin == Spin::Free
+        && let Some((i, _)) = reals.iter().enumerate().min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+    {
+        let l = reals.remove(i);
+        picks.push((C64::new(l, 0.0), C64::new(l, 0.0), ModeKind::SpinSpeed));
+    }
+    for l in lambdas.iter().filter(|l| !is_real(l) && l.im > 0.0) {
+        picks.push((*l, l.conj(), ModeKind::Vibration));
+    }
+    for pair in reals.chunks(2) {
+        let (a, b) = (pair[0], *pair.get(1).unwrap_or(&pair[0]));
+        let (rep, other) = if a.abs() <= b.abs() { (a, b) } else { (b, a) };
+        picks.push((C64::new(rep, 0.0), C64::new(other, 0.0), ModeKind::Vibration));
+    }
+    picks
+}
+
+/// Potential energy by coordinate (the diagonal part: a tree's springs and pendulums each sit on
+/// their own coordinate), normalised, and whether it is positive overall. A mode whose diagonal
+/// potential energy is not (a pendulum standing inward, a rigid mode) gets zeros and is named
+/// by its kinetic share instead.
+fn strain_shares(kq: &DMatrix<f64>, q: &[C64]) -> (Vec<f64>, bool) {
+    let n = q.len();
+    let mut strain: Vec<f64> = (0..n).map(|j| kq[(j, j)] * q[j].norm_sqr()).collect();
+    let stiff = strain.iter().sum::<f64>() > 0.0;
+    strain.iter_mut().for_each(|e| *e = e.max(0.0));
+    if stiff {
+        normalise(&mut strain);
+    } else {
+        strain.fill(0.0);
+    }
+    (strain, stiff)
 }
 
 impl LinearModel {
