@@ -3,7 +3,7 @@
 //! order n_t (eq. 15), the inertia ratio Ĩ (eq. 18), the rotor eigen-order n_r (eq. 17), and a
 //! builder that makes the same system a generic [`Mechanism`].
 //!
-//! Geometry (docs/design.md): the rotor spins about ground point O (coordinate θ); pendulum i pivots at
+//! Geometry (docs/design/conventions.md): the rotor spins about ground point O (coordinate θ); pendulum i pivots at
 //! Q_i on the rotor at radius R and angle ψ_i = 2πi/N; its centre of mass lies at distance L from
 //! Q_i on the radial line when φ_i = 0. With N pendulums the mass, inertia and damping of the
 //! single pendulum of the paper are split evenly, so N synchronous pendulums act as one.
@@ -59,7 +59,7 @@ pub struct CpvaParams {
 }
 
 impl CpvaParams {
-    /// kanedyn's canonical parameters (docs/design.md): Table 2 of the paper plus R = 0.17 m and
+    /// kanedyn's canonical parameters (docs/design/conventions.md): Table 2 of the paper plus R = 0.17 m and
     /// k = 6 mm, one pendulum.
     pub fn canonical() -> Self {
         Self {

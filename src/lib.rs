@@ -3,7 +3,7 @@
 //! A mechanism (bodies joined in a tree, read from RON) becomes the equations of motion
 //! `M(q) u̇ = F(q, u, t)`, `q̇ = W⁻¹ u`, evaluated numerically from Kane's partial velocities
 //! without heap allocation. The rotor with centrifugal pendulum vibration absorbers (CPVA) is the
-//! flagship example; see the README, the user guide (`docs/guide/`) and `docs/design.md`.
+//! flagship example; see the README, the user guide (`docs/guide/`) and `docs/design/index.md`.
 //!
 //! The crate is a pipeline; each module is one stage and imports only the stages before it:
 //!

@@ -20,7 +20,7 @@
 //!
 //! and the forward pass (parents first) `q̈ = (μ − Uᵀ â_p)/D`, `â = â_p + s q̈` (eqs. 7.44–7.46,
 //! the velocity-product term c already in b). A fixed joint passes its subtree's `Iᴬ` and z on
-//! whole. A path joint's rollers (docs/design.md, "Rollers") are a second rigid body moved by the
+//! whole. A path joint's rollers (docs/design/paths.md, "Rollers") are a second rigid body moved by the
 //! same coordinate with its own column: the joint's U, D and μ sum both bodies' terms, and the
 //! parent receives both inertias.
 //!

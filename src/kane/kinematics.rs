@@ -62,7 +62,7 @@ fn frames(mech: &Mechanism, q: &[f64], qdot: &[f64]) -> (Vec<Pose>, Vec<f64>, Ve
     (poses, w, v_origin)
 }
 
-/// The state of one path joint's rollers in the world frame (docs/design.md, "Rollers").
+/// The state of one path joint's rollers in the world frame (docs/design/paths.md, "Rollers").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RollerState {
     /// The rollers' rotation: their parent's angle plus ψ = −s/(2 r_r), rad.

@@ -1,7 +1,7 @@
 //! The numeric Kane engine: `M(q) u̇ = F(q, u, t)` and `ẋ = [W⁻¹u; M⁻¹F]` for any tree of the
 //! joint kinds of [`crate::model::joint::JointKind`].
 //!
-//! The method (docs/design.md) is Kane's: forward kinematics, the partial velocities
+//! The method (docs/design/kane.md) is Kane's: forward kinematics, the partial velocities
 //! `v_{j,r} = ∂v_j/∂u_r` and `ω_{j,r} = ∂ω_j/∂u_r` of every body from the motion columns of the
 //! joints on its path (mapped to the speeds by `q̇ = W⁻¹u`), the bias accelerations at `u̇ = 0`
 //! (W is constant for both speed choices, so `q̈ = 0`), and Kane's sums
@@ -195,7 +195,7 @@ struct Node {
     first_abs: Vec2,
 }
 
-/// A path joint's rollers as the engine carries them (docs/design.md, "Rollers"): one rigid
+/// A path joint's rollers as the engine carries them (docs/design/paths.md, "Rollers"): one rigid
 /// body hanging from the path's parent and moved by the path's coordinate
 /// ([`JointKind`]'s `roller_motion`); its terms are added by `Model::add_rollers` (`rates.rs`).
 #[derive(Debug, Clone, Copy)]

@@ -15,7 +15,7 @@
 //! Everything about a joint comes from the joint kind's `motion` ([`crate::model::joint`]): its transform, its columns and its
 //! velocity-product terms; a new joint kind needs no change here.
 //!
-//! A path joint's rollers (docs/design.md, "Rollers") are one rigid body each, hanging from the
+//! A path joint's rollers (docs/design/paths.md, "Rollers") are one rigid body each, hanging from the
 //! path's parent and moved by the path's coordinate through the kind's `roller_motion`. Kane's
 //! sums have no term between two bodies, so their terms are simply added after the composite
 //! pass (`Model::add_rollers`), body by body as the textbook writes them: for every pair of

@@ -17,7 +17,7 @@
 //! exerts, so a revolute joint's moment is its spring, damper and applied torque (its
 //! constraint carries no moment), a path or slide joint's moment includes the track's.
 //!
-//! Geared mechanisms (docs/design.md, "Gears"): the pass runs on the unconstrained tree at the
+//! Geared mechanisms (docs/design/model.md, "Gears"): the pass runs on the unconstrained tree at the
 //! expanded state `q_full = T q + o`, `q̇_full = T q̇`, `q̈_full = T q̈` (T constant). A rigid
 //! coupling `q̇_d = r q̇_f` acts on that tree as the generalized constraint force `Gᵀλ` of its
 //! Jacobian row `G = e_d − r e_f`: a joint torque λ at the driven joint d and `−r λ` at the

@@ -92,7 +92,7 @@ fn kinematics(
     let mut frames: Vec<Frame> = Vec::with_capacity(mech.bodies.len());
     let mut out = Vec::with_capacity(mech.bodies.len());
     // The bodies, then the rollers (each a body moved by its path's coordinate, hanging from the
-    // path's parent: docs/design.md, "Rollers"), whose frames are pushed after the bodies'.
+    // path's parent: docs/design/paths.md, "Rollers"), whose frames are pushed after the bodies'.
     let sets = mech.roller_sets();
     let entries = mech.joints.iter().enumerate().map(|(j, joint)| {
         let coord = joint.coordinate;

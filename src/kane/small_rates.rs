@@ -27,7 +27,7 @@
 //!
 //! NOTE: the form is the general one made fixed-size rather than a new regrouping: besides the
 //! mount rotation above, the joint interface stays the only thing it knows about a path
-//! (docs/design.md, "Fast path for path joints"), and equality with the general path is by
+//! (docs/design/kane.md, "Fast path for path joints"), and equality with the general path is by
 //! construction, not by a second derivation.
 //!
 //! The exception is the commonest tree, a rotor carrying one path absorber about its axis: it

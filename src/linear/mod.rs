@@ -14,7 +14,7 @@
 //! (with absolute angular velocities as speeds every body of the spinning subtree has u⁰ = Ω, as
 //! in the paper's eqs. 9 and 11). In a geared mechanism whose meshes pass the rotation on, the
 //! joints meshed to the spin turn with it: `q̇⁰ = Ω z`, z the rigid rotation
-//! ([`Mechanism::rigid_rotation`], docs/design.md "Gears"), and what is said of the spin angle
+//! ([`Mechanism::rigid_rotation`], docs/design/model.md "Gears"), and what is said of the spin angle
 //! below holds of the angle along z. The spin angle must be *cyclic*: F may not depend on it. That
 //! holds when the spin joint has no spring ([`LinearError::SpinSpring`] otherwise) and no load
 //! needs the world orientation. Gravity and world-frame forces do: with them the steady spin is

@@ -1,5 +1,5 @@
 //! Absorber properties of a mechanism's absorber joints, in closed form from the path's Taylor
-//! coefficients about its vertex (docs/design.md, "Absorber properties").
+//! coefficients about its vertex (docs/design/paths.md, "Absorber properties").
 //!
 //! At held spin Ω, a body of mass m and centroidal inertia I whose centre of mass follows a path
 //! (arc length s) and turns by α(s) has the reduced equation
@@ -10,7 +10,7 @@
 //! `κ = −(3/4) x₄/ñ² − (3/2) I α₁ α₃ / (m + I α₁²)` (single-harmonic balance, exact to O(A²)).
 //! A circle gives κ = −1/(16 L²), the compound pendulum's n/n_t = 1 − φ₀²/16.
 //!
-//! A translating absorber on rollers (docs/design.md, "Rollers") keeps a constant s-inertia
+//! A translating absorber on rollers (docs/design/paths.md, "Rollers") keeps a constant s-inertia
 //! `M₀ = m + N(m_r + I_r/r_r²)/4` and gains the rollers' centrifugal potential
 //! `−½ Ω² N m_r |c̄(s)|²`, `c̄ = ½(P + r(s))`; with the path's x coordinate
 //! `r_x = ρ₀ − (κ_v/2)s² + c₄s⁴ + …` (κ_v = (1+ñ²)/ρ₀ the vertex curvature,
@@ -111,7 +111,7 @@ pub fn path_orders(m: f64, i: f64, n2: f64, x4: f64, alpha: [f64; 2]) -> (f64, f
 /// n_t² of a translating absorber (mass m, path order ñ, `n2` = ñ²) carried by `count` rollers
 /// of mass `m_r` (kg), centroidal inertia `i_r` (kg·m²) and radius `r_r` (m) rolling without slip
 /// between a rotor track and an absorber track, with the rollers' centroid halfway between the
-/// path's vertex and its centre of curvature (docs/design.md, "Rollers"):
+/// path's vertex and its centre of curvature (docs/design/paths.md, "Rollers"):
 /// `n_t² = ñ² (m + N m_r/2) / (m + N (m_r + I_r/r_r²)/4)`.
 ///
 /// The same number as [`roller_orders`]'s first, for a designer without a mechanism; a loaded
@@ -228,7 +228,7 @@ pub fn markdown(mech: &Mechanism) -> String {
         return String::new();
     }
     let mut md = String::from(
-        "## Absorbers\n\nAt held spin, from the path's Taylor coefficients (docs/design.md, \"Absorber properties\"): \
+        "## Absorbers\n\nAt held spin, from the path's Taylor coefficients (docs/design/paths.md, \"Absorber properties\"): \
          linear tuning order n_t, nonlinear coefficient κ of the free oscillation's order n(A) ≈ n_t (1 + κ A²) \
          (A: the centre of mass's arc-length amplitude), end of travel.\n\n\
          | joint | kind | m (kg) | I (kg·m²) | n_t | κ (1/m²) | travel (m) | tautochronic |\n\
@@ -263,7 +263,7 @@ pub fn markdown(mech: &Mechanism) -> String {
         let Some(r) = a.rollers else { continue };
         md += &format!(
             "\nRollers included for `{}`: {} × (m_r {:.6e} kg, I_r {:.6e} kg·m², r_r {:.6e} m) rolling without slip \
-             (docs/design.md, \"Rollers\"): n_t = {:.6} with them, {:.6} without \
+             (docs/design/paths.md, \"Rollers\"): n_t = {:.6} with them, {:.6} without \
              (n_t² = ñ² (m + N m_r/2) / (m + N (m_r + I_r/r_r²)/4)); κ includes their centrifugal potential.\n",
             a.joint,
             r.count,

@@ -2,7 +2,7 @@
 //! +τ on the child and −τ on the parent like a joint spring or damper (a torque for a revolute
 //! joint, a force along the slide or the path for a prismatic or path joint).
 //!
-//! Three laws, each optional and summed (docs/design.md, "Joint couplings"):
+//! Three laws, each optional and summed (docs/design/model.md, "Joint couplings"):
 //!
 //! - **Staged spring** ([`StageSpring`]), the arc springs of a dual-mass flywheel or the spring
 //!   sets of a clutch damper: piecewise-linear in the deflection δ = q − q₀, with a table of
@@ -21,7 +21,7 @@
 //!   with `N = max(k p + c ṗ, 0)` while p > 0 and nothing otherwise. The damping may not pull:
 //!   the contact ends when N reaches 0 (before p does), so a rebound never sticks to the stop;
 //!   a mass m meeting the stop then leaves it with the velocity ratio
-//!   `e = exp(−ζ (π − 2 arcsin ζ)/√(1 − ζ²))`, ζ = c/(2√(k m)) (docs/design.md derives it).
+//!   `e = exp(−ζ (π − 2 arcsin ζ)/√(1 − ζ²))`, ζ = c/(2√(k m)) (docs/design/model.md derives it).
 //!
 //! tanh, not `q̇/√(q̇² + ε²)`: both have slope 1/ε at zero, but tanh reaches ±1 exponentially
 //! (1 − tanh x ≈ 2e^{−2x}) where the algebraic form creeps up as 1/(2x²), so the same ε gives a

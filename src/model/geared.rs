@@ -1,4 +1,4 @@
-//! A geared mechanism's queries (issue 15, item 1; docs/design.md, "Gears"): the map from the
+//! A geared mechanism's queries (issue 15, item 1; docs/design/model.md, "Gears"): the map from the
 //! reduced state to every joint's coordinate and rate, the unconstrained tree the engine
 //! evaluates before reducing (`expanded`), its reduction matrix T, and locking a gear train.
 //! Kept apart from [`super::gears`] (the couplings as data) so that the mechanism, which holds

@@ -6,7 +6,7 @@
 //! parent). Kane's method treats it by dependent speeds: `u_d = A u_i` with A constant, so the
 //! state is the independent coordinates alone and the reduced equations are
 //! `F̃_r + F̃*_r = 0`, `F̃ = F_i + Aᵀ F_d` ([`crate::kane`]'s `reduce` module does the reduction;
-//! docs/design.md, "Gears").
+//! docs/design/model.md, "Gears").
 //!
 //! A compliant coupling (`mesh: (stiffness: k, damping: c)`) is no constraint: both joints keep
 //! their coordinates and a spring and damper act on the mesh deflection measured at the driving

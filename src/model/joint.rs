@@ -297,7 +297,7 @@ impl JointKind {
     }
 
     /// The motion of a path joint's rollers ([`Rollers`]) relative to the parent at the path's
-    /// coordinate `q`, as a joint's (docs/design.md, "Rollers"): the rollers' centroid
+    /// coordinate `q`, as a joint's (docs/design/paths.md, "Rollers"): the rollers' centroid
     /// `at + R(γ) ½(P + r(s))` (`centre` = P, the vertex's centre of curvature in the path's
     /// frame), turned by ψ = `turn_rate` · s; columns ω = `turn_rate` (= −1/(2 r_r)) and
     /// v = ½ R(γ) t(s); bias 0 and ½ R(γ) r''(s) per ṡ². Beyond the travel every field is NaN,

@@ -1,7 +1,7 @@
 //! Applied loads: joint torques driven by an excitation, dampers to ground, point forces and
 //! uniform gravity (joint springs and dampers live on the joints themselves).
 //!
-//! Sign conventions (docs/design.md): a joint torque τ acts +τ on the child and −τ on the parent, so its
+//! Sign conventions (docs/design/model.md): a joint torque τ acts +τ on the child and −τ on the parent, so its
 //! generalized force is `τ · ∂q̇_joint/∂u`; a damper to ground puts `−c·ω` on its body.
 
 use crate::model::excitation::Excitation;

@@ -68,7 +68,7 @@ pub struct Mechanism {
     pub gears: Vec<Gear>,
 }
 
-/// One path joint's rollers as the engine carries them (docs/design.md, "Rollers"): a rigid body
+/// One path joint's rollers as the engine carries them (docs/design/paths.md, "Rollers"): a rigid body
 /// of mass N m_r and centroidal inertia N I_r hanging from the path joint's parent, moved by the
 /// path's coordinate through [`JointKind`]'s `roller_motion`, plus the rollers' spread
 /// `N m_r spread²`, a constant inertia of that parent.

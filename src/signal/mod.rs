@@ -3,7 +3,7 @@
 //! or swept, §4.1 of the paper ("5-frequency-bin summation").
 //!
 //! Two methods, both returning one [`OrderTrace`] per harmonic multiple:
-//! - [`stft_order_traces`] (time domain, the study convention of docs/design.md): a short-time Fourier
+//! - [`stft_order_traces`] (time domain, the study convention of docs/design/conventions.md): a short-time Fourier
 //!   transform with periodic Hann windows; per window the bin nearest `m·n(t_c)·Ω/2π` and
 //!   `half_width_bins` neighbours each side.
 //! - [`angle_domain_order_traces`] (angle domain, a cross-check): the signal is resampled at

@@ -1,8 +1,8 @@
-//! Time-domain order tracking by short-time Fourier transform (the study convention of docs/design.md).
+//! Time-domain order tracking by short-time Fourier transform (the study convention of docs/design/conventions.md).
 
 use super::{HannSpectrum, OrderTrace, SignalError, order_checked};
 
-/// Options of [`stft_order_traces`]. The defaults are the study convention of docs/design.md.
+/// Options of [`stft_order_traces`]. The defaults are the study convention of docs/design/conventions.md.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StftOptions {
     /// Window length, s (default 2 s: 0.5 Hz bins). Rounded to a whole number of samples N.

@@ -20,7 +20,7 @@
 //!   coupling's constraint torque λ, a compliant mesh's spring and damper torque; it needs `ẋ`
 //!   and the joint torques acting at driven joints, which [`simulate`] hands over).
 //!
-//! On a geared mechanism (docs/design.md, "Gears") a rigidly driven joint has no state entry:
+//! On a geared mechanism (docs/design/model.md, "Gears") a rigidly driven joint has no state entry:
 //! its coordinate, rate and acceleration are `factor · (the followed coordinate's)` plus its
 //! offset ([`Mechanism::follow_map`]), and a body's angle is `Σ factor · q_k` plus the offsets
 //! over the rotating joints on its path ([`Mechanism::rotation_rates`]); reactions run on the

@@ -64,7 +64,7 @@ impl Default for IntegrateOptions {
 }
 
 /// Which integrator a study's run used and why (the study's `integration.integrator`, or the
-/// `Auto` rule of docs/design.md, "Stiff mechanisms: the integrator choice").
+/// `Auto` rule of docs/design/time.md, "Stiff mechanisms: the integrator choice").
 #[derive(Debug, Clone, PartialEq, serde::Serialize, schemars::JsonSchema)]
 pub struct IntegratorChoice {
     /// The method that ran.

@@ -112,7 +112,7 @@ fn canonical_parameters_give_back_table_2() {
     let it = inertia_ratio(p.i_a(), p.pendulum_mass, r, p.i_b(), l);
     assert_relative_eq!(nt, 3.11, max_relative = 1e-9);
     assert_relative_eq!(it, 2255.0, max_relative = 1e-9);
-    // n_r from eq. (17) with the recovered n_t and Ĩ equals docs/design.md's tabulated value.
+    // n_r from eq. (17) with the recovered n_t and Ĩ equals docs/design/conventions.md's tabulated value.
     assert_abs_diff_eq!(rotor_order(nt, it), 3.19088605122, epsilon = 1e-10);
     // The same numbers from the generic mechanism's bodies, not from the parameter struct.
     let mech = p.with_pendulums(4).mechanism(None).unwrap();
@@ -190,7 +190,7 @@ fn closed_form_rhs_matches_engine_rhs() {
 
 #[test]
 fn locked_twin_is_one_rigid_rotor() {
-    // Locking every pivot at φ = 0 leaves one body with the locked inertia of docs/design.md,
+    // Locking every pivot at φ = 0 leaves one body with the locked inertia of docs/design/conventions.md,
     // I_A + I_B + m_p (R + L)², and the rotor's damping only.
     for n_pend in [1, 4] {
         let p = CpvaParams::canonical().with_pendulums(n_pend);

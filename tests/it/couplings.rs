@@ -215,7 +215,7 @@ fn friction_loop_dissipates_four_tf_a() {
     assert!(last_err <= 1e-2);
 }
 
-/// The restitution of a spring-dashpot contact whose damping may not pull (docs/design.md):
+/// The restitution of a spring-dashpot contact whose damping may not pull (docs/design/model.md):
 /// contact ends when k p + c ṗ = 0, at ω_d t = π − 2 arcsin ζ, with ṗ = −v₀ e^{−ζ ω_n t}.
 fn restitution(zeta: f64) -> f64 {
     (-zeta * (PI - 2.0 * zeta.asin()) / (1.0 - zeta * zeta).sqrt()).exp()

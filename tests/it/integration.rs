@@ -17,7 +17,7 @@ fn omega() -> f64 {
 }
 
 /// Mean torque c_r·Ω (holds the mean speed) plus `amplitude` N·m at order `order`, ramped in over
-/// 2 s (docs/design.md study conventions).
+/// 2 s (docs/design/conventions.md study conventions).
 fn excitation(p: &CpvaParams, amplitude: f64, order: f64) -> Excitation {
     Excitation {
         mean: p.c_r * omega(),

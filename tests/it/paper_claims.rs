@@ -101,7 +101,7 @@ fn multi_order_jump_at_600_rpm_and_absorption_above() {
     let m = &report().multi[0];
     for s in &m.speeds {
         let locked = s.locked.as_ref().unwrap();
-        // Steadiness as docs/design.md asks: the last two windows agree to 1e-3.
+        // Steadiness as docs/design/conventions.md asks: the last two windows agree to 1e-3.
         let response = s.response.as_ref().unwrap();
         assert!(response.change <= 1e-3, "{} rpm not steady: {}", s.rpm, response.change);
         let (main, second) = (response.amplitudes[0], response.amplitudes[1]);

@@ -381,7 +381,7 @@ fn catalog_general_part_loads() {
     println!("{}", markdown(&mech));
 }
 
-/// The rollers' closed-form tuning order (docs/design.md, "Rollers") against the reduced
+/// The rollers' closed-form tuning order (docs/design/paths.md, "Rollers") against the reduced
 /// Lagrangian built here from the rolling kinematics on the actual curve: every roller centre at
 /// c̄(s) = ½(P + r(s)) (P the vertex's centre of curvature, from r''(0)), moving at ½ṡ, turning
 /// at −ṡ/(2r_r) relative to the rotor. At held spin the s-inertia is m + N(m_r/4 + I_r/(4r_r²))

@@ -1,6 +1,6 @@
 //! The path joint (issue 14) against numbers from outside the engine: the revolute compound
 //! pendulum after the change of coordinate s = Lφ, the epicycloid's amplitude-independent
-//! frequency ñΩ at held spin (the 1-DOF reference `s̈ = −ñ²Ω² s` is derived in docs/design.md,
+//! frequency ñΩ at held spin (the 1-DOF reference `s̈ = −ñ²Ω² s` is derived in docs/design/paths.md,
 //! "The path joint"; here only its frequency is used), the circle's amplitude-dependent frequency
 //! π / (2K(sin(φ₀/2))), the tuning orders of eq. (15), √(R/L) and √(m ñ² / (m + I α₁²)) from the
 //! linear analysis, harmonic balance against the linear response at small amplitude, energy

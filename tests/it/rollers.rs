@@ -1,4 +1,4 @@
-//! Roller-type absorbers (issue 14, item 4; docs/design.md, "Rollers"): a translating absorber on a
+//! Roller-type absorbers (issue 14, item 4; docs/design/paths.md, "Rollers"): a translating absorber on a
 //! path joint carried by N rollers that roll without slip between a rotor track and an absorber
 //! track. Each roller centre moves relative to the rotor by half the absorber's displacement and
 //! turns by ψ = −s/(2 r_r); their centroid is c̄(s) = ½(P + r(s)), P the vertex's centre of

@@ -1,6 +1,6 @@
 //! The general path `ρ² = ρ₀² − ñ²s² + x₄s⁴ + …` with the rotation law `α = α₁s + α₃s³ + …`:
 //! its polar angle θ(s) from `θ' = √(1 − ρ'²)/ρ`, tabulated once per distinct path as a Chebyshev
-//! series in u (`s = s_end sin u`) and evaluated by Clenshaw's recurrence (docs/design.md, "The
+//! series in u (`s = s_end sin u`) and evaluated by Clenshaw's recurrence (docs/design/paths.md, "The
 //! general path").
 
 use super::{MAX_COEFFICIENTS, PathPoint, PolarPoint};
@@ -10,7 +10,7 @@ use std::sync::{Mutex, OnceLock};
 /// A general path's data and its tabulated curve: `ρ² = P(z)`, `z = s²`, with
 /// `P(z) = ρ₀² − ñ²z + x₄z² + x₆z³ + …`, and `α(s) = s A(z)`, `A(z) = α₁ + α₃z + …`.
 ///
-/// **The curve** (docs/design.md, "The general path"): `θ' = √(1 − ρ'²)/ρ = √g(z)/P(z)` with
+/// **The curve** (docs/design/paths.md, "The general path"): `θ' = √(1 − ρ'²)/ρ = √g(z)/P(z)` with
 /// `g(z) = P(z) − z P'(z)²` (P' = dP/dz); the path ends at the first positive root `z_end` of g,
 /// `s_end = √z_end`, where |dρ/ds| reaches 1 (a cusp; ρ reaching 0 makes g negative first). With
 /// `g = (z_end − z) h(z)` and `s = s_end sin u`, `dθ/du = s_end² cos²u √h(z) / P(z)`: analytic in

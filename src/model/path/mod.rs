@@ -1,5 +1,5 @@
 //! Absorber paths: the curves a path joint's child frame origin follows in its parent's frame,
-//! parameterised by arc length, with the child body's rotation law (docs/design.md, "The path
+//! parameterised by arc length, with the child body's rotation law (docs/design/paths.md, "The path
 //! joint").
 //!
 //! A path is described in polar form about a centre c (the rotor axis): the squared distance
@@ -167,7 +167,7 @@ impl PathPoint {
 
 /// The rotation-invariant quantities of a path at one arc length s: what the dynamics of a body
 /// whose centre of mass follows the path about the rotor axis need when the rotor's own frame is
-/// the basis (docs/design.md, "Fast path for path joints"). With r the point, t = r' the unit
+/// the basis (docs/design/paths.md, "Fast path for path joints"). With r the point, t = r' the unit
 /// tangent and κ = r'' the curvature vector, all about the path's centre:
 /// `|r|² = ρ²`, `r·t = ρρ' = ½ dρ²/ds`, `r × t = ρ w` (w = ρθ'), `r × κ = d(r × t)/ds`.
 /// None of them depends on the polar angle θ(s), so none needs it.
@@ -233,7 +233,7 @@ impl PathShape {
 
     /// True when the path is exactly an epicycloid with a linear rotation law (a general path
     /// without x or higher α terms counts): then, at held spin, the reduced equation is exactly
-    /// linear (see docs/design.md).
+    /// linear (see docs/design/paths.md).
     pub fn is_epicycloid(self) -> bool {
         match self {
             PathShape::Epicycloid { .. } => true,
@@ -317,7 +317,7 @@ impl PathShape {
                 let d_rho = -n2 * s / rho;
                 let w = rho0 * cos_u / rho;
                 // θ(s) = A u − β with A = √(1+ñ²)/ñ and β = atan2(ñ sin u, √(1+ñ²) cos u), whose
-                // cosine and sine are w and −ρ' (docs/design.md): so e_ρ is the direction of
+                // cosine and sine are w and −ρ' (docs/design/paths.md): so e_ρ is the direction of
                 // A u turned back by β, and the tangent ρ' e_ρ + w e_θ is the direction of
                 // A u + π/2: the tangent turns linearly in u. Its derivative, with
                 // du/ds = ñ√(1+ñ²) / (ρ₀ cos u), is the curvature vector, of length

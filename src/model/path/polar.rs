@@ -1,6 +1,6 @@
 //! The rotation-invariant form of a path (|r|², r·t, r×t, r×κ about the rotor axis), which the
 //! fixed-size pair form of a rotor with one path absorber reads instead of the curve's polar angle
-//! (docs/design.md, "Fast path for path joints").
+//! (docs/design/kane.md, "Fast path for path joints").
 
 use super::{GeneralPath, PolarPoint};
 

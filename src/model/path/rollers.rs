@@ -1,6 +1,6 @@
 //! Rollers of a roller-type absorber: N rollers rolling without slip between the rotor's track
 //! and the absorber's, their centroid halfway between the vertex's centre of curvature and the
-//! absorber's point, turning at dψ/ds = −1/(2 r_r) (docs/design.md, "Rollers").
+//! absorber's point, turning at dψ/ds = −1/(2 r_r) (docs/design/paths.md, "Rollers").
 
 use super::PathShape;
 use crate::model::math::Vec2;
@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 /// Rollers that carry a translating absorber on its path (a roller-type or bifilar absorber):
 /// `count` rollers of `mass` (kg), centroidal `inertia` (kg·m²) and `radius` (m) rolling without
-/// slip between a track of the parent (rotor) and a track of the absorber (docs/design.md,
+/// slip between a track of the parent (rotor) and a track of the absorber (docs/design/paths.md,
 /// "Rollers").
 ///
 /// Their kinematics need nothing about the tracks' shapes: each roller centre moves, relative to
@@ -108,7 +108,7 @@ impl Rollers {
     }
 
     /// The vertex's centre of curvature P in the path's own frame, `r(0) + r''(0)/|r''(0)|²`, m:
-    /// the rollers' centroid is `c̄(s) = ½(P + r(s))` (docs/design.md, "Rollers").
+    /// the rollers' centroid is `c̄(s) = ½(P + r(s))` (docs/design/paths.md, "Rollers").
     pub fn vertex_centre(shape: PathShape) -> Vec2 {
         let vertex = shape.at(0.0);
         vertex.position + vertex.curvature / vertex.curvature.norm_squared()
