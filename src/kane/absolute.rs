@@ -54,6 +54,8 @@ impl Model {
     /// accelerations, backward pass of subtree forces and moments): the same sums in fewer
     /// instructions (BENCHMARKS.md), because the accelerations, forces and moments about joint
     /// points are never formed.
+    ///
+    /// Kernel: the pair sums above in one walk per body; its length is those formulas'.
     #[inline(always)]
     pub(super) fn evaluate_absolute<const N: usize>(
         &self,

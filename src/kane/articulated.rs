@@ -145,6 +145,9 @@ impl Model {
     }
 
     /// [`super::Kane::rhs`] by the articulated-body algorithm (see the module doc).
+    ///
+    /// Kernel: Featherstone's three passes (velocities out, articulated inertias in, accelerations
+    /// out) over one workspace, as the algorithm is written; its length is the algorithm's.
     #[inline(never)]
     pub(super) fn rhs_articulated(
         &self,

@@ -163,6 +163,9 @@ impl Model {
     /// [`Kane::rhs`](super::Kane::rhs) by the fixed-size composite-body path for `N` speeds (`N = self.n ≤ SMALL`,
     /// `self.small` set by [`small`]; the caller has checked the lengths of `x` and `xdot`).
     ///
+    /// Kernel: one pass of Kane's composite-body sums and the LDLᵀ solve in local arrays; split
+    /// into calls, the arrays would leave registers and the literal-N unrolling would stop.
+    ///
     /// NOTE: the structure of [`super::small`]'s `rhs_small` (local arrays of the literal length
     /// N, literal indices only, topology as tests of constant data, libm first, out of line and
     /// called through `Small::rhs`) applied to `evaluate_rates`; its figures are in

@@ -47,6 +47,8 @@ pub(crate) fn dense_sample<Y: Slab>(
     Ok(())
 }
 
+/// Integrates `ẋ = rhs(t, x)` from `(t0, x0)` to `t1` with DOP853 (see the module doc),
+/// delivering the fixed-rate samples to `on_sample`.
 pub(crate) fn run<Y: Slab>(
     rhs: &mut DynRhs,
     x0: &[f64],
@@ -70,31 +72,10 @@ pub(crate) fn run<Y: Slab>(
     // Derivatives at the start and the end of the current step, and one sample state.
     let (mut f_prev, mut f_end, mut xk) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
 
-    // Turns a fault into our error, with the counters at this point.
-    let fail = |fault: Fault, t_reached: f64, stats: IntegrateStats| match fault {
-        Fault::Engine { t, err } => IntegrateError::Engine { source: err, t_eval: t, t_reached, stats },
-        Fault::NonFinite { t } => IntegrateError::NonFinite { what: "derivative", t_eval: t, t_reached, stats },
-    };
-    let with_evals = |mut s: IntegrateStats| {
-        s.rhs_evals = sys.evals.get();
-        s
-    };
+    let fail = |fault: Fault, t_reached: f64, stats: IntegrateStats| fail(fault, t_reached, stats);
+    let with_evals = |s: IntegrateStats| with_evals(&sys, s);
 
-    let y0 = Y::from_slice(x0);
-    sys.keep.set(true);
-    let init = solver.init(&sys, t0, t1, &y0);
-    sys.keep.set(false);
-    if let Some(fault) = sys.fault.borrow_mut().take() {
-        return Err(fail(fault, t0, with_evals(stats)));
-    }
-    if let Err(e) = init {
-        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: with_evals(stats) });
-    }
-    // init ends with f(t0, x0).
-    end_derivative(&sys, t0, x0, &mut f_prev).map_err(|f| fail(f, t0, with_evals(stats)))?;
-    // The steps from here are our own (`dp8`): the crate's, with the dense output formed only
-    // where a sample falls; they hand over their end derivative themselves.
-    let mut solver = Dp8::after_init(&solver, Y::from_slice(&f_prev));
+    let mut solver = start(solver, &sys, (t0, t1), x0, &mut f_prev, stats)?;
     if clock.due(t0).is_some() {
         sampler.deliver(&sys, &mut stats, 0, t0, x0).map_err(|f| fail(f, t0, with_evals(stats)))?;
         clock.next = 1;
@@ -123,9 +104,8 @@ pub(crate) fn run<Y: Slab>(
         }
         // The watchdog's deadline, read every 64 attempts (a clock read costs about as much as
         // a tenth of one right-hand side).
-        if let Some((at, budget_s)) = opts.deadline
-            && (stats.accepted + stats.rejected) % 64 == 0
-            && std::time::Instant::now() >= at
+        if (stats.accepted + stats.rejected) % 64 == 0
+            && let Some(budget_s) = past_deadline(opts)
         {
             return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: with_evals(stats) });
         }
@@ -153,16 +133,7 @@ pub(crate) fn run<Y: Slab>(
         (travel_retries, travel_fault) = (0, None);
         let outcome = match res {
             Ok(o) => o,
-            Err(e) => {
-                let stats = with_evals(stats);
-                use differential_equations::error::Error as E;
-                return Err(match e {
-                    E::MaxSteps { .. } => IntegrateError::MaxSteps { max_steps: opts.max_steps, t_reached: t, stats },
-                    E::StepSize { .. } => IntegrateError::StepSizeUnderflow { t_reached: t, h, stats },
-                    E::Stiffness { .. } => IntegrateError::Stiff { t_reached: t, stats },
-                    other => IntegrateError::Solver { message: format!("{other:?}"), t_reached: t, stats },
-                });
-            }
+            Err(e) => return Err(solver_error(e, opts.max_steps, (t, h), with_evals(stats))),
         };
         if outcome == Outcome::Rejected {
             stats.rejected += 1;
@@ -180,22 +151,8 @@ pub(crate) fn run<Y: Slab>(
         }
         if clock.due(t_new).is_some() {
             f_end.copy_from_slice(solver.fsal().slice());
-            // The three dense-output stages, for this step's samples.
-            solver.dense(&sys);
-            if let Some(fault) = sys.fault.borrow_mut().take() {
-                return Err(fail(fault, t_new, with_evals(stats)));
-            }
-            while let Some(tk) = clock.due(t_new) {
-                dense_sample(&solver, &f_prev, &f_end, tk, &mut xk).map_err(|message| IntegrateError::Solver {
-                    message,
-                    t_reached: t_new,
-                    stats: with_evals(stats),
-                })?;
-                sampler
-                    .deliver(&sys, &mut stats, clock.next, tk, &xk)
-                    .map_err(|f| fail(f, t_new, with_evals(stats)))?;
-                clock.next += 1;
-            }
+            let ends = (f_prev.as_slice(), f_end.as_slice());
+            step_samples(&mut solver, &sys, ends, (&mut clock, &mut sampler), &mut xk, &mut stats)?;
             std::mem::swap(&mut f_prev, &mut f_end);
         } else {
             f_prev.copy_from_slice(solver.fsal().slice());
@@ -210,6 +167,96 @@ pub(crate) fn run<Y: Slab>(
         clock.next += 1;
     }
     Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: with_evals(stats) })
+}
+
+/// The crate's `init` at `(t0, x0)` (it chooses the first step and ends with f(t0, x0), which
+/// goes into `f_prev`), then our own stepper from there (`dp8`: the crate's steps, with the
+/// dense output formed only where a sample falls; they hand over their end derivative
+/// themselves).
+fn start<Y: Slab>(
+    mut solver: Dop853<Y>,
+    sys: &System<'_>,
+    (t0, t1): (f64, f64),
+    x0: &[f64],
+    f_prev: &mut [f64],
+    stats: IntegrateStats,
+) -> Result<Dp8<Y>, IntegrateError> {
+    let y0 = Y::from_slice(x0);
+    sys.keep.set(true);
+    let init = solver.init(sys, t0, t1, &y0);
+    sys.keep.set(false);
+    if let Some(fault) = sys.fault.borrow_mut().take() {
+        return Err(fail(fault, t0, with_evals(sys, stats)));
+    }
+    if let Err(e) = init {
+        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: with_evals(sys, stats) });
+    }
+    end_derivative(sys, t0, x0, f_prev).map_err(|f| fail(f, t0, with_evals(sys, stats)))?;
+    Ok(Dp8::after_init(&solver, Y::from_slice(f_prev)))
+}
+
+/// The watchdog's budget (s) when its deadline has passed.
+fn past_deadline(opts: &IntegrateOptions) -> Option<f64> {
+    let (at, budget_s) = opts.deadline?;
+    (std::time::Instant::now() >= at).then_some(budget_s)
+}
+
+/// The samples that fall inside the step just accepted (`ends`: the derivatives at its two
+/// ends), from the corrected dense output, delivered by `sampler` in the order of `clock`.
+fn step_samples<Y: Slab>(
+    solver: &mut Dp8<Y>,
+    sys: &System<'_>,
+    ends: (&[f64], &[f64]),
+    (clock, sampler): (&mut Clock, &mut Sampler<'_>),
+    xk: &mut [f64],
+    stats: &mut IntegrateStats,
+) -> Result<(), IntegrateError> {
+    let t_new = solver.t();
+    // The three dense-output stages, for this step's samples.
+    solver.dense(sys);
+    if let Some(fault) = sys.fault.borrow_mut().take() {
+        return Err(fail(fault, t_new, with_evals(sys, *stats)));
+    }
+    while let Some(tk) = clock.due(t_new) {
+        dense_sample(solver, ends.0, ends.1, tk, xk).map_err(|message| IntegrateError::Solver {
+            message,
+            t_reached: t_new,
+            stats: with_evals(sys, *stats),
+        })?;
+        sampler.deliver(sys, stats, clock.next, tk, xk).map_err(|f| fail(f, t_new, with_evals(sys, *stats)))?;
+        clock.next += 1;
+    }
+    Ok(())
+}
+
+/// Turns a fault into our error, with the counters at this point.
+fn fail(fault: Fault, t_reached: f64, stats: IntegrateStats) -> IntegrateError {
+    match fault {
+        Fault::Engine { t, err } => IntegrateError::Engine { source: err, t_eval: t, t_reached, stats },
+        Fault::NonFinite { t } => IntegrateError::NonFinite { what: "derivative", t_eval: t, t_reached, stats },
+    }
+}
+
+/// `stats` with the right-hand-side evaluations counted so far.
+fn with_evals(sys: &System<'_>, mut stats: IntegrateStats) -> IntegrateStats {
+    stats.rhs_evals = sys.evals.get();
+    stats
+}
+
+/// The crate's step error as ours, at time `t` with step `h` (`at`).
+fn solver_error<Y: Slab>(
+    e: differential_equations::error::Error<f64, Y>,
+    max_steps: usize,
+    (t, h): (f64, f64),
+    stats: IntegrateStats,
+) -> IntegrateError {
+    use differential_equations::error::Error as E;
+    match e {
+        E::MaxSteps { .. } => IntegrateError::MaxSteps { max_steps, t_reached: t, stats },
+        E::StepSize { .. } => IntegrateError::StepSizeUnderflow { t_reached: t, h, stats },
+        E::Stiffness { .. } => IntegrateError::Stiff { t_reached: t, stats },
+        other => IntegrateError::Solver { message: format!("{other:?}"), t_reached: t, stats },
+    }
 }
 
 /// Copies ẋ at `(t, x)` (the solver's start) into `out`: the kept evaluation when it was made at
