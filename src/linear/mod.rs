@@ -1,7 +1,8 @@
 //! Linear analysis of any mechanism about a steady spin: linearisation (paper §2.3, eq. 13),
 //! the first-order form `M ẋ + A x = T` (eq. 19), eigen-orders and mode shapes, the order-domain
 //! frequency response `x̂ = (iΩnM + A)⁻¹ â` (eq. 22) normalised by the locked mechanism (Fig. 2),
-//! Campbell data and the linear multi-order response over speed (§4.2, Table 1).
+//! Campbell data and the linear multi-order response over speed (§4.2, Table 1). Design notes:
+//! `docs/design/linear.md`.
 //!
 //! This module holds the operating point, the Jacobians and [`LinearModel`] with its first- and
 //! second-order forms; the analyses are in submodules, all re-exported here: `modes` (eigen-orders

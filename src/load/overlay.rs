@@ -77,13 +77,18 @@ pub(super) fn merge(
     Ok((merged, counts))
 }
 
-/// The base's `speeds` and `gravity` apply; an overlay that sets others is refused.
+/// The base's `speeds` and `gravity` apply; an overlay that sets others is refused. A field the
+/// overlay writes counts as set even when it holds the default value (which the parsed spec
+/// alone cannot tell from an absent field): it would otherwise be ignored without a word.
 fn check_kept_settings(spec: &MechanismSpec, base_spec: &MechanismSpec, src: &Source) -> Result<()> {
-    if spec.speeds != base_spec.speeds && spec.speeds != crate::model::speeds::Speeds::default() {
+    let written = |field: &str| crate::io::locate(&src.text, field).is_some();
+    let speeds_set = spec.speeds != crate::model::speeds::Speeds::default() || written("speeds");
+    let gravity_set = spec.gravity != (0.0, 0.0) || written("gravity");
+    if spec.speeds != base_spec.speeds && speeds_set {
         return Err(src
             .error("speeds", format!("an overlay keeps its base's speeds ({:?}); remove `speeds`", base_spec.speeds)));
     }
-    if spec.gravity != base_spec.gravity && spec.gravity != (0.0, 0.0) {
+    if spec.gravity != base_spec.gravity && gravity_set {
         return Err(src.error(
             "gravity",
             format!("an overlay keeps its base's gravity ({:?}); remove `gravity`", base_spec.gravity),

@@ -2,7 +2,9 @@
 //! excitations, the choice of generalized speeds, and the validated [`mechanism::Mechanism`].
 //!
 //! Nothing here evaluates dynamics; reading files into these types is [`crate::load`]'s work and
-//! turning them into equations of motion is [`crate::kane`]'s.
+//! turning them into equations of motion is [`crate::kane`]'s. Design notes: `docs/design/model.md`
+//! (the mechanism, couplings, gears, loads) and `docs/design/paths.md` (path joints, absorbers,
+//! rollers).
 
 pub mod absorber;
 pub mod body;

@@ -4,7 +4,8 @@
 //! drive laws of driven runs (torques locked to a crank angle, a prescribed speed:
 //! [`drive_laws`]), the DOP853 stepping loop (`dop853.rs`, its step in `dp8.rs`), the Radau IIA
 //! loop (`radau.rs`), the state and right-hand-side plumbing both loops share (`system.rs`), and
-//! what one integration run takes and gives (`run.rs`, re-exported by [`integrate`]).
+//! what one integration run takes and gives (`run.rs`, re-exported by [`integrate`]). Design
+//! notes: `docs/design/time.md`.
 
 mod dop853;
 mod dp8;

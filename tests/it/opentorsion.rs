@@ -270,6 +270,26 @@ fn bad_overlays_give_located_errors() {
         ),
     );
     assert_eq!(path, "speeds", "{msg}");
+    // Used to be ignored without a word (issue 49, item 10): an overlay that writes the default
+    // `speeds: JointRates` on a base with other speeds, or `gravity: (0.0, 0.0)` on a base with
+    // gravity, sets them as much as any other value does.
+    let base_text = std::fs::read_to_string("examples/opentorsion_marine.ron").unwrap();
+    let absolute =
+        base_text.replacen("speeds: JointRates,", "speeds: AbsoluteAngularVelocities, gravity: (0.0, -9.81),", 1);
+    assert_ne!(absolute, base_text);
+    std::fs::write(dir.join("base_absolute.ron"), absolute).unwrap();
+    for (field, value) in [("speeds", "JointRates"), ("gravity", "(0.0, 0.0)")] {
+        let (file, at, path, msg) = overlay(
+            &format!("h_{field}.ron"),
+            &format!(
+                "Mechanism(name: \"h\", base: \"base_absolute.ron\", {field}: {value}, bodies: [{body}], joints: [{}])",
+                joint("node_1")
+            ),
+        );
+        assert!(file.ends_with(&format!("h_{field}.ron")), "{file}: {msg}");
+        assert_eq!(path, field, "{msg}");
+        assert!(at.is_some() && msg.contains(&format!("remove `{field}`")), "{msg}");
+    }
     // A base outside the overlay's folder tree is refused like any other file.
     let (_, _, path, msg) = overlay(
         "g.ron",
