@@ -136,16 +136,14 @@ impl Hbm {
         // And their Floquet pairs near ±1 with the senses they turn in.
         let mut senses = vec![std::mem::take(&mut self.pair_senses)];
         let mut folds = Vec::new();
-        let mut ds = copts.ds;
-        let mut s = 0.0;
+        let (mut ds, mut s) = (copts.ds, 0.0);
         // The previous point's tangent and the chord to it.
         let mut prev: Option<(DVector<f64>, f64)> = None;
         // A step already aimed at a suspected pair of crossings, and a step already tried past a
         // point where the corrector failed at every smaller step, since the last accepted point.
         let mut aim =
             Aim { aimed: None, misses: Vec::new(), quiet: Vec::new(), floor: 1e-3 * copts.ds.min(copts.ds_max) };
-        let mut jumped = false;
-        let mut last_chord = copts.ds;
+        let (mut jumped, mut last_chord) = (false, copts.ds);
         let end = loop {
             if points.len() >= copts.max_points {
                 break BranchEnd::MaxPoints;
@@ -229,11 +227,7 @@ impl Hbm {
             points.push(cand);
             prev = Some((std::mem::replace(&mut cur, Cursor { y, t }).t, chord));
             chord_m = next_chord;
-            if iters <= 7 && refreshes <= 1 {
-                ds = (ds * 1.5).min(copts.ds_max);
-            } else if iters >= 10 || refreshes >= 3 {
-                ds *= 0.7;
-            }
+            ds = next_step(ds, iters, refreshes, copts.ds_max);
         };
         let branch = Branch { parameter, points, folds, bifurcations: Vec::new(), end, newton_iterations: newton };
         Ok(self.finish_branch(&su, branch, tests, senses, copts))
@@ -405,6 +399,19 @@ impl Hbm {
             self.refine_crossings(su, &mut branch);
         }
         branch
+    }
+}
+
+/// The step after a corrector of `iters` iterations and `refreshes` Jacobian refreshes: 1.5
+/// times `ds` (at most `ds_max`) after at most 7 iterations and one refresh, 0.7 times after 10
+/// iterations or 3 refreshes, else `ds`.
+fn next_step(ds: f64, iters: usize, refreshes: usize, ds_max: f64) -> f64 {
+    if iters <= 7 && refreshes <= 1 {
+        (ds * 1.5).min(ds_max)
+    } else if iters >= 10 || refreshes >= 3 {
+        ds * 0.7
+    } else {
+        ds
     }
 }
 
