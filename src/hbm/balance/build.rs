@@ -5,8 +5,7 @@
 
 use super::options::{HbmError, HbmOptions};
 use super::problem::Hbm;
-use super::sample::Evaluator;
-use super::sample::SampleLin;
+use super::sample::{Evaluator, SampleLin};
 use crate::hbm::series::{Aft, Upsampler};
 use crate::kane::Kane;
 use crate::model::excitation::{Excitation, Harmonic};

@@ -1,6 +1,6 @@
 //! Newton's method at fixed parameters: the unknowns from a guess, the iteration on the
 //! balance `R̂(x) = 0` with the Jacobian factorised by blocks or densely, and the solution record
-//! with its harmonic-count indicators (the mod docs' "Harmonic count").
+//! with its harmonic-count indicators (the room's docs, "Harmonic count").
 
 use super::options::HbmError;
 use super::parameter::{At, Parameter};

@@ -6,7 +6,7 @@
 pub struct ContinuationOptions {
     /// Initial arclength step (in the norm of (coefficients in rad, scaled parameter λ), the
     /// coefficients of the coordinates other than the spin one weighted by 1/√(n_dof − 1): see
-    /// the module docs).
+    /// the continuation room's docs).
     pub ds: f64,
     /// Smallest step before giving up.
     pub ds_min: f64,
@@ -14,7 +14,7 @@ pub struct ContinuationOptions {
     /// pendulums at 500 N·m are unstable only for n ≈ 3.081–3.095) shows as a dip of a test
     /// function, and the step is aimed at it (`tests/it/hbm_events.rs` sweeps 0.1, 0.02, 0.001);
     /// a narrow tongue of period doubling or of loss of unison stepped over whole shows as a
-    /// flip of the sense of the Floquet pair near ±1 (module docs; `tests/it/hbm_tongue.rs`).
+    /// flip of the sense of the Floquet pair near ±1 (the room's docs; `tests/it/hbm_tongue.rs`).
     pub ds_max: f64,
     /// Largest number of points on a branch (a bound on the work, and the plan's: the paper's
     /// branches take 16–60 points at the default `ds_max`, up to ~1600 at 0.001; raise it with a

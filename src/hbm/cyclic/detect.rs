@@ -8,7 +8,7 @@ use crate::model::math::{Vec2, rotate_cs};
 use crate::model::mechanism::Mechanism;
 use std::fmt;
 
-/// Relative tolerance of the identity test (module docs, "Detection").
+/// Relative tolerance of the identity test (the room's docs, "Detection").
 const TOL: f64 = 1e-12;
 
 /// N identical absorbers on one parent body, solved by one representative.
@@ -38,7 +38,7 @@ pub enum Route {
         reason: String,
     },
     /// Each identical set by one scaled representative (the unison response) and one Floquet
-    /// block for its non-unison motions (module docs).
+    /// block for its non-unison motions (the room's docs).
     Cyclic {
         /// The identical sets.
         sets: Vec<CyclicSet>,
@@ -110,7 +110,7 @@ fn vectors(mech: &Mechanism, sub: &[usize]) -> Vec<Vec2> {
 }
 
 /// Why member `d` is not member `c` turned about the parent's origin, or None when it is
-/// (module docs, "Detection"); both subtrees have the same shape.
+/// (the room's docs, "Detection"); both subtrees have the same shape.
 fn difference(mech: &Mechanism, torques: &[JointTorque], c: &[usize], d: &[usize]) -> Option<String> {
     let (vc, vd) = (vectors(mech, c), vectors(mech, d));
     let scale = vc.iter().chain(&vd).map(|v| v.norm()).fold(0.0, f64::max);
@@ -181,7 +181,7 @@ fn fixed_origin(mech: &Mechanism, p: usize) -> bool {
 
 /// The route for `mech` with the applied joint torques `torques` (the evaluator's, see
 /// [`Kane::joint_torques`]), the spin joint `spin_joint` and the excitation inputs at the joints
-/// `inputs`: cyclic when it holds identical sets and nothing breaks their symmetry (module docs,
+/// `inputs`: cyclic when it holds identical sets and nothing breaks their symmetry (the room's docs,
 /// "Detection"), else general with the reason.
 pub fn detect(mech: &Mechanism, torques: &[JointTorque], spin_joint: usize, inputs: &[usize]) -> Route {
     let general = |reason: &str| Route::General { reason: reason.into() };

@@ -238,7 +238,7 @@ mod tests {
     use crate::model::excitation::rpm_to_rad_s;
     use crate::model::speeds::Speeds;
 
-    /// The structure the non-unison block rests on (module docs, item 2), read from the general
+    /// The structure the non-unison block rests on (the room's docs, item 2), read from the general
     /// problem's per-sample A, B, C at a unison solution of three pendulums, for both speed
     /// choices: a pendulum's rows have no entry in another pendulum's columns, every pendulum
     /// has the same diagonal block, and the rotor's row has the same entry in every pendulum's

@@ -19,7 +19,7 @@ impl Hbm {
     /// Floquet multipliers of a solution of this problem (see the stability room's docs): monodromy by RK4 with Richardson's extrapolation over the variational
     /// equations with [`HbmOptions::stability_samples`] samples per period (beyond six
     /// coordinates by Butcher's sixth-order method from a quarter as many steps where the
-    /// mechanism's fastest rate allows; module docs). One block (`all`) on the
+    /// mechanism's fastest rate allows; the room's docs). One block (`all`) on the
     /// general route; on the reduced problem of the cyclic route ([`RoutedHbm`](crate::hbm::RoutedHbm)) the
     /// `unison` block and one non-unison block per identical set, each from its own monodromy.
     pub fn stability(&mut self, sol: &HbmSolution) -> Result<Stability, HbmError> {

@@ -7,19 +7,19 @@ use crate::hbm::series::HbmSolution;
 use nalgebra::DVector;
 
 /// The predictor's offset along the null vector, as a fraction of the weighted norm of the
-/// non-spin unknowns at the branch point (module docs, step 3).
+/// non-spin unknowns at the branch point (the room's docs, step 3).
 const EPS_FRACTION: f64 = 0.02;
 
 /// The largest ratio σ₁/σ₂ of the two smallest singular values of ∂R̂/∂x accepted as a branch
-/// point with a one-dimensional kernel (module docs, step 2). At a located branch point σ₁ is
+/// point with a one-dimensional kernel (the room's docs, step 2). At a located branch point σ₁ is
 /// of the order of the location's error times dσ₁/dp, ~1e-8 relative.
 const KERNEL_RATIO: f64 = 1e-3;
 
 impl Hbm {
     /// Switches at a symmetry-breaking branch point onto the non-symmetric branch and continues
     /// it in `parameter` inside the range `range` = (from, to) (order n; Ω in rad/s; torque
-    /// scale s), with stability when `copts.stability`: see the module docs of the `switch`
-    /// submodule. `value` is the branch point's parameter (as located on the symmetric branch),
+    /// scale s), with stability when `copts.stability`: see the switch room's docs.
+    /// `value` is the branch point's parameter (as located on the symmetric branch),
     /// `guess` a solution of the symmetric branch near it (every coordinate an unknown; for
     /// [`Symmetry::HalfPeriod`] a state of the period-1 problem or of this one), `symmetry` the
     /// symmetry broken there: identical absorbers swapped, or (on the problem of half the base
