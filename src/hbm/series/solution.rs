@@ -3,9 +3,9 @@
 //! one about Ωt) with the solved mean torque T_m, and its read-outs: harmonic amplitudes,
 //! accelerations `(hω₀)²·|c_h|` at an order, the synthesis of q(t) and q̇(t), the peak amplitude
 //! over a period (Clenshaw's recurrence), and the top-harmonic share of the acceleration spectrum
-//! that says whether H suffices (section "Harmonic count" of the module docs of [`crate::hbm`]).
+//! that says whether H suffices (section "Harmonic count" of the balance room's docs).
 
-use super::Stability;
+use super::floquet::Stability;
 use std::f64::consts::PI;
 
 /// One periodic steady state.
@@ -40,10 +40,10 @@ pub struct HbmSolution {
     /// Largest share of the top harmonic in a coordinate's acceleration spectrum.
     pub top_harmonic_ratio: f64,
     /// Largest share of a joint coupling's force in the harmonics above H (0 without
-    /// couplings; section "Harmonic count" of the module docs of [`crate::hbm`]).
+    /// couplings; section "Harmonic count" of the harmonic balance's formulation).
     pub coupling_tail: f64,
-    /// True when `top_harmonic_ratio` exceeds [`HbmOptions::harmonic_tol`](super::HbmOptions::harmonic_tol)
-    /// or `coupling_tail` exceeds [`HbmOptions::coupling_tol`](super::HbmOptions::coupling_tol): raise H.
+    /// True when `top_harmonic_ratio` exceeds [`HbmOptions::harmonic_tol`](crate::hbm::HbmOptions::harmonic_tol)
+    /// or `coupling_tail` exceeds [`HbmOptions::coupling_tol`](crate::hbm::HbmOptions::coupling_tol): raise H.
     pub needs_more_harmonics: bool,
     /// Floquet stability, when computed.
     pub stability: Option<Stability>,
@@ -51,7 +51,7 @@ pub struct HbmSolution {
 
 impl HbmSolution {
     /// Fourier coefficients per coordinate, 2H + 1.
-    pub(super) fn nb(&self) -> usize {
+    pub(in crate::hbm) fn nb(&self) -> usize {
         2 * self.harmonics + 1
     }
 
@@ -332,8 +332,8 @@ impl HbmSolution {
         (0..self.ndof()).filter(|&k| k != self.spin).map(|k| self.peak_amplitude(k)).fold(0.0, f64::max)
     }
 
-    /// The share of the top harmonic (see the module docs).
-    pub(super) fn harmonic_ratio(&self) -> f64 {
+    /// The share of the top harmonic (section "Harmonic count" of the balance room's docs).
+    pub(in crate::hbm) fn harmonic_ratio(&self) -> f64 {
         let mut worst = 0.0f64;
         for k in 0..self.ndof() {
             let mut sum = 0.0;
@@ -355,7 +355,7 @@ impl HbmSolution {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_problem;
+    use crate::hbm::balance::test_problem;
     use approx::{abs_diff_eq, assert_abs_diff_eq};
     use std::f64::consts::PI;
 

@@ -1,126 +1,25 @@
-//! Branch switching at a symmetry-breaking branch point (a Floquet multiplier through +1 of a
-//! symmetric, e.g. unison, branch that is not a fold): the start of the branch of non-symmetric
-//! solutions that crosses the symmetric one there, followed by the ordinary continuation.
-//!
-//! Two symmetries S ([`Symmetry`]) are broken this way:
-//! - a permutation P of identical absorbers: the unison branch's +1 branch points, where the
-//!   non-unison branch starts;
-//! - the shift by half the base period on the problem of half the base frequency (twice the
-//!   period of the excitation): there the period-1 states are those with even harmonics only,
-//!   their odd harmonics decouple at linear order, and a period doubling of the period-1 branch
-//!   (a multiplier through −1) is a branch point whose null vector holds odd harmonics only. The
-//!   branch switched there is the period-doubled one (the subharmonic of order n/2), and its
-//!   return to the symmetric states is a return to the period-1 branch (at another period
-//!   doubling). A period-1 guess is carried to the doubled problem (harmonic h becomes 2h).
-//!
-//! The method (a pitchfork of a problem equivariant under S; Seydel, *Practical Bifurcation and
-//! Stability Analysis*, §5.6, "branch switching by the null vector"), written below for the
-//! permutation P; for the half-period shift read S for P:
-//!
-//! 1. The symmetric solution y* at the located branch point is solved by Newton at the fixed
-//!    parameter from the symmetric branch's point, each step projected on the symmetric states,
-//!    Δx ← (Δx + P Δx)/2, so that no round-off of the nearly singular solve leaks into the
-//!    antisymmetric directions (the symmetric problem is regular there).
-//! 2. The null vector φ of ∂R̂/∂x there: the right singular vector of the smallest singular value
-//!    of the dense Jacobian (the sets where switching is asked are small: three coordinates for
-//!    two pendulums). It must be antisymmetric (Pφ = −φ; a symmetric null vector is a fold, not
-//!    a symmetry breaking) and isolated: σ₁ ≤ 1e-3 σ₂ (a one-dimensional kernel; more identical
-//!    absorbers than two give a kernel of dimension two, which this method does not split).
-//!    Because the unison branch's tangent is symmetric, φ is orthogonal to it.
-//! 3. Predictor y* + ε φ with ε = 2 % of the weighted norm of the non-spin unknowns of y* (the
-//!    absorbers' root-mean-square amplitude in rad): large enough that the corrector cannot
-//!    return to the symmetric branch (it is held on the hyperplane φᵀ(y − y_pred) = 0, which
-//!    the symmetric states cross only at φ-coordinate 0, ε away), small enough that the new
-//!    branch's parameter is still within ~1e-5 of the branch point (it moves as ε²).
-//! 4. One pseudo-arclength correction on that hyperplane, the parameter free, then the ordinary
-//!    continuation ([`Hbm::continue_in`]'s loop, with its events and stability) with the tangent
-//!    oriented along +φ, i.e. away from the branch point. By the symmetry the branch started
-//!    along −φ is the mirror image (the absorbers swapped), so one side is followed.
-//!
-//! The switched branch ends where the parameter leaves the range, at any of the ordinary ends,
-//! or where it returns to the symmetric states ([`BranchEnd::Unison`](super::BranchEnd)): φᵀx
-//! vanishes on every symmetric state (Pφ = −φ), so its change of sign between two points marks
-//! the return; it is located by an Illinois search on φᵀx along the step and accepted when the
-//! state found is symmetric to 1e-3 of its size (else the branch only crossed the hyperplane
-//! φᵀx = 0 elsewhere, and it goes on). Past that point the continuation would follow the mirror
-//! image of the same branch back.
+//! [`Hbm::switch_at`]: the symmetric state at the branch point, its antisymmetric null vector,
+//! the predictor along it and the start of the continuation (the steps of the room's docs).
 
-use super::continuation::{Cursor, Illinois};
-use super::corrector::Setup;
-use super::{Branch, ContinuationOptions, Hbm, HbmError, HbmSolution, Parameter};
+use crate::hbm::balance::{Hbm, HbmError, Parameter, Setup, Symmetry};
+use crate::hbm::continuation::{Branch, ContinuationOptions, Cursor};
+use crate::hbm::series::HbmSolution;
 use nalgebra::DVector;
 
 /// The predictor's offset along the null vector, as a fraction of the weighted norm of the
-/// non-spin unknowns at the branch point (module docs, step 3).
+/// non-spin unknowns at the branch point (the room's docs, step 3).
 const EPS_FRACTION: f64 = 0.02;
 
 /// The largest ratio σ₁/σ₂ of the two smallest singular values of ∂R̂/∂x accepted as a branch
-/// point with a one-dimensional kernel (module docs, step 2). At a located branch point σ₁ is
+/// point with a one-dimensional kernel (the room's docs, step 2). At a located branch point σ₁ is
 /// of the order of the location's error times dσ₁/dp, ~1e-8 relative.
 const KERNEL_RATIO: f64 = 1e-3;
-
-/// A state symmetric to this fraction of its size counts as back on the symmetric branch.
-const UNISON_DEFECT: f64 = 1e-3;
-
-/// The symmetry of a problem that a branch switch breaks.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Symmetry {
-    /// The permutation of the coordinates that swaps identical absorbers (`mirror[k]` is the
-    /// coordinate k is mapped to; the spin coordinate fixed): their unison branch's +1 branch
-    /// points.
-    Swap(Vec<usize>),
-    /// The shift by half the base period, τ → τ + π (harmonic h of ω₀ times (−1)^h), of a
-    /// problem whose base frequency is half that of the excitation (built with an extra multiple
-    /// of half the excitation's base, amplitude zero): on it a period doubling (a multiplier
-    /// through −1) of the period-1 branch is a symmetry-breaking branch point, and the branch
-    /// switched there is the period-doubled one.
-    HalfPeriod,
-}
-
-impl Symmetry {
-    /// The image of the unknowns `x` (`n` coordinates of `nb` coefficients each, in the layout
-    /// of [`HbmSolution::coefficients`]).
-    pub fn apply(&self, x: &[f64], n: usize, nb: usize) -> Vec<f64> {
-        let mut out = vec![0.0; x.len()];
-        match self {
-            Symmetry::Swap(mirror) => {
-                for (k, &j) in mirror.iter().enumerate().take(n) {
-                    out[j * nb..(j + 1) * nb].copy_from_slice(&x[k * nb..(k + 1) * nb]);
-                }
-            }
-            Symmetry::HalfPeriod => {
-                for (i, (o, v)) in out.iter_mut().zip(x).enumerate() {
-                    // Index i % nb: 0 the mean, 2h − 1 and 2h the cosine and sine of harmonic h.
-                    let h = (i % nb).div_ceil(2);
-                    *o = if h % 2 == 1 { -v } else { *v };
-                }
-            }
-        }
-        out
-    }
-
-    /// `(‖x − S x‖, ‖x‖)` over the coordinates that move (the spin coordinate left out of a
-    /// swap, which fixes it; its mean slot, the scaled mean torque, out of both).
-    fn defect(&self, x: &[f64], n: usize, nb: usize, spin: usize) -> (f64, f64) {
-        let image = self.apply(x, n, nb);
-        let (mut defect, mut size) = (0.0, 0.0);
-        for (i, (a, b)) in x.iter().zip(&image).enumerate() {
-            let in_spin = i / nb == spin;
-            if in_spin && (matches!(self, Symmetry::Swap(_)) || i % nb == 0) {
-                continue;
-            }
-            defect += (a - b) * (a - b);
-            size += a * a;
-        }
-        (defect.sqrt(), size.sqrt())
-    }
-}
 
 impl Hbm {
     /// Switches at a symmetry-breaking branch point onto the non-symmetric branch and continues
     /// it in `parameter` inside the range `range` = (from, to) (order n; Ω in rad/s; torque
-    /// scale s), with stability when `copts.stability`: see the module docs of the `switch`
-    /// submodule. `value` is the branch point's parameter (as located on the symmetric branch),
+    /// scale s), with stability when `copts.stability`: see the switch room's docs.
+    /// `value` is the branch point's parameter (as located on the symmetric branch),
     /// `guess` a solution of the symmetric branch near it (every coordinate an unknown; for
     /// [`Symmetry::HalfPeriod`] a state of the period-1 problem or of this one), `symmetry` the
     /// symmetry broken there: identical absorbers swapped, or (on the problem of half the base
@@ -331,53 +230,5 @@ impl Hbm {
             stability: None,
             ..guess.clone()
         })
-    }
-
-    /// The return of a switched branch to the symmetric states inside the step from `cur` to
-    /// the accepted point `y`, if φᵀx (`c` = φ) changes sign there and the state where it
-    /// vanishes is symmetric (module docs): that state. Illinois regula falsi on φᵀx along the
-    /// step (correctors on the hyperplanes normal to cur's tangent), 30 evaluations at most,
-    /// until |φᵀx| is 1e-6 of its value at the ends.
-    pub(super) fn rejoin(
-        &mut self,
-        su: &Setup,
-        cur: &Cursor,
-        y: &DVector<f64>,
-        c: &[f64],
-        symmetry: &Symmetry,
-        newton: &mut usize,
-    ) -> Option<DVector<f64>> {
-        let m = self.unknowns();
-        let nb = self.nb;
-        let cx = |y: &DVector<f64>| -> f64 { su.x_of(y.as_slice(), m).iter().zip(c).map(|(a, b)| a * b).sum() };
-        let (ca, cb) = (cx(&cur.y), cx(y));
-        if ca.signum() == cb.signum() || ca == 0.0 {
-            return None;
-        }
-        let scale = ca.abs().max(cb.abs());
-        let mut ill = Illinois::new((0.0, ca), (cur.t.dot(&(y - &cur.y)), cb));
-        let mut best = y.clone();
-        let mut best_f = cb.abs();
-        for _ in 0..30 {
-            if ill.f1 == ill.f0 {
-                break;
-            }
-            let s = ill.secant();
-            let pred = &cur.y + &cur.t * s;
-            let Ok((ys, it)) = self.correct(su, &pred, &cur.t, self.opts.max_iter) else { break };
-            *newton += it;
-            let f = cx(&ys);
-            if f.abs() < best_f {
-                (best, best_f) = (ys, f.abs());
-            }
-            if f.abs() <= 1e-6 * scale {
-                break;
-            }
-            ill.update(s, f);
-        }
-        // Symmetric to UNISON_DEFECT of its size?
-        let x = su.x_of(best.as_slice(), m);
-        let (defect, size) = symmetry.defect(&x, self.n, nb, self.spin);
-        (defect <= UNISON_DEFECT * size).then_some(best)
     }
 }

@@ -1,49 +1,52 @@
-//! The corrector of the continuation (`continuation.rs`), with the scaled parameter λ = p/p_ref
+//! The pseudo-arclength corrector that the continuation steps with, with the scaled parameter λ = p/p_ref
 //! it works in ([`Setup`]): the bordered system
 //! `[[∂R̂/∂x, ∂R̂/∂λ], [tᵀ]]` that stays regular through turning points, the unit tangent it
 //! yields, Newton's method on it, and the Newton–chord iteration with good-Broyden updates
 //! (Kelley §7.3) that reuses one factorisation per point.
 
-use super::blocklu::{BlockLu, Factor};
-use super::{At, Hbm, HbmError, HbmSolution, Parameter};
+use super::options::HbmError;
+use super::parameter::{At, Parameter};
+use super::problem::Hbm;
+use crate::hbm::numerics::{BlockLu, Factor};
+use crate::hbm::series::HbmSolution;
 use nalgebra::{DMatrix, DVector};
 
 /// A continuation's parameter, its scale and the values held fixed, and the weights of its
 /// arclength: the continuation works in `y = (w ⊙ x, λ)`, w = 1 on the spin coordinate's
 /// unknowns (its harmonics and the mean torque) and `weight` on every other coordinate's.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Setup {
-    pub(super) param: Parameter,
-    pub(super) p_ref: f64,
-    pub(super) base: At,
+pub(in crate::hbm) struct Setup {
+    pub(in crate::hbm) param: Parameter,
+    pub(in crate::hbm) p_ref: f64,
+    pub(in crate::hbm) base: At,
     /// The weight of the coordinates other than the spin one: 1/√(n_dof − 1), so that the
     /// arclength measures their root mean square. N absorbers moving alike then take the steps of
     /// one (without it a step in the parameter shrank as 1/√N: 16 mistuned pendulums took four
     /// times the points of one); 1 for the paper's rotor and every two-coordinate problem.
-    pub(super) weight: f64,
+    pub(in crate::hbm) weight: f64,
     /// The spin coordinate's unknowns, `spin·nb..(spin + 1)·nb`.
-    pub(super) spin: (usize, usize),
+    pub(in crate::hbm) spin: (usize, usize),
 }
 
 impl Setup {
     /// The setup of `hbm` for `param` (scale `p_ref`, fixed values `base`).
-    pub(super) fn new(hbm: &Hbm, param: Parameter, p_ref: f64, base: At) -> Self {
+    pub(in crate::hbm) fn new(hbm: &Hbm, param: Parameter, p_ref: f64, base: At) -> Self {
         let weight = if hbm.n > 2 { 1.0 / ((hbm.n - 1) as f64).sqrt() } else { 1.0 };
         Self { param, p_ref, base, weight, spin: (hbm.spin * hbm.nb, (hbm.spin + 1) * hbm.nb) }
     }
 
     /// The arclength weight of unknown i.
-    pub(super) fn w(&self, i: usize) -> f64 {
+    pub(in crate::hbm) fn w(&self, i: usize) -> f64 {
         if (self.spin.0..self.spin.1).contains(&i) { 1.0 } else { self.weight }
     }
 
     /// The unknowns x of a continuation state y (its first `m` entries divided by the weights).
-    pub(super) fn x_of(&self, y: &[f64], m: usize) -> Vec<f64> {
+    pub(in crate::hbm) fn x_of(&self, y: &[f64], m: usize) -> Vec<f64> {
         y[..m].iter().enumerate().map(|(i, v)| v / self.w(i)).collect()
     }
 
     /// The residual's parameters at scaled parameter λ.
-    pub(super) fn at(&self, lambda: f64) -> At {
+    pub(in crate::hbm) fn at(&self, lambda: f64) -> At {
         let mut at = self.base;
         match self.param {
             Parameter::Order => at.order = lambda,
@@ -54,7 +57,7 @@ impl Setup {
     }
 
     /// λ of a solution.
-    pub(super) fn lambda(&self, sol: &HbmSolution) -> f64 {
+    pub(in crate::hbm) fn lambda(&self, sol: &HbmSolution) -> f64 {
         match self.param {
             Parameter::Order => sol.order,
             Parameter::Speed { .. } => sol.omega / self.p_ref,
@@ -63,7 +66,7 @@ impl Setup {
     }
 
     /// A scaled parameter the residual can be evaluated at.
-    pub(super) fn valid(&self, lambda: f64) -> bool {
+    pub(in crate::hbm) fn valid(&self, lambda: f64) -> bool {
         lambda.is_finite() && (lambda > 0.0 || matches!(self.param, Parameter::TorqueScale { .. }))
     }
 }
@@ -73,13 +76,13 @@ impl Setup {
 /// the last row only, so it is applied by the Sherman–Morrison formula instead of a second
 /// factorisation: with `z = B₀⁻¹ e_last` (the unnormalised tangent, t₀ᵀz = 1) and `d = t − t₀`,
 /// `B⁻¹r = B₀⁻¹r − z (dᵀB₀⁻¹r) / (1 + dᵀz)`, and `1 + dᵀz = tᵀz = |z| > 0`.
-pub(super) struct Chord {
-    pub(super) lu: Factor,
-    pub(super) update: Option<(DVector<f64>, DVector<f64>, f64)>,
+pub(in crate::hbm) struct Chord {
+    pub(in crate::hbm) lu: Factor,
+    pub(in crate::hbm) update: Option<(DVector<f64>, DVector<f64>, f64)>,
 }
 
 impl Chord {
-    pub(super) fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(in crate::hbm) fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
         let mut y = self.lu.solve(r)?;
         if let Some((z, d, denom)) = &self.update {
             let f = d.dot(&y) / denom;
@@ -94,7 +97,7 @@ impl Hbm {
     /// by block elimination along the tree where its pattern allows it (more than two
     /// coordinates; `blocklu`), densely otherwise (the paper's rotor, two coordinates, stays on
     /// the dense LU).
-    pub(super) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
+    pub(in crate::hbm) fn factor(&self, border: Option<(&Setup, &DVector<f64>)>) -> Factor {
         if self.n > 6 {
             let col = border.map(|(su, _)| &self.gp * su.p_ref);
             // The blocks the last assembly left zero are not read: reading them (most of 357²
@@ -119,7 +122,7 @@ impl Hbm {
     }
 
     /// The bordered matrix `[[J, ∂R̂/∂λ], [rowᵀ]]` from the work buffers (∂R̂/∂λ = p_ref ∂R̂/∂p).
-    pub(super) fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
+    pub(in crate::hbm) fn bordered(&self, su: &Setup, row: &DVector<f64>) -> DMatrix<f64> {
         let m = self.unknowns();
         let mut b = DMatrix::zeros(m + 1, m + 1);
         b.view_mut((0, 0), (m, m)).copy_from(&self.jac);
@@ -138,12 +141,12 @@ impl Hbm {
     }
 
     /// Unit tangent from the buffers' Jacobian, oriented by `row` (previous tangent).
-    pub(super) fn tangent(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
+    pub(in crate::hbm) fn tangent(&self, su: &Setup, row: &DVector<f64>, order: f64) -> Result<DVector<f64>, HbmError> {
         Ok(self.tangent_chord(su, row, order)?.0)
     }
 
     /// Like [`Hbm::tangent`], also returning the chord matrix bordered by the new tangent.
-    pub(super) fn tangent_chord(
+    pub(in crate::hbm) fn tangent_chord(
         &self,
         su: &Setup,
         row: &DVector<f64>,
@@ -164,7 +167,7 @@ impl Hbm {
     }
 
     /// Pseudo-arclength corrector from `pred` on the hyperplane normal to `t`.
-    pub(super) fn correct(
+    pub(in crate::hbm) fn correct(
         &mut self,
         su: &Setup,
         pred: &DVector<f64>,
@@ -208,7 +211,7 @@ impl Hbm {
     /// When a step contracts by less than half, the Jacobian is refreshed at the
     /// current iterate (at most `max_refresh` times) and the updates restart from it. Returns the
     /// point, the iterations and the refreshes.
-    pub(super) fn correct_chord(
+    pub(in crate::hbm) fn correct_chord(
         &mut self,
         su: &Setup,
         chord: &Chord,

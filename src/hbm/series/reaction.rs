@@ -10,7 +10,7 @@
 //! ([`HbmSolution::mesh_torque_harmonics`], from [`crate::kane::Kane::gear_torques`] at the same
 //! samples).
 
-use super::HbmSolution;
+use super::solution::HbmSolution;
 use crate::kane::Kane;
 use crate::model::mechanism::Mechanism;
 use realfft::RealFftPlanner;

@@ -12,7 +12,7 @@
 use nalgebra::{DMatrix, DVector};
 
 /// `P A = L U` of a square matrix, L unit lower and U upper triangular, packed column-major.
-pub(super) struct DenseLu {
+pub(in crate::hbm) struct DenseLu {
     n: usize,
     /// L below the diagonal, U on and above it; column j at `j n .. (j + 1) n`.
     packed: Vec<f64>,
@@ -23,7 +23,7 @@ pub(super) struct DenseLu {
 impl DenseLu {
     /// The factorisation of `a` (square). A column without a non-zero pivot is left as it is,
     /// and the solves then return None.
-    pub(super) fn new(a: &DMatrix<f64>) -> Self {
+    pub(in crate::hbm) fn new(a: &DMatrix<f64>) -> Self {
         let n = a.nrows();
         debug_assert_eq!(n, a.ncols());
         let mut packed = a.as_slice().to_vec();
@@ -64,7 +64,7 @@ impl DenseLu {
     }
 
     /// x with `A x = b`; None where U has a zero on its diagonal or x is not finite.
-    pub(super) fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(in crate::hbm) fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
         let n = self.n;
         let mut out = b.clone();
         let x = out.as_mut_slice();
@@ -96,7 +96,7 @@ impl DenseLu {
     }
 
     /// x with `Aᵀ x = b` (`Uᵀ Lᵀ P x = b`); None as for [`DenseLu::solve`].
-    pub(super) fn solve_transposed(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(in crate::hbm) fn solve_transposed(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
         let n = self.n;
         let mut out = b.clone();
         let x = out.as_mut_slice();

@@ -1,5 +1,5 @@
 //! The per-sample evaluator of the harmonic balance (sections "Residual" and "Jacobian" of the
-//! module docs of [`crate::hbm`]): Kane's equations as the residual
+//! room's docs): Kane's equations as the residual
 //! `R(t) = M(q) W q̈ − F(q, W q̇, t) − g·T(t)` at one time sample, and its derivatives
 //! `A = ∂R/∂q`, `B = ∂R/∂q̇` (central differences of the engine, the spin angle's column of A
 //! zero as the angle is cyclic; or one call of the engine's closed-form residual Jacobian where it
@@ -14,19 +14,19 @@ const ONE_SIDED_STEP: f64 = 1e-7;
 
 /// The engine wrapped to evaluate `R = M W q̈ − F(q, W q̇) − g T` and its per-sample derivatives.
 #[derive(Debug, Clone)]
-pub(super) struct Evaluator {
+pub(in crate::hbm) struct Evaluator {
     kane: Kane,
     n: usize,
-    pub(super) speeds: Speeds,
-    pub(super) parents: Vec<Option<usize>>,
+    pub(in crate::hbm) speeds: Speeds,
+    pub(in crate::hbm) parents: Vec<Option<usize>>,
     /// W, row-major.
-    pub(super) w: Vec<f64>,
+    pub(in crate::hbm) w: Vec<f64>,
     /// W's non-zeros row by row, `(k, W_jk)` for row j: `M W` and `∂R/∂u W` skip W's zeros
     /// (most of it on a tree: the absolute speeds' W has 2n − 1 non-zeros), which summed
     /// in the same order gives the same numbers; n³ per sample was 7 % of a 16-pendulum branch.
     w_rows: Vec<Vec<(usize, f64)>>,
     /// Generalized force (in speeds) of a unit torque in the spin joint.
-    pub(super) g: Vec<f64>,
+    pub(in crate::hbm) g: Vec<f64>,
     u: Vec<f64>,
     ud: Vec<f64>,
     rp: Vec<f64>,
@@ -38,25 +38,25 @@ pub(super) struct Evaluator {
     /// 1 + 2(n − 1) + 2n, about 1e-8 relative instead of 1e-11): for the Jacobians of a branch
     /// whose points are only starting guesses, where they steer Newton's method and the steps but
     /// decide no reported number.
-    pub(super) one_sided: bool,
+    pub(in crate::hbm) one_sided: bool,
 }
 
 /// Per-sample linearisation: R, and row-major `A = ∂R/∂q`, `B = ∂R/∂q̇`, `C = ∂R/∂q̈`.
 #[derive(Debug, Clone)]
-pub(super) struct SampleLin {
+pub(in crate::hbm) struct SampleLin {
     /// R, n entries.
-    pub(super) r: Vec<f64>,
+    pub(in crate::hbm) r: Vec<f64>,
     /// ∂R/∂q, n × n.
-    pub(super) a: Vec<f64>,
+    pub(in crate::hbm) a: Vec<f64>,
     /// ∂R/∂q̇, n × n.
-    pub(super) b: Vec<f64>,
+    pub(in crate::hbm) b: Vec<f64>,
     /// ∂R/∂q̈ = M W, n × n.
-    pub(super) c: Vec<f64>,
+    pub(in crate::hbm) c: Vec<f64>,
 }
 
 impl SampleLin {
     /// Zeroed buffers for n coordinates.
-    pub(super) fn new(n: usize) -> Self {
+    pub(in crate::hbm) fn new(n: usize) -> Self {
         Self { r: vec![0.0; n], a: vec![0.0; n * n], b: vec![0.0; n * n], c: vec![0.0; n * n] }
     }
 }
@@ -64,7 +64,13 @@ impl SampleLin {
 impl Evaluator {
     /// The evaluator of `kane`'s mechanism (its spin torque already removed) with `speeds`, the
     /// joints' `parents`, W (row-major) and the generalized force `g` of a unit spin torque.
-    pub(super) fn new(kane: Kane, speeds: Speeds, parents: Vec<Option<usize>>, w: Vec<f64>, g: Vec<f64>) -> Self {
+    pub(in crate::hbm) fn new(
+        kane: Kane,
+        speeds: Speeds,
+        parents: Vec<Option<usize>>,
+        w: Vec<f64>,
+        g: Vec<f64>,
+    ) -> Self {
         let n = kane.ndof();
         let w_rows =
             (0..n).map(|j| (0..n).filter(|&k| w[j * n + k] != 0.0).map(|k| (k, w[j * n + k])).collect()).collect();
@@ -88,7 +94,7 @@ impl Evaluator {
 
     /// R at one sample; writes `M W` into `mw` when given.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn residual(
+    pub(in crate::hbm) fn residual(
         &mut self,
         t: f64,
         q: &[f64],
@@ -125,7 +131,7 @@ impl Evaluator {
     /// R, A, B, C at one sample by central differences (q and q̇ are restored on return). When
     /// the spin angle is `cyclic` its column of A is zero and not differenced.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn linearize(
+    pub(in crate::hbm) fn linearize(
         &mut self,
         t: f64,
         q: &mut [f64],

@@ -1,48 +1,14 @@
-//! The data model of a harmonic-balance solution branch: the continued [`Parameter`] (order n,
-//! mean speed Ω or torque scale s), the points with the quantities of the paper's figures and the
+//! The data model of a harmonic-balance solution branch in its continued [`Parameter`] (order
+//! n, mean speed Ω or torque scale s): the points with the quantities of the paper's figures and the
 //! branch tangent, the folds (turning points in the parameter, where a sweep jumps: Figs. 3, 4),
 //! the Floquet bifurcations (multiplier crossings of the unit circle between successive points,
 //! classified by the critical multiplier: +1, −1, or a complex pair for Neimark–Sacker), and the
 //! read-outs of a [`Branch`]: starting guesses at a parameter value and cubic Hermite
 //! interpolation between points.
 
-use super::HbmSolution;
+use crate::hbm::balance::Parameter;
+use crate::hbm::series::HbmSolution;
 use std::f64::consts::PI;
-
-/// The parameter continued along a branch; the others keep the values of the
-/// [`Hbm`](super::Hbm) problem ([`Hbm::omega`](super::Hbm::omega),
-/// [`Hbm::torque_scale`](super::Hbm::torque_scale)) unless the variant fixes them. Its kind
-/// also names the derivative ∂R̂/∂p that the Jacobian assembly forms. (A study file names it,
-/// with its range in the spec's units, as `study::HbmParameter`.)
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Parameter {
-    /// The excitation order n (dimensionless).
-    Order,
-    /// The mean speed Ω in rad/s, at the fixed excitation order `order`.
-    Speed {
-        /// Excitation order n held fixed.
-        order: f64,
-    },
-    /// The torque scale s (dimensionless; the oscillating amplitudes are s·T_k), at the fixed
-    /// excitation order `order`.
-    TorqueScale {
-        /// Excitation order n held fixed.
-        order: f64,
-    },
-}
-
-impl Parameter {
-    /// The value of this parameter in a solution: its order n, mean speed Ω (rad/s) or torque
-    /// scale s.
-    pub fn value(self, sol: &HbmSolution) -> f64 {
-        match self {
-            Parameter::Order => sol.order,
-            Parameter::Speed { .. } => sol.omega,
-            Parameter::TorqueScale { .. } => sol.torque_scale,
-        }
-    }
-}
-
 /// One point of a branch, with the quantities of the paper's figures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BranchPoint {
@@ -91,7 +57,7 @@ pub enum FoldKind {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Fold {
     /// Order at the fold (refined when
-    /// [`ContinuationOptions::refine_folds`](super::ContinuationOptions::refine_folds); the fixed
+    /// [`ContinuationOptions::refine_folds`](crate::hbm::ContinuationOptions::refine_folds); the fixed
     /// order when another parameter is continued).
     pub order: f64,
     /// Value of the continued parameter at the fold (n, Ω in rad/s, or s).
@@ -105,7 +71,7 @@ pub struct Fold {
     /// Pendulum peak amplitude at the fold, rad.
     pub pendulum_amplitude: f64,
     /// The motion the branch takes through the fold: its tangent there in the layout of
-    /// [`HbmSolution::coefficients`](super::HbmSolution::coefficients) (the gauge slot zero), which at
+    /// [`HbmSolution::coefficients`](crate::hbm::HbmSolution::coefficients) (the gauge slot zero), which at
     /// a turning point spans the Jacobian's null space, i.e. the critical mode (whether the
     /// absorbers turn together or apart). Empty when the fold was not refined.
     pub critical: Vec<f64>,
@@ -156,7 +122,7 @@ pub struct Bifurcation {
     /// Index of the point before the change.
     pub after: usize,
     /// Order at the crossing: the fold's at a fold; otherwise located by bisection along the
-    /// segment (with [`ContinuationOptions::refine_folds`](super::ContinuationOptions::refine_folds)),
+    /// segment (with [`ContinuationOptions::refine_folds`](crate::hbm::ContinuationOptions::refine_folds)),
     /// else interpolated where the crossing multiplier's modulus passes 1.
     pub order: f64,
     /// The continued parameter at the crossing, found the same way.
@@ -178,15 +144,15 @@ pub enum BranchEnd {
     ReachedTarget,
     /// Turned back and left the range at the starting value (the last point is at it).
     LeftRange,
-    /// Hit [`ContinuationOptions::max_points`](super::ContinuationOptions::max_points).
+    /// Hit [`ContinuationOptions::max_points`](crate::hbm::ContinuationOptions::max_points).
     MaxPoints,
-    /// The step fell below [`ContinuationOptions::ds_min`](super::ContinuationOptions::ds_min) (the
+    /// The step fell below [`ContinuationOptions::ds_min`](crate::hbm::ContinuationOptions::ds_min) (the
     /// last point is the last success).
     StepTooSmall,
-    /// Passed [`ContinuationOptions::deadline`](super::ContinuationOptions::deadline): the
+    /// Passed [`ContinuationOptions::deadline`](crate::hbm::ContinuationOptions::deadline): the
     /// analysis overran its time budget (the last point is the last success).
     Watchdog,
-    /// A switched branch ([`Hbm::switch_at`](super::Hbm::switch_at)) returned to the symmetric
+    /// A switched branch ([`Hbm::switch_at`](crate::hbm::Hbm::switch_at)) returned to the symmetric
     /// (unison) states: the last point is where it meets them, a branch point of the symmetric
     /// branch.
     Unison,
@@ -211,7 +177,7 @@ pub struct Branch {
 
 impl Branch {
     /// Starting guesses at parameter value p (the order n of an order branch): for each segment
-    /// of the branch that crosses p, the solution at its nearer end (pass it to [`Hbm::solve`](super::Hbm::solve)
+    /// of the branch that crosses p, the solution at its nearer end (pass it to [`Hbm::solve`](crate::hbm::Hbm::solve)
     /// there; one per sheet of an S-shaped branch).
     pub fn guesses_at(&self, value: f64) -> Vec<&HbmSolution> {
         self.points
@@ -343,7 +309,7 @@ pub(super) fn bifurcations(points: &[BranchPoint], folds: &[Fold]) -> Vec<Bifurc
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hbm::Stability;
+    use crate::hbm::series::Stability;
     use approx::abs_diff_eq;
     use nalgebra::Complex;
 

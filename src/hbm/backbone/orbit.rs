@@ -1,51 +1,9 @@
-//! Free periodic orbits (backbones) by harmonic balance with a phase condition, continued in
-//! amplitude by natural continuation: the undamped, unforced periodic motions of an absorber
-//! joint with the spin held or free.
-//!
-//! # Formulation
-//!
-//! The problem is the forced one of [`crate::hbm`] without excitation and without dampers (build
-//! the [`Hbm`] from a mechanism whose dampers and joint torques are removed, with no harmonics):
-//! `q_s = Ωt + p_s(τ)`, `q_k = p_k(τ)`, τ = ω₀t, ω₀ = nΩ, and n, the order of the free
-//! oscillation, is now an unknown. Ω stays fixed: the equations of a mechanism without gravity,
-//! springs to ground or applied torques are invariant under the time scaling t → ct (all
-//! speeds × 1/c), so the orbits at another mean speed are these ones slowed or sped up and their
-//! order n = ω₀/Ω is the same. Fixing Ω fixes the angular momentum level and loses nothing.
-//!
-//! The unknowns are the Fourier coefficients, the order n and two unfolding parameters; the
-//! equations are the balanced residual and two scalar conditions at τ = 0 on the released joint
-//! j (its coordinate's index `coord`):
-//!
-//! - phase condition `ṗ_j(0) = Σ_h h b_jh = 0`: the orbit's time origin is a turning point of the
-//!   joint (an autonomous orbit shifted in time is an orbit; this picks one);
-//! - amplitude condition `p_j(0) = a_j0 + Σ_h a_jh = A`: the joint is at A at that turning point,
-//!   which is what the time route's "released from rest at A" means, point for point.
-//!
-//! A conservative system's periodic orbits come in families, so the balanced residual is
-//! dependent (its combination with the velocities is the time derivative of the energy, zero
-//! over a period whatever the coefficients). Following Muñoz-Almaraz et al. (2003) the dependence
-//! is unfolded by a parameter that breaks the conserved quantity: a dissipation `ε` (a unit
-//! viscous damper on every joint other than the spin, internal, so it leaves the angular
-//! momentum alone) for the energy, and with a free rotor the rotor's mean torque T_m (the forced
-//! problem's unknown in the spin's gauge slot) for the angular momentum. On an orbit both are
-//! zero (to the aliasing of the discrete transforms); they are returned as a check. The system is
-//! square: `n_dof(2H + 1) + 2` unknowns and equations, solved by Newton's method with a dense LU
-//! (small mechanisms: an absorber and its rotor).
-//!
-//! - `Spin::Free`: every coordinate is balanced; the rotor's mean angle is the gauge (0) and
-//!   its oscillation p_s is solved with the absorber's, so the mean rotor speed is Ω exactly.
-//! - `Spin::Held`: the spin coordinate is prescribed, p_s ≡ 0 (and T_m), and the spin's
-//!   equations are dropped (the torque that holds the speed is whatever it is).
-//!
-//! # Continuation
-//!
-//! [`Hbm::backbone`] starts each sign of amplitude at a small amplitude from the linear mode
-//! (order and shape from the linear analysis) and steps the amplitude to each requested value
-//! in steps no larger than `max_step`, each Newton solve predicted by the secant through the two
-//! previous orbits (natural continuation in the amplitude: the backbone of an absorber has no
-//! fold in amplitude below the top of its travel), halving a step that fails.
+//! Free orbits by harmonic balance with a phase and an amplitude condition, unfolded by a
+//! dissipation (and a mean torque with the rotor free), and the backbone through them by
+//! natural continuation in the amplitude (the room's docs).
 
-use super::{At, Hbm, HbmError, HbmSolution, Parameter};
+use crate::hbm::balance::{At, Hbm, HbmError, Parameter};
+use crate::hbm::series::HbmSolution;
 use nalgebra::{DMatrix, DVector};
 
 /// Whether the rotor speed is prescribed or a degree of freedom during the free oscillation.
@@ -121,7 +79,7 @@ impl Hbm {
         d
     }
 
-    /// The augmented residual and Jacobian at `p` (see the module docs).
+    /// The augmented residual and Jacobian at `p` (see the room's docs).
     fn free_system(
         &mut self,
         p: &Point,
@@ -224,7 +182,7 @@ impl Hbm {
     /// The free periodic orbit of the joint with coordinate `coord` through its turning point at
     /// `amplitude`, by Newton's method from the orbit `from` (or, without one, from the linear
     /// mode: order `linear_order`, shape `shape` per coordinate, relative to the joint's = 1).
-    /// `self` must be the unforced, undamped problem (module docs).
+    /// `self` must be the unforced, undamped problem (the room's docs).
     pub fn free_orbit(
         &mut self,
         spin: FreeSpin,
@@ -275,7 +233,7 @@ impl Hbm {
 
     /// The backbone of the joint with coordinate `coord`: the free orbit at each of `amplitudes`
     /// (any order, non-zero), by natural continuation from the linear mode (`linear_order`,
-    /// `shape` as in [`Hbm::free_orbit`]); see the module docs. One result per amplitude, in
+    /// `shape` as in [`Hbm::free_orbit`]); see the room's docs. One result per amplitude, in
     /// their order: an error where the continuation could not reach it.
     pub fn backbone(
         &mut self,
@@ -374,7 +332,7 @@ mod tests {
         mech.loads.joint_torques.clear();
         let kane = Kane::new(&mech).unwrap();
         let omega = crate::model::excitation::rpm_to_rad_s(1000.0);
-        let opts = super::super::HbmOptions { harmonics, stability_samples: 0, ..Default::default() };
+        let opts = crate::hbm::balance::HbmOptions { harmonics, stability_samples: 0, ..Default::default() };
         Hbm::new(&kane, 0, omega, &[], opts).unwrap()
     }
 

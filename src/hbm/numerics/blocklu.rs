@@ -54,7 +54,7 @@ struct Step {
 
 /// A block-eliminated factorisation (module docs).
 #[derive(Debug, Clone)]
-pub(super) struct BlockLu {
+pub(in crate::hbm) struct BlockLu {
     offsets: Vec<usize>,
     sizes: Vec<usize>,
     steps: Vec<Step>,
@@ -66,14 +66,14 @@ pub(super) struct BlockLu {
 /// A factorisation of a Jacobian or bordered Jacobian: dense LU (small problems, dense patterns,
 /// a refused block) or block elimination.
 #[derive(Debug, Clone)]
-pub(super) enum Factor {
+pub(in crate::hbm) enum Factor {
     Dense(Lu),
     Block(Box<BlockLu>),
 }
 
 impl Factor {
     /// x = B⁻¹ r, None when singular.
-    pub(super) fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
+    pub(in crate::hbm) fn solve(&self, r: &DVector<f64>) -> Option<DVector<f64>> {
         match self {
             Factor::Dense(lu) => lu.solve(r),
             Factor::Block(b) => b.solve(r),
@@ -81,7 +81,7 @@ impl Factor {
     }
 
     /// Sign and ln |·| of the determinant.
-    pub(super) fn determinant(&self) -> (f64, f64) {
+    pub(in crate::hbm) fn determinant(&self) -> (f64, f64) {
         match self {
             Factor::Dense(lu) => lu_determinant(lu),
             Factor::Block(b) => {
@@ -114,7 +114,7 @@ impl BlockLu {
     /// read; the others are tested entry by entry as without it.
     /// None when no block can be eliminated with less fill than the dense LU (the caller then
     /// factorises densely) or an eliminated block is refused (module docs).
-    pub(super) fn new(
+    pub(in crate::hbm) fn new(
         j: &DMatrix<f64>,
         border: Option<(&DVector<f64>, &DVector<f64>, &[f64])>,
         n: usize,

@@ -1,18 +1,20 @@
 //! The alternating frequency/time (AFT) assembly of the harmonic balance (sections "Residual" and
-//! "Jacobian" of the module docs of [`crate::hbm`]): the Fourier unknowns synthesised at the N_t
+//! "Jacobian" of the room's docs): the Fourier unknowns synthesised at the N_t
 //! samples by inverse real FFTs, Kane's residual and its per-sample derivatives evaluated there
 //! and projected back by forward real FFTs into R̂; the Fourier-domain Jacobian ∂R̂/∂x (each
 //! product of a sampled coefficient with cos lτ or sin lτ taken from the coefficient's discrete
 //! Fourier coefficients at h ± l), and ∂R̂/∂p for the continued parameter.
 
-use super::{At, Hbm, Parameter, aft};
+use super::parameter::{At, Parameter};
+use super::problem::Hbm;
+use crate::hbm::series::cos_sin;
 use std::f64::consts::PI;
 
 impl Hbm {
     /// Residual R̂ (and with `jacobian` = Some(p), its Jacobian and ∂R̂/∂p) at unknowns x and
     /// parameters `at`, into the work buffers. Only the kind of p is read: the order a variant
     /// holds fixed is `at.order` here.
-    pub(super) fn assemble(&mut self, x: &[f64], at: &At, jacobian: Option<Parameter>) {
+    pub(in crate::hbm) fn assemble(&mut self, x: &[f64], at: &At, jacobian: Option<Parameter>) {
         let (n, nb, nt, spin) = (self.n, self.nb, self.aft.nt, self.spin);
         let At { order, omega, scale } = *at;
         match &mut self.rhat_at {
@@ -121,7 +123,7 @@ impl Hbm {
         }
     }
 
-    /// The Fourier-domain Jacobian from the per-sample `A, B, C` in `samples` (see the module
+    /// The Fourier-domain Jacobian from the per-sample `A, B, C` in `samples` (see the room's
     /// docs): each block (i, k) projects `A_ik e + ω₀ B_ik e' + ω₀² C_ik e''` for every basis
     /// function e, which for products of a sampled coefficient with cos lτ or sin lτ reduces to
     /// sums and differences of the coefficient's discrete Fourier coefficients at h ± l. One FFT
@@ -159,7 +161,7 @@ impl Hbm {
             // (C_m, S_m) for m = −2H..=2H, unfolded once so that the entries below are plain
             // lookups.
             for (u, v) in unfolded.iter_mut().enumerate() {
-                *v = aft::cos_sin(spec, nt, u as isize - 2 * hh as isize);
+                *v = cos_sin(spec, nt, u as isize - 2 * hh as isize);
             }
         }
         let dim = n * nb;
@@ -230,7 +232,7 @@ impl Hbm {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_problem;
+    use super::super::build::test_problem;
     use super::*;
     use crate::model::excitation::Harmonic;
 
@@ -259,8 +261,8 @@ mod tests {
         // 40 N·m of order 2n at 1000 rpm: 40 / (104.7 rad/s)².
         let per_w2 = [Harmonic { multiple: 2.0, amplitude: 40.0 / 104.72f64.powi(2), phase: -0.5 }];
         let omega = crate::model::excitation::rpm_to_rad_s(1000.0);
-        let hbm = super::Hbm::with_speed_forcing(&kane, 0, omega, &gas, &per_w2, &[(0, 1.0, 0.0)], Default::default())
-            .unwrap();
+        let hbm =
+            Hbm::with_speed_forcing(&kane, 0, omega, &gas, &per_w2, &[(0, 1.0, 0.0)], Default::default()).unwrap();
         jacobian_check_of(hbm, 0);
     }
 
@@ -268,7 +270,7 @@ mod tests {
         jacobian_check_of(test_problem(40.0, time_samples, speeds), time_samples);
     }
 
-    fn jacobian_check_of(mut hbm: super::Hbm, time_samples: usize) {
+    fn jacobian_check_of(mut hbm: Hbm, time_samples: usize) {
         let sol = hbm.solve(3.05, None).unwrap();
         let mut x = hbm.unknowns_from(Some(&sol));
         // Move off the solution so that the residual is not zero.

@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 /// Forward and inverse real FFTs of one length with their preallocated buffers.
 #[derive(Clone)]
-pub(super) struct Aft {
+pub(in crate::hbm) struct Aft {
     pub nt: usize,
     harmonics: usize,
     fwd: Arc<dyn RealToComplex<f64>>,
@@ -97,7 +97,7 @@ impl Aft {
 /// `(C_m, S_m) = ((1/N)Σ r_j cos mτ_j, (1/N)Σ r_j sin mτ_j)` for any integer m, from the
 /// normalised half spectrum of `nt` real samples.
 #[inline]
-pub(super) fn cos_sin(spec: &[Complex<f64>], nt: usize, m: isize) -> (f64, f64) {
+pub(in crate::hbm) fn cos_sin(spec: &[Complex<f64>], nt: usize, m: isize) -> (f64, f64) {
     let m = m.rem_euclid(nt as isize) as usize;
     if m <= nt / 2 {
         (spec[m].re, -spec[m].im)
@@ -112,7 +112,7 @@ pub(super) fn cos_sin(spec: &[Complex<f64>], nt: usize, m: isize) -> (f64, f64) 
 /// evaluated at N_s equally spaced instants by one inverse real FFT of length N_s (components
 /// above N_s/2, when N_s < N_t, fold onto the bins they alias to).
 #[derive(Clone)]
-pub(super) struct Upsampler {
+pub(in crate::hbm) struct Upsampler {
     ns: usize,
     inv: Arc<dyn ComplexToReal<f64>>,
     spec: Vec<Complex<f64>>,
