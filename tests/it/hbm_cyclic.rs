@@ -1,4 +1,4 @@
-//! The cyclic route of the harmonic balance (src/hbm/cyclic.rs) on the canonical rotor with N
+//! The cyclic route of the harmonic balance (src/hbm/cyclic/) on the canonical rotor with N
 //! identical pendulums (the paper's pendulum split evenly, `CpvaParams::with_pendulums`), 1000
 //! rpm, H = 10, n 2.9 → 3.3, checked against routes that do not share its reduction:
 //!

@@ -1,5 +1,5 @@
 //! The jump boundary of the paper's rotor in (order, torque) at 1000 rpm: the fold curve
-//! continued by the minimally augmented system (`src/hbm/fold2.rs`), against the one-parameter
+//! continued by the minimally augmented system (`src/hbm/fold_curves/`), against the one-parameter
 //! folds the issue quotes (each confirmed by independent shooting in `tests/it/hbm_events.rs`)
 //! and, for its cusp, against a bisection on one-parameter branches at a fine step.
 
