@@ -491,9 +491,23 @@ fn check_time_scales(
     Ok(())
 }
 
+/// A body's or joint's name: not blank, and no control character (C0, DEL, C1). A name is
+/// quoted into summaries, CSV headers, figures and messages; a newline or tab in one splits a
+/// table row or a comment line there (issue 49), and it is never what the engineer meant.
 fn check_name(src: &Source, path: &str, name: &str) -> Result<()> {
     if name.trim().is_empty() {
         return Err(src.error(path, "name is empty"));
+    }
+    if let Some(c) = name.chars().find(|c| c.is_control()) {
+        return Err(src.error(
+            path,
+            format!(
+                "name `{}` holds the control character {:?} (U+{:04X}): names take printable characters only",
+                name.escape_debug(),
+                c,
+                u32::from(c)
+            ),
+        ));
     }
     Ok(())
 }

@@ -58,6 +58,7 @@ mod random_trees;
 mod reactions;
 mod reliability_ii;
 mod report_html;
+mod report_injection;
 mod reproducible_runs;
 mod results_json;
 mod results_schema;
