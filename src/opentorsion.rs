@@ -161,7 +161,13 @@ impl Assembly {
                 Err(problem(path, format!("{what} must be finite and non-negative, got {v}")))
             }
         };
-        let mut nodes = 0;
+        // The highest node index and the field that gives it.
+        let mut last: Option<(usize, String)> = None;
+        let mut node = |n: usize, path: String| {
+            if last.as_ref().is_none_or(|(m, _)| n > *m) {
+                last = Some((n, path));
+            }
+        };
         for (s, sh) in self.shafts.iter().enumerate() {
             if sh.nl == sh.nr {
                 return Err(problem(format!("shafts[{s}].nr"), format!("shaft {s} joins node {} to itself", sh.nl)));
@@ -174,20 +180,23 @@ impl Assembly {
             }
             finite_nonneg(format!("shafts[{s}].c"), sh.c, "damping (N·m·s/rad)")?;
             finite_nonneg(format!("shafts[{s}].mass"), sh.mass, "inertia (kg·m²)")?;
-            nodes = nodes.max(sh.nl + 1).max(sh.nr + 1);
+            node(sh.nl, format!("shafts[{s}].nl"));
+            node(sh.nr, format!("shafts[{s}].nr"));
         }
         for (d, disk) in self.disks.iter().enumerate() {
             finite_nonneg(format!("disks[{d}].inertia"), disk.inertia, "inertia (kg·m²)")?;
             finite_nonneg(format!("disks[{d}].c"), disk.c, "damping (N·m·s/rad)")?;
             finite_nonneg(format!("disks[{d}].k"), disk.k, "stiffness to ground (N·m/rad)")?;
-            nodes = nodes.max(disk.node + 1);
+            node(disk.node, format!("disks[{d}].node"));
         }
         for (g, gear) in self.gears.iter().enumerate() {
             finite_nonneg(format!("gears[{g}].inertia"), gear.inertia, "inertia (kg·m²)")?;
-            if !(gear.radius.is_finite() && gear.radius != 0.0) {
+            // A negative diameter or tooth count is a typo, not a reversed mesh (issue 49: one
+            // was accepted and flipped the stage's sign).
+            if !(gear.radius.is_finite() && gear.radius > 0.0) {
                 return Err(problem(
                     format!("gears[{g}].radius"),
-                    format!("gear {g}: radius (or tooth count) must be finite and non-zero, got {}", gear.radius),
+                    format!("gear {g}: radius (or tooth count) must be finite and positive, got {}", gear.radius),
                 ));
             }
             if let Some(p) = gear.parent {
@@ -204,26 +213,46 @@ impl Assembly {
                     ));
                 }
             }
-            nodes = nodes.max(gear.node + 1);
+            node(gear.node, format!("gears[{g}].node"));
         }
-        if nodes == 0 {
+        let Some((last, last_path)) = last else {
             return Err(problem("", "the assembly has no elements"));
-        }
-        // A node index far beyond the elements is a typo, and would make thousands of bodies.
-        let mut used = vec![false; nodes];
+        };
+        // Every node holds an element, so there are at most `bound` nodes; an index at or beyond
+        // it is a typo and leaves a gap below it. Only what the elements can fill is allocated
+        // (issue 49: node 2^64 − 1 overflowed, 2^63 overflowed a capacity, and 1e12 aborted on
+        // allocation, taking Python down with it).
+        let bound = 2 * self.shafts.len() + self.disks.len() + self.gears.len();
+        let mut used = vec![false; bound];
+        let mut mark = |n: usize| {
+            if let Some(u) = used.get_mut(n) {
+                *u = true;
+            }
+        };
         for sh in &self.shafts {
-            used[sh.nl] = true;
-            used[sh.nr] = true;
+            mark(sh.nl);
+            mark(sh.nr);
         }
-        self.disks.iter().for_each(|d| used[d.node] = true);
-        self.gears.iter().for_each(|g| used[g.node] = true);
-        if let Some(n) = used.iter().position(|u| !u) {
-            return Err(problem(
-                "",
-                format!("node {n} has no element (nodes are numbered 0 to {} without gaps)", nodes - 1),
-            ));
+        self.disks.iter().for_each(|d| mark(d.node));
+        self.gears.iter().for_each(|g| mark(g.node));
+        let gap = used[..=last.min(bound - 1)].iter().position(|u| !u);
+        if gap.is_some() || last >= bound {
+            let (path, beyond) = if last >= bound {
+                let what = format!(
+                    "node {last} is beyond the elements ({} shaft(s), {} disk(s) and {} gear(s) reach at most {bound} \
+                     nodes): ",
+                    self.shafts.len(),
+                    self.disks.len(),
+                    self.gears.len()
+                );
+                (last_path, what)
+            } else {
+                (String::new(), String::new())
+            };
+            let gap = gap.map_or_else(String::new, |n| format!("node {n} has no element "));
+            return Err(problem(path, format!("{beyond}{gap}(nodes are numbered 0 to {last} without gaps)")));
         }
-        Ok(nodes)
+        Ok(last + 1)
     }
 
     /// The mechanism RON of this assembly, named `name` (see the module documentation for the
@@ -335,7 +364,9 @@ impl Assembly {
             let _ = writeln!(
                 w,
                 "// NOTE: excitations are not converted (they were on: {}); add them in a study.",
-                self.excited.join(", ")
+                // Escaped: a name is the user's text, and a newline in it would end the comment
+                // and put the rest of the name into the RON as code (issue 49).
+                self.excited.iter().map(|e| e.escape_debug().to_string()).collect::<Vec<_>>().join(", ")
             );
         }
         let _ = writeln!(w, "Mechanism(");
@@ -574,7 +605,7 @@ fn from_tors(file: &Path, text: &str) -> Result<TorsBuilder> {
 
     let mut b = TorsBuilder::default();
     let mut visited = vec![false; tors.components.len()];
-    b.component(&tors, start, &next, &mut visited, &err)?;
+    b.walk(&tors, start, &next, &mut visited, &err)?;
     if let Some(c) = visited.iter().position(|v| !v) {
         return Err(err(
             &format!("components[{c}]"),
@@ -598,103 +629,25 @@ struct TorsBuilder {
 }
 
 impl TorsBuilder {
-    fn component(
+    /// Lays the components on the nodes from `start` as OpenTorsion does: a component's
+    /// elements in order, and after an element that a connection leaves from, the whole
+    /// component it leads to (and what that one leads to) before the next element. A stack of
+    /// (component, next element), not recursion: a chain of 12,300 components overflowed the
+    /// stack (issue 49).
+    fn walk(
         &mut self,
         tors: &Tors,
-        c: usize,
+        start: usize,
         next: &BTreeMap<(usize, String), (usize, usize)>,
         visited: &mut [bool],
         err: &dyn Fn(&str, String) -> Error,
     ) -> Result<()> {
-        visited[c] = true;
-        let comp = &tors.components[c];
-        for (e, element) in comp.elements.iter().enumerate() {
-            let path = format!("components[{c}].elements[{e}]");
-            let id = format!("{}.{}", comp.name, element.name);
-            if element.excitation.is_some() {
-                self.assembly.excited.push(id.clone());
-            }
-            let need = |value: Option<f64>, field: &str| {
-                value.ok_or_else(|| err(&path, format!("{} `{id}` has no `{field}`", element.kind)))
-            };
-            let damping = element.damping.unwrap_or(0.0);
-            match element.kind.as_str() {
-                "Disk" => {
-                    let inertia = need(element.inertia, "inertia")?;
-                    // OpenTorsion adds a disk to the previous one when both are on this node.
-                    match self.assembly.disks.last_mut() {
-                        Some(last) if last.node == self.node => {
-                            last.inertia += inertia;
-                            last.c += damping;
-                        }
-                        _ => {
-                            self.assembly.disks.push(Disk { node: self.node, inertia, c: damping, k: 0.0 });
-                            self.disk_paths.push(path.clone());
-                        }
-                    }
-                }
-                "ShaftDiscrete" => {
-                    let k = need(element.stiffness, "stiffness")?;
-                    self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: damping, mass: 0.0 });
-                    self.shaft_paths.push(path.clone());
-                    self.node += 1;
-                }
-                "ShaftContinuous" => {
-                    // mm to m; polar second moment of area J, stiffness G·J/L and the mass factor
-                    // ρ·J·L/6. OpenTorsion gives such a shaft no damping.
-                    let l = need(element.length, "length")? * 1e-3;
-                    let d = need(element.outerDiameter, "outerDiameter")? * 1e-3;
-                    let di = element.innerDiameter.unwrap_or(0.0) * 1e-3;
-                    let j = std::f64::consts::PI * (d.powi(4) - di.powi(4)) / 32.0;
-                    if !(l > 0.0 && j > 0.0 && di >= 0.0) {
-                        return Err(err(
-                            &format!("{path}.length"),
-                            format!("shaft `{id}`: length and outer diameter must be positive, outer above inner (mm)"),
-                        ));
-                    }
-                    let rho = element.density.unwrap_or(DENSITY);
-                    let (k, mass) = (SHEAR_MODULUS * j / l, rho * j * l / 6.0);
-                    self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: 0.0, mass });
-                    self.shaft_paths.push(path.clone());
-                    self.node += 1;
-                }
-                "GearElement" => {
-                    let inertia = need(element.inertia, "inertia")?;
-                    let Some(radius) = element.teeth.or(element.diameter) else {
-                        return Err(err(&path, format!("gear `{id}` has neither `teeth` nor `diameter`")));
-                    };
-                    let parent = match &element.parent {
-                        None => None,
-                        Some(p) => match self.gear_index.get(&format!("{}.{p}", comp.name)) {
-                            Some(&g) => {
-                                // A gear driven by a parent sits on a node of its own.
-                                self.node += 1;
-                                Some(g)
-                            }
-                            None => {
-                                return Err(err(
-                                    &format!("{path}.parent"),
-                                    format!(
-                                        "gear `{id}`: parent `{p}` is not a gear listed before it in component `{}`",
-                                        comp.name
-                                    ),
-                                ));
-                            }
-                        },
-                    };
-                    self.gear_index.insert(id.clone(), self.assembly.gears.len());
-                    self.assembly.gears.push(Gear { node: self.node, inertia, radius, parent });
-                    self.gear_paths.push(path.clone());
-                }
-                other => {
-                    return Err(err(
-                        &format!("{path}.type"),
-                        format!(
-                            "unknown element type `{other}` (TORS types: Disk, ShaftDiscrete, ShaftContinuous, GearElement)"
-                        ),
-                    ));
-                }
-            }
+        visited[start] = true;
+        let mut stack = vec![(start, 0usize)];
+        while let Some((c, e)) = stack.pop() {
+            let Some(element) = tors.components[c].elements.get(e) else { continue };
+            stack.push((c, e + 1));
+            self.element(tors, c, e, err)?;
             if let Some(&(to, k)) = next.get(&(c, element.name.clone())) {
                 if visited[to] {
                     return Err(err(
@@ -705,7 +658,101 @@ impl TorsBuilder {
                         ),
                     ));
                 }
-                self.component(tors, to, next, visited, err)?;
+                visited[to] = true;
+                stack.push((to, 0));
+            }
+        }
+        Ok(())
+    }
+
+    /// Lays element `e` of component `c` on the nodes.
+    fn element(&mut self, tors: &Tors, c: usize, e: usize, err: &dyn Fn(&str, String) -> Error) -> Result<()> {
+        let comp = &tors.components[c];
+        let element = &comp.elements[e];
+        let path = format!("components[{c}].elements[{e}]");
+        let id = format!("{}.{}", comp.name, element.name);
+        if element.excitation.is_some() {
+            self.assembly.excited.push(id.clone());
+        }
+        let need = |value: Option<f64>, field: &str| {
+            value.ok_or_else(|| err(&path, format!("{} `{id}` has no `{field}`", element.kind)))
+        };
+        let damping = element.damping.unwrap_or(0.0);
+        match element.kind.as_str() {
+            "Disk" => {
+                let inertia = need(element.inertia, "inertia")?;
+                // OpenTorsion adds a disk to the previous one when both are on this node.
+                match self.assembly.disks.last_mut() {
+                    Some(last) if last.node == self.node => {
+                        last.inertia += inertia;
+                        last.c += damping;
+                    }
+                    _ => {
+                        self.assembly.disks.push(Disk { node: self.node, inertia, c: damping, k: 0.0 });
+                        self.disk_paths.push(path.clone());
+                    }
+                }
+            }
+            "ShaftDiscrete" => {
+                let k = need(element.stiffness, "stiffness")?;
+                self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: damping, mass: 0.0 });
+                self.shaft_paths.push(path.clone());
+                self.node += 1;
+            }
+            "ShaftContinuous" => {
+                // mm to m; polar second moment of area J, stiffness G·J/L and the mass factor
+                // ρ·J·L/6. OpenTorsion gives such a shaft no damping.
+                let l = need(element.length, "length")? * 1e-3;
+                let d = need(element.outerDiameter, "outerDiameter")? * 1e-3;
+                let di = element.innerDiameter.unwrap_or(0.0) * 1e-3;
+                let j = std::f64::consts::PI * (d.powi(4) - di.powi(4)) / 32.0;
+                if !(l > 0.0 && j > 0.0 && di >= 0.0) {
+                    return Err(err(
+                        &format!("{path}.length"),
+                        format!("shaft `{id}`: length and outer diameter must be positive, outer above inner (mm)"),
+                    ));
+                }
+                let rho = element.density.unwrap_or(DENSITY);
+                let (k, mass) = (SHEAR_MODULUS * j / l, rho * j * l / 6.0);
+                self.assembly.shafts.push(Shaft { nl: self.node, nr: self.node + 1, k, c: 0.0, mass });
+                self.shaft_paths.push(path.clone());
+                self.node += 1;
+            }
+            "GearElement" => {
+                let inertia = need(element.inertia, "inertia")?;
+                let Some(radius) = element.teeth.or(element.diameter) else {
+                    return Err(err(&path, format!("gear `{id}` has neither `teeth` nor `diameter`")));
+                };
+                let parent = match &element.parent {
+                    None => None,
+                    Some(p) => match self.gear_index.get(&format!("{}.{p}", comp.name)) {
+                        Some(&g) => {
+                            // A gear driven by a parent sits on a node of its own.
+                            self.node += 1;
+                            Some(g)
+                        }
+                        None => {
+                            return Err(err(
+                                &format!("{path}.parent"),
+                                format!(
+                                    "gear `{id}`: parent `{p}` is not a gear listed before it in component `{}`",
+                                    comp.name
+                                ),
+                            ));
+                        }
+                    },
+                };
+                self.gear_index.insert(id.clone(), self.assembly.gears.len());
+                self.assembly.gears.push(Gear { node: self.node, inertia, radius, parent });
+                self.gear_paths.push(path.clone());
+            }
+            other => {
+                return Err(err(
+                    &format!("{path}.type"),
+                    format!(
+                        "unknown element type `{other}` (TORS types: Disk, ShaftDiscrete, ShaftContinuous, GearElement)"
+                    ),
+                ));
             }
         }
         Ok(())
@@ -716,9 +763,31 @@ impl TorsBuilder {
 /// that `kanedyn.from_opentorsion` uses) to mechanism RON named `name`; errors name the file,
 /// line:column and field.
 pub fn convert(file: &Path, text: &str, name: &str) -> Result<String> {
+    // A UTF-8 byte-order mark, as some Windows editors write, is not JSON but means nothing.
+    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
     // The node form has `shafts`, `disks` or `gears` at the top; a TORS file `components`.
     let top: serde_json::Value = parse_json(file, text)?;
-    let node_form = top.as_object().is_some_and(|o| !o.contains_key("components"));
+    let object = top.as_object();
+    // Neither form's keys: say so rather than read it as a node form with unknown fields (issue
+    // 49: a TORS file without `components` was read as a node form).
+    let node_key = |k: &String| matches!(k.as_str(), "shafts" | "disks" | "gears" | "excited");
+    if let Some(o) = object.filter(|o| !o.is_empty() && !o.contains_key("components") && !o.keys().any(node_key)) {
+        let keys: Vec<String> = o.keys().map(|k| format!("`{}`", k.escape_debug())).collect();
+        let (path, message) = if o.contains_key("structure") {
+            ("structure", "a TORS file (it has `structure`) without `components`, which list its elements".to_string())
+        } else {
+            (
+                "",
+                format!(
+                    "neither a TORS file (`components`) nor kanedyn's node form (`shafts`, `disks`, `gears`): its \
+                     keys are {}",
+                    keys.join(", ")
+                ),
+            )
+        };
+        return Err(json_error(file, text, path, message));
+    }
+    let node_form = object.is_some_and(|o| !o.contains_key("components"));
     if node_form {
         let assembly: Assembly = parse_json(file, text)?;
         assembly.to_ron(name).map_err(|p| json_error(file, text, &p.path, p.message))

@@ -39,6 +39,8 @@ mod hbm_switch;
 mod hbm_tongue;
 mod honest_peaks;
 mod honest_summaries;
+mod importer_bounds;
+mod importer_fuzz;
 mod input_hardening;
 mod integration;
 mod joint_kinds;
