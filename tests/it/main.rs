@@ -7,6 +7,7 @@
 mod support;
 
 mod backbone;
+mod broken_pipe;
 mod campbell_crossings;
 mod catalog;
 mod cli;
