@@ -63,6 +63,7 @@ impl Mechanism {
                 .map_err(|e| overlay::relocate(e, &counts, src, &base_src));
         }
         check_counts(spec, src, policy)?;
+        parts::check_printable(src, "name", &spec.name)?;
         let base = folder_of(&src.file);
         let body_table = bodies::read_bodies(spec, src, policy, &base)?;
         let joint_table = joints::read_joints(spec, &body_table, src, policy, &base)?;

@@ -7,6 +7,7 @@ use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
 use kanedyn::model::mechanism::Mechanism;
 use kanedyn::study::{Limits, LoadOptions, RunOptions, Study};
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -150,17 +151,46 @@ fn main() -> ExitCode {
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
         Command::Run { study, out, threads, verbose, limits } => run(&study, &out, threads, verbose, &limits),
         Command::Schema => serde_json::to_string_pretty(&kanedyn::study::json::schema())
-            .map(|text| println!("{text}"))
-            .map_err(Into::into),
+            .map_err(Into::into)
+            .and_then(|text| stdout(format_args!("{text}\n"))),
         Command::Import { file, out, name, max_file_kb } => import(&file, out.as_deref(), name.as_deref(), max_file_kb),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", without_repeats(&e));
+            // Not `eprintln!`, which panics when standard error is closed too.
+            let _ = writeln!(std::io::stderr(), "error: {}", without_repeats(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// Writes to standard output. A reader that stops reading early (`kanedyn schema | head -1`,
+/// `kanedyn run … | true`) ends the output, not the command: what it no longer wants is dropped
+/// and the command finishes its work and exits with its own status (issue 49: `println!`
+/// panicked with exit 101 and a backtrace). Any other write error is the command's error.
+fn stdout(args: std::fmt::Arguments<'_>) -> Result<()> {
+    match std::io::stdout().lock().write_fmt(args) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(anyhow!("cannot write to standard output: {e}")),
+        _ => Ok(()),
+    }
+}
+
+/// `print!` through [`stdout`], returning from the function on a write error.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        stdout(format_args!($($arg)*))?
+    };
+}
+
+/// `println!` through [`stdout`], returning from the function on a write error.
+macro_rules! sayln {
+    () => {
+        stdout(format_args!("\n"))?
+    };
+    ($($arg:tt)*) => {
+        stdout(format_args!("{}\n", format_args!($($arg)*)))?
+    };
 }
 
 /// `check` on a study (its text begins with `Study(`) prints the plan; on anything else it
@@ -174,15 +204,15 @@ fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
     }
     let study = Study::from_source(src, &opts)?;
     let plan = study.plan();
-    println!("study `{}` ({}): OK", study.spec.name, file.display());
-    println!(
+    sayln!("study `{}` ({}): OK", study.spec.name, file.display());
+    sayln!(
         "mechanism `{}`: {} degrees of freedom; outputs go to <out>/{}/",
         study.mechanism.name,
         study.mechanism.ndof(),
         study.spec.name
     );
-    println!("plan (coarse upper-bound estimates):\n{plan}");
-    print!("{}", kanedyn::model::absorber::markdown(&study.mechanism));
+    sayln!("plan (coarse upper-bound estimates):\n{plan}");
+    say!("{}", kanedyn::model::absorber::markdown(&study.mechanism));
     Ok(())
 }
 
@@ -207,18 +237,22 @@ fn without_repeats(e: &anyhow::Error) -> String {
 
 fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
     let mech = Mechanism::from_file_with(file, policy)?;
-    println!("mechanism `{}` ({}): OK", mech.name, file.display());
-    println!("degrees of freedom: {}", mech.ndof());
-    println!("generalized speeds: {:?}", mech.speeds);
-    println!("bodies: {}", mech.bodies.len());
+    sayln!("mechanism `{}` ({}): OK", mech.name, file.display());
+    sayln!("degrees of freedom: {}", mech.ndof());
+    sayln!("generalized speeds: {:?}", mech.speeds);
+    sayln!("bodies: {}", mech.bodies.len());
     for b in &mech.bodies {
         let i = b.inertia;
-        println!(
+        sayln!(
             "  {:<16} mass {:>10.6} kg   com ({:.6}, {:.6}) m   inertia {:.6e} kg·m²",
-            b.name, i.mass, i.com.x, i.com.y, i.i_com
+            b.name,
+            i.mass,
+            i.com.x,
+            i.com.y,
+            i.i_com
         );
     }
-    println!("joints (tree order): {}", mech.joints.len());
+    sayln!("joints (tree order): {}", mech.joints.len());
     for (k, j) in mech.joints.iter().enumerate() {
         let parent = j.parent.map_or("ground", |p| mech.bodies[p].name.as_str());
         // Units of the coordinate's spring and damper: per radian for a turn, per metre for a slide.
@@ -232,26 +266,34 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
         }
         extra += &j.couplings.describe(per, unit);
         let q = j.coordinate.map_or_else(|| "    ".to_string(), |c| format!("q[{c}]"));
-        println!(
+        sayln!(
             "  {q} {:<12} {:?} {} -> {} at ({}, {}) m{extra}",
-            j.name, j.kind, parent, mech.bodies[k].name, j.at.x, j.at.y
+            j.name,
+            j.kind,
+            parent,
+            mech.bodies[k].name,
+            j.at.x,
+            j.at.y
         );
     }
     if mech.is_geared() {
-        println!("couplings: {}", mech.gears.len());
+        sayln!("couplings: {}", mech.gears.len());
         for g in &mech.gears {
             let how = g.mesh.map_or_else(
                 || "rigid".to_string(),
                 |m| format!("compliant mesh {} N·m/rad, {} N·m·s/rad at the driver", m.stiffness, m.damping),
             );
-            println!(
+            sayln!(
                 "  {} follows {}: ratio {}, offset {} ({how})",
-                mech.joints[g.joint].name, mech.joints[g.follows].name, g.ratio, g.offset
+                mech.joints[g.joint].name,
+                mech.joints[g.follows].name,
+                g.ratio,
+                g.offset
             );
         }
     }
     let l = &mech.loads;
-    println!(
+    sayln!(
         "loads: gravity ({}, {}) m/s², {} joint torque(s), {} damper(s) to ground, {} point force(s)",
         l.gravity.x,
         l.gravity.y,
@@ -259,8 +301,8 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
         l.ground_dampers.len(),
         l.point_forces.len()
     );
-    println!("total mass: {} kg", mech.total_mass());
-    print!("{}", kanedyn::model::absorber::markdown(&mech));
+    sayln!("total mass: {} kg", mech.total_mass());
+    say!("{}", kanedyn::model::absorber::markdown(&mech));
     Ok(())
 }
 
@@ -335,7 +377,7 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
     if let Some(what) = bad {
         bail!("the equations of motion overflow at this state: {what} (values too large for f64?)");
     }
-    println!("{}", serde_json::to_string(&out)?);
+    sayln!("{}", serde_json::to_string(&out)?);
     Ok(())
 }
 
@@ -355,15 +397,15 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &
     let start = std::time::Instant::now();
     let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: true })?;
     if verbose {
-        println!("{}", report.summary);
-        println!("files written:");
+        sayln!("{}", report.summary);
+        sayln!("files written:");
         for f in &report.files {
-            println!("  {}", f.display());
+            sayln!("  {}", f.display());
         }
-        println!();
+        sayln!();
     }
     for line in kanedyn::study::digest(&study, &report, start.elapsed().as_secs_f64()) {
-        println!("{line}");
+        sayln!("{line}");
     }
     if !report.failures.is_empty() {
         let summary = report.files.iter().find(|f| f.ends_with("summary.md"));
@@ -391,7 +433,7 @@ fn import(file: &Path, out: Option<&Path>, name: Option<&str>, max_file_kb: u64)
     );
     match out {
         Some(path) => std::fs::write(path, &ron).with_context(|| format!("{}: cannot write", path.display()))?,
-        None => print!("{ron}"),
+        None => say!("{ron}"),
     }
     loaded.map(|_| ()).map_err(|e| anyhow!("the converted mechanism was written but does not load as it is: {e}"))
 }

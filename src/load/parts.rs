@@ -11,9 +11,28 @@ use std::path::{Path, PathBuf};
 /// How deep catalog parts may refer to further parts (guards against a part naming itself).
 pub(super) const MAX_PART_DEPTH: usize = 8;
 
+/// A body's or joint's name: not blank, and no control character (C0, DEL, C1). A name is
+/// quoted into summaries, CSV headers, figures and messages; a newline or tab in one splits a
+/// table row or a comment line there (issue 49), and it is never what the engineer meant.
 pub(super) fn check_name(src: &Source, path: &str, name: &str) -> Result<()> {
     if name.trim().is_empty() {
         return Err(src.error(path, "name is empty"));
+    }
+    check_printable(src, path, name)
+}
+
+/// A name (of a body, a joint or the mechanism) takes printable characters only.
+pub(super) fn check_printable(src: &Source, path: &str, name: &str) -> Result<()> {
+    if let Some(c) = name.chars().find(|c| c.is_control()) {
+        return Err(src.error(
+            path,
+            format!(
+                "name `{}` holds the control character {:?} (U+{:04X}): names take printable characters only",
+                name.escape_debug(),
+                c,
+                u32::from(c)
+            ),
+        ));
     }
     Ok(())
 }

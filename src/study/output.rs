@@ -152,11 +152,50 @@ pub(crate) fn write_file(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
 }
 
+/// A cell as a spreadsheet will show it, not run it: text starting with `=`, `+`, `-`, `@`, a
+/// tab or a carriage return is a formula to Excel, LibreOffice and Google Sheets (a joint named
+/// `=HYPERLINK(…)` in a column header, issue 49), so it gets a leading `'`, which they take for
+/// "text" and do not display. A number (`-0.5`, `+1e-3`) stays as written: it is a number to
+/// them too, and the files must read back as numbers.
+pub(crate) fn neutralised(cell: &str) -> std::borrow::Cow<'_, str> {
+    let formula = cell.starts_with(['=', '+', '-', '@', '\t', '\r']);
+    if formula && !cell.parse::<f64>().is_ok_and(f64::is_finite) {
+        std::borrow::Cow::Owned(format!("'{cell}"))
+    } else {
+        std::borrow::Cow::Borrowed(cell)
+    }
+}
+
+/// A CSV writer whose every cell, header or value, passes through [`neutralised`]: the one way
+/// the study writes CSV files.
+pub(crate) struct CsvWriter(csv::Writer<File>);
+
+impl CsvWriter {
+    /// Creates (or truncates) the file at `path`.
+    pub(crate) fn from_path(path: &Path) -> csv::Result<Self> {
+        csv::Writer::from_path(path).map(Self)
+    }
+
+    /// Writes one record.
+    pub(crate) fn write_record<I, T>(&mut self, record: I) -> csv::Result<()>
+    where
+        I: IntoIterator<Item = T>,
+        T: AsRef<str>,
+    {
+        self.0.write_record(record.into_iter().map(|cell| neutralised(cell.as_ref()).into_owned()))
+    }
+
+    /// Flushes the buffered records to the file.
+    pub(crate) fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()
+    }
+}
+
 /// Writes a CSV file with a header row and columns of equal length; non-finite values are written
-/// as empty cells.
+/// as empty cells, text a spreadsheet would run as a formula is [`neutralised`].
 pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<()> {
     let io = |e: csv::Error| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e.into() };
-    let mut w = csv::Writer::from_path(path).map_err(io)?;
+    let mut w = CsvWriter::from_path(path).map_err(io)?;
     w.write_record(header).map_err(io)?;
     let rows = columns.iter().map(|c| c.len()).min().unwrap_or(0);
     let mut rec = Vec::with_capacity(columns.len());
@@ -180,5 +219,20 @@ mod finite_text_tests {
         assert_eq!(finite_text("t = -inf, x = Infinity"), "t = undefined, x = undefined");
         assert_eq!(finite_text("mechanism `inf` at /tmp/nan/s.ron:3:4"), "mechanism `inf` at /tmp/nan/s.ron:3:4");
         assert_eq!(finite_text("information, finite, 1e-300, inflow"), "information, finite, 1e-300, inflow");
+    }
+}
+
+#[cfg(test)]
+mod neutralised_tests {
+    use super::neutralised;
+
+    #[test]
+    fn formulas_get_a_quote_and_numbers_stay_numbers() {
+        for formula in ["=HYPERLINK(\"x\")", "+cmd", "-2+3", "@SUM(A1)", "\tx", "\r=1", "-", "-inf", "+NaN"] {
+            assert_eq!(neutralised(formula), format!("'{formula}"), "{formula:?}");
+        }
+        for plain in ["-0.5", "+1e-3", "-1.5e300", "0", "pivot_angle_rad", "a=b", "", "'quoted"] {
+            assert_eq!(neutralised(plain), plain, "{plain:?}");
+        }
     }
 }

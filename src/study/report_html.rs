@@ -21,7 +21,7 @@
 //! mapping is 10 kB (about 230 lines), so the page is 947 kB.
 use super::{AnalysisSpec, write_file};
 use crate::error::Result;
-use pulldown_cmark::{Options, Parser, html};
+use pulldown_cmark::{Event, Options, Parser, Tag, TagEnd, html};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -46,7 +46,9 @@ pub(crate) struct Part<'a> {
     pub files: Vec<PathBuf>,
 }
 
-/// Text safe inside HTML (element content and quoted attributes).
+/// Text safe inside HTML (element content and double-quoted attributes, the only kind this page
+/// writes): every name and label of the study and mechanism files reaches the page through this
+/// or through [`markdown`] (issue 49).
 fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
@@ -143,11 +145,22 @@ fn is(p: &Path, ext: &str) -> bool {
 }
 
 /// Markdown as HTML, its tables made to fit ([`fit_tables`]).
+///
+/// The summaries quote names and labels from the user's files, so their Markdown is not
+/// trusted: raw HTML in it is shown as text, never passed through (issue 49: a joint named
+/// ``piv`<svg onload=…>`` closed its code span and became a live element), and a link or image
+/// shows its text without the element (a `javascript:` address would run on a click). The
+/// summaries themselves write neither, so a normal report is unchanged.
 fn markdown(md: &str) -> String {
     let mut options = Options::empty();
     options.insert(Options::ENABLE_TABLES);
+    let events = Parser::new_ext(md, options).filter_map(|event| match event {
+        Event::Html(text) | Event::InlineHtml(text) => Some(Event::Text(text)),
+        Event::Start(Tag::Link { .. } | Tag::Image { .. }) | Event::End(TagEnd::Link | TagEnd::Image) => None,
+        other => Some(other),
+    });
     let mut out = String::new();
-    html::push_html(&mut out, Parser::new_ext(md, options));
+    html::push_html(&mut out, events);
     fit_tables(&out)
 }
 

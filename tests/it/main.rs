@@ -7,6 +7,7 @@
 mod support;
 
 mod backbone;
+mod broken_pipe;
 mod campbell_crossings;
 mod catalog;
 mod cli;
@@ -39,6 +40,8 @@ mod hbm_switch;
 mod hbm_tongue;
 mod honest_peaks;
 mod honest_summaries;
+mod importer_bounds;
+mod importer_fuzz;
 mod input_hardening;
 mod integration;
 mod joint_kinds;
@@ -58,6 +61,7 @@ mod random_trees;
 mod reactions;
 mod reliability_ii;
 mod report_html;
+mod report_injection;
 mod reproducible_runs;
 mod results_json;
 mod results_schema;

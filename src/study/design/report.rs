@@ -87,7 +87,7 @@ pub(super) fn describe_case(r: &DesignResult, c: &CaseRow) -> String {
 pub(super) fn write_csv(r: &DesignResult, dir: &Path) -> Result<PathBuf> {
     let path = dir.join(format!("{}.csv", r.name));
     let io = |e: csv::Error| Error::Io { file: path.clone(), action: "cannot write", source: e.into() };
-    let mut w = csv::Writer::from_path(&path).map_err(io)?;
+    let mut w = crate::study::output::CsvWriter::from_path(&path).map_err(io)?;
     let mut header = vec!["case".to_string()];
     header.extend(r.parameters.iter().chain(&r.results).map(|c| c.name.clone()));
     header.extend(["status".to_string(), "error".to_string()]);
