@@ -199,5 +199,9 @@ fn names_with_control_characters_are_refused_where_they_are_written() {
         assert!(message.contains("control character") && message.contains(shown), "{message}");
         let (_, at, field, message) = located(load(&mechanism("rotor", bad)).unwrap_err());
         assert_eq!((at, field.as_str()), (Some((7, 21)), "joints[0].name"), "{message}");
+        // The mechanism's own name reaches the same places (headings, the digest).
+        let text = mechanism("rotor", "spin").replacen("name: \"m\"", &format!("name: \"m{bad}\""), 1);
+        let (_, at, field, message) = located(load(&text).unwrap_err());
+        assert_eq!((at, field.as_str()), (Some((2, 11)), "name"), "{message}");
     }
 }
