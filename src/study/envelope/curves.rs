@@ -127,9 +127,8 @@ pub(super) fn covered(
 }
 
 /// One boundary through `seed`, followed both ways in the second parameter on `hk` (its kind,
-/// identical set and test); each walk that fails is a failure after `origin` (where it was
-/// seeded).
-#[allow(clippy::too_many_arguments)]
+/// identical set and test), with its failures: each walk that fails is one, after `origin`
+/// (where it was seeded).
 pub(super) fn walk_boundary(
     hk: &mut Hbm,
     ax: &Axis,
@@ -137,9 +136,9 @@ pub(super) fn walk_boundary(
     seed: &FoldCurvePoint,
     (kind, set, test): (BoundaryKind, Option<String>, Singularity),
     fopts: &FoldCurveOptions,
-    failures: &mut Vec<String>,
     origin: &str,
-) -> Walked {
+) -> (Walked, Vec<String>) {
+    let mut failures = Vec::new();
     let fo = FoldCurveOptions { test, ..*fopts };
     let mut w =
         Walked { kind, set, test, points: Vec::new(), curves: Vec::new(), ends: [String::new(), String::new()] };
@@ -163,7 +162,7 @@ pub(super) fn walk_boundary(
             }
         }
     }
-    w
+    (w, failures)
 }
 
 /// Where the unison-loss curve `c` (its test `test`, a representative's block) meets a fold:
