@@ -180,25 +180,7 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
     };
     let model = LinearModel::new(mech, &study.spec.spin_joint, omega, None).map_err(lin(mech))?;
     let free = model.modes(Spin::Free, Damping::Undamped).map_err(lin(mech))?;
-    // The modal table of the mechanism as built: eigen-orders, damping ratios and the joint that
-    // dominates each mode, with the spin held (absorber alone) and free (coupled).
-    let mut modes = Vec::new();
-    // With modal damping the damped rows are those of the damping in force in the response (the
-    // modal matrix of the spin-free modes, alone or with the dampers), not the dampers'.
-    let modal = spec.modal();
-    let damped_model = match modal {
-        Some((z, how)) => model.with_modal_damping_combined(Spin::Free, z, how).map_err(lin(mech))?,
-        None => model.clone(),
-    };
-    for (spin, spin_held) in [(Spin::Held, true), (Spin::Free, false)] {
-        for (damping, damped) in [(Damping::Undamped, false), (Damping::Damped, true)] {
-            let model = if damped { &damped_model } else { &model };
-            for m in &model.modes(spin, damping).map_err(lin(mech))?.modes {
-                let (order, damping_ratio, label) = (m.order, m.damping_ratio, m.label.clone());
-                modes.push(ModeRow { spin_held, damped, order, damping_ratio, label });
-            }
-        }
-    }
+    let modes = mode_rows(study, spec, &model)?;
     let free_orders: Vec<(f64, String)> = free.modes.iter().map(|m| (m.order, m.label.clone())).collect();
     let rspec = ResponseSpec {
         spin_joint: study.spec.spin_joint.clone(),
@@ -211,21 +193,72 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
         (0..steps).map(|i| scale * (spec.from + (spec.to - spec.from) * i as f64 / (steps - 1) as f64)).collect();
     let default_variant = [super::Variant { label: "as built".into(), dampers: Vec::new() }];
     let variants = if spec.variants.is_empty() { &default_variant[..] } else { &spec.variants[..] };
+    let sweep = Sweep { study, spec, omega, n_t, rspec, orders };
     let mut results = Vec::new();
     let mut failures = Vec::new();
-    // The watchdog: checked between variants and every `CHUNK` orders.
-    const CHUNK: usize = 4096;
-    let deadline = study.spec.integration.deadline;
-    let watch = |m: &crate::model::mechanism::Mechanism, reached: String| -> Result<()> {
-        match deadline.filter(|d| d.passed()) {
+    for (vi, v) in variants.iter().enumerate() {
+        sweep.watch(mech, format!("before variant `{}` ({} of {})", v.label, vi + 1, variants.len()))?;
+        results.push(sweep.variant(v, &mut failures)?);
+    }
+    let result = LinearResult { name: spec.name.clone(), n_t, free_orders, modes, variants: results };
+    Ok((result, failures))
+}
+
+/// The modal table of the mechanism as built: eigen-orders, damping ratios and the joint that
+/// dominates each mode, with the spin held (absorber alone) and free (coupled), undamped and
+/// damped. With modal damping the damped rows are those of the damping in force in the response
+/// (the modal matrix of the spin-free modes, alone or with the dampers), not the dampers'.
+fn mode_rows(study: &Study, spec: &LinearResponseSpec, model: &LinearModel) -> Result<Vec<ModeRow>> {
+    let mech = &study.mechanism;
+    let damped_model = match spec.modal() {
+        Some((z, how)) => model.with_modal_damping_combined(Spin::Free, z, how).map_err(lin(mech))?,
+        None => model.clone(),
+    };
+    let mut modes = Vec::new();
+    for (spin, spin_held) in [(Spin::Held, true), (Spin::Free, false)] {
+        for (damping, damped) in [(Damping::Undamped, false), (Damping::Damped, true)] {
+            let model = if damped { &damped_model } else { model };
+            for m in &model.modes(spin, damping).map_err(lin(mech))?.modes {
+                let (order, damping_ratio, label) = (m.order, m.damping_ratio, m.label.clone());
+                modes.push(ModeRow { spin_held, damped, order, damping_ratio, label });
+            }
+        }
+    }
+    Ok(modes)
+}
+
+/// Orders per watchdog check: the response is checked between variants and every `CHUNK` orders.
+const CHUNK: usize = 4096;
+
+/// What every variant's response shares: the operating speed (rad/s), the tuning order, the
+/// response's inputs and body, and the order grid.
+struct Sweep<'a> {
+    study: &'a Study,
+    spec: &'a LinearResponseSpec,
+    omega: f64,
+    n_t: Option<f64>,
+    rspec: ResponseSpec,
+    orders: Vec<f64>,
+}
+
+impl Sweep<'_> {
+    /// The watchdog: an error naming where the response got to (`reached`) once it has passed.
+    fn watch(&self, m: &Mechanism, reached: String) -> Result<()> {
+        match self.study.spec.integration.deadline.filter(|d| d.passed()) {
             Some(d) => Err(lin(m)(LinearError::Watchdog { reached, budget_s: d.budget_s })),
             None => Ok(()),
         }
-    };
-    for (vi, v) in variants.iter().enumerate() {
-        watch(mech, format!("before variant `{}` ({} of {})", v.label, vi + 1, variants.len()))?;
-        let m = with_dampers(mech, &v.dampers);
-        let mut resp = OrderResponse::new(&m, &rspec, omega, None).map_err(lin(&m))?;
+    }
+
+    /// One variant's response over the order grid (the mechanism with its dampers), with its
+    /// extremes, first amplification, asymptote, gravity's line and elements; a response or a
+    /// gravity line that is not finite is listed in `failures`.
+    fn variant(&self, v: &Variant, failures: &mut Vec<String>) -> Result<ResponseVariant> {
+        let (study, spec, orders) = (self.study, self.spec, &self.orders);
+        let steps = orders.len();
+        let modal = spec.modal();
+        let m = with_dampers(&study.mechanism, &v.dampers);
+        let mut resp = OrderResponse::new(&m, &self.rspec, self.omega, None).map_err(lin(&m))?;
         // Modal damping replaces (or adds to) the dampers of both the mechanism and its locked
         // twin, modes with the spin free as the response is taken.
         if let Some((z, how)) = modal {
@@ -234,31 +267,21 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
         }
         let mut pts = Vec::with_capacity(orders.len());
         for (c, chunk) in orders.chunks(CHUNK).enumerate() {
-            watch(&m, format!("in variant `{}` at order {} of {}", v.label, c * CHUNK, orders.len()))?;
+            self.watch(&m, format!("in variant `{}` at order {} of {}", v.label, c * CHUNK, orders.len()))?;
             pts.extend(resp.sweep(chunk).map_err(lin(&m))?);
         }
         let locked_max = pts.iter().map(|p| p.locked.abs()).fold(0.0, f64::max);
         let ratio: Vec<f64> = pts.iter().map(|p| super::ratio(p.response, p.locked, locked_max)).collect();
         // Extremes refined by the linear module's golden-section search around the grid's.
         let ext = resp.extremes(orders[0], orders[steps - 1], steps).map_err(lin(&m))?;
-        let crossing = match n_t {
+        let crossing = match self.n_t {
             Some(nt) if nt < orders[steps - 1] => {
                 resp.first_amplification(nt.max(orders[0]), orders[steps - 1], steps).map_err(lin(&m))?
             }
             _ => None,
         };
         let asymptote = resp.asymptote().map_err(lin(&m))?;
-        // Gravity's order-1 line (with modal damping, through the modally damped model).
-        let gravity = if resp.model.has_gravity() {
-            let q = resp.gravity_coordinates().map_err(lin(&m))?;
-            Some(GravityResponse {
-                accel: resp.gravity_response().map_err(lin(&m))?.norm(),
-                locked: resp.gravity_locked_response().map_err(lin(&m))?.norm(),
-                elements: study.elements.iter().filter_map(|&j| m.coordinate(j)).map(|c| q[c].norm()).collect(),
-            })
-        } else {
-            None
-        };
+        let gravity = self.gravity(&m, &resp)?;
         if let Some(g) = &gravity
             && !(g.accel.is_finite() && g.locked.is_finite() && g.elements.iter().all(|v| v.is_finite()))
         {
@@ -270,18 +293,52 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
                 spec.name, v.label, orders[i]
             ));
         }
-        // One solve per order for every element's coordinate.
+        let elements = self.elements(&m, &resp, &v.label)?;
+        Ok(ResponseVariant {
+            label: v.label.clone(),
+            orders: orders.clone(),
+            response: pts.iter().map(|p| p.response).collect(),
+            locked: pts.iter().map(|p| p.locked).collect(),
+            ratio,
+            min: (ext.min_order, ext.min_ratio),
+            max: (ext.max_order, ext.max_ratio),
+            crossing,
+            asymptote,
+            elements,
+            gravity,
+        })
+    }
+
+    /// Gravity's order-1 line of mechanism `m` (with modal damping, through the modally damped
+    /// model), None without gravity.
+    fn gravity(&self, m: &Mechanism, resp: &OrderResponse) -> Result<Option<GravityResponse>> {
+        if !resp.model.has_gravity() {
+            return Ok(None);
+        }
+        let q = resp.gravity_coordinates().map_err(lin(m))?;
+        Ok(Some(GravityResponse {
+            accel: resp.gravity_response().map_err(lin(m))?.norm(),
+            locked: resp.gravity_locked_response().map_err(lin(m))?.norm(),
+            elements: self.study.elements.iter().filter_map(|&j| m.coordinate(j)).map(|c| q[c].norm()).collect(),
+        }))
+    }
+
+    /// Every element's coordinate and spring-and-damper torque per N·m over the order grid, from
+    /// one solve per order for all of them (the dampers left out where modal damping replaces
+    /// them).
+    fn elements(&self, m: &Mechanism, resp: &OrderResponse, label: &str) -> Result<Vec<ElementFrf>> {
+        let (orders, omega) = (&self.orders, self.omega);
         let mut states: Vec<Option<DVector<crate::linear::C64>>> = Vec::with_capacity(orders.len());
         for (c, chunk) in orders.chunks(CHUNK).enumerate() {
-            watch(&m, format!("in variant `{}` at element order {} of {}", v.label, c * CHUNK, orders.len()))?;
+            self.watch(m, format!("in variant `{label}` at element order {} of {}", c * CHUNK, orders.len()))?;
             states.extend(chunk.iter().map(|&n| resp.coordinate_responses(n).ok()));
         }
-        let mut elements = Vec::with_capacity(study.elements.len());
-        for &j in &study.elements {
+        let replaced = matches!(self.spec.modal(), Some((_, crate::linear::ModalCombination::Replace)));
+        let mut elements = Vec::with_capacity(self.study.elements.len());
+        for &j in &self.study.elements {
             let joint = &m.joints[j];
             let Some(c) = m.coordinate(j) else { continue };
             let k = joint.spring.map_or(0.0, |s| s.stiffness);
-            let replaced = matches!(modal, Some((_, crate::linear::ModalCombination::Replace)));
             let damper = if replaced { 0.0 } else { joint.damper };
             let (amplitude, torque) = orders
                 .iter()
@@ -298,22 +355,8 @@ pub(crate) fn compute_response(study: &Study, spec: &LinearResponseSpec) -> Resu
                 torque,
             });
         }
-        results.push(ResponseVariant {
-            label: v.label.clone(),
-            orders: orders.clone(),
-            response: pts.iter().map(|p| p.response).collect(),
-            locked: pts.iter().map(|p| p.locked).collect(),
-            ratio,
-            min: (ext.min_order, ext.min_ratio),
-            max: (ext.max_order, ext.max_ratio),
-            crossing,
-            asymptote,
-            elements,
-            gravity,
-        });
+        Ok(elements)
     }
-    let result = LinearResult { name: spec.name.clone(), n_t, free_orders, modes, variants: results };
-    Ok((result, failures))
 }
 
 /// The linear response's CSV tables, one per variant: the order, and with a locked twin the
