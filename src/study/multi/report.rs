@@ -10,8 +10,8 @@ use crate::study::{MultiOrderSpec, Study, cell};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Writes the CSV ([`table`]) and the figure (the paper's Fig. 5), and returns the summary
-/// section with the files written.
+/// Writes the CSV ([`table`]) and the figure (the paper's Fig. 5: [`response_panel`], then
+/// [`element_panels`]), and returns the summary section with the files written.
 pub(super) fn render(
     study: &Study,
     spec: &MultiOrderSpec,
@@ -19,9 +19,19 @@ pub(super) fn render(
     dir: &Path,
 ) -> Result<(String, Vec<PathBuf>)> {
     let csv = table(study, spec, result).write_csv(dir)?;
-    let has_locked = study.locked.is_some();
+    let mut panels = vec![response_panel(study, spec, result)];
+    panels.extend(element_panels(study, spec, result));
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 640, 480)?;
 
-    // Figure 5: each order vs speed, mechanism solid, locked twin dotted.
+    Ok((summary(spec, result), vec![csv, svg]))
+}
+
+/// Figure 5: each order against the speed, the mechanism solid, the locked twin dotted, the
+/// linear model dashed (the harmonic balance's state where there are no time runs), with the
+/// jumps between speeds labelled.
+fn response_panel(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Panel {
+    let has_locked = study.locked.is_some();
     let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
     let mut series = Vec::new();
     for (k, m) in spec.multiples.iter().enumerate() {
@@ -56,7 +66,7 @@ pub(super) fn render(
     }
     let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
     let labels = jump_labels(spec, result);
-    let panel = Panel {
+    Panel {
         y_range: Some((0.0, 1.1 * top.max(f64::MIN_POSITIVE))),
         title: format!("Steady multi-order response, n = {}", num(spec.order, 5)),
         x_label: "mean speed, rpm".into(),
@@ -65,8 +75,14 @@ pub(super) fn render(
         series: with_sample_markers(series),
         labels,
         ..Panel::default()
-    };
-    let mut panels = vec![panel];
+    }
+}
+
+/// The elements' panels over the speeds: the torque transmitted by the shaft-like elements,
+/// and the amplitude of the others.
+fn element_panels(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Vec<Panel> {
+    let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
+    let mut panels = Vec::new();
     // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
     // from the torque ramp's harmonic-balance state (else the lowest state) where there are none,
     // or from the linear response in a linear-only analysis (the marine gearbox's propeller-shaft
@@ -139,10 +155,7 @@ pub(super) fn render(
             ..Panel::default()
         });
     }
-    let svg = dir.join(format!("{}.svg", spec.name));
-    crate::plot::write_svg(&svg, &panels, 640, 480)?;
-
-    Ok((summary(spec, result), vec![csv, svg]))
+    panels
 }
 
 /// Few speeds (a list of operating points, not a fine grid): the lines between them are
