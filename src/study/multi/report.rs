@@ -265,6 +265,27 @@ fn sci(v: f64, precision: usize) -> String {
 fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## Multi-order response `{}`: n = {}, steady states\n", spec.name, spec.order);
+    md += &damping_and_gravity(spec, r);
+    md += &engine_table(r);
+    md += &share_table(spec);
+    md += &speed_table(spec, r);
+    md += &linear_gap(spec, r);
+    md += &linear_element_peaks(r);
+    // Element by element over the last window: every absorber and spring, not only the largest.
+    let steady = r
+        .speeds
+        .iter()
+        .flat_map(|s| s.response.iter().flat_map(move |resp| resp.elements.iter().map(move |e| (s.rpm, e))));
+    md += &element_table(steady, &spec.multiples);
+    if spec.hbm {
+        md += &hbm_table(spec, r);
+    }
+    md
+}
+
+/// With gravity, what its linear column is; with modal damping, where it acts.
+fn damping_and_gravity(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
     let gravity = r.speeds.iter().any(|s| s.linear_gravity.is_some());
     if gravity {
         let _ = writeln!(
@@ -284,8 +305,15 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
             how.describe()
         );
     }
-    md += &engine_table(r);
-    md += &share_table(spec);
+    md
+}
+
+/// The table of speeds (thinned on a fine grid): per tracked multiple the time-domain amplitude
+/// with the locked twin's and their ratio and the linear ones, gravity's linear line, and the
+/// runs' convergence, largest angle, time and mean-speed correction.
+fn speed_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let gravity = r.speeds.iter().any(|s| s.linear_gravity.is_some());
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -347,50 +375,47 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');
-    md += &linear_gap(spec, r);
-    md += &linear_element_peaks(r);
-    // Element by element over the last window: every absorber and spring, not only the largest.
-    let steady = r
-        .speeds
-        .iter()
-        .flat_map(|s| s.response.iter().flat_map(move |resp| resp.elements.iter().map(move |e| (s.rpm, e))));
-    md += &element_table(steady, &spec.multiples);
-    if spec.hbm {
-        let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
-        let _ = writeln!(
-            md,
-            "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM | low-amplitude branch |"
-        );
-        let _ = writeln!(md, "|---|---|---|---|");
-        for s in &r.speeds {
-            let states: Vec<String> = s
-                .hbm
-                .iter()
-                .map(|h| {
-                    let st = match h.stable {
-                        Some(true) => "stable",
-                        Some(false) => "unstable",
-                        None => "?",
-                    };
-                    let amps: Vec<String> = h.amplitudes.iter().map(|a| cell(*a, 3)).collect();
-                    format!("({}; {st})", amps.join(", "))
-                })
-                .collect();
-            let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{} relative", sci(d, 2)));
-            let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
-                format!("ends at {} × the torques (fold): only the upper state remains", cell(f, 4))
-            });
-            let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
-        }
-        md.push('\n');
-        let _ = writeln!(
-            md,
-            "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
-             at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
-             and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
-        );
-        md += &ramp_table(spec, r);
+    md
+}
+
+/// The harmonic balance at the operating order: every branch's states per speed, the match with
+/// the time domain, the low-amplitude branch, and the torque ramp's states ([`ramp_table`]).
+fn hbm_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
+    let _ = writeln!(
+        md,
+        "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM | low-amplitude branch |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|");
+    for s in &r.speeds {
+        let states: Vec<String> = s
+            .hbm
+            .iter()
+            .map(|h| {
+                let st = match h.stable {
+                    Some(true) => "stable",
+                    Some(false) => "unstable",
+                    None => "?",
+                };
+                let amps: Vec<String> = h.amplitudes.iter().map(|a| cell(*a, 3)).collect();
+                format!("({}; {st})", amps.join(", "))
+            })
+            .collect();
+        let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{} relative", sci(d, 2)));
+        let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
+            format!("ends at {} × the torques (fold): only the upper state remains", cell(f, 4))
+        });
+        let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
     }
+    md.push('\n');
+    let _ = writeln!(
+        md,
+        "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
+         at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
+         and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
+    );
+    md += &ramp_table(spec, r);
     md
 }
 
