@@ -5,9 +5,56 @@ use super::{BoundaryKind, EnvelopeResult, TORQUE_COLUMN};
 use crate::plot::num;
 use std::fmt::Write as _;
 
-/// Its summary section.
+/// Its summary section: what was mapped ([`intro`]), the boundaries ([`boundary_table`]), the
+/// sections, the codimension-two points ([`point_table`]) and the regions' meaning.
 pub(super) fn markdown(r: &EnvelopeResult) -> String {
     let mut md = format!("## Operating envelope `{}`\n\n", r.name);
+    md += &intro(r);
+    let _ = writeln!(md, "Period doublings: {}.\n", r.period_doubling_search);
+    if r.boundaries.is_empty() {
+        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison, no period \
+               doubling on the seed branches).\n\n";
+        return md;
+    }
+    md += &boundary_table(r);
+    let sections: Vec<String> = r
+        .boundaries
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| {
+            b.sections.iter().map(move |sec| {
+                let at: Vec<String> = sec.second_values.iter().map(|&v| r.second_words(v, 9)).collect();
+                format!(
+                    "boundary {} at {}: {}",
+                    i + 1,
+                    r.value_words(sec.value, 9),
+                    if at.is_empty() { "none".into() } else { at.join(", ") }
+                )
+            })
+        })
+        .collect();
+    if !sections.is_empty() {
+        let _ = writeln!(md, "Sections (solved exactly there): {}.\n", sections.join("; "));
+    }
+    md += &point_table(r);
+    md += "Regions: one steady state outside the jump boundaries; inside one, three steady states coexist and the \
+           response jumps at its edges";
+    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::UnisonLoss) {
+        md += "; inside a unison-loss boundary the identical absorbers' unison motion is unstable (a non-unison \
+               motion takes over)";
+    }
+    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::PeriodDoubling) {
+        md += "; inside a period-doubling boundary the response is unstable against a motion of twice its period \
+               (a swing at half the order takes over: see `switch: true` on a harmonic balance)";
+    }
+    md += ".\n\n";
+    md
+}
+
+/// What was mapped, over what ranges, by which route, from which seeds, in how long, and what
+/// the CSV's kinds mean.
+fn intro(r: &EnvelopeResult) -> String {
+    let mut md = String::new();
     let _ = writeln!(
         md,
         "{}{} over {} {}–{}{} and {} {}–{}, route {}: {} from {} seed branches ({}) in {} s. \
@@ -42,12 +89,13 @@ pub(super) fn markdown(r: &EnvelopeResult) -> String {
         r.name,
         r.name
     );
-    let _ = writeln!(md, "Period doublings: {}.\n", r.period_doubling_search);
-    if r.boundaries.is_empty() {
-        md += "No boundary crosses the map: one steady state everywhere (no jump, no loss of unison, no period \
-               doubling on the seed branches).\n\n";
-        return md;
-    }
+    md
+}
+
+/// One row per boundary: its kind, points, range of the second parameter, crossings of the
+/// second parameter's top and why its ends stopped.
+fn boundary_table(r: &EnvelopeResult) -> String {
+    let mut md = String::new();
     let _ = writeln!(
         md,
         "| boundary | kind | points | range of the {} | {} at its largest | ends |\n|---|---|---|---|---|---|",
@@ -82,59 +130,36 @@ pub(super) fn markdown(r: &EnvelopeResult) -> String {
         );
     }
     md.push('\n');
-    let sections: Vec<String> = r
-        .boundaries
-        .iter()
-        .enumerate()
-        .flat_map(|(i, b)| {
-            b.sections.iter().map(move |sec| {
-                let at: Vec<String> = sec.second_values.iter().map(|&v| r.second_words(v, 9)).collect();
-                format!(
-                    "boundary {} at {}: {}",
-                    i + 1,
-                    r.value_words(sec.value, 9),
-                    if at.is_empty() { "none".into() } else { at.join(", ") }
-                )
-            })
-        })
-        .collect();
-    if !sections.is_empty() {
-        let _ = writeln!(md, "Sections (solved exactly there): {}.\n", sections.join("; "));
+    md
+}
+
+/// The codimension-two points with what each means (empty without one).
+fn point_table(r: &EnvelopeResult) -> String {
+    let mut md = String::new();
+    if r.points.is_empty() {
+        return md;
     }
-    if !r.points.is_empty() {
+    let _ = writeln!(
+        md,
+        "Codimension-two points:\n\n| point | boundary | {} | {} | meaning |\n|---|---|---|---|---|",
+        match r.parameter.as_str() {
+            "order" => "order",
+            TORQUE_COLUMN => "torque (N·m)",
+            _ => "speed (rpm)",
+        },
+        r.second_label
+    );
+    for p in &r.points {
         let _ = writeln!(
             md,
-            "Codimension-two points:\n\n| point | boundary | {} | {} | meaning |\n|---|---|---|---|---|",
-            match r.parameter.as_str() {
-                "order" => "order",
-                TORQUE_COLUMN => "torque (N·m)",
-                _ => "speed (rpm)",
-            },
-            r.second_label
+            "| {} | {} | {} | {} | {} |",
+            p.kind.words(),
+            p.boundary + 1,
+            num(p.value, 8),
+            num(p.second_value, 7),
+            p.kind.meaning()
         );
-        for p in &r.points {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                p.kind.words(),
-                p.boundary + 1,
-                num(p.value, 8),
-                num(p.second_value, 7),
-                p.kind.meaning()
-            );
-        }
-        md.push('\n');
     }
-    md += "Regions: one steady state outside the jump boundaries; inside one, three steady states coexist and the \
-           response jumps at its edges";
-    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::UnisonLoss) {
-        md += "; inside a unison-loss boundary the identical absorbers' unison motion is unstable (a non-unison \
-               motion takes over)";
-    }
-    if r.boundaries.iter().any(|b| b.kind == BoundaryKind::PeriodDoubling) {
-        md += "; inside a period-doubling boundary the response is unstable against a motion of twice its period \
-               (a swing at half the order takes over: see `switch: true` on a harmonic balance)";
-    }
-    md += ".\n\n";
+    md.push('\n');
     md
 }
