@@ -180,7 +180,7 @@ fn check_parameter_plane(c: &Checks<'_>, e: &EnvelopeSpec, p: &super::EnvelopePa
         (p.from, p.to),
         (&c.at("parameter.from"), &c.at("parameter.to")),
     )?;
-    return seeds_in(c, "seeds", &e.seeds, (p.from, p.to), "");
+    seeds_in(c, "seeds", &e.seeds, (p.from, p.to), "")
 }
 
 /// A multi-order set's plane: its scale's range and seeds.
@@ -201,7 +201,7 @@ fn check_scale_plane(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
             ),
         ));
     }
-    return seeds_in(c, "seeds", &e.seeds, (e.scale_min, e.scale_max), "");
+    seeds_in(c, "seeds", &e.seeds, (e.scale_min, e.scale_max), "")
 }
 
 /// A single order's plane: its torque range and seed torques.

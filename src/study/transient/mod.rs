@@ -320,7 +320,7 @@ fn recorder(study: &Study, reaction_joints: &[usize]) -> Result<Recorder> {
             probes.push(Probe::GearMeshTorque(j));
         }
     }
-    Ok(Recorder::new(&study.mechanism, &probes)?)
+    Recorder::new(&study.mechanism, &probes)
 }
 
 /// A transient's recorded signals, by name.
