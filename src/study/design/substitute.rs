@@ -80,8 +80,8 @@ pub(crate) fn check_masses(mech: &Mechanism) -> std::result::Result<(), String> 
     Ok(())
 }
 
-/// The study and analysis of one case: `values` (a row of [`case_values`]) substituted into
-/// the mechanism (its locked twin rebuilt and checked) and the analysis.
+/// The study and analysis of one case: `values` (a row of [`case_values`](super::case_values))
+/// substituted into the mechanism (its locked twin rebuilt and checked) and the analysis.
 ///
 /// # Errors
 /// A case whose mechanism is invalid (a tuning order out of reach, a body left with neither
