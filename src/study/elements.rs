@@ -6,9 +6,9 @@
 //! the last window, with the peak of the oscillating part over that window, refined between the
 //! samples ([`crate::signal::findings::refined_peak`]).
 
-use super::sim::{self, ElementColumns};
 use super::spec::TrackingSpec;
 use super::table::{Table, fmt_num};
+use super::track::track;
 use crate::error::Result;
 use crate::hbm::HbmSolution;
 use crate::model::mechanism::Mechanism;
@@ -200,7 +200,7 @@ pub(crate) fn from_window(
         let span = q.len().min(2 * window);
         let (q2, qd2) = (&q[q.len() - span..], &qd[qd.len() - span..]);
         let amplitudes = |signal: &[f64]| -> Result<Vec<f64>> {
-            let traces = sim::track(&mech.name, signal, fs, omega, &move |_| order, multiples, tracking)?;
+            let traces = track(&mech.name, signal, fs, omega, &move |_| order, multiples, tracking)?;
             Ok(traces.iter().map(|t| *t.amplitude.last().unwrap_or(&f64::NAN)).collect())
         };
         // The peak of the oscillating part over the last window, between the samples too
@@ -231,6 +231,13 @@ pub(crate) fn from_window(
         });
     }
     Ok(out)
+}
+
+/// The signals a time run records for the elements: per element its coordinate and its rate
+/// (`sim::element_columns` reads them off the run's recorder).
+pub(crate) struct ElementColumns<'a> {
+    /// Per element: (q, q̇) over the run's recorded samples.
+    pub signals: Vec<(&'a [f64], &'a [f64])>,
 }
 
 /// One element's order traces over a sweep.
@@ -276,14 +283,14 @@ pub(crate) fn traces(
         };
         let (torque, torque_peak) = if let Some(f) = element_torque(mech, j) {
             let t: Vec<f64> = q.iter().zip(qd).map(|(&q, &qd)| f.at(q, qd)).collect();
-            (Some(sim::track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t, None))
+            (Some(track(&mech.name, &t, fs, omega, order_at, multiples, tracking)?), peak(&t, None))
         } else {
             (None, 0.0)
         };
         out.push(ElementTraces {
             joint: mech.joints[j].name.clone(),
             unit: mech.joints[j].kind.coordinate_unit(),
-            traces: sim::track(&mech.name, q, fs, omega, order_at, multiples, tracking)?,
+            traces: track(&mech.name, q, fs, omega, order_at, multiples, tracking)?,
             peak: peak(q, Some(qd)),
             torque,
             torque_peak,

@@ -1,13 +1,14 @@
 //! The study's glue between the engine, the integrator and order tracking: one time-domain run
 //! streamed into the few signals a study needs, with progress bars.
 
-use super::elements::{ElementStreams, ElementTraces};
+use super::elements::{ElementColumns, ElementStreams, ElementTraces};
 use super::spec::Integrator;
+use super::track::tracked;
 use super::{Deadline, ExciteAt, IntegrationSpec, Study, TrackingSpec};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::kane::{Kane, Model};
 use crate::model::mechanism::Mechanism;
-use crate::signal::{OrderTrace, StftOptions, StftStream, stft_order_traces};
+use crate::signal::{OrderTrace, StftOptions, StftStream};
 use crate::time::integrate::{IntegrateOptions, IntegratorChoice, Method};
 use crate::time::probe::{Probe, Recorder};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -101,12 +102,6 @@ pub(crate) fn recorder(
         probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
     }
     Recorder::new(mech, &probes)
-}
-
-/// The signals a time run records for the elements: per element its coordinate and its rate.
-pub(crate) struct ElementColumns<'a> {
-    /// Per element: (q, q̇) over the run's recorded samples.
-    pub signals: Vec<(&'a [f64], &'a [f64])>,
 }
 
 /// The elements' (q, q̇) columns of a [`recorder`] made for `n_elements` elements.
@@ -249,45 +244,10 @@ pub(crate) fn fastest_eigenvalue(mech: &Mechanism, spin_joint: &str, omega: f64)
     }
 }
 
-/// Order traces of a sampled response by the STFT of docs/design.md; `mechanism` names the model in
-/// an error (the study validates the bands at load, so one is an internal inconsistency).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn track(
-    mechanism: &str,
-    signal: &[f64],
-    fs: f64,
-    omega: f64,
-    order_at: &dyn Fn(f64) -> f64,
-    multiples: &[f64],
-    t: &TrackingSpec,
-) -> Result<Vec<OrderTrace>> {
-    let opts = StftOptions { window_s: t.window_s, hop_s: t.hop_s, half_width_bins: t.half_width_bins };
-    let traces = stft_order_traces(signal, fs, omega, order_at, multiples, &opts);
-    tracked(mechanism, traces, signal.len(), fs, multiples, t)
-}
-
-/// The study's reading of one channel of a run's [`StftStream`]: [`track`] of its whole record
-/// (`len` samples): no trace when the run failed before one window, an order-tracking error as the
-/// model's.
-fn tracked(
-    mechanism: &str,
-    result: std::result::Result<Vec<OrderTrace>, crate::signal::SignalError>,
-    len: usize,
-    fs: f64,
-    multiples: &[f64],
-    t: &TrackingSpec,
-) -> Result<Vec<OrderTrace>> {
-    if len < (t.window_s * fs).round() as usize {
-        // A run that failed before one full window has no trace; its failure is reported.
-        return Ok(multiples.iter().map(|&m| OrderTrace { multiple: m, ..OrderTrace::default() }).collect());
-    }
-    result.map_err(|e| Error::Model { mechanism: mechanism.to_string(), message: format!("order tracking: {e}") })
-}
-
 /// What an order sweep reads off one run, computed as the run goes from the rows of a
 /// [`recorder`] (so no column needs to be kept): the response's order traces, the largest
 /// relative excursion and the elements' traces and peaks, each equal to the same analysis of the
-/// whole record ([`track`], [`super::elements::ElementStreams`]). It holds under two tracking
+/// whole record ([`super::track::track`], [`super::elements::ElementStreams`]). It holds under two tracking
 /// windows per channel.
 pub(crate) struct RunStream<'a> {
     stft: StftStream<'a>,

@@ -216,175 +216,177 @@ fn overlay(
 ) -> Result<Overlay> {
     let path = dir.join(format!("{cname}_{}.svg", a.name()));
     match a {
-        AnalysisSpec::OrderSweep(s) => {
-            let mut panels = Vec::new();
-            let mut rows = Vec::new();
-            for &amp in &s.amplitudes {
-                let (mut resp, mut elem) = (Vec::new(), Vec::new());
-                for (c, (label, name)) in names.iter().enumerate() {
-                    let runs: Vec<&SweepRun> = report
-                        .sweeps
-                        .iter()
-                        .filter(|r| &r.analysis == name && !r.locked && r.amplitude == amp)
-                        .collect();
-                    for r in &runs {
-                        let style = if r.direction == Direction::Up { LineStyle::Solid } else { LineStyle::Dashed };
-                        let dir_word = if r.direction == Direction::Up { "up" } else { "down" };
-                        if let Some(t) = r.trace(1.0) {
-                            resp.push(Series {
-                                label: format!("{label}, {dir_word}"),
-                                x: t.order.clone(),
-                                y: t.amplitude.clone(),
-                                color: c,
-                                style,
-                            });
-                            let (o, v) = min_after(&t.order, &t.amplitude, &t.time_s, 5.0);
-                            let el = r.elements.first();
-                            let peak = el.map_or(f64::NAN, |e| e.peak);
-                            rows.push((
-                                label.clone(),
-                                format!(
-                                    "{} N·m {dir_word}: smallest main-order response {} rad/s² at order {}; largest `{}` {} {}",
-                                    fmt_num(amp),
-                                    super::cell(v, 1),
-                                    super::cell(o, 4),
-                                    el.map_or("", |e| e.joint.as_str()),
-                                    super::cell(peak, 5),
-                                    el.map_or("", |e| e.unit),
-                                ),
-                            ));
-                        }
-                        if let Some(e) = r.elements.first()
-                            && let Some(t) = e.traces.iter().find(|t| (t.multiple - 1.0).abs() < 1e-12)
-                        {
-                            elem.push(Series {
-                                label: format!("{label}, {dir_word}"),
-                                x: t.order.clone(),
-                                y: t.amplitude.clone(),
-                                color: c,
-                                style,
-                            });
-                        }
-                    }
-                }
-                let unit = first_unit(report, names);
-                panels.push(Panel {
-                    title: format!("{} N·m: response, main order", fmt_num(amp)),
-                    x_label: "excitation order n".into(),
-                    y_label: "main-order acceleration, rad/s²".into(),
-                    x_range: Some((s.order_min, s.order_max)),
-                    series: resp,
-                    ..Panel::default()
-                });
-                panels.push(Panel {
-                    title: format!("{} N·m: first element, main order", fmt_num(amp)),
-                    x_label: "excitation order n".into(),
-                    y_label: format!("main-order amplitude, {unit}"),
-                    x_range: Some((s.order_min, s.order_max)),
-                    series: elem,
-                    ..Panel::default()
-                });
-            }
-            crate::plot::write_svg(&path, &panels, 620, 460)?;
-            Ok((Some(path), rows))
-        }
-        AnalysisSpec::HarmonicBalance(h) => {
-            let mut panels = Vec::new();
-            let mut rows = Vec::new();
-            let amps: Vec<f64> = if h.amplitudes.is_empty() { vec![f64::NAN] } else { h.amplitudes.clone() };
-            for &amp in &amps {
-                let (mut resp, mut elem) = (Vec::new(), Vec::new());
-                for (c, (label, name)) in names.iter().enumerate() {
-                    let branches: Vec<&HbmBranch> = report
-                        .hbm
-                        .iter()
-                        .filter(|b| &b.analysis == name && (b.amplitude == amp || amp.is_nan()))
-                        .collect();
-                    let mut folds: Vec<f64> = branches.iter().flat_map(|b| b.folds.iter().copied()).collect();
-                    folds.sort_by(f64::total_cmp);
-                    folds.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * b.abs().max(1.0));
+        AnalysisSpec::OrderSweep(s) => sweep_overlay(s, names, report, path),
+        AnalysisSpec::HarmonicBalance(h) => hbm_overlay(h, names, report, path),
+        AnalysisSpec::FreeOscillation(_) => free_overlay(names, report, path),
+        _ => Ok((None, Vec::new())),
+    }
+}
+
+/// An order sweep's overlay: per amplitude, the main-order response and the first element's
+/// main-order amplitude of every mechanism, up solid and down dashed; per mechanism and run its
+/// smallest response after the ramp-in and the first element's peak.
+fn sweep_overlay(
+    s: &super::SweepSpec,
+    names: &[(String, String)],
+    report: &StudyReport,
+    path: PathBuf,
+) -> Result<Overlay> {
+    let mut panels = Vec::new();
+    let mut rows = Vec::new();
+    for &amp in &s.amplitudes {
+        let (mut resp, mut elem) = (Vec::new(), Vec::new());
+        for (c, (label, name)) in names.iter().enumerate() {
+            let runs: Vec<&SweepRun> =
+                report.sweeps.iter().filter(|r| &r.analysis == name && !r.locked && r.amplitude == amp).collect();
+            for r in &runs {
+                let style = if r.direction == Direction::Up { LineStyle::Solid } else { LineStyle::Dashed };
+                let dir_word = if r.direction == Direction::Up { "up" } else { "down" };
+                if let Some(t) = r.trace(1.0) {
+                    resp.push(Series {
+                        label: format!("{label}, {dir_word}"),
+                        x: t.order.clone(),
+                        y: t.amplitude.clone(),
+                        color: c,
+                        style,
+                    });
+                    let (o, v) = min_after(&t.order, &t.amplitude, &t.time_s, 5.0);
+                    let el = r.elements.first();
+                    let peak = el.map_or(f64::NAN, |e| e.peak);
                     rows.push((
                         label.clone(),
                         format!(
-                            "{} N·m: folds at {}",
+                            "{} N·m {dir_word}: smallest main-order response {} rad/s² at order {}; largest `{}` {} {}",
                             fmt_num(amp),
-                            if folds.is_empty() {
-                                "none (no jump)".to_string()
-                            } else {
-                                folds.iter().map(|f| format!("{f:.4}")).collect::<Vec<_>>().join(", ")
-                            }
+                            super::cell(v, 1),
+                            super::cell(o, 4),
+                            el.map_or("", |e| e.joint.as_str()),
+                            super::cell(peak, 5),
+                            el.map_or("", |e| e.unit),
                         ),
                     ));
-                    for (bi, b) in branches.iter().enumerate() {
-                        push_stability(
-                            &mut resp,
-                            label,
-                            bi == 0,
-                            c,
-                            &b.curve_parameter,
-                            &b.curve_accel[0],
-                            &b.curve_stable,
-                        );
-                        let e: Vec<f64> = b
-                            .elements
-                            .iter()
-                            .map(|p| p.first().and_then(|e| e.amplitude.first().copied()).unwrap_or(f64::NAN))
-                            .collect();
-                        push_stability(&mut elem, label, bi == 0, c, &b.parameter, &e, &b.stable);
-                    }
                 }
-                let unit = first_unit(report, names);
-                let x_label = match h.parameter {
-                    super::HbmParameter::Order => "excitation order n".to_string(),
-                    super::HbmParameter::Speed { .. } => "speed, rpm".to_string(),
-                    super::HbmParameter::Torque { .. } => "torque amplitude, N·m".to_string(),
-                };
-                panels.push(Panel {
-                    title: format!("{} N·m: harmonic balance, response", fmt_num(amp)),
-                    x_label: x_label.clone(),
-                    y_label: "main-order acceleration, rad/s²".into(),
-                    series: resp,
-                    ..Panel::default()
-                });
-                panels.push(Panel {
-                    title: format!("{} N·m: harmonic balance, first element", fmt_num(amp)),
-                    x_label,
-                    y_label: format!("main-order amplitude, {unit}"),
-                    series: elem,
-                    ..Panel::default()
-                });
+                if let Some(e) = r.elements.first()
+                    && let Some(t) = e.traces.iter().find(|t| (t.multiple - 1.0).abs() < 1e-12)
+                {
+                    elem.push(Series {
+                        label: format!("{label}, {dir_word}"),
+                        x: t.order.clone(),
+                        y: t.amplitude.clone(),
+                        color: c,
+                        style,
+                    });
+                }
             }
-            crate::plot::write_svg(&path, &panels, 620, 460)?;
-            Ok((Some(path), rows))
         }
-        AnalysisSpec::FreeOscillation(_) => {
-            let results: Vec<(String, &FreeOscillationResult)> = names
-                .iter()
-                .filter_map(|(l, n)| report.free.iter().find(|r| &r.name == n).map(|r| (l.clone(), r)))
-                .collect();
-            let rows = results
-                .iter()
-                .map(|(l, r)| {
-                    let ratios = r.order_ratios();
-                    let last = ratios.iter().rev().find(|v| v.is_finite()).copied().unwrap_or(f64::NAN);
-                    let top = r.amplitudes.last().copied().unwrap_or(f64::NAN);
-                    (
-                        l.clone(),
-                        format!(
-                            "linear order {:.5}; at {} {} the order is {} of it",
-                            r.linear_order,
-                            fmt_num(top),
-                            r.unit,
-                            super::cell(last, 6)
-                        ),
-                    )
-                })
-                .collect();
-            crate::plot::write_svg(&path, &[backbone::panel(&results)], 760, 520)?;
-            Ok((Some(path), rows))
-        }
-        _ => Ok((None, Vec::new())),
+        let unit = first_unit(report, names);
+        panels.push(Panel {
+            title: format!("{} N·m: response, main order", fmt_num(amp)),
+            x_label: "excitation order n".into(),
+            y_label: "main-order acceleration, rad/s²".into(),
+            x_range: Some((s.order_min, s.order_max)),
+            series: resp,
+            ..Panel::default()
+        });
+        panels.push(Panel {
+            title: format!("{} N·m: first element, main order", fmt_num(amp)),
+            x_label: "excitation order n".into(),
+            y_label: format!("main-order amplitude, {unit}"),
+            x_range: Some((s.order_min, s.order_max)),
+            series: elem,
+            ..Panel::default()
+        });
     }
+    crate::plot::write_svg(&path, &panels, 620, 460)?;
+    Ok((Some(path), rows))
+}
+
+/// A harmonic balance's overlay: per amplitude, every mechanism's branches (response and first
+/// element, stable solid, unstable dashed); per mechanism its folds.
+fn hbm_overlay(h: &super::HbmSpec, names: &[(String, String)], report: &StudyReport, path: PathBuf) -> Result<Overlay> {
+    let mut panels = Vec::new();
+    let mut rows = Vec::new();
+    let amps: Vec<f64> = if h.amplitudes.is_empty() { vec![f64::NAN] } else { h.amplitudes.clone() };
+    for &amp in &amps {
+        let (mut resp, mut elem) = (Vec::new(), Vec::new());
+        for (c, (label, name)) in names.iter().enumerate() {
+            let branches: Vec<&HbmBranch> =
+                report.hbm.iter().filter(|b| &b.analysis == name && (b.amplitude == amp || amp.is_nan())).collect();
+            let mut folds: Vec<f64> = branches.iter().flat_map(|b| b.folds.iter().copied()).collect();
+            folds.sort_by(f64::total_cmp);
+            folds.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * b.abs().max(1.0));
+            rows.push((
+                label.clone(),
+                format!(
+                    "{} N·m: folds at {}",
+                    fmt_num(amp),
+                    if folds.is_empty() {
+                        "none (no jump)".to_string()
+                    } else {
+                        folds.iter().map(|f| format!("{f:.4}")).collect::<Vec<_>>().join(", ")
+                    }
+                ),
+            ));
+            for (bi, b) in branches.iter().enumerate() {
+                push_stability(&mut resp, label, bi == 0, c, &b.curve_parameter, &b.curve_accel[0], &b.curve_stable);
+                let e: Vec<f64> = b
+                    .elements
+                    .iter()
+                    .map(|p| p.first().and_then(|e| e.amplitude.first().copied()).unwrap_or(f64::NAN))
+                    .collect();
+                push_stability(&mut elem, label, bi == 0, c, &b.parameter, &e, &b.stable);
+            }
+        }
+        let unit = first_unit(report, names);
+        let x_label = match h.parameter {
+            super::HbmParameter::Order => "excitation order n".to_string(),
+            super::HbmParameter::Speed { .. } => "speed, rpm".to_string(),
+            super::HbmParameter::Torque { .. } => "torque amplitude, N·m".to_string(),
+        };
+        panels.push(Panel {
+            title: format!("{} N·m: harmonic balance, response", fmt_num(amp)),
+            x_label: x_label.clone(),
+            y_label: "main-order acceleration, rad/s²".into(),
+            series: resp,
+            ..Panel::default()
+        });
+        panels.push(Panel {
+            title: format!("{} N·m: harmonic balance, first element", fmt_num(amp)),
+            x_label,
+            y_label: format!("main-order amplitude, {unit}"),
+            series: elem,
+            ..Panel::default()
+        });
+    }
+    crate::plot::write_svg(&path, &panels, 620, 460)?;
+    Ok((Some(path), rows))
+}
+
+/// A free oscillation's overlay: every mechanism's backbone; per mechanism its linear order and
+/// how far the order has moved at the largest amplitude.
+fn free_overlay(names: &[(String, String)], report: &StudyReport, path: PathBuf) -> Result<Overlay> {
+    let results: Vec<(String, &FreeOscillationResult)> =
+        names.iter().filter_map(|(l, n)| report.free.iter().find(|r| &r.name == n).map(|r| (l.clone(), r))).collect();
+    let rows = results
+        .iter()
+        .map(|(l, r)| {
+            let ratios = r.order_ratios();
+            let last = ratios.iter().rev().find(|v| v.is_finite()).copied().unwrap_or(f64::NAN);
+            let top = r.amplitudes.last().copied().unwrap_or(f64::NAN);
+            (
+                l.clone(),
+                format!(
+                    "linear order {:.5}; at {} {} the order is {} of it",
+                    r.linear_order,
+                    fmt_num(top),
+                    r.unit,
+                    super::cell(last, 6)
+                ),
+            )
+        })
+        .collect();
+    crate::plot::write_svg(&path, &[backbone::panel(&results)], 760, 520)?;
+    Ok((Some(path), rows))
 }
 
 /// The unit of the first element reported by any of the sweeps or branches of `names`.

@@ -71,9 +71,19 @@ const MAX_SCALE: f64 = 1e6;
 /// range, and a mechanism parameter (with its fixed torque or set), each with its values and
 /// seeds in range; the fields of another refused where they are written.
 fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
-    let src = c.src;
-    // The fields each kind of second parameter takes (the others must be left out).
-    let given = |field: &str| match field {
+    check_load(c, &e.load)?;
+    if let Some(p) = &e.parameter {
+        return check_parameter_plane(c, e, p);
+    }
+    if !e.load.is_empty() {
+        return check_scale_plane(c, e);
+    }
+    check_torque_plane(c, e)
+}
+
+/// Whether the field of a second parameter is given (the others must be left out).
+fn given(e: &EnvelopeSpec, field: &str) -> bool {
+    match field {
         "torque_min" => e.torque_min != 0.0,
         "torque_max" => e.torque_max != 0.0,
         "seed_torques" => !e.seed_torques.is_empty(),
@@ -82,103 +92,124 @@ fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
         "torque" => e.torque != 0.0,
         "seeds" => !e.seeds.is_empty(),
         _ => false,
-    };
-    let refuse = |fields: &[&str], why: &str| -> Result<()> {
-        match fields.iter().find(|f| given(f)) {
-            Some(f) => Err(src.error(&c.at(f), format!("`{f}` does not apply here: {why}"))),
-            None => Ok(()),
-        }
-    };
-    let seeds_in = |field: &str, seeds: &[f64], (lo, hi): (f64, f64), unit: &str| -> Result<()> {
-        if seeds.len() > MAX_LIST {
-            return Err(src.error(&c.at(field), format!("at most {MAX_LIST} values")));
-        }
-        for (i, &t) in seeds.iter().enumerate() {
-            if !(t.is_finite() && lo <= t && t <= hi) {
-                return Err(src.error(
-                    &c.at(&format!("{field}[{i}]")),
-                    format!("{t}{unit} lies outside the map's range {lo}..{hi}{unit}"),
-                ));
-            }
-        }
-        Ok(())
-    };
-    check_load(c, &e.load)?;
-    if let Some(p) = &e.parameter {
-        refuse(
-            &["torque_min", "torque_max", "seed_torques", "scale_min", "scale_max"],
-            "a mechanism parameter's plane holds the torque fixed (`torque`, or the set `load` as written)",
-        )?;
-        let torque_plane = matches!(e.plane, EnvelopePlane::Torque { .. });
-        match (e.load.is_empty(), e.torque) {
-            _ if torque_plane => {
-                if !e.load.is_empty() {
-                    return Err(src.error(&c.at("load"), "a `Torque` plane maps a single order's torque: no `load`"));
-                }
-                if e.torque != 0.0 {
-                    return Err(src.error(
-                        &c.at("torque"),
-                        "a `Torque` plane maps the torque over `plane: Torque(…, torque_min, torque_max)`: drop `torque`",
-                    ));
-                }
-            }
-            (true, t) if !(pos(t) && t <= MAX_TORQUE_NM) => {
-                return Err(src.error(
-                    &c.at("torque"),
-                    format!("a mechanism parameter's plane needs the fixed torque 0 < torque ≤ {MAX_TORQUE_NM:e} N·m (or a `load`), got {t}"),
-                ));
-            }
-            (false, t) if t != 0.0 => {
-                return Err(src.error(&c.at("torque"), "give the fixed `torque` or a `load`, not both"));
-            }
-            _ => {}
-        }
-        if let Err(m) = crate::study::validate::limits::check_file_name(&p.name) {
-            return Err(src.error(&c.at("parameter.name"), m));
-        }
-        if p.quantity == crate::study::design::Quantity::Rpm {
-            // The (order, speed) plane at a fixed torque.
-            if e.plane != EnvelopePlane::Order {
-                return Err(src.error(
-                    &c.at("parameter.quantity"),
-                    "a `Speed` plane maps the speed already: map the speed against the order on an `Order` plane",
-                ));
-            }
-            rpm(src, &c.at("parameter.from"), p.from)?;
-            rpm(src, &c.at("parameter.to"), p.to)?;
-            if p.from >= p.to {
-                return Err(src.error(&c.at("parameter.to"), format!("need from < to, got {} and {}", p.from, p.to)));
-            }
-            return seeds_in("seeds", &e.seeds, (p.from, p.to), " rpm");
-        }
-        crate::study::design::check_mechanism_quantity(
-            src,
-            &c.at("parameter.quantity"),
-            c.mech,
-            c.spin,
-            &p.quantity,
-            (p.from, p.to),
-            (&c.at("parameter.from"), &c.at("parameter.to")),
-        )?;
-        return seeds_in("seeds", &e.seeds, (p.from, p.to), "");
     }
-    if !e.load.is_empty() {
-        refuse(
-            &["torque_min", "torque_max", "seed_torques", "torque"],
-            "a `load` is mapped over its scale: give `scale_min` and `scale_max` (dimensionless)",
-        )?;
-        if !(pos(e.scale_min) && e.scale_min < e.scale_max && e.scale_max <= MAX_SCALE) {
-            return Err(src.error(
-                &c.at(if pos(e.scale_min) { "scale_max" } else { "scale_min" }),
-                format!(
-                    "need 0 < scale_min < scale_max ≤ {MAX_SCALE:e} (scales of the set), got {} and {}",
-                    e.scale_min, e.scale_max
-                ),
+}
+
+/// The first of `fields` that is given, refused with `why`.
+fn refuse(c: &Checks<'_>, e: &EnvelopeSpec, fields: &[&str], why: &str) -> Result<()> {
+    match fields.iter().find(|f| given(e, f)) {
+        Some(f) => Err(c.src.error(&c.at(f), format!("`{f}` does not apply here: {why}"))),
+        None => Ok(()),
+    }
+}
+
+/// At most [`MAX_LIST`] seeds at `field`, each within the map's range `(lo, hi)` (in `unit`).
+fn seeds_in(c: &Checks<'_>, field: &str, seeds: &[f64], (lo, hi): (f64, f64), unit: &str) -> Result<()> {
+    if seeds.len() > MAX_LIST {
+        return Err(c.src.error(&c.at(field), format!("at most {MAX_LIST} values")));
+    }
+    for (i, &t) in seeds.iter().enumerate() {
+        if !(t.is_finite() && lo <= t && t <= hi) {
+            return Err(c.src.error(
+                &c.at(&format!("{field}[{i}]")),
+                format!("{t}{unit} lies outside the map's range {lo}..{hi}{unit}"),
             ));
         }
-        return seeds_in("seeds", &e.seeds, (e.scale_min, e.scale_max), "");
     }
+    Ok(())
+}
+
+/// A mechanism parameter's plane (or the speed's, on an `Order` plane): the fixed torque or set,
+/// the parameter's name, quantity and range, and its seeds.
+fn check_parameter_plane(c: &Checks<'_>, e: &EnvelopeSpec, p: &super::EnvelopeParameter) -> Result<()> {
+    let src = c.src;
     refuse(
+        c,
+        e,
+        &["torque_min", "torque_max", "seed_torques", "scale_min", "scale_max"],
+        "a mechanism parameter's plane holds the torque fixed (`torque`, or the set `load` as written)",
+    )?;
+    let torque_plane = matches!(e.plane, EnvelopePlane::Torque { .. });
+    match (e.load.is_empty(), e.torque) {
+        _ if torque_plane => {
+            if !e.load.is_empty() {
+                return Err(src.error(&c.at("load"), "a `Torque` plane maps a single order's torque: no `load`"));
+            }
+            if e.torque != 0.0 {
+                return Err(src.error(
+                    &c.at("torque"),
+                    "a `Torque` plane maps the torque over `plane: Torque(…, torque_min, torque_max)`: drop `torque`",
+                ));
+            }
+        }
+        (true, t) if !(pos(t) && t <= MAX_TORQUE_NM) => {
+            return Err(src.error(
+                &c.at("torque"),
+                format!("a mechanism parameter's plane needs the fixed torque 0 < torque ≤ {MAX_TORQUE_NM:e} N·m (or a `load`), got {t}"),
+            ));
+        }
+        (false, t) if t != 0.0 => {
+            return Err(src.error(&c.at("torque"), "give the fixed `torque` or a `load`, not both"));
+        }
+        _ => {}
+    }
+    if let Err(m) = crate::study::validate::limits::check_file_name(&p.name) {
+        return Err(src.error(&c.at("parameter.name"), m));
+    }
+    if p.quantity == crate::study::design::Quantity::Rpm {
+        // The (order, speed) plane at a fixed torque.
+        if e.plane != EnvelopePlane::Order {
+            return Err(src.error(
+                &c.at("parameter.quantity"),
+                "a `Speed` plane maps the speed already: map the speed against the order on an `Order` plane",
+            ));
+        }
+        rpm(src, &c.at("parameter.from"), p.from)?;
+        rpm(src, &c.at("parameter.to"), p.to)?;
+        if p.from >= p.to {
+            return Err(src.error(&c.at("parameter.to"), format!("need from < to, got {} and {}", p.from, p.to)));
+        }
+        return seeds_in(c, "seeds", &e.seeds, (p.from, p.to), " rpm");
+    }
+    crate::study::design::check_mechanism_quantity(
+        src,
+        &c.at("parameter.quantity"),
+        c.mech,
+        c.spin,
+        &p.quantity,
+        (p.from, p.to),
+        (&c.at("parameter.from"), &c.at("parameter.to")),
+    )?;
+    seeds_in(c, "seeds", &e.seeds, (p.from, p.to), "")
+}
+
+/// A multi-order set's plane: its scale's range and seeds.
+fn check_scale_plane(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
+    let src = c.src;
+    refuse(
+        c,
+        e,
+        &["torque_min", "torque_max", "seed_torques", "torque"],
+        "a `load` is mapped over its scale: give `scale_min` and `scale_max` (dimensionless)",
+    )?;
+    if !(pos(e.scale_min) && e.scale_min < e.scale_max && e.scale_max <= MAX_SCALE) {
+        return Err(src.error(
+            &c.at(if pos(e.scale_min) { "scale_max" } else { "scale_min" }),
+            format!(
+                "need 0 < scale_min < scale_max ≤ {MAX_SCALE:e} (scales of the set), got {} and {}",
+                e.scale_min, e.scale_max
+            ),
+        ));
+    }
+    seeds_in(c, "seeds", &e.seeds, (e.scale_min, e.scale_max), "")
+}
+
+/// A single order's plane: its torque range and seed torques.
+fn check_torque_plane(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
+    let src = c.src;
+    refuse(
+        c,
+        e,
         &["scale_min", "scale_max", "torque", "seeds"],
         "a single order is mapped over its torque amplitude (`torque_min`, `torque_max`, `seed_torques`); \
          a scale needs a `load`, a fixed torque a `parameter`",
@@ -192,7 +223,7 @@ fn check_second(c: &Checks<'_>, e: &EnvelopeSpec) -> Result<()> {
             ),
         ));
     }
-    seeds_in("seed_torques", &e.seed_torques, (e.torque_min, e.torque_max), " N·m")
+    seeds_in(c, "seed_torques", &e.seed_torques, (e.torque_min, e.torque_max), " N·m")
 }
 
 /// A multi-order set: 1 to [`MAX_LIST`] harmonics, each a positive multiple, an admissible

@@ -717,7 +717,7 @@ fn steady(
     let tracking = TrackingSpec { window_s: spec.window_s, hop_s: spec.window_s, half_width_bins: 2 };
     let order = spec.order;
     let mut measure = |tail: &[f64]| -> Result<WindowPair> {
-        let traces = sim::track(&mech.name, tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
+        let traces = super::track::track(&mech.name, tail, fs, omega, &move |_| order, &spec.multiples, &tracking)?;
         let first = traces.iter().map(|tr| tr.amplitude[0]).collect();
         let last = traces.iter().map(|tr| *tr.amplitude.last().unwrap_or(&f64::NAN)).collect();
         Ok((first, last))

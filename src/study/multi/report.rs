@@ -10,8 +10,8 @@ use crate::study::{MultiOrderSpec, Study, cell};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-/// Writes the CSV ([`table`]) and the figure (the paper's Fig. 5), and returns the summary
-/// section with the files written.
+/// Writes the CSV ([`table`]) and the figure (the paper's Fig. 5: [`response_panel`], then
+/// [`element_panels`]), and returns the summary section with the files written.
 pub(super) fn render(
     study: &Study,
     spec: &MultiOrderSpec,
@@ -19,9 +19,19 @@ pub(super) fn render(
     dir: &Path,
 ) -> Result<(String, Vec<PathBuf>)> {
     let csv = table(study, spec, result).write_csv(dir)?;
-    let has_locked = study.locked.is_some();
+    let mut panels = vec![response_panel(study, spec, result)];
+    panels.extend(element_panels(study, spec, result));
+    let svg = dir.join(format!("{}.svg", spec.name));
+    crate::plot::write_svg(&svg, &panels, 640, 480)?;
 
-    // Figure 5: each order vs speed, mechanism solid, locked twin dotted.
+    Ok((summary(spec, result), vec![csv, svg]))
+}
+
+/// Figure 5: each order against the speed, the mechanism solid, the locked twin dotted, the
+/// linear model dashed (the harmonic balance's state where there are no time runs), with the
+/// jumps between speeds labelled.
+fn response_panel(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Panel {
+    let has_locked = study.locked.is_some();
     let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
     let mut series = Vec::new();
     for (k, m) in spec.multiples.iter().enumerate() {
@@ -56,7 +66,7 @@ pub(super) fn render(
     }
     let top = series.iter().flat_map(|s| s.y.iter().copied()).filter(|v| v.is_finite()).fold(0.0, f64::max);
     let labels = jump_labels(spec, result);
-    let panel = Panel {
+    Panel {
         y_range: Some((0.0, 1.1 * top.max(f64::MIN_POSITIVE))),
         title: format!("Steady multi-order response, n = {}", num(spec.order, 5)),
         x_label: "mean speed, rpm".into(),
@@ -65,8 +75,14 @@ pub(super) fn render(
         series: with_sample_markers(series),
         labels,
         ..Panel::default()
-    };
-    let mut panels = vec![panel];
+    }
+}
+
+/// The elements' panels over the speeds: the torque transmitted by the shaft-like elements,
+/// and the amplitude of the others.
+fn element_panels(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Vec<Panel> {
+    let rpm: Vec<f64> = result.speeds.iter().map(|s| s.rpm).collect();
+    let mut panels = Vec::new();
     // The elements' amplitudes at each tracked order over the speeds: from the time runs, or
     // from the torque ramp's harmonic-balance state (else the lowest state) where there are none,
     // or from the linear response in a linear-only analysis (the marine gearbox's propeller-shaft
@@ -139,10 +155,7 @@ pub(super) fn render(
             ..Panel::default()
         });
     }
-    let svg = dir.join(format!("{}.svg", spec.name));
-    crate::plot::write_svg(&svg, &panels, 640, 480)?;
-
-    Ok((summary(spec, result), vec![csv, svg]))
+    panels
 }
 
 /// Few speeds (a list of operating points, not a fine grid): the lines between them are
@@ -252,6 +265,27 @@ fn sci(v: f64, precision: usize) -> String {
 fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## Multi-order response `{}`: n = {}, steady states\n", spec.name, spec.order);
+    md += &damping_and_gravity(spec, r);
+    md += &engine_table(r);
+    md += &share_table(spec);
+    md += &speed_table(spec, r);
+    md += &linear_gap(spec, r);
+    md += &linear_element_peaks(r);
+    // Element by element over the last window: every absorber and spring, not only the largest.
+    let steady = r
+        .speeds
+        .iter()
+        .flat_map(|s| s.response.iter().flat_map(move |resp| resp.elements.iter().map(move |e| (s.rpm, e))));
+    md += &element_table(steady, &spec.multiples);
+    if spec.hbm {
+        md += &hbm_table(spec, r);
+    }
+    md
+}
+
+/// With gravity, what its linear column is; with modal damping, where it acts.
+fn damping_and_gravity(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
     let gravity = r.speeds.iter().any(|s| s.linear_gravity.is_some());
     if gravity {
         let _ = writeln!(
@@ -271,8 +305,15 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
             how.describe()
         );
     }
-    md += &engine_table(r);
-    md += &share_table(spec);
+    md
+}
+
+/// The table of speeds (thinned on a fine grid): per tracked multiple the time-domain amplitude
+/// with the locked twin's and their ratio and the linear ones, gravity's linear line, and the
+/// runs' convergence, largest angle, time and mean-speed correction.
+fn speed_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let gravity = r.speeds.iter().any(|s| s.linear_gravity.is_some());
     let mut head = "| rpm |".to_string();
     let mut rule = "|---|".to_string();
     for m in &spec.multiples {
@@ -334,50 +375,47 @@ fn summary(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "{row}");
     }
     md.push('\n');
-    md += &linear_gap(spec, r);
-    md += &linear_element_peaks(r);
-    // Element by element over the last window: every absorber and spring, not only the largest.
-    let steady = r
-        .speeds
-        .iter()
-        .flat_map(|s| s.response.iter().flat_map(move |resp| resp.elements.iter().map(move |e| (s.rpm, e))));
-    md += &element_table(steady, &spec.multiples);
-    if spec.hbm {
-        let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
-        let _ = writeln!(
-            md,
-            "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM | low-amplitude branch |"
-        );
-        let _ = writeln!(md, "|---|---|---|---|");
-        for s in &r.speeds {
-            let states: Vec<String> = s
-                .hbm
-                .iter()
-                .map(|h| {
-                    let st = match h.stable {
-                        Some(true) => "stable",
-                        Some(false) => "unstable",
-                        None => "?",
-                    };
-                    let amps: Vec<String> = h.amplitudes.iter().map(|a| cell(*a, 3)).collect();
-                    format!("({}; {st})", amps.join(", "))
-                })
-                .collect();
-            let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{} relative", sci(d, 2)));
-            let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
-                format!("ends at {} × the torques (fold): only the upper state remains", cell(f, 4))
-            });
-            let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
-        }
-        md.push('\n');
-        let _ = writeln!(
-            md,
-            "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
-             at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
-             and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
-        );
-        md += &ramp_table(spec, r);
+    md
+}
+
+/// The harmonic balance at the operating order: every branch's states per speed, the match with
+/// the time domain, the low-amplitude branch, and the torque ramp's states ([`ramp_table`]).
+fn hbm_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
+    let mut md = String::new();
+    let _ = writeln!(md, "Harmonic balance (H = 10) at the operating order, every branch:\n");
+    let _ = writeln!(
+        md,
+        "| rpm | states (main, second rad/s²; stability) | time domain vs nearest stable HBM | low-amplitude branch |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|");
+    for s in &r.speeds {
+        let states: Vec<String> = s
+            .hbm
+            .iter()
+            .map(|h| {
+                let st = match h.stable {
+                    Some(true) => "stable",
+                    Some(false) => "unstable",
+                    None => "?",
+                };
+                let amps: Vec<String> = h.amplitudes.iter().map(|a| cell(*a, 3)).collect();
+                format!("({}; {st})", amps.join(", "))
+            })
+            .collect();
+        let m = s.hbm_match().map_or("–".into(), |(_, d)| format!("{} relative", sci(d, 2)));
+        let low = s.hbm_lower_fold.map_or("reaches the full torques".into(), |f| {
+            format!("ends at {} × the torques (fold): only the upper state remains", cell(f, 4))
+        });
+        let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
     }
+    md.push('\n');
+    let _ = writeln!(
+        md,
+        "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
+         at the operating order; where it folds below s = 1 a run at these torques cannot settle on it \
+         and jumps to the upper state (the paper's Fig. 5 at 600 rpm).\n"
+    );
+    md += &ramp_table(spec, r);
     md
 }
 

@@ -562,7 +562,7 @@ mod tests {
             let order_at = move |t: f64| order.at(t);
             let tracking = &study.spec.order_tracking;
             let accel = &rec.columns[sim::ACCEL];
-            let want = sim::track("s", accel, fs, omega, &order_at, &spec.multiples, tracking).unwrap();
+            let want = crate::study::track::track("s", accel, fs, omega, &order_at, &spec.multiples, tracking).unwrap();
             assert_eq!(run.traces, want);
             assert_eq!(run.traces[0].len(), (12000 - 2000) / 250 + 1);
             let relative = rec.columns[sim::RELATIVE].iter().copied().fold(0.0, f64::max);

@@ -4,11 +4,8 @@
 
 use super::{MAX_ENGINE_ORDER, TransientResult, TransientSpec, run, tables};
 use crate::error::Result;
-use crate::io::Source;
-use crate::model::mechanism::Mechanism;
 use crate::study::Study;
 use crate::study::StudyReport;
-use crate::study::StudySpec;
 use crate::study::analysis::{Analysis, Bench, Checks, Kept, Output, Resources};
 use crate::study::digest::num;
 use crate::study::json::Json;
@@ -57,7 +54,7 @@ impl Analysis for TransientSpec {
     }
 
     fn check(&self, c: &Checks<'_>) -> Result<()> {
-        check_transient(c.src, c.spec, c.mech, c.spin, c.k, self)
+        check_transient(c, self)
     }
 
     fn files(&self, _locked: bool) -> Vec<String> {
@@ -145,25 +142,31 @@ impl Kept for TransientResult {
     }
 }
 
-pub(super) fn check_transient(
-    src: &Source,
-    spec: &StudySpec,
-    mech: &Mechanism,
-    spin: usize,
-    k: usize,
-    t: &crate::study::TransientSpec,
-) -> Result<()> {
-    use crate::study::SpeedProfile;
-    let at = |field: &str| format!("analyses[{k}].{field}");
+/// The transient's fields, each refused where it is written: the speed profile, the initial
+/// angles and rates, the reactions, the torques, the engine and the order–rpm map.
+pub(super) fn check_transient(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
     if !(pos(t.duration_s) && t.duration_s <= MAX_TRANSIENT_S) {
-        return Err(src.error(&at("duration_s"), format!("duration must lie in 0 < duration_s ≤ {MAX_TRANSIENT_S} s")));
+        return Err(c
+            .src
+            .error(&c.at("duration_s"), format!("duration must lie in 0 < duration_s ≤ {MAX_TRANSIENT_S} s")));
     }
+    check_speed(c, t)?;
+    check_initial(c, t)?;
+    check_reactions(c, t)?;
+    check_torques(c, t)?;
+    check_engine(c, t)?;
+    check_map(c, t)
+}
+
+/// The speed profile: speeds in range, the ramp and the governor's time constant finite and
+/// positive.
+fn check_speed(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
+    use crate::study::SpeedProfile;
     let speed_ok = |v: f64| v.is_finite() && (0.0..=MAX_RPM).contains(&v);
-    let prescribed = matches!(t.speed, SpeedProfile::Prescribed { .. });
     match t.speed {
         SpeedProfile::Free { rpm } => {
             if !speed_ok(rpm) {
-                return Err(src.error(&at("speed.rpm"), format!("speed must lie in 0 ≤ rpm ≤ {MAX_RPM:e}")));
+                return Err(c.src.error(&c.at("speed.rpm"), format!("speed must lie in 0 ≤ rpm ≤ {MAX_RPM:e}")));
             }
         }
         SpeedProfile::Torque { rpm_from, rpm_to, ramp_s, .. }
@@ -171,121 +174,152 @@ pub(super) fn check_transient(
             if let SpeedProfile::Torque { governor_s: Some(tau), .. } = t.speed
                 && !(pos(tau) && tau <= MAX_TRANSIENT_S)
             {
-                return Err(
-                    src.error(&at("speed.governor_s"), "the governor's time constant must be finite and positive (s)")
-                );
+                return Err(c
+                    .src
+                    .error(&c.at("speed.governor_s"), "the governor's time constant must be finite and positive (s)"));
             }
             for (f, v) in [("rpm_from", rpm_from), ("rpm_to", rpm_to)] {
                 if !speed_ok(v) {
-                    return Err(
-                        src.error(&at(&format!("speed.{f}")), format!("speed must lie in 0 ≤ rpm ≤ {MAX_RPM:e}"))
-                    );
+                    return Err(c
+                        .src
+                        .error(&c.at(&format!("speed.{f}")), format!("speed must lie in 0 ≤ rpm ≤ {MAX_RPM:e}")));
                 }
             }
             if let Some(r) = ramp_s
                 && !(pos(r) && r <= MAX_TRANSIENT_S)
             {
-                return Err(src.error(&at("speed.ramp_s"), "the ramp must be finite and positive (s)"));
+                return Err(c.src.error(&c.at("speed.ramp_s"), "the ramp must be finite and positive (s)"));
             }
         }
     }
-    let joint = |path: &str, name: &str| -> Result<usize> {
-        let j = mech.joint_index(name).ok_or_else(|| {
-            let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
-            src.error(path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
-        })?;
-        if mech.coordinate(j).is_none() {
-            let why = if mech.follow_map()[j].is_some() {
-                "is rigidly driven by a gear: its state follows the joint it is geared to (set that one; a \
-                 transient's crank-locked torques act on joints with a coordinate)"
-            } else {
-                "is Fixed: it has no coordinate"
-            };
-            return Err(src.error(path, format!("joint `{name}` {why}")));
-        }
-        Ok(j)
-    };
+    Ok(())
+}
+
+/// The joint `name` (at `path`), which must have a coordinate of its own.
+fn coordinate_joint(c: &Checks<'_>, path: &str, name: &str) -> Result<usize> {
+    let j = c.mech.joint_index(name).ok_or_else(|| {
+        let names: Vec<&str> = c.mech.joints.iter().map(|j| j.name.as_str()).collect();
+        c.src.error(path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
+    })?;
+    if c.mech.coordinate(j).is_none() {
+        let why = if c.mech.follow_map()[j].is_some() {
+            "is rigidly driven by a gear: its state follows the joint it is geared to (set that one; a \
+             transient's crank-locked torques act on joints with a coordinate)"
+        } else {
+            "is Fixed: it has no coordinate"
+        };
+        return Err(c.src.error(path, format!("joint `{name}` {why}")));
+    }
+    Ok(j)
+}
+
+/// The initial angles and rates: joints with a coordinate, each once, values finite (the spin
+/// joint's rate is the profile's first speed).
+fn check_initial(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
     for (field, list) in [("angles", &t.angles), ("rates", &t.rates)] {
         if list.len() > MAX_LIST {
-            return Err(src.error(&at(field), format!("at most {MAX_LIST} entries")));
+            return Err(c.src.error(&c.at(field), format!("at most {MAX_LIST} entries")));
         }
         let mut seen = Vec::new();
         for (i, (name, v)) in list.iter().enumerate() {
-            let path = at(&format!("{field}[{i}]"));
-            let j = joint(&path, name)?;
-            if field == "rates" && j == spin {
-                return Err(src.error(&path, "the spin joint's initial rate is the speed profile's first speed"));
+            let path = c.at(&format!("{field}[{i}]"));
+            let j = coordinate_joint(c, &path, name)?;
+            if field == "rates" && j == c.spin {
+                return Err(c.src.error(&path, "the spin joint's initial rate is the speed profile's first speed"));
             }
             if !(v.is_finite() && v.abs() <= 1e6) {
-                return Err(src.error(&path, format!("must be finite and at most 1e6 in size, got {}", g(*v))));
+                return Err(c.src.error(&path, format!("must be finite and at most 1e6 in size, got {}", g(*v))));
             }
             if seen.contains(&j) {
-                return Err(src.error(&path, format!("joint `{name}` is given twice")));
+                return Err(c.src.error(&path, format!("joint `{name}` is given twice")));
             }
             seen.push(j);
         }
     }
+    Ok(())
+}
+
+/// The joints whose reactions are recorded: known, each once.
+fn check_reactions(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
     if t.reactions.len() > MAX_LIST {
-        return Err(src.error(&at("reactions"), format!("at most {MAX_LIST} joints")));
+        return Err(c.src.error(&c.at("reactions"), format!("at most {MAX_LIST} joints")));
     }
     for (i, name) in t.reactions.iter().enumerate() {
-        let path = at(&format!("reactions[{i}]"));
-        let j = mech.joint_index(name).ok_or_else(|| {
-            let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
-            src.error(&path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
+        let path = c.at(&format!("reactions[{i}]"));
+        let j = c.mech.joint_index(name).ok_or_else(|| {
+            let names: Vec<&str> = c.mech.joints.iter().map(|j| j.name.as_str()).collect();
+            c.src.error(&path, format!("unknown joint `{name}` (joints: {})", names.join(", ")))
         })?;
         if t.reactions[..i].contains(name) {
-            return Err(src.error(&path, format!("joint `{}` is given twice", mech.joints[j].name)));
+            return Err(c.src.error(&path, format!("joint `{}` is given twice", c.mech.joints[j].name)));
         }
     }
+    Ok(())
+}
+
+/// Whether the spin speed is prescribed (its drive then takes whatever torque it needs).
+fn prescribed(t: &crate::study::TransientSpec) -> bool {
+    matches!(t.speed, crate::study::SpeedProfile::Prescribed { .. })
+}
+
+/// The crank-locked torques: joints with a coordinate (not a prescribed spin joint), means,
+/// orders, ramps and harmonics in range.
+fn check_torques(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
+    let prescribed = prescribed(t);
     if t.torques.len() > MAX_LIST {
-        return Err(src.error(&at("torques"), format!("at most {MAX_LIST} torques")));
+        return Err(c.src.error(&c.at("torques"), format!("at most {MAX_LIST} torques")));
     }
     for (i, tq) in t.torques.iter().enumerate() {
-        let path = |f: &str| at(&format!("torques[{i}].{f}"));
-        let j = joint(&path("joint"), &tq.joint)?;
-        if prescribed && j == spin {
-            return Err(src.error(
+        let path = |f: &str| c.at(&format!("torques[{i}].{f}"));
+        let j = coordinate_joint(c, &path("joint"), &tq.joint)?;
+        if prescribed && j == c.spin {
+            return Err(c.src.error(
                 &path("joint"),
                 "the spin joint's speed is prescribed: its drive takes whatever torque it needs (apply the torque at another joint)",
             ));
         }
-        torque(src, &path("mean"), tq.mean)?;
-        order(src, &path("order"), tq.order)?;
+        torque(c.src, &path("mean"), tq.mean)?;
+        order(c.src, &path("order"), tq.order)?;
         if !(tq.ramp_s.is_finite() && tq.ramp_s >= 0.0) {
-            return Err(src.error(&path("ramp_s"), "ramp must be a finite, non-negative duration (s)"));
+            return Err(c.src.error(&path("ramp_s"), "ramp must be a finite, non-negative duration (s)"));
         }
         if tq.harmonics.len() > MAX_LIST {
-            return Err(src.error(&path("harmonics"), format!("at most {MAX_LIST} harmonics")));
+            return Err(c.src.error(&path("harmonics"), format!("at most {MAX_LIST} harmonics")));
         }
         for (h, hm) in tq.harmonics.iter().enumerate() {
             let hp = path(&format!("harmonics[{h}]"));
-            order(src, &format!("{hp}.multiple"), hm.multiple)?;
-            torque(src, &format!("{hp}.amplitude"), hm.amplitude)?;
+            order(c.src, &format!("{hp}.multiple"), hm.multiple)?;
+            torque(c.src, &format!("{hp}.amplitude"), hm.amplitude)?;
             if !(hm.phase.is_finite() && hm.phase.abs() <= 1e3) {
-                return Err(src.error(&format!("{hp}.phase"), "phase must be finite, |α| ≤ 1000 rad"));
+                return Err(c.src.error(&format!("{hp}.phase"), "phase must be finite, |α| ≤ 1000 rad"));
             }
         }
     }
+    Ok(())
+}
+
+/// The engine's excited joints (not a prescribed spin joint).
+fn check_engine(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
+    let prescribed = prescribed(t);
     if let Some(e) = &t.engine {
         // The engine's order, highest order and ramp were checked when it was loaded.
-        check_excite(src, spec, mech, &at("engine.excite"), &e.excite, None)?;
+        check_excite(c.src, c.spec, c.mech, &c.at("engine.excite"), &e.excite, None)?;
         let excited: Vec<(String, usize)> = if e.excite.is_empty() {
-            vec![(at("engine"), spin)]
+            vec![(c.at("engine"), c.spin)]
         } else {
             e.excite
                 .iter()
                 .enumerate()
                 .map(|(i, x)| {
-                    let path = at(&format!("engine.excite[{i}].joint"));
-                    let j = joint(&path, &x.joint)?;
+                    let path = c.at(&format!("engine.excite[{i}].joint"));
+                    let j = coordinate_joint(c, &path, &x.joint)?;
                     Ok((path, j))
                 })
                 .collect::<Result<_>>()?
         };
         for (path, j) in excited {
-            if prescribed && j == spin {
-                return Err(src.error(
+            if prescribed && j == c.spin {
+                return Err(c.src.error(
                     &path,
                     "the spin joint's speed is prescribed: its drive would take up the engine torque (excite \
                      another joint, or run the speed with `Torque(…)`)",
@@ -293,38 +327,44 @@ pub(super) fn check_transient(
             }
         }
     }
+    Ok(())
+}
+
+/// The order–rpm map: its resolution, its highest order below the block's and the samples'
+/// Nyquist limits, its cuts below it.
+fn check_map(c: &Checks<'_>, t: &crate::study::TransientSpec) -> Result<()> {
     let m = &t.map;
     if !(8..=1024).contains(&m.samples_per_rev) {
-        return Err(src.error(&at("map.samples_per_rev"), "need 8 to 1024 points per revolution"));
+        return Err(c.src.error(&c.at("map.samples_per_rev"), "need 8 to 1024 points per revolution"));
     }
     if !(1..=1024).contains(&m.revs_per_block) {
-        return Err(src.error(&at("map.revs_per_block"), "need 1 to 1024 revolutions per block"));
+        return Err(c.src.error(&c.at("map.revs_per_block"), "need 1 to 1024 revolutions per block"));
     }
     if !(pos(m.hop_revs) && m.hop_revs <= 1e6) {
-        return Err(src.error(&at("map.hop_revs"), "hop must be finite, positive and at most 1e6 revolutions"));
+        return Err(c.src.error(&c.at("map.hop_revs"), "hop must be finite, positive and at most 1e6 revolutions"));
     }
-    order(src, &at("map.max_order"), m.max_order)?;
-    let half = spec.order_tracking.half_width_bins as f64;
+    order(c.src, &c.at("map.max_order"), m.max_order)?;
+    let half = c.spec.order_tracking.half_width_bins as f64;
     let r = m.revs_per_block as f64;
     // The highest column's band must end below the block's Nyquist bin P·R/2.
     let top = (m.samples_per_rev as f64 * r / 2.0 - 1.0 - half) / r;
     if m.max_order > top {
-        return Err(src.error(
-            &at("map.max_order"),
+        return Err(c.src.error(
+            &c.at("map.max_order"),
             format!(
                 "order {} is beyond what {} points per revolution resolve (at most {top:.3} with {} bins each side); raise samples_per_rev",
                 g(m.max_order),
                 m.samples_per_rev,
-                spec.order_tracking.half_width_bins
+                c.spec.order_tracking.half_width_bins
             ),
         ));
     }
     let (a, b) = t.speed.rpm_range();
     let f_top = m.max_order * a.max(b) / 60.0;
-    let fs = spec.integration.sample_hz;
+    let fs = c.spec.integration.sample_hz;
     if f_top >= 0.5 * fs {
-        return Err(src.error(
-            &at("map.max_order"),
+        return Err(c.src.error(
+            &c.at("map.max_order"),
             format!(
                 "order {} at {} rpm is {f_top:.1} Hz, at or beyond the Nyquist frequency of integration.sample_hz = {} Hz: raise the sample rate or lower max_order",
                 g(m.max_order),
@@ -334,13 +374,13 @@ pub(super) fn check_transient(
         ));
     }
     if m.cuts.len() > 64 {
-        return Err(src.error(&at("map.cuts"), "at most 64 order cuts"));
+        return Err(c.src.error(&c.at("map.cuts"), "at most 64 order cuts"));
     }
-    for (i, &c) in m.cuts.iter().enumerate() {
-        let p = at(&format!("map.cuts[{i}]"));
-        order(src, &p, c)?;
-        if c > m.max_order {
-            return Err(src.error(&p, format!("order {} lies above map.max_order = {}", g(c), g(m.max_order))));
+    for (i, &cut) in m.cuts.iter().enumerate() {
+        let p = c.at(&format!("map.cuts[{i}]"));
+        order(c.src, &p, cut)?;
+        if cut > m.max_order {
+            return Err(c.src.error(&p, format!("order {} lies above map.max_order = {}", g(cut), g(m.max_order))));
         }
     }
     Ok(())

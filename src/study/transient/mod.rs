@@ -221,14 +221,32 @@ fn locked(study: &Study, t: &JointTorqueSpec) -> LockedTorque {
     }
 }
 
-/// Integrates the transient and tracks its map; the run's failure (if any) is listed and its
-/// samples up to there kept, and a map that cannot be made is listed without costing the time
-/// series.
-pub(crate) fn compute(
-    study: &Study,
-    spec: &TransientSpec,
-    progress: &Progress,
-) -> Result<(TransientResult, Vec<String>)> {
+/// A transient ready to run: the drive with its torques (or the prescribed speed), the
+/// recorder of the response, the spin joint, the elements and the reactions, and the state it
+/// starts from.
+struct Rig {
+    drive: Drive,
+    rec: Recorder,
+    x0: Vec<f64>,
+    /// The rigid-rotation inertia of the spin joint's load, kg·m².
+    inertia: f64,
+    /// Whether the spin speed is prescribed.
+    prescribed: bool,
+    /// The first speed, rad/s.
+    omega0: f64,
+    /// The joints whose reactions are recorded.
+    reaction_joints: Vec<usize>,
+}
+
+/// Whether a gear mesh drives joint `j` (its reaction comes with the mesh's torque).
+fn meshed(study: &Study, j: usize) -> bool {
+    matches!(study.mechanism.gear_driving(j), Ok(Some(_)))
+}
+
+/// The drive, the recorder and the initial state of the transient: the analysis's torques in
+/// place of the mechanism's own, the feed-forward torque (losses and J·α through the ramp) or
+/// the prescribed speed, the engine and the governor.
+fn rig(study: &Study, spec: &TransientSpec) -> Result<Rig> {
     let mech = &study.mechanism;
     let spin = study.spin;
     let mut kane = study.kane(false)?;
@@ -260,20 +278,8 @@ pub(crate) fn compute(
             ramp_s: 0.0,
         });
     }
-    let mut probes = vec![Probe::BodyAccel(study.body), Probe::JointAngle(spin), Probe::JointRate(spin)];
-    for &j in &study.elements {
-        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
-    }
     let reaction_joints: Vec<usize> = spec.reactions.iter().filter_map(|r| mech.joint_index(r)).collect();
-    // A driven joint's reaction comes with the torque of the mesh that drives it.
-    let meshed = |j: usize| matches!(mech.gear_driving(j), Ok(Some(_)));
-    for &j in &reaction_joints {
-        probes.extend([Probe::JointForceRadial(j), Probe::JointForceTangential(j), Probe::JointMoment(j)]);
-        if meshed(j) {
-            probes.push(Probe::GearMeshTorque(j));
-        }
-    }
-    let mut rec = Recorder::new(mech, &probes)?;
+    let mut rec = recorder(study, &reaction_joints)?;
     // A mesh torque balances the torques at driven joints as this run applies them.
     rec.use_torques_of(&kane);
     let mut drive = Drive::new(kane, spin, torques, prescribed)?;
@@ -296,7 +302,164 @@ pub(crate) fn compute(
             until_s: ramp_s,
         })?;
     }
+    Ok(Rig { drive, rec, x0, inertia, prescribed: prescribed.is_some(), omega0, reaction_joints })
+}
 
+/// The transient's recorder: the response body's acceleration, the spin joint's angle and
+/// rate, each element's (q, q̇), and each reaction joint's radial and tangential force and
+/// moment (with its gear mesh's torque when a mesh drives it).
+fn recorder(study: &Study, reaction_joints: &[usize]) -> Result<Recorder> {
+    let spin = study.spin;
+    let mut probes = vec![Probe::BodyAccel(study.body), Probe::JointAngle(spin), Probe::JointRate(spin)];
+    for &j in &study.elements {
+        probes.extend([Probe::JointAngle(j), Probe::JointRate(j)]);
+    }
+    for &j in reaction_joints {
+        probes.extend([Probe::JointForceRadial(j), Probe::JointForceTangential(j), Probe::JointMoment(j)]);
+        if meshed(study, j) {
+            probes.push(Probe::GearMeshTorque(j));
+        }
+    }
+    Recorder::new(&study.mechanism, &probes)
+}
+
+/// A transient's recorded signals, by name.
+struct Recorded {
+    time_s: Vec<f64>,
+    response: Vec<f64>,
+    theta: Vec<f64>,
+    spin_rpm: Vec<f64>,
+    element_series: Vec<(Vec<f64>, Vec<f64>)>,
+    reaction_series: Vec<(String, [Vec<f64>; 3])>,
+    mesh_series: Vec<(String, Vec<f64>)>,
+}
+
+impl Recorded {
+    /// The columns of `rec` (made by [`recorder`] for `reaction_joints`), taken out of it.
+    fn take(study: &Study, rec: &mut Recorder, reaction_joints: &[usize]) -> Self {
+        let mech = &study.mechanism;
+        let to_rpm = 60.0 / (2.0 * PI);
+        let time_s = std::mem::take(&mut rec.time);
+        let mut cols = std::mem::take(&mut rec.columns).into_iter();
+        let response = cols.next().unwrap_or_default();
+        let theta = cols.next().unwrap_or_default();
+        let spin_rpm: Vec<f64> = cols.next().unwrap_or_default().iter().map(|w| w * to_rpm).collect();
+        let element_series: Vec<(Vec<f64>, Vec<f64>)> =
+            study.elements.iter().map(|_| (cols.next().unwrap_or_default(), cols.next().unwrap_or_default())).collect();
+        let mut mesh_series = Vec::new();
+        let reaction_series: Vec<(String, [Vec<f64>; 3])> = reaction_joints
+            .iter()
+            .map(|&j| {
+                let mut next = || cols.next().unwrap_or_default();
+                let forces = [next(), next(), next()];
+                if meshed(study, j) {
+                    mesh_series.push((mech.joints[j].name.clone(), next()));
+                }
+                (mech.joints[j].name.clone(), forces)
+            })
+            .collect();
+        Self { time_s, response, theta, spin_rpm, element_series, reaction_series, mesh_series }
+    }
+
+    /// Each reaction's range after the first second.
+    fn reaction_ranges(&self) -> Vec<ReactionRange> {
+        let skip = self.time_s.iter().position(|&t| t >= 1.0).unwrap_or(0);
+        let range =
+            |v: &[f64]| v.iter().skip(skip).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        self.reaction_series
+            .iter()
+            .map(|(name, [r, t, m])| ReactionRange {
+                joint: name.clone(),
+                radial_n: range(r),
+                tangential_n: range(t),
+                moment_nm: range(m),
+                mesh_torque_nm: self.mesh_series.iter().find(|(n, _)| n == name).map(|(_, v)| range(v)),
+            })
+            .collect()
+    }
+
+    /// Each element's largest excursion, refined between the samples (Hermite with q̇), with the
+    /// time and speed of its largest sample.
+    fn element_peaks(&self, study: &Study) -> Vec<ElementPeak> {
+        let (mech, fs) = (&study.mechanism, study.spec.integration.sample_hz);
+        study
+            .elements
+            .iter()
+            .zip(&self.element_series)
+            .map(|(&j, (q, qd))| {
+                let (k, _) = q
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| (k, v.abs()))
+                    .fold((0, f64::NAN), |a, b| if b.1 > a.1 || a.1.is_nan() { b } else { a });
+                // Between the samples too (Hermite with q̇).
+                let peak = crate::signal::findings::refined_peak(q, Some(qd), 1.0 / fs, 0.0);
+                ElementPeak {
+                    joint: mech.joints[j].name.clone(),
+                    unit: mech.joints[j].kind.coordinate_unit(),
+                    peak,
+                    at_time_s: self.time_s.get(k).copied().unwrap_or(f64::NAN),
+                    at_rpm: self.spin_rpm.get(k).copied().unwrap_or(f64::NAN),
+                }
+            })
+            .collect()
+    }
+
+    /// The order–rpm map of the response over the spin joint's angle, with the cuts of it and of
+    /// each element's own map at the analysis's orders, and a note for a map that cannot be made
+    /// (the time series do not depend on it).
+    fn order_map(&self, study: &Study, spec: &TransientSpec) -> (Option<OrderMap>, Vec<OrderCut>, Option<String>) {
+        let mech = &study.mechanism;
+        let fs = study.spec.integration.sample_hz;
+        let opts_map = AngleOptions {
+            samples_per_rev: spec.map.samples_per_rev,
+            revs_per_block: spec.map.revs_per_block,
+            hop_revs: spec.map.hop_revs,
+            half_width_bins: study.spec.order_tracking.half_width_bins,
+        };
+        let orders = cut_orders(spec);
+        let mut cuts = Vec::new();
+        let mut map = None;
+        let mut map_notes: Vec<String> = Vec::new();
+        let body = &study.spec.response_body;
+        match order_rpm_map(&self.response, &self.theta, fs, spec.map.max_order, &opts_map) {
+            Ok(m) => {
+                cuts.extend(cuts_of(&m, &orders, &format!("{body}_accel"), "rad/s²"));
+                for (e, &j) in study.elements.iter().enumerate() {
+                    let joint = &mech.joints[j];
+                    match order_rpm_map(&self.element_series[e].0, &self.theta, fs, spec.map.max_order, &opts_map) {
+                        Ok(em) => cuts.extend(cuts_of(
+                            &em,
+                            &orders,
+                            &format!("{}_q", joint.name),
+                            joint.kind.coordinate_unit(),
+                        )),
+                        Err(err) => map_notes.push(format!("no order map of `{}` ({err})", joint.name)),
+                    }
+                }
+                map = Some(m);
+            }
+            Err(e) => map_notes.push(format!(
+                "no order–rpm map ({e}): it needs the spin joint turning forwards through at least one block of {} \
+                 revolutions (`map.revs_per_block`)",
+                spec.map.revs_per_block
+            )),
+        }
+        (map, cuts, (!map_notes.is_empty()).then(|| map_notes.join("; ")))
+    }
+}
+
+/// Integrates the transient and tracks its map; the run's failure (if any) is listed and its
+/// samples up to there kept, and a map that cannot be made is listed without costing the time
+/// series.
+pub(crate) fn compute(
+    study: &Study,
+    spec: &TransientSpec,
+    progress: &Progress,
+) -> Result<(TransientResult, Vec<String>)> {
+    let mech = &study.mechanism;
+    let n = mech.ndof();
+    let Rig { mut drive, mut rec, x0, inertia, prescribed, omega0, reaction_joints } = rig(study, spec)?;
     // The highest excitation line: the top of the speed range at the engine's highest order (the
     // speed itself without an engine).
     let top_omega = {
@@ -318,102 +481,18 @@ pub(crate) fn compute(
     if let Some(e) = &sim.error {
         failures.push(format!("{}: {e} (the samples up to there are kept)", spec.name));
     }
-    let to_rpm = 60.0 / (2.0 * PI);
-    let time_s = std::mem::take(&mut rec.time);
-    let mut cols = std::mem::take(&mut rec.columns).into_iter();
-    let response = cols.next().unwrap_or_default();
-    let theta = cols.next().unwrap_or_default();
-    let spin_rpm: Vec<f64> = cols.next().unwrap_or_default().iter().map(|w| w * to_rpm).collect();
-    let element_series: Vec<(Vec<f64>, Vec<f64>)> =
-        study.elements.iter().map(|_| (cols.next().unwrap_or_default(), cols.next().unwrap_or_default())).collect();
-    let mut mesh_series = Vec::new();
-    let reaction_series: Vec<(String, [Vec<f64>; 3])> = reaction_joints
-        .iter()
-        .map(|&j| {
-            let mut next = || cols.next().unwrap_or_default();
-            let forces = [next(), next(), next()];
-            if meshed(j) {
-                mesh_series.push((mech.joints[j].name.clone(), next()));
-            }
-            (mech.joints[j].name.clone(), forces)
-        })
-        .collect();
-    let skip = time_s.iter().position(|&t| t >= 1.0).unwrap_or(0);
-    let range =
-        |v: &[f64]| v.iter().skip(skip).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-    let reaction_ranges = reaction_series
-        .iter()
-        .map(|(name, [r, t, m])| ReactionRange {
-            joint: name.clone(),
-            radial_n: range(r),
-            tangential_n: range(t),
-            moment_nm: range(m),
-            mesh_torque_nm: mesh_series.iter().find(|(n, _)| n == name).map(|(_, v)| range(v)),
-        })
-        .collect();
-
+    let r = Recorded::take(study, &mut rec, &reaction_joints);
+    let reaction_ranges = r.reaction_ranges();
     // The drive's torque at the samples, from the state rebuilt out of every joint's (q, q̇)
     // would need them all; the recorded ones are the spin and the elements, so it is evaluated
     // from a full state only when every coordinate is recorded.
     let mut drive_torque = Vec::new();
-    if prescribed.is_some() {
-        drive_torque = reaction(&mut drive, study, &time_s, &theta, &spin_rpm, &element_series);
+    if prescribed {
+        drive_torque = reaction(&mut drive, study, &r.time_s, &r.theta, &r.spin_rpm, &r.element_series);
     }
-
-    let fs = study.spec.integration.sample_hz;
-    let opts_map = AngleOptions {
-        samples_per_rev: spec.map.samples_per_rev,
-        revs_per_block: spec.map.revs_per_block,
-        hop_revs: spec.map.hop_revs,
-        half_width_bins: study.spec.order_tracking.half_width_bins,
-    };
-    let orders = cut_orders(spec);
-    let mut cuts = Vec::new();
-    let mut map = None;
-    let mut map_notes: Vec<String> = Vec::new();
-    let body = &study.spec.response_body;
-    match order_rpm_map(&response, &theta, fs, spec.map.max_order, &opts_map) {
-        Ok(m) => {
-            cuts.extend(cuts_of(&m, &orders, &format!("{body}_accel"), "rad/s²"));
-            for (e, &j) in study.elements.iter().enumerate() {
-                let joint = &mech.joints[j];
-                match order_rpm_map(&element_series[e].0, &theta, fs, spec.map.max_order, &opts_map) {
-                    Ok(em) => {
-                        cuts.extend(cuts_of(&em, &orders, &format!("{}_q", joint.name), joint.kind.coordinate_unit()))
-                    }
-                    Err(err) => map_notes.push(format!("no order map of `{}` ({err})", joint.name)),
-                }
-            }
-            map = Some(m);
-        }
-        Err(e) => map_notes.push(format!(
-            "no order–rpm map ({e}): it needs the spin joint turning forwards through at least one block of {} \
-             revolutions (`map.revs_per_block`)",
-            spec.map.revs_per_block
-        )),
-    }
-    let map_note = (!map_notes.is_empty()).then(|| map_notes.join("; "));
-    let elements = study
-        .elements
-        .iter()
-        .zip(&element_series)
-        .map(|(&j, (q, qd))| {
-            let (k, _) = q
-                .iter()
-                .enumerate()
-                .map(|(k, v)| (k, v.abs()))
-                .fold((0, f64::NAN), |a, b| if b.1 > a.1 || a.1.is_nan() { b } else { a });
-            // Between the samples too (Hermite with q̇).
-            let peak = crate::signal::findings::refined_peak(q, Some(qd), 1.0 / fs, 0.0);
-            ElementPeak {
-                joint: mech.joints[j].name.clone(),
-                unit: mech.joints[j].kind.coordinate_unit(),
-                peak,
-                at_time_s: time_s.get(k).copied().unwrap_or(f64::NAN),
-                at_rpm: spin_rpm.get(k).copied().unwrap_or(f64::NAN),
-            }
-        })
-        .collect();
+    let (map, cuts, map_note) = r.order_map(study, spec);
+    let elements = r.element_peaks(study);
+    let Recorded { time_s, response, spin_rpm, element_series, reaction_series, mesh_series, .. } = r;
     let result = TransientResult {
         name: spec.name.clone(),
         rigid_inertia_kg_m2: inertia,

@@ -188,24 +188,7 @@ fn increasing(v: &[f64]) -> bool {
 
 fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
     let mut md = String::new();
-    let profile = match spec.speed {
-        SpeedProfile::Free { rpm } => format!("spin free from {} rpm", fmt_num(rpm)),
-        SpeedProfile::Torque { rpm_from, rpm_to, .. } => {
-            format!(
-                "run {} → {} rpm driven by the feed-forward torque J·α + losses{}",
-                fmt_num(rpm_from),
-                fmt_num(rpm_to),
-                match spec.speed {
-                    SpeedProfile::Torque { governor_s: Some(tau), .. } =>
-                        format!(" and a speed governor (τ = {} s)", fmt_num(tau)),
-                    _ => String::new(),
-                }
-            )
-        }
-        SpeedProfile::Prescribed { rpm_from, rpm_to, .. } => {
-            format!("spin speed prescribed {} → {} rpm", fmt_num(rpm_from), fmt_num(rpm_to))
-        }
-    };
+    let profile = profile_words(spec);
     let _ = writeln!(md, "## Transient `{}`: {} s, {profile}\n", spec.name, fmt_num(spec.duration_s));
     let _ = writeln!(
         md,
@@ -216,34 +199,7 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
         r.sim.stats.accepted,
         r.sim.rhs_evals()
     );
-    if let Some(e) = &spec.engine {
-        let orders = e.series.as_ref().map(|s| s.orders()).unwrap_or_default();
-        let list = |o: &[f64]| o.iter().map(|v| fmt_num(*v)).collect::<Vec<_>>().join(", ");
-        let _ = writeln!(
-            md,
-            "Engine `{}`: its oscillating torque at the spin joint's angle and rate of each instant, orders {} (amplitudes following the speed); its mean torque is not applied.\n",
-            e.file,
-            list(&orders)
-        );
-        // T_k at the run's first and last speed; every block's in the cuts CSV.
-        let ends = [r.rpm_start, r.rpm_end];
-        let torques = engine_torques(spec, &ends);
-        if !torques.is_empty() {
-            let _ = writeln!(
-                md,
-                "Its order torques T_k (N·m) at the run's first and last speed (at every block's speed in `{}_cuts.csv`, \
-                 columns `engine_T_order<k>_Nm`):\n",
-                spec.name
-            );
-            let head: String = torques.iter().map(|(o, _)| format!(" T order {} |", fmt_num(*o))).collect();
-            let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(torques.len()));
-            for (i, rpm) in ends.iter().enumerate() {
-                let cells: String = torques.iter().map(|(_, t)| format!(" {} |", cell(t[i], 4))).collect();
-                let _ = writeln!(md, "| {} |{cells}", cell(*rpm, 1));
-            }
-            md.push('\n');
-        }
-    }
+    md += &engine_section(spec, r);
     let target = spec.speed.rpm_range().1;
     if !matches!(spec.speed, SpeedProfile::Free { .. })
         && r.sim.error.is_none()
@@ -271,56 +227,136 @@ fn summary(study: &Study, spec: &TransientSpec, r: &TransientResult) -> String {
             cell(r.map_speed_resolution_rpm, 2)
         );
     }
-    if !r.cuts.is_empty() {
-        md += "| signal | order | peak amplitude | unit | at (rpm) |\n|---|---|---|---|---|\n";
-        for c in &r.cuts {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                c.signal,
-                fmt_num(c.order),
-                cell(c.peak, 6),
-                c.unit,
-                cell(c.peak_rpm, 1)
-            );
+    md += &cut_table(r);
+    md += &reaction_table(r);
+    md += &peak_table(r);
+    md
+}
+
+/// The speed profile in words: free, a run driven by the feed-forward torque (and a governor),
+/// or a prescribed speed.
+fn profile_words(spec: &TransientSpec) -> String {
+    match spec.speed {
+        SpeedProfile::Free { rpm } => format!("spin free from {} rpm", fmt_num(rpm)),
+        SpeedProfile::Torque { rpm_from, rpm_to, .. } => {
+            format!(
+                "run {} → {} rpm driven by the feed-forward torque J·α + losses{}",
+                fmt_num(rpm_from),
+                fmt_num(rpm_to),
+                match spec.speed {
+                    SpeedProfile::Torque { governor_s: Some(tau), .. } =>
+                        format!(" and a speed governor (τ = {} s)", fmt_num(tau)),
+                    _ => String::new(),
+                }
+            )
+        }
+        SpeedProfile::Prescribed { rpm_from, rpm_to, .. } => {
+            format!("spin speed prescribed {} → {} rpm", fmt_num(rpm_from), fmt_num(rpm_to))
+        }
+    }
+}
+
+/// With an engine: what it applies and its order torques at the run's first and last speed.
+fn engine_section(spec: &TransientSpec, r: &TransientResult) -> String {
+    let mut md = String::new();
+    let Some(e) = &spec.engine else { return md };
+    let orders = e.series.as_ref().map(|s| s.orders()).unwrap_or_default();
+    let list = |o: &[f64]| o.iter().map(|v| fmt_num(*v)).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        md,
+        "Engine `{}`: its oscillating torque at the spin joint's angle and rate of each instant, orders {} (amplitudes following the speed); its mean torque is not applied.\n",
+        e.file,
+        list(&orders)
+    );
+    // T_k at the run's first and last speed; every block's in the cuts CSV.
+    let ends = [r.rpm_start, r.rpm_end];
+    let torques = engine_torques(spec, &ends);
+    if !torques.is_empty() {
+        let _ = writeln!(
+            md,
+            "Its order torques T_k (N·m) at the run's first and last speed (at every block's speed in `{}_cuts.csv`, \
+             columns `engine_T_order<k>_Nm`):\n",
+            spec.name
+        );
+        let head: String = torques.iter().map(|(o, _)| format!(" T order {} |", fmt_num(*o))).collect();
+        let _ = writeln!(md, "| rpm |{head}\n|---|{}", "---|".repeat(torques.len()));
+        for (i, rpm) in ends.iter().enumerate() {
+            let cells: String = torques.iter().map(|(_, t)| format!(" {} |", cell(t[i], 4))).collect();
+            let _ = writeln!(md, "| {} |{cells}", cell(*rpm, 1));
         }
         md.push('\n');
     }
-    if !r.reaction_ranges.is_empty() {
-        md += "Joint reactions (what the parent exerts on the child; radial: outward from the parent's origin), \
-               smallest and largest after the first second:\n\n";
-        // The mesh column appears only when a listed joint is driven by a gear.
-        let mesh = r.reaction_ranges.iter().any(|x| x.mesh_torque_nm.is_some());
-        md += if mesh {
-            "| joint | radial force (N) | tangential force (N) | moment (N·m) | gear mesh torque (N·m) |\n|---|---|---|---|---|\n"
-        } else {
-            "| joint | radial force (N) | tangential force (N) | moment (N·m) |\n|---|---|---|---|\n"
-        };
-        let pair = |(a, b): (f64, f64)| format!("{} … {}", cell(a, 3), cell(b, 3));
-        for x in &r.reaction_ranges {
-            let _ =
-                write!(md, "| {} | {} | {} | {} |", x.joint, pair(x.radial_n), pair(x.tangential_n), pair(x.moment_nm));
-            if mesh {
-                let _ = write!(md, " {} |", x.mesh_torque_nm.map_or_else(|| "—".to_string(), pair));
-            }
-            md.push('\n');
+    md
+}
+
+/// The order cuts' peaks: signal, order, peak amplitude and the speed of its block.
+fn cut_table(r: &TransientResult) -> String {
+    let mut md = String::new();
+    if r.cuts.is_empty() {
+        return md;
+    }
+    md += "| signal | order | peak amplitude | unit | at (rpm) |\n|---|---|---|---|---|\n";
+    for c in &r.cuts {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            c.signal,
+            fmt_num(c.order),
+            cell(c.peak, 6),
+            c.unit,
+            cell(c.peak_rpm, 1)
+        );
+    }
+    md.push('\n');
+    md
+}
+
+/// The joints' reactions after the first second, smallest and largest (with the gear mesh's
+/// torque where a listed joint is driven by a gear).
+fn reaction_table(r: &TransientResult) -> String {
+    let mut md = String::new();
+    if r.reaction_ranges.is_empty() {
+        return md;
+    }
+    md += "Joint reactions (what the parent exerts on the child; radial: outward from the parent's origin), \
+           smallest and largest after the first second:\n\n";
+    // The mesh column appears only when a listed joint is driven by a gear.
+    let mesh = r.reaction_ranges.iter().any(|x| x.mesh_torque_nm.is_some());
+    md += if mesh {
+        "| joint | radial force (N) | tangential force (N) | moment (N·m) | gear mesh torque (N·m) |\n|---|---|---|---|---|\n"
+    } else {
+        "| joint | radial force (N) | tangential force (N) | moment (N·m) |\n|---|---|---|---|\n"
+    };
+    let pair = |(a, b): (f64, f64)| format!("{} … {}", cell(a, 3), cell(b, 3));
+    for x in &r.reaction_ranges {
+        let _ = write!(md, "| {} | {} | {} | {} |", x.joint, pair(x.radial_n), pair(x.tangential_n), pair(x.moment_nm));
+        if mesh {
+            let _ = write!(md, " {} |", x.mesh_torque_nm.map_or_else(|| "—".to_string(), pair));
         }
         md.push('\n');
     }
-    if !r.elements.is_empty() {
-        md += "| element | largest excursion | unit | at time (s) | at speed (rpm) |\n|---|---|---|---|---|\n";
-        for e in &r.elements {
-            let _ = writeln!(
-                md,
-                "| {} | {} | {} | {} | {} |",
-                e.joint,
-                cell(e.peak, 6),
-                e.unit,
-                cell(e.at_time_s, 3),
-                cell(e.at_rpm, 1)
-            );
-        }
-        md.push('\n');
+    md.push('\n');
+    md
+}
+
+/// The elements' largest excursions, with when and at what speed.
+fn peak_table(r: &TransientResult) -> String {
+    let mut md = String::new();
+    if r.elements.is_empty() {
+        return md;
     }
+    md += "| element | largest excursion | unit | at time (s) | at speed (rpm) |\n|---|---|---|---|---|\n";
+    for e in &r.elements {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} |",
+            e.joint,
+            cell(e.peak, 6),
+            e.unit,
+            cell(e.at_time_s, 3),
+            cell(e.at_rpm, 1)
+        );
+    }
+    md.push('\n');
     md
 }
