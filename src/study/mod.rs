@@ -16,7 +16,7 @@
 //! runs and excitation) over `elements.rs` over `track.rs` (order tracking), `table.rs` and
 //! `output.rs` (what the analyses write), `json.rs` (`results.json`), `digest.rs` (what
 //! `kanedyn run` prints).
-//! See docs/design.md, "The study layout".
+//! See docs/design/study.md, "The study layout".
 //!
 //! The public face is what this module re-exports (the study file's types, [`Study`], [`run`],
 //! the results in [`StudyReport`] and their terminal [`digest`]) and the modules [`design`] (design studies case by case),

@@ -174,7 +174,7 @@ pub(crate) const IMPLICIT_BREAK_EVEN: f64 = 32.0;
 
 /// Which integrator a study's time-domain run at spin speed `omega` (rad/s) with its highest
 /// excitation line at `f_line_hz` uses, and why: the study's choice, or under `Auto` the rule of
-/// docs/design.md ("Stiff mechanisms: the integrator choice"): the fastest eigenvalue |λ|max of
+/// docs/design/time.md ("Stiff mechanisms: the integrator choice"): the fastest eigenvalue |λ|max of
 /// the mechanism linearised at `omega` (damped, spin free; [`crate::linear::LinearModel`]) bounds
 /// DOP853's step at `5/|λ|max`; accuracy asks for about `1/(10 f_line)·(rtol/1e-9)^(1/8)`;
 /// implicit Radau IIA when the first is more than [`IMPLICIT_BREAK_EVEN`] times shorter.
@@ -351,7 +351,7 @@ impl Study {
         (joints + ground) * omega
     }
 
-    /// The initial state of a sweep or steady run (docs/design.md): q = 0, the spin joint turning at
+    /// The initial state of a sweep or steady run (docs/design/conventions.md): q = 0, the spin joint turning at
     /// `omega`, every joint geared to it at its steady rate ([`Mechanism::steady_rates`]: a shaft
     /// behind a compliant mesh turns with the train) and every other joint at rest relative to its
     /// parent.

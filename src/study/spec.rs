@@ -77,7 +77,7 @@ pub use crate::deadline::Deadline;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Integrator {
     /// Explicit DOP853 unless the linearised mechanism has a mode so fast that DOP853's
-    /// stability limit, not the tolerance, would set its step (docs/design.md, "Stiff
+    /// stability limit, not the tolerance, would set its step (docs/design/time.md, "Stiff
     /// mechanisms: the integrator choice"); then implicit Radau IIA.
     #[default]
     Auto,
@@ -101,7 +101,7 @@ impl Default for IntegrationSpec {
     }
 }
 
-/// Short-time FFT order-tracking settings (docs/design.md: 2 s Hann windows, 0.25 s hop, 5 bins).
+/// Short-time FFT order-tracking settings (docs/design/conventions.md: 2 s Hann windows, 0.25 s hop, 5 bins).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrackingSpec {

@@ -1,4 +1,4 @@
-//! Order tracking as a study reads it: the STFT order traces of docs/design.md of a whole
+//! Order tracking as a study reads it: the STFT order traces of docs/design/conventions.md of a whole
 //! sampled record ([`track`]), and one channel of a streamed run's STFT read the same way
 //! ([`tracked`]): no trace for a record shorter than one window, an order-tracking error as the
 //! model's. Both the time runs (`sim`) and the elements (`elements`) take it from here, so
@@ -8,7 +8,7 @@ use super::spec::TrackingSpec;
 use crate::error::{Error, Result};
 use crate::signal::{OrderTrace, StftOptions, stft_order_traces};
 
-/// Order traces of a sampled response by the STFT of docs/design.md; `mechanism` names the model in
+/// Order traces of a sampled response by the STFT of docs/design/conventions.md; `mechanism` names the model in
 /// an error (the study validates the bands at load, so one is an internal inconsistency).
 pub(crate) fn track(
     mechanism: &str,

@@ -83,7 +83,7 @@ impl Hbm {
             return Err(HbmError::Invalid(format!("mean speed must be positive and finite, got {omega} rad/s")));
         }
         // A rigidly driven joint is excited through its gear: its torque reaches the coordinate it
-        // follows times the factor (Tᵀ, docs/design.md "Gears").
+        // follows times the factor (Tᵀ, docs/design/model.md "Gears").
         let follow = mech.follow_map();
         check_inputs(mech, &follow, inputs)?;
         let torques = replaced_torques(kane, spin_joint, inputs)?;

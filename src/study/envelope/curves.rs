@@ -1,6 +1,6 @@
 //! The boundary curves of the map: their seeds on a one-parameter branch (the singular points
 //! of a test function, localised at the seed's value), each followed both ways in the second
-//! parameter by two-parameter continuation (`hbm::fold2`), and what is read off a followed curve:
+//! parameter by two-parameter continuation (`hbm::fold_curves`), and what is read off a followed curve:
 //! its crossings of a value of either parameter (each solved there exactly) and the points where a
 //! unison-loss curve meets a fold (bisected on the sign of the whole Jacobian's determinant).
 

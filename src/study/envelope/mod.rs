@@ -1,6 +1,6 @@
 //! The operating envelope (issue 28, items 1 and 2): the boundaries of the steady response in a
 //! plane of two parameters, each a curve of codimension-one points followed by two-parameter
-//! continuation (`hbm::fold2`, the minimally augmented systems of Govaerts 2000, §4.3.2), with the
+//! continuation (`hbm::fold_curves`, the minimally augmented systems of Govaerts 2000, §4.3.2), with the
 //! codimension-two points where they end or turn. The first parameter is the excitation order n
 //! at a mean speed (or the speed at an order, or the torque at an order and speed); the second
 //! the torque amplitude T of a single order, the common scale s of a multi-order set, the mean

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 /// The operating envelope at a mean speed (or at an order): the boundaries in a plane of two
 /// parameters where the steady response jumps (fold curves, with their cusps) and, for identical
 /// absorbers, where their unison motion is lost, each followed by two-parameter continuation
-/// (`hbm::fold2`).
+/// (`hbm::fold_curves`).
 ///
 /// The first parameter is the excitation order n (or the mean speed, `plane`). The second is
 /// one of:
