@@ -1,7 +1,6 @@
 //! Where a panel's legend and its point labels go: the legend where it hides the least curve,
 //! each label in the first free place near its point.
 
-use super::panel::keep;
 use super::*;
 
 /// The legend box as fractions of the plotting area (width, height), estimated from the label
@@ -12,6 +11,12 @@ pub(super) fn legend_size(panel: &Panel, w: u32, h: u32) -> (f64, f64) {
     let chars = labels.iter().map(|s| s.label.chars().count()).max().unwrap_or(0) as f64;
     let (plot_w, plot_h) = ((w as f64 - 100.0).max(1.0), (h as f64 - 100.0).max(1.0));
     ((7.0 * chars + 45.0) / plot_w, (22.0 * labels.len() as f64 + 16.0) / plot_h)
+}
+
+/// The points a panel draws: finite ones, and on a logarithmic y axis only positive values
+/// (the legend places itself by the same points the panel plots).
+pub(super) fn keep(log_y: bool) -> impl Fn(&(f64, f64)) -> bool {
+    move |&(x, y)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0)
 }
 
 /// The place for the legend (the four corners, then the middles of the four edges) where the

@@ -1,14 +1,10 @@
 //! One panel of a line plot: its data range, title, axes and curves.
 
-use super::legend::{draw_labels, legend_corner, legend_place, legend_size};
+use super::legend::{draw_labels, keep, legend_corner, legend_place, legend_size};
 use super::vector::{coord, mark};
 use super::*;
 use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::ValueFormatter;
-
-pub(super) fn keep(log_y: bool) -> impl Fn(&(f64, f64)) -> bool {
-    move |&(x, y)| x.is_finite() && y.is_finite() && (!log_y || y > 0.0)
-}
 
 pub(super) fn data_range(panel: &Panel) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
