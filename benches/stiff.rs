@@ -4,8 +4,8 @@
 //! (`sweep60_shaft16.ron`, where `Auto` picks it) and with implicit Radau IIA
 //! (`sweep60_shaft16_implicit.ron`). The three run in turn `STIFF_ROUNDS` times (default 3); the
 //! median of each and the ratios to the one-pendulum sweep are printed, with each run's steps.
-//! The whole-process figures of BENCHMARKS.md ("Stiff shafts") come from `farm-bench` on the
-//! same three files.
+//! The whole-process figures of BENCHMARKS.md ("Stiff shafts") come from whole-process runs
+//! alternated (`/usr/bin/time -v`) on the same three files.
 //!
 //! ```text
 //! cargo bench --bench stiff
