@@ -7,7 +7,7 @@
 //! and the name rule (`load/parts.rs`), overlays on a base file (`load/overlay.rs`), the bodies
 //! (`load/bodies.rs`), the joints and their tree order (`load/joints.rs`), the tree of bodies and
 //! joints with its coordinates (`load/tree.rs`), the loads (`load/loads.rs`), the gears
-//! ([`crate::model::gears::resolve`]) and the engine's check (`load/engine.rs`). The input rules
+//! (`crate::model::gears::resolve`) and the engine's check (`load/engine.rs`). The input rules
 //! and error classes are in the guide (`docs/guide/src/mechanism.md`, `limits.md`).
 
 mod bodies;
