@@ -4,8 +4,9 @@
 //! integration (sections 4 and 5; its conclusion names harmonic balance as the method to come).
 //!
 //! The method lives in rooms, each a folder that imports only the rooms below it; their public
-//! items are re-exported here, so every path `crate::hbm::X` is the one to use. From the ground
-//! up:
+//! items are re-exported here, so every path `crate::hbm::X` is the one to use. Design notes:
+//! `docs/design/hbm.md` (the rooms) and `docs/design/hbm-notes.md` (four of them in detail). From
+//! the ground up:
 //!
 //! - **numerics**: the kernels the method rests on and that know nothing of it: dense LU with
 //!   a transposed solve, block Gaussian elimination along the mechanism's tree with its Schur
