@@ -145,3 +145,21 @@ def test_bad_assemblies_raise_argument_errors(plant):
     )
     with pytest.raises(kanedyn.ArgumentError, match="elastic gears are not converted"):
         kanedyn.from_opentorsion(elastic)
+
+
+def test_a_huge_node_index_is_an_argument_error_not_a_crash():
+    """It used to kill the interpreter (issue 49, item 2): a disk at node 10^12 made the importer
+    allocate for 10^12 nodes and abort. An index beyond what the elements can hold is now refused
+    before anything is sized by it. The assembly is a stand-in with OpenTorsion's attribute names,
+    as OpenTorsion's own `Assembly` would size its matrices by that node first."""
+    from types import SimpleNamespace as Element
+
+    for node in (10**12, 2**63, 2**64 - 1):
+        huge = Element(
+            shaft_elements=[],
+            disk_elements=[Element(node=0, I=1.0, c=0.0, k=0.0), Element(node=node, I=2.0, c=0.0, k=0.0)],
+            gear_elements=[],
+        )
+        where = rf"assembly\.disk_elements\[1\]\.node: node {node} is beyond the elements"
+        with pytest.raises(kanedyn.ArgumentError, match=where):
+            kanedyn.from_opentorsion(huge)
