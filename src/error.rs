@@ -118,3 +118,14 @@ pub enum EngineError {
 
 /// Result alias of the library.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// The failure line for a panic caught around one analysis or one design case (so that one bug
+/// costs the others nothing): its message, from a `&str` or `String` payload.
+pub(crate) fn internal_error(payload: &(dyn std::any::Any + Send)) -> String {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_default();
+    format!("internal error (please report): {what}")
+}

@@ -140,14 +140,7 @@ pub(crate) fn run_guarded(
     let failure = match attempt {
         Ok(Ok(section)) => return (section, true),
         Ok(Err(e)) => e.to_string(),
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            format!("internal error (please report): {what}")
-        }
+        Err(panic) => crate::error::internal_error(&*panic),
     };
     report.failures.push(format!("{} `{}` ({where_}): {failure}", a.kind(), a.name()));
     (format!("## {} `{}`\n\nFailed: {failure}\n\n", a.kind(), a.name()), false)

@@ -182,7 +182,17 @@ impl CsvWriter {
         I: IntoIterator<Item = T>,
         T: AsRef<str>,
     {
-        self.0.write_record(record.into_iter().map(|cell| neutralised(cell.as_ref()).into_owned()))
+        // Field by field, so a cell that needs no quote is written from where it lies (no copy).
+        for cell in record {
+            self.0.write_field(neutralised(cell.as_ref()).as_bytes())?;
+        }
+        self.0.write_record(std::iter::empty::<&[u8]>())
+    }
+
+    /// Writes one record of finite numbers as `f64`'s shortest round-trip text: a number is
+    /// never a formula, so no cell is checked.
+    fn write_numbers(&mut self, record: &[String]) -> csv::Result<()> {
+        self.0.write_record(record)
     }
 
     /// Flushes the buffered records to the file.
@@ -204,7 +214,7 @@ pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Res
         // A value that does not exist or apply (a ratio to a zero reference, a trace that does
         // not reach this order) is NaN in memory and an empty cell on disk, never `NaN`/`inf`.
         rec.extend(columns.iter().map(|c| if c[r].is_finite() { c[r].to_string() } else { String::new() }));
-        w.write_record(&rec).map_err(io)?;
+        w.write_numbers(&rec).map_err(io)?;
     }
     w.flush().map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
 }

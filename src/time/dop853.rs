@@ -72,18 +72,15 @@ pub(crate) fn run<Y: Slab>(
     // Derivatives at the start and the end of the current step, and one sample state.
     let (mut f_prev, mut f_end, mut xk) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
 
-    let fail = |fault: Fault, t_reached: f64, stats: IntegrateStats| fail(fault, t_reached, stats);
-    let with_evals = |s: IntegrateStats| with_evals(&sys, s);
-
     let mut solver = start(solver, &sys, (t0, t1), x0, &mut f_prev, stats)?;
     if clock.due(t0).is_some() {
-        sampler.deliver(&sys, &mut stats, 0, t0, x0).map_err(|f| fail(f, t0, with_evals(stats)))?;
+        sampler.deliver(&sys, &mut stats, 0, t0, x0).map_err(|f| f.error(t0, sys.counted(stats)))?;
         clock.next = 1;
     }
 
     // The run is complete once t is within rounding of t1.
     let t_done = t1 - 4.0 * f64::EPSILON * t1.abs().max(t0.abs());
-    let (mut travel_retries, mut travel_fault) = (0, None);
+    let (mut travel_retries, mut travel_fault): (usize, Option<Fault>) = (0, None);
     loop {
         let t = solver.t();
         if t >= t_done {
@@ -98,16 +95,16 @@ pub(crate) fn run<Y: Slab>(
         // there by trial stages beyond a path's travel, the motion does leave it.
         if 0.1 * h.abs() <= t.abs() * f64::EPSILON || h == 0.0 {
             if let Some(fault) = travel_fault.take() {
-                return Err(fail(fault, t, with_evals(stats)));
+                return Err(fault.error(t, sys.counted(stats)));
             }
-            return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: with_evals(stats) });
+            return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: sys.counted(stats) });
         }
         // The watchdog's deadline, read every 64 attempts (a clock read costs about as much as
         // a tenth of one right-hand side).
         if (stats.accepted + stats.rejected) % 64 == 0
             && let Some(budget_s) = past_deadline(opts)
         {
-            return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: with_evals(stats) });
+            return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: sys.counted(stats) });
         }
         let res = solver.step(&sys);
         let fault = sys.fault.borrow_mut().take();
@@ -128,12 +125,12 @@ pub(crate) fn run<Y: Slab>(
                 solver.set_h(0.25 * h);
                 continue;
             }
-            return Err(fail(fault, t, with_evals(stats)));
+            return Err(fault.error(t, sys.counted(stats)));
         }
         (travel_retries, travel_fault) = (0, None);
         let outcome = match res {
             Ok(o) => o,
-            Err(e) => return Err(solver_error(e, opts.max_steps, (t, h), with_evals(stats))),
+            Err(e) => return Err(solver_error(e, opts.max_steps, (t, h), sys.counted(stats))),
         };
         if outcome == Outcome::Rejected {
             stats.rejected += 1;
@@ -146,7 +143,7 @@ pub(crate) fn run<Y: Slab>(
                 what: "state",
                 t_eval: t_new,
                 t_reached: t,
-                stats: with_evals(stats),
+                stats: sys.counted(stats),
             });
         }
         if clock.due(t_new).is_some() {
@@ -163,10 +160,10 @@ pub(crate) fn run<Y: Slab>(
     while let Some(tk) = clock.due(t1) {
         sampler
             .deliver(&sys, &mut stats, clock.next, tk, solver.y().slice())
-            .map_err(|f| fail(f, t_end, with_evals(stats)))?;
+            .map_err(|f| f.error(t_end, sys.counted(stats)))?;
         clock.next += 1;
     }
-    Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: with_evals(stats) })
+    Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: sys.counted(stats) })
 }
 
 /// The crate's `init` at `(t0, x0)` (it chooses the first step and ends with f(t0, x0), which
@@ -186,12 +183,12 @@ fn start<Y: Slab>(
     let init = solver.init(sys, t0, t1, &y0);
     sys.keep.set(false);
     if let Some(fault) = sys.fault.borrow_mut().take() {
-        return Err(fail(fault, t0, with_evals(sys, stats)));
+        return Err(fault.error(t0, sys.counted(stats)));
     }
     if let Err(e) = init {
-        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: with_evals(sys, stats) });
+        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: sys.counted(stats) });
     }
-    end_derivative(sys, t0, x0, f_prev).map_err(|f| fail(f, t0, with_evals(sys, stats)))?;
+    end_derivative(sys, t0, x0, f_prev).map_err(|f| f.error(t0, sys.counted(stats)))?;
     Ok(Dp8::after_init(&solver, Y::from_slice(f_prev)))
 }
 
@@ -215,32 +212,18 @@ fn step_samples<Y: Slab>(
     // The three dense-output stages, for this step's samples.
     solver.dense(sys);
     if let Some(fault) = sys.fault.borrow_mut().take() {
-        return Err(fail(fault, t_new, with_evals(sys, *stats)));
+        return Err(fault.error(t_new, sys.counted(*stats)));
     }
     while let Some(tk) = clock.due(t_new) {
         dense_sample(solver, ends.0, ends.1, tk, xk).map_err(|message| IntegrateError::Solver {
             message,
             t_reached: t_new,
-            stats: with_evals(sys, *stats),
+            stats: sys.counted(*stats),
         })?;
-        sampler.deliver(sys, stats, clock.next, tk, xk).map_err(|f| fail(f, t_new, with_evals(sys, *stats)))?;
+        sampler.deliver(sys, stats, clock.next, tk, xk).map_err(|f| f.error(t_new, sys.counted(*stats)))?;
         clock.next += 1;
     }
     Ok(())
-}
-
-/// Turns a fault into our error, with the counters at this point.
-fn fail(fault: Fault, t_reached: f64, stats: IntegrateStats) -> IntegrateError {
-    match fault {
-        Fault::Engine { t, err } => IntegrateError::Engine { source: err, t_eval: t, t_reached, stats },
-        Fault::NonFinite { t } => IntegrateError::NonFinite { what: "derivative", t_eval: t, t_reached, stats },
-    }
-}
-
-/// `stats` with the right-hand-side evaluations counted so far.
-fn with_evals(sys: &System<'_>, mut stats: IntegrateStats) -> IntegrateStats {
-    stats.rhs_evals = sys.evals.get();
-    stats
 }
 
 /// The crate's step error as ours, at time `t` with step `h` (`at`).

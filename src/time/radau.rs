@@ -24,7 +24,7 @@
 //! both ends of the step.
 
 use crate::time::run::{IntegrateError, IntegrateOptions, IntegrateStats, Integrated, Sample};
-use crate::time::system::{Clock, DynRhs, Fault, Sampler, Slab, System};
+use crate::time::system::{Clock, DynRhs, Sampler, Slab, System};
 use differential_equations::error::Error as E;
 use differential_equations::interpolate::Interpolation;
 use differential_equations::methods::{ImplicitRungeKutta, Ordinary, Radau};
@@ -87,25 +87,17 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
     let mut stats = IntegrateStats { method: crate::time::run::Method::Radau5, ..IntegrateStats::default() };
     let mut clock = Clock::new(t0, t1, opts.sample_rate_hz);
     let mut sampler = Sampler { on_sample, xdot: opts.sample_derivatives.then(|| vec![0.0; n]) };
-    let fail = |fault: Fault, t_reached: f64, stats: IntegrateStats| match fault {
-        Fault::Engine { t, err } => IntegrateError::Engine { source: err, t_eval: t, t_reached, stats },
-        Fault::NonFinite { t } => IntegrateError::NonFinite { what: "derivative", t_eval: t, t_reached, stats },
-    };
-    let with_evals = |mut s: IntegrateStats| {
-        s.rhs_evals = sys.evals.get();
-        s
-    };
 
     let init = solver.init(sys, t0, t1, &Y::from_slice(x0));
     if let Some(fault) = sys.fault.borrow_mut().take() {
-        return Err(fail(fault, t0, with_evals(stats)));
+        return Err(fault.error(t0, sys.counted(stats)));
     }
     if let Err(e) = init {
-        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: with_evals(stats) });
+        return Err(IntegrateError::Solver { message: format!("{e:?}"), t_reached: t0, stats: sys.counted(stats) });
     }
     solver.set_status(Status::Solving);
     if clock.due(t0).is_some() {
-        sampler.deliver(sys, &mut stats, 0, t0, x0).map_err(|f| fail(f, t0, with_evals(stats)))?;
+        sampler.deliver(sys, &mut stats, 0, t0, x0).map_err(|f| f.error(t0, sys.counted(stats)))?;
         clock.next = 1;
     }
 
@@ -123,20 +115,20 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
         // Step-size collapse: Newton failures and rejections halve the step until it cannot
         // advance t (Hairer's test, as in the DOP853 loop).
         if 0.1 * h.abs() <= t.abs() * f64::EPSILON || h == 0.0 {
-            return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: with_evals(stats) });
+            return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: sys.counted(stats) });
         }
         if let Some((at, budget_s)) = opts.deadline
             && (stats.accepted + stats.rejected).is_multiple_of(64)
             && std::time::Instant::now() >= at
         {
-            return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: with_evals(stats) });
+            return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: sys.counted(stats) });
         }
         let res = solver.step(sys);
         if let Some(fault) = sys.fault.borrow_mut().take() {
-            return Err(fail(fault, t, with_evals(stats)));
+            return Err(fault.error(t, sys.counted(stats)));
         }
         if let Err(e) = res {
-            let stats = with_evals(stats);
+            let stats = sys.counted(stats);
             return Err(match e {
                 E::MaxSteps { .. } => IntegrateError::MaxSteps { max_steps: opts.max_steps, t_reached: t, stats },
                 E::StepSize { .. } => IntegrateError::StepSizeUnderflow { t_reached: t, h, stats },
@@ -155,18 +147,18 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
                 what: "state",
                 t_eval: t_new,
                 t_reached: t,
-                stats: with_evals(stats),
+                stats: sys.counted(stats),
             });
         }
         while let Some(tk) = clock.due(t_new) {
             let xk = solver.interpolate(tk).map_err(|e| IntegrateError::Solver {
                 message: format!("{e:?}"),
                 t_reached: t_new,
-                stats: with_evals(stats),
+                stats: sys.counted(stats),
             })?;
             sampler
                 .deliver(sys, &mut stats, clock.next, tk, xk.slice())
-                .map_err(|f| fail(f, t_new, with_evals(stats)))?;
+                .map_err(|f| f.error(t_new, sys.counted(stats)))?;
             clock.next += 1;
         }
     }
@@ -174,10 +166,10 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
     while let Some(tk) = clock.due(t1) {
         sampler
             .deliver(sys, &mut stats, clock.next, tk, solver.y().slice())
-            .map_err(|f| fail(f, t_end, with_evals(stats)))?;
+            .map_err(|f| f.error(t_end, sys.counted(stats)))?;
         clock.next += 1;
     }
-    Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: with_evals(stats) })
+    Ok(Integrated { t_end, x_end: solver.y().slice().to_vec(), stats: sys.counted(stats) })
 }
 
 thread_local! {

@@ -6,7 +6,7 @@
 //! and sampler. It sits below the three loops so that none of them imports another's internals.
 
 use crate::error::EngineError;
-use crate::time::run::{IntegrateStats, Sample};
+use crate::time::run::{IntegrateError, IntegrateStats, Sample};
 use differential_equations::linalg::Matrix;
 use differential_equations::ode::ODE;
 use differential_equations::tolerance::Tolerance;
@@ -167,6 +167,16 @@ pub(super) enum Fault {
     NonFinite { t: f64 },
 }
 
+impl Fault {
+    /// The fault as the run's error, with the counters `stats` at time `t_reached`.
+    pub(super) fn error(self, t_reached: f64, stats: IntegrateStats) -> IntegrateError {
+        match self {
+            Fault::Engine { t, err } => IntegrateError::Engine { source: err, t_eval: t, t_reached, stats },
+            Fault::NonFinite { t } => IntegrateError::NonFinite { what: "derivative", t_eval: t, t_reached, stats },
+        }
+    }
+}
+
 /// Adapter from the caller's `FnMut` with errors to the crate's `ODE::diff(&self)` without:
 /// interior mutability for the closure, a counter, and a fault slot the driver checks after every
 /// step (the crate cannot stop mid-step, so after a fault the remaining stages get NaN and the
@@ -190,6 +200,12 @@ impl<'a> System<'a> {
             recent: RefCell::new(Recent::new(n)),
             keep: Cell::new(false),
         }
+    }
+
+    /// `stats` with the right-hand-side evaluations counted so far.
+    pub(super) fn counted(&self, mut stats: IntegrateStats) -> IntegrateStats {
+        stats.rhs_evals = self.evals.get();
+        stats
     }
 }
 

@@ -424,14 +424,7 @@ pub fn run_case(study: &Study, spec: &DesignSpec, index: usize, values: &[f64]) 
         Ok(Ok((results, failures))) if failures.is_empty() => (results, CaseStatus::Ok, String::new()),
         Ok(Ok((results, failures))) => (results, CaseStatus::Partial, failures.join("; ")),
         Ok(Err(e)) => (vec![f64::NAN; n_results], CaseStatus::Failed, e.to_string()),
-        Err(panic) => {
-            let what = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            (vec![f64::NAN; n_results], CaseStatus::Failed, format!("internal error (please report): {what}"))
-        }
+        Err(panic) => (vec![f64::NAN; n_results], CaseStatus::Failed, crate::error::internal_error(&*panic)),
     };
     CaseRow { index, values: values.to_vec(), results, status, error }
 }
