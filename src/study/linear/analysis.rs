@@ -16,6 +16,11 @@ use crate::study::validate::{
 use schemars::{JsonSchema, Schema, SchemaGenerator};
 use serde::Serialize;
 
+/// Writing one response point (its CSV row, figure point and results entry), s: the 20,000-point
+/// case of `tests/plan_calibration.rs` measured ≈ 10 µs a point in all, of which the solves are
+/// about 2 µs, so a plan without the output was 4.5× low.
+const LINEAR_OUTPUT_PER_POINT_S: f64 = 5e-6;
+
 /// What the summary reads off a linear response (its `findings` in `results.json`).
 #[derive(Serialize, JsonSchema)]
 #[schemars(rename = "LinearFindings")]
@@ -119,7 +124,9 @@ impl Analysis for LinearResponseSpec {
             memory_bytes: runs as f64 * p * 8.0 * 8.0,
             output_bytes: runs as f64 * p * 5.0 * CSV_CELL_BYTES,
             cpu_s: runs as f64
-                * (LINEAR_SETUP_S + LINEAR_SETUP_PER_DOF3_S * n * n * n + p * 2.0 * (1e-6 + 20e-9 * n * n * n)),
+                * (LINEAR_SETUP_S
+                    + LINEAR_SETUP_PER_DOF3_S * n * n * n
+                    + p * (2.0 * (1e-6 + 20e-9 * n * n * n) + LINEAR_OUTPUT_PER_POINT_S)),
             driver: "points",
             ..base
         }
