@@ -71,7 +71,7 @@ fn check_time_scales(
     ground_damper_at: &[usize],
 ) -> Result<()> {
     use crate::model::time_scales::{Element, compliances, time_scales};
-    let Some(diag) = compliances(m) else { return Ok(()) };
+    let Some(diag) = compliances(mech, m) else { return Ok(()) };
     for ts in time_scales(mech, &diag) {
         // A friction's smoothing has its own range (`ranges::FRICTION_SMOOTHING`): a near-Coulomb
         // law is stiff by choice, which the plan counts and the watchdog bounds.

@@ -275,7 +275,7 @@ pub(crate) fn time_scales(mech: &crate::model::mechanism::Mechanism) -> (f64, f6
         return (0.0, 0.0);
     }
     let Ok(mut kane) = crate::kane::Kane::new(mech) else { return (0.0, 0.0) };
-    let Some(diag) = compliances(kane.mass_matrix(&vec![0.0; n])) else { return (0.0, 0.0) };
+    let Some(diag) = compliances(mech, kane.mass_matrix(&vec![0.0; n])) else { return (0.0, 0.0) };
     let (mut f, mut decay) = (0.0_f64, 0.0_f64);
     for ts in time_scales(mech, &diag) {
         if ts.is_stiffness() {

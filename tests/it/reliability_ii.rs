@@ -454,3 +454,50 @@ fn a_refused_input_file_is_located_at_the_field_that_names_it() {
         assert!(e.contains(why), "{e}");
     }
 }
+
+/// A light hub (J₁) driving a heavy rotor (J₂) through a shaft joint: whatever the generalized
+/// speeds, the shaft coordinate meets the compliance `1/J₁ + 1/J₂` (the coordinates' mass matrix
+/// is `[[J₁ + J₂, J₂], [J₂, J₂]]`, whose inverse has that corner), and the spin coordinate `1/J₁`.
+/// With absolute angular velocities the loader's range check and the study's plan used to read
+/// the speeds' mass matrix instead, `1/J₂` for the rotor's own rotation: a shaft damper 20 times
+/// past the decay-rate limit loaded, and a stiff-shaft transient ran 4.6 times its plan.
+#[test]
+fn shaft_compliance_does_not_depend_on_the_generalized_speeds() {
+    let s = Scratch::new("shaft-compliance");
+    let (j1, j2) = (1.0e-3, 10.0);
+    let shaft = |speeds: &str, damper: &str| {
+        format!(
+            r#"Mechanism(
+    name: "m",
+    speeds: {speeds},
+    bodies: [Body(name: "hub", mass: 1.0, inertia: {j1:e}), Body(name: "rotor", mass: 50.0, inertia: {j2:e})],
+    joints: [
+        Joint(name: "spin", parent: "ground", child: "hub"),
+        Joint(name: "shaft", parent: "hub", child: "rotor", spring: (stiffness: 1.0e4), damper: {damper}),
+    ],
+)
+"#
+        )
+    };
+    for speeds in ["JointRates", "AbsoluteAngularVelocities"] {
+        let mech =
+            kanedyn::model::mechanism::Mechanism::from_file(&s.write("good.ron", &shaft(speeds, "1.0"))).unwrap();
+        let mut kane = kanedyn::kane::Kane::new(&mech).unwrap();
+        let m = kane.mass_matrix(&[0.0, 0.0]).clone();
+        let c = kanedyn::model::time_scales::compliances(&mech, &m).unwrap();
+        // A Cholesky solve loses about its condition number in ulps: cond ≈ 4·J₂/J₁ = 4e4 on this
+        // matrix, so ~1e-11 relative.
+        let rel = |a: f64, b: f64| (a - b).abs() / b;
+        assert!(rel(c[0], 1.0 / j1) < 1e-10, "{speeds}: spin compliance {} vs {}", c[0], 1.0 / j1);
+        assert!(
+            rel(c[1], 1.0 / j1 + 1.0 / j2) < 1e-10,
+            "{speeds}: shaft compliance {} vs {}",
+            c[1],
+            1.0 / j1 + 1.0 / j2
+        );
+        // 2e6 N·m·s/rad on 1000.1 1/(kg·m²) decays at 2.0e9 1/s, 20 × the 1e8 limit (on 1/J₂ it
+        // would have been 2e5 1/s).
+        let e = mechanism_error(&s, &shaft(speeds, "2.0e6"));
+        assert!(e.contains("joints[1].damper") && e.contains("up to 1e8 1/s"), "{speeds}: {e}");
+    }
+}
