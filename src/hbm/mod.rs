@@ -22,6 +22,10 @@
 //!   corrector on the bordered Jacobian; the continued [`Parameter`] and the [`Symmetry`] a
 //!   branch switch breaks. Its docs hold the formulation (unknowns, gauge, residual, Jacobian,
 //!   harmonic count).
+//! - **sensitivity**: derivatives of a state and its read-outs along an operating or a design
+//!   parameter ([`Direction`]) by the implicit function theorem on `R̂(x, p) = 0`, one
+//!   factorisation of ∂R̂/∂x for every parameter ([`Hbm::state_sensitivities`],
+//!   [`StateSensitivity`]).
 //! - **stability**: Floquet multipliers, the eigenvalues of the monodromy matrix of the
 //!   variational equations `C δq̈ + B δq̇ + A δq = 0`, integrated densely by RK4 with
 //!   Richardson's extrapolation or, on a large tree, sparsely by Butcher's sixth-order method
@@ -49,19 +53,22 @@ mod continuation;
 mod cyclic;
 mod fold_curves;
 mod numerics;
+mod sensitivity;
 mod series;
 mod stability;
 mod switch;
 
 pub use backbone::{BackboneOptions, FreeOrbit, FreeSpin, FreeStart};
-pub use balance::{Hbm, HbmError, HbmOptions, Parameter, PointHook, Symmetry};
+pub use balance::{Hbm, HbmError, HbmOptions, MechanismFamily, Parameter, PointHook, Symmetry};
 pub use continuation::{
     Bifurcation, BifurcationClass, BifurcationKind, Branch, BranchEnd, BranchPoint, ContinuationOptions, Fold,
     FoldKind, continue_in_order,
 };
 pub use cyclic::{CyclicSet, Route, RoutedHbm, detect, route_for};
 pub use fold_curves::{
-    FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, MechanismFamily, ParameterPoint, Singularity,
+    FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, SingularSensitivity,
+    Singularity,
 };
+pub use sensitivity::{Direction, StateSensitivity};
 pub use series::{FloquetBlock, HbmSolution, MeshTorqueHarmonics, ReactionHarmonics, Stability};
 pub use stability::solve_periodic;

@@ -36,6 +36,7 @@ mod hbm_events;
 mod hbm_fold_curve;
 mod hbm_neimark_sacker;
 mod hbm_period_doubling;
+mod hbm_sensitivity;
 mod hbm_switch;
 mod hbm_tongue;
 mod honest_peaks;

@@ -94,6 +94,7 @@
 mod assembly;
 mod build;
 mod corrector;
+mod family;
 mod newton;
 mod options;
 mod parameter;
@@ -102,6 +103,8 @@ mod sample;
 mod symmetry;
 
 pub(in crate::hbm) use corrector::{Chord, Setup};
+pub use family::MechanismFamily;
+pub(in crate::hbm) use family::{Built, on_family, problem};
 pub use options::{HbmError, HbmOptions, PointHook};
 pub(crate) use parameter::At;
 pub use parameter::Parameter;

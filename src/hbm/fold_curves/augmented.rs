@@ -4,9 +4,9 @@
 //! by block elimination on the bordered matrix, and the walk that carries the borders, the
 //! tested block and the family's problems from point to point.
 
-use super::family::{Built, MechanismFamily, on_family, problem};
 use super::plane::{FoldCurvePoint, FoldPlane, Plane, Singularity};
 use crate::hbm::balance::{At, Hbm, HbmError, Parameter};
+use crate::hbm::balance::{Built, MechanismFamily, on_family, problem};
 use crate::hbm::numerics::DenseLu;
 use crate::hbm::series::HbmSolution;
 use nalgebra::{DMatrix, DVector};

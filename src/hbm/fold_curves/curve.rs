@@ -4,9 +4,9 @@
 //! torque extrema) located by Illinois regula falsi on the tangent.
 
 use super::augmented::{Corrected, NewtonLu, Walk, settled, unit_tangent};
-use super::family::{MechanismFamily, problem};
 use super::plane::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint};
 use crate::hbm::balance::{At, Hbm, HbmError};
+use crate::hbm::balance::{MechanismFamily, problem};
 use crate::hbm::numerics::Illinois;
 use nalgebra::DVector;
 

@@ -2,9 +2,10 @@
 //! minimally augmented system `R̂ = 0, g = 0` (Govaerts 2000): fold curves (the jump boundaries
 //! of a response), unison-loss curves on a representative's block and period-doubling curves on
 //! the half-frequency problem, with their cusps and torque extrema. It holds the plane and the
-//! tested matrix (`plane`), a mechanism parameter's family of problems (`family`), the
-//! augmented system (`augmented`), single singular points (`points`) and the curve's walk
-//! (`curve`). It uses the balance, series and numerics rooms.
+//! tested matrix (`plane`), the augmented system (`augmented`), single singular points
+//! (`points`), a singular point's derivative along a third parameter (`sensitivity`) and the
+//! curve's walk (`curve`). It uses the balance, sensitivity, series and numerics rooms (a
+//! mechanism parameter's family of problems lives in the balance room).
 //!
 //! Two-parameter continuation of folds of the harmonic balance in (excitation order n or mean
 //! speed Ω, torque scale s or a mechanism parameter p): the jump boundary of a response in the
@@ -56,9 +57,9 @@
 
 mod augmented;
 mod curve;
-mod family;
 mod plane;
 mod points;
+mod sensitivity;
 
-pub use family::MechanismFamily;
 pub use plane::{FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, Singularity};
+pub use sensitivity::SingularSensitivity;

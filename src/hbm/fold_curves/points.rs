@@ -4,9 +4,9 @@
 
 use super::augmented::Lu;
 use super::augmented::{Walk, settled};
-use super::family::{MechanismFamily, on_family, problem};
 use super::plane::{FoldCurvePoint, FoldPlane, Singularity};
 use crate::hbm::balance::{At, Hbm, HbmError, Parameter};
+use crate::hbm::balance::{MechanismFamily, on_family, problem};
 use crate::hbm::series::HbmSolution;
 use nalgebra::{DMatrix, DVector};
 

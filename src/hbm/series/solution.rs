@@ -216,6 +216,18 @@ impl HbmSolution {
     /// `max_τ |Σ_{h≥1} c_{2h−1} cos hτ + c_{2h} sin hτ|` of a series laid out like one
     /// coordinate's coefficients (see [`HbmSolution::peak_amplitude`]).
     fn series_peak(&self, c: &[f64]) -> f64 {
+        self.series_peak_at(c).0
+    }
+
+    /// The peak of [`HbmSolution::peak_amplitude`] for coordinate k and the normalised time
+    /// τ = ω₀t ∈ [0, 2π) where the series reaches it (a sensitivity of the peak is the series'
+    /// sensitivity at that instant, since p′ vanishes there).
+    pub(in crate::hbm) fn peak_at(&self, k: usize) -> (f64, f64) {
+        self.series_peak_at(&self.coefficients[k * self.nb()..(k + 1) * self.nb()])
+    }
+
+    /// [`HbmSolution::peak_at`] of a series laid out like one coordinate's coefficients.
+    fn series_peak_at(&self, c: &[f64]) -> (f64, f64) {
         let ns = 16 * (self.harmonics + 1);
         let dtau = 2.0 * PI / ns as f64;
         let (ds, dc) = dtau.sin_cos();
@@ -235,11 +247,19 @@ impl HbmSolution {
             // The sample angle by rotation (one sin_cos per call instead of per sample).
             (c1, s1) = (c1 * dc - s1 * ds, s1 * dc + c1 * ds);
         }
-        let mut peak = samples.iter().copied().fold(0.0f64, f64::max);
+        let mut peak = (0.0f64, 0.0f64);
+        for (j, &v) in samples.iter().enumerate() {
+            if v > peak.0 {
+                peak = (v, j as f64 * dtau);
+            }
+        }
         for j in 0..ns {
             let (before, after) = (samples[(j + ns - 1) % ns], samples[(j + 1) % ns]);
             if samples[j] > 0.0 && samples[j] >= before && samples[j] >= after {
-                peak = peak.max(self.refine_extremum(c, j as f64 * dtau, dtau));
+                let refined = self.refine_extremum(c, j as f64 * dtau, dtau);
+                if refined.0 > peak.0 {
+                    peak = refined;
+                }
             }
         }
         peak
@@ -283,19 +303,20 @@ impl HbmSolution {
     /// The largest (`top`) or smallest value of the series `c` met by Newton's method on p′
     /// from τ0, each step clamped to `τ0 ± half`.
     fn refine_signed(&self, c: &[f64], tau0: f64, half: f64, top: bool) -> f64 {
-        if top { self.refine_by(c, tau0, half, |p| p) } else { -self.refine_by(c, tau0, half, |p| -p) }
+        if top { self.refine_by(c, tau0, half, |p| p).0 } else { -self.refine_by(c, tau0, half, |p| -p).0 }
     }
 
     /// |p(τ*)| at the stationary point τ* of the series `c` within `τ0 ± half` (see
     /// [`HbmSolution::peak_amplitude`]), by Newton's method on p′ with p″, each step clamped to
     /// the bracket.
-    fn refine_extremum(&self, c: &[f64], tau0: f64, half: f64) -> f64 {
+    fn refine_extremum(&self, c: &[f64], tau0: f64, half: f64) -> (f64, f64) {
         self.refine_by(c, tau0, half, f64::abs)
     }
 
     /// The largest `score(p)` over the points Newton's method on p′ visits from τ0 (each step
-    /// clamped to `τ0 ± half`), the start included: |p| for a peak, ±p for a signed extreme.
-    fn refine_by(&self, c: &[f64], tau0: f64, half: f64, score: impl Fn(f64) -> f64) -> f64 {
+    /// clamped to `τ0 ± half`), the start included: |p| for a peak, ±p for a signed extreme;
+    /// with the τ where it was met.
+    fn refine_by(&self, c: &[f64], tau0: f64, half: f64, score: impl Fn(f64) -> f64) -> (f64, f64) {
         let series = |tau: f64| {
             let (mut p, mut pd, mut pdd) = (0.0, 0.0, 0.0);
             for h in 1..=self.harmonics {
@@ -311,7 +332,7 @@ impl HbmSolution {
         let (lo, hi) = (tau0 - half, tau0 + half);
         let mut tau = tau0;
         let (mut p, mut pd, mut pdd) = series(tau);
-        let mut best = score(p);
+        let mut best = (score(p), tau);
         for _ in 0..20 {
             if pdd == 0.0 {
                 break;
@@ -322,7 +343,9 @@ impl HbmSolution {
             }
             tau = next;
             (p, pd, pdd) = series(tau);
-            best = best.max(score(p));
+            if score(p) > best.0 {
+                best = (score(p), tau);
+            }
         }
         best
     }

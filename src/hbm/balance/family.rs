@@ -1,8 +1,10 @@
-//! A mechanism parameter as a fold curve's second parameter ([`MechanismFamily`]): the problem
-//! built at any p, the last few kept, since the engine builds the mechanism once and offers no
-//! derivative in p.
+//! A mechanism parameter p as a parameter of the balance ([`MechanismFamily`]): a fold curve's
+//! second parameter, a sensitivity's direction. The problem is built at any p, the last few
+//! kept, since the engine builds the mechanism once and offers no derivative in p.
 
-use crate::hbm::balance::{At, Hbm, HbmError};
+use super::options::HbmError;
+use super::parameter::At;
+use super::problem::Hbm;
 
 /// A family of problems along a mechanism parameter p (a pivot's damping, an absorber's
 /// tuning), the plane's second parameter in place of the torque scale.
@@ -40,7 +42,7 @@ impl std::fmt::Debug for MechanismFamily<'_> {
 /// Problems built at recent values of p, the last few kept (a corrector needs p and p ± h at
 /// each iterate, and the tangent the same again at the converged point).
 #[derive(Default)]
-pub(super) struct Built {
+pub(in crate::hbm) struct Built {
     problems: Vec<(f64, Hbm)>,
 }
 
@@ -48,7 +50,7 @@ impl Built {
     const KEPT: usize = 6;
 
     /// The problem at p, built unless kept.
-    pub(super) fn at(&mut self, family: &MechanismFamily<'_>, p: f64) -> Result<&mut Hbm, HbmError> {
+    pub(in crate::hbm) fn at(&mut self, family: &MechanismFamily<'_>, p: f64) -> Result<&mut Hbm, HbmError> {
         let k = match self.problems.iter().position(|(q, _)| q.to_bits() == p.to_bits()) {
             Some(k) => k,
             None => {
@@ -68,12 +70,12 @@ impl Built {
 }
 
 /// `at` with the family's p where p is a parameter of the evaluation (a speed family's Ω).
-pub(super) fn on_family(at: At, family: &MechanismFamily<'_>, p: f64) -> At {
+pub(in crate::hbm) fn on_family(at: At, family: &MechanismFamily<'_>, p: f64) -> At {
     if family.speed { At { omega: p, ..at } } else { at }
 }
 
 /// The problem at p: `base` on a torque-scale plane (p None), else the family's, built if need be.
-pub(super) fn problem<'h>(
+pub(in crate::hbm) fn problem<'h>(
     base: &'h mut Hbm,
     built: &'h mut Built,
     family: Option<&MechanismFamily<'_>>,
