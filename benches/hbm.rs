@@ -2,6 +2,7 @@
 //! below (2.9 → 3.3) and from above (3.3 → 2.9), with Floquet stability at every point.
 
 #[path = "../tests/it/support/cpva_hbm.rs"]
+#[allow(dead_code)] // the design family is for the sensitivity bench
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, single};

@@ -13,6 +13,7 @@
 //! ```
 
 #[path = "../tests/it/support/cpva_hbm.rs"]
+#[allow(dead_code)] // the design family is for the sensitivity bench
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, omega, single};

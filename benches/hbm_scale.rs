@@ -20,6 +20,7 @@
 //! tangent's share), each timed alone.
 
 #[path = "../tests/it/support/cpva_hbm.rs"]
+#[allow(dead_code)] // the design family is for the sensitivity bench
 mod cpva_hbm;
 
 use cpva_hbm::{cpva_hbm, omega, single};

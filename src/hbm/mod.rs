@@ -69,6 +69,6 @@ pub use fold_curves::{
     FoldCurve, FoldCurveEnd, FoldCurveOptions, FoldCurvePoint, FoldPlane, ParameterPoint, SingularSensitivity,
     Singularity,
 };
-pub use sensitivity::{Direction, StateSensitivity};
+pub use sensitivity::{DesignPoint, Direction, StateSensitivity};
 pub use series::{FloquetBlock, HbmSolution, MeshTorqueHarmonics, ReactionHarmonics, Stability};
 pub use stability::solve_periodic;

@@ -5,65 +5,10 @@
 //! at 1000 rpm) at 40 and 500 N·m, with respect to the pivot radius, the centre-of-mass radius,
 //! the pendulum mass and the pivot damping.
 
-use crate::support::cpva_hbm::{omega, single};
-use kanedyn::cpva::CpvaParams;
+use crate::support::cpva_hbm::{Design, base_value, problem};
 use kanedyn::hbm::{
-    ContinuationOptions, Direction, FoldPlane, Hbm, HbmError, HbmOptions, HbmSolution, MechanismFamily, Parameter,
-    Singularity,
+    ContinuationOptions, DesignPoint, Direction, FoldPlane, HbmSolution, MechanismFamily, Parameter, Singularity,
 };
-use kanedyn::kane::Kane;
-use kanedyn::model::mechanism::Mechanism;
-
-/// The design parameters varied: each sets one number of the mechanism.
-#[derive(Clone, Copy, Debug)]
-enum Design {
-    PivotRadius,
-    ComRadius,
-    PendulumMass,
-    PivotDamping,
-}
-
-impl Design {
-    const ALL: [Design; 4] = [Design::PivotRadius, Design::ComRadius, Design::PendulumMass, Design::PivotDamping];
-
-    fn get(self, m: &Mechanism) -> f64 {
-        let (j, b) = (m.joint_index("pivot").unwrap(), m.body_index("pendulum").unwrap());
-        match self {
-            Design::PivotRadius => m.joints[j].at.norm(),
-            Design::ComRadius => m.bodies[b].inertia.com.norm(),
-            Design::PendulumMass => m.bodies[b].inertia.mass,
-            Design::PivotDamping => m.joints[j].damper,
-        }
-    }
-
-    fn set(self, m: &mut Mechanism, v: f64) {
-        let (j, b) = (m.joint_index("pivot").unwrap(), m.body_index("pendulum").unwrap());
-        match self {
-            Design::PivotRadius => {
-                let at = m.joints[j].at;
-                m.joints[j].at = at * (v / at.norm());
-            }
-            Design::ComRadius => {
-                let com = m.bodies[b].inertia.com;
-                m.bodies[b].inertia.com = com * (v / com.norm());
-            }
-            Design::PendulumMass => m.bodies[b].inertia.mass = v,
-            Design::PivotDamping => m.joints[j].damper = v,
-        }
-    }
-}
-
-/// The canonical rotor with `design` set to `p`, excited by `torque` N·m at the main order.
-fn problem(design: Design, p: f64, torque: f64) -> Result<Hbm, HbmError> {
-    let mut mech = CpvaParams::canonical().mechanism(None).unwrap();
-    design.set(&mut mech, p);
-    let kane = Kane::new(&mech).map_err(|e| HbmError::Invalid(e.to_string()))?;
-    Hbm::new(&kane, mech.joint_index("spin").unwrap(), omega(), &single(torque), HbmOptions::default())
-}
-
-fn base_value(design: Design) -> f64 {
-    design.get(&CpvaParams::canonical().mechanism(None).unwrap())
-}
 
 /// Richardson's extrapolation of central differences of `f` at p with steps δ and δ/2:
 /// `(4 D(δ/2) − D(δ)) / 3`, whose error is O(δ⁴) of f's fifth derivative.
@@ -99,7 +44,8 @@ fn state_sensitivities_match_differences_of_solves() {
             assert_eq!(sol.spin, spin);
             let build = move |p: f64| problem(design, p, torque);
             let family = MechanismFamily { build: &build, scale: 1.0, reference: p0, speed: false };
-            let s = hbm.state_sensitivities(&sol, &[Direction::Design(&family, p0)]).unwrap().remove(0);
+            let point = DesignPoint::new(&family, p0).unwrap();
+            let s = hbm.state_sensitivities(&sol, &[Direction::Design(&point)]).unwrap().remove(0);
             let solve_at =
                 |p: f64| -> HbmSolution { problem(design, p, torque).unwrap().solve(3.0, Some(&sol)).unwrap() };
             let fd_accel = richardson(&mut |p| solve_at(p).order_acceleration(spin, 1.0), p0, DELTA * p0);
@@ -160,12 +106,13 @@ fn fold_order_sensitivities_match_differences_of_fold_solves() {
                 let point = hbm.fold_at(FoldPlane::Order, 1.0, &guess).unwrap();
                 let build = move |p: f64| problem(design, p, torque);
                 let family = MechanismFamily { build: &build, scale: 1.0, reference: p0, speed: false };
+                let design_point = DesignPoint::new(&family, p0).unwrap();
                 let s = hbm
                     .singular_sensitivities(
                         FoldPlane::Order,
                         Singularity::Jacobian,
                         &point,
-                        &[Direction::Design(&family, p0)],
+                        &[Direction::Design(&design_point)],
                     )
                     .unwrap()
                     .remove(0);
@@ -180,6 +127,10 @@ fn fold_order_sensitivities_match_differences_of_fold_solves() {
                     rel(s.parameter, fd)
                 );
                 assert!(rel(s.parameter, fd) <= TOL, "{torque} N·m, {design:?}: {} vs {fd}", s.parameter);
+                // The left-null-vector form (no ∂g/∂p, one Jacobian) must agree as well.
+                let short =
+                    hbm.fold_sensitivities(FoldPlane::Order, &point, &[Direction::Design(&design_point)]).unwrap();
+                assert!(rel(short[0], fd) <= TOL, "{torque} N·m, {design:?}: wᵀ form {} vs {fd}", short[0]);
             }
         }
     }

@@ -11,7 +11,8 @@
 //! `dλ/dp = −wᵀ ∂R̂/∂p / wᵀ ∂R̂/∂λ`: ∂g/∂p moves only the state's derivative there.
 
 use super::plane::{FoldCurvePoint, FoldPlane, Singularity};
-use crate::hbm::balance::{At, Hbm, HbmError, Parameter, on_family};
+use crate::hbm::balance::{At, Hbm, HbmError, Parameter};
+use crate::hbm::numerics::DenseLu;
 use crate::hbm::sensitivity::{DESIGN_STEP, Direction, StateSensitivity};
 use nalgebra::{DMatrix, DVector};
 
@@ -109,6 +110,59 @@ impl Hbm {
         Ok(out)
     }
 
+    /// The derivative of a fold's first parameter alone (n, Ω in rad/s, or s, per unit of each
+    /// direction's parameter) by `dλ/dp = −wᵀ∂R̂/∂p / wᵀ∂R̂/∂λ`, w the left null vector of J at
+    /// the fold (`point`, as from [`Hbm::fold_at`] on this problem): one Jacobian, one
+    /// factorisation and its transposed solves, then ∂R̂/∂p per direction; no second
+    /// derivatives, which only the state's motion along the fold needs
+    /// ([`Hbm::singular_sensitivities`] gives both).
+    ///
+    /// # Errors
+    /// As [`Hbm::singular_sensitivities`]; also a branch that does not turn at the point
+    /// (wᵀ∂R̂/∂λ = 0, a cusp or a branch point, where the fold has no such derivative).
+    pub fn fold_sensitivities(
+        &mut self,
+        plane: FoldPlane,
+        point: &FoldCurvePoint,
+        directions: &[Direction<'_>],
+    ) -> Result<Vec<f64>, HbmError> {
+        let sol = &point.solution;
+        let m = self.unknowns();
+        if sol.coefficients.len() != m {
+            return Err(HbmError::Invalid(format!(
+                "a fold of {} unknowns cannot be differentiated on a problem of {m}",
+                sol.coefficients.len()
+            )));
+        }
+        let x = self.unknowns_from(Some(sol));
+        let at = At { order: point.order, omega: point.omega, scale: point.scale };
+        let param = self.plane(plane).param();
+        self.assemble(&x, &at, Some(param));
+        let rl = self.gp.clone();
+        let w = left_null_vector(&self.jac).ok_or(HbmError::Singular { order: at.order })?;
+        let turn = w.dot(&rl);
+        if !(turn.is_finite() && turn.abs() > 1e-12 * w.norm() * rl.norm()) {
+            return Err(HbmError::Invalid(format!(
+                "the branch does not turn at the fold near n = {} (wᵀ∂R̂/∂λ = {turn:e}): a cusp or a branch point",
+                at.order
+            )));
+        }
+        directions
+            .iter()
+            .map(|d| {
+                if let Direction::Operating(p) = d
+                    && std::mem::discriminant(p) == std::mem::discriminant(&param)
+                {
+                    return Err(HbmError::Invalid(
+                        "a fold's sensitivity along its plane's own first parameter is undefined".into(),
+                    ));
+                }
+                let dl = -w.dot(&self.residual_derivative(&x, &at, d)?) / turn;
+                if dl.is_finite() { Ok(dl) } else { Err(HbmError::NonFinite { order: at.order }) }
+            })
+            .collect()
+    }
+
     /// ∂R̂/∂p and `(∂J/∂p) v` at x and `at` along `direction`, with J the Jacobian whose
     /// companion derivative is `param`'s: the residual's derivative exact for an operating
     /// parameter, both by central differences between p ± h otherwise (h = [`DESIGN_STEP`]
@@ -136,23 +190,31 @@ impl Hbm {
                 let rp = self.residual_derivative(x, at, direction)?;
                 Ok((rp, jv))
             }
-            Direction::Design(family, p) => {
-                let h = DESIGN_STEP * family.reference;
-                let side = |q: f64| -> Result<(DVector<f64>, DVector<f64>), HbmError> {
-                    let mut hbm = (family.build)(q)?;
-                    if hbm.unknowns() != x.len() {
-                        return Err(HbmError::Invalid(format!(
-                            "the family's problem at p = {q} has {} unknowns, the point {}",
-                            hbm.unknowns(),
-                            x.len()
-                        )));
-                    }
-                    hbm.assemble(x, &on_family(*at, family, q), Some(param));
-                    Ok((hbm.rhat.clone(), &hbm.jac * v))
-                };
-                let ((r_up, j_up), (r_down, j_down)) = (side(p + h)?, side(p - h)?);
-                Ok(((r_up - r_down) / (2.0 * h), (j_up - j_down) / (2.0 * h)))
+            Direction::Design(point) => {
+                let (rp, jv) = point.differences(x, at, Some((param, v)))?;
+                Ok((rp, jv.unwrap_or_else(|| DVector::zeros(x.len()))))
             }
         }
     }
+}
+
+/// The left null vector of a (numerically) singular J, unit length: two steps of inverse
+/// iteration on Jᵀ from a flat vector (at a located fold J's smallest singular value is ~1e-10
+/// of the next, so each step removes that much of the other directions), or the SVD's left
+/// singular vector of the smallest singular value where an LU solve is not finite.
+fn left_null_vector(j: &DMatrix<f64>) -> Option<DVector<f64>> {
+    let m = j.nrows();
+    let lu = DenseLu::new(j);
+    let mut w = DVector::from_element(m, 1.0 / (m as f64).sqrt());
+    for _ in 0..2 {
+        match lu.solve_transposed(&w) {
+            Some(next) if next.iter().all(|v| v.is_finite()) && next.norm() > 0.0 => w = next.normalize(),
+            _ => {
+                let svd = j.clone().svd(true, false);
+                let k = svd.singular_values.imin();
+                return svd.u.map(|u| u.column(k).clone_owned());
+            }
+        }
+    }
+    Some(w)
 }

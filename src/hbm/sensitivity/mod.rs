@@ -26,4 +26,4 @@
 mod state;
 
 pub(in crate::hbm) use state::DESIGN_STEP;
-pub use state::{Direction, StateSensitivity};
+pub use state::{DesignPoint, Direction, StateSensitivity};

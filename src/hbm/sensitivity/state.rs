@@ -2,9 +2,10 @@
 //! [`Direction`], one factorisation of J at the state, a back-solve per direction, and the
 //! chain rules from the coefficients to the read-outs ([`StateSensitivity`]).
 
-use crate::hbm::balance::{At, Hbm, HbmError, MechanismFamily, Parameter, on_family};
+use crate::hbm::balance::{At, Hbm, HbmError, MechanismFamily, Parameter};
 use crate::hbm::series::HbmSolution;
 use nalgebra::DVector;
+use std::cell::RefCell;
 
 /// Step of a design parameter's central difference of the residual, relative to the family's
 /// reference: the difference errs by O(h²) of the residual's third derivative in p and by
@@ -18,9 +19,70 @@ pub enum Direction<'a> {
     /// derivatives per unit of it. The order a `Speed` or `TorqueScale` variant names is not
     /// read: the state's own is used.
     Operating(Parameter),
-    /// A design parameter p of the mechanism at the value `p` (the family's unit): the problem
-    /// the sensitivity is asked of must be the family's at p; derivatives per unit of p.
-    Design(&'a MechanismFamily<'a>, f64),
+    /// A design parameter of the mechanism at a [`DesignPoint`]: the problem the sensitivity
+    /// is asked of must be the family's at the point's p; derivatives per unit of p.
+    Design(&'a DesignPoint),
+}
+
+/// A design parameter's value p with the family's problems at p ± h built once (h =
+/// [`DESIGN_STEP`] times the family's reference): every state of an operating set at this design
+/// is differentiated with them, so the builds are paid once per design and parameter, and a
+/// state's derivative costs two residuals and a back-solve.
+#[derive(Debug)]
+pub struct DesignPoint {
+    /// The parameter's value, in the family's unit.
+    pub p: f64,
+    /// The difference step, in the family's unit.
+    pub h: f64,
+    /// Whether p is the mean speed Ω (see [`MechanismFamily::speed`]).
+    pub speed: bool,
+    /// The problems at p + h and p − h (their buffers change as residuals are assembled).
+    problems: RefCell<[Hbm; 2]>,
+}
+
+impl DesignPoint {
+    /// The family's problems at p ± h.
+    ///
+    /// # Errors
+    /// Whatever building a problem returns, and a non-finite or non-positive reference.
+    pub fn new(family: &MechanismFamily<'_>, p: f64) -> Result<Self, HbmError> {
+        let h = DESIGN_STEP * family.reference;
+        if !(h.is_finite() && h > 0.0 && p.is_finite()) {
+            return Err(HbmError::Invalid(format!(
+                "a design point needs a finite p and a positive reference, got p = {p}, reference {}",
+                family.reference
+            )));
+        }
+        let problems = RefCell::new([(family.build)(p + h)?, (family.build)(p - h)?]);
+        Ok(Self { p, h, speed: family.speed, problems })
+    }
+
+    /// The residual's and (with `jacobian`) the Jacobian-times-v's central differences at x and
+    /// `at` (the problems' own at p ± h: a speed family's Ω moves with p).
+    pub(in crate::hbm) fn differences(
+        &self,
+        x: &[f64],
+        at: &At,
+        jacobian: Option<(Parameter, &DVector<f64>)>,
+    ) -> Result<(DVector<f64>, Option<DVector<f64>>), HbmError> {
+        let mut problems = self.problems.borrow_mut();
+        let mut side = |k: usize, q: f64| -> Result<(DVector<f64>, Option<DVector<f64>>), HbmError> {
+            let hbm = &mut problems[k];
+            if hbm.unknowns() != x.len() {
+                return Err(HbmError::Invalid(format!(
+                    "the family's problem at p = {q} has {} unknowns, the state {}",
+                    hbm.unknowns(),
+                    x.len()
+                )));
+            }
+            let at = if self.speed { At { omega: q, ..*at } } else { *at };
+            hbm.assemble(x, &at, jacobian.map(|(param, _)| param));
+            Ok((hbm.rhat.clone(), jacobian.map(|(_, v)| &hbm.jac * v)))
+        };
+        let ((r_up, j_up), (r_down, j_down)) = (side(0, self.p + self.h)?, side(1, self.p - self.h)?);
+        let per = 1.0 / (2.0 * self.h);
+        Ok(((r_up - r_down) * per, j_up.zip(j_down).map(|(u, d)| (u - d) * per)))
+    }
 }
 
 impl Direction<'_> {
@@ -29,7 +91,7 @@ impl Direction<'_> {
         match self {
             Direction::Operating(Parameter::Order) => 1.0 / at.order,
             Direction::Operating(Parameter::Speed { .. }) => 1.0 / at.omega,
-            Direction::Design(family, _) if family.speed => 1.0 / at.omega,
+            Direction::Design(point) if point.speed => 1.0 / at.omega,
             _ => 0.0,
         }
     }
@@ -162,22 +224,7 @@ impl Hbm {
                 self.assemble(x, at, Some(param));
                 Ok(self.gp.clone())
             }
-            Direction::Design(family, p) => {
-                let h = DESIGN_STEP * family.reference;
-                let side = |q: f64| -> Result<DVector<f64>, HbmError> {
-                    let mut hbm = (family.build)(q)?;
-                    if hbm.unknowns() != x.len() {
-                        return Err(HbmError::Invalid(format!(
-                            "the family's problem at p = {q} has {} unknowns, the state {}",
-                            hbm.unknowns(),
-                            x.len()
-                        )));
-                    }
-                    hbm.assemble(x, &on_family(*at, family, q), None);
-                    Ok(hbm.rhat.clone())
-                };
-                Ok((side(p + h)? - side(p - h)?) / (2.0 * h))
-            }
+            Direction::Design(point) => Ok(point.differences(x, at, None)?.0),
         }
     }
 }
