@@ -44,16 +44,9 @@ impl Hbm {
         point: &FoldCurvePoint,
         directions: &[Direction<'_>],
     ) -> Result<Vec<SingularSensitivity>, HbmError> {
-        let sol = &point.solution;
-        let m = self.unknowns();
-        if sol.coefficients.len() != m {
-            return Err(HbmError::Invalid(format!(
-                "a singular point of {} unknowns cannot be differentiated on a problem of {m}",
-                sol.coefficients.len()
-            )));
-        }
-        let x = self.unknowns_from(Some(sol));
         let at = At { order: point.order, omega: point.omega, scale: point.scale };
+        let x = self.differentiable(&point.solution)?;
+        let m = x.len();
         let mut walk = self.walk(plane, test, None, &x, &at, None)?;
         walk.central = true;
         let aug = self.augmented(&x, &at, None, &mut walk)?;
@@ -72,13 +65,7 @@ impl Hbm {
         let (spin, nb, t_scale) = (self.spin, self.nb, self.t_scale);
         let mut out = Vec::with_capacity(directions.len());
         for d in directions {
-            if let Direction::Operating(p) = d
-                && std::mem::discriminant(p) == std::mem::discriminant(&param)
-            {
-                return Err(HbmError::Invalid(
-                    "a singular point's sensitivity along its plane's own first parameter is undefined".into(),
-                ));
-            }
+            across(d, param)?;
             let (mut rp, jv) = self.moved_residual_and_jacobian(&x, &at, d, param, &v)?;
             for &i in &walk.pinned {
                 rp[i] = 0.0;
@@ -126,16 +113,8 @@ impl Hbm {
         point: &FoldCurvePoint,
         directions: &[Direction<'_>],
     ) -> Result<Vec<f64>, HbmError> {
-        let sol = &point.solution;
-        let m = self.unknowns();
-        if sol.coefficients.len() != m {
-            return Err(HbmError::Invalid(format!(
-                "a fold of {} unknowns cannot be differentiated on a problem of {m}",
-                sol.coefficients.len()
-            )));
-        }
-        let x = self.unknowns_from(Some(sol));
         let at = At { order: point.order, omega: point.omega, scale: point.scale };
+        let x = self.differentiable(&point.solution)?;
         let param = self.plane(plane).param();
         self.assemble(&x, &at, Some(param));
         let rl = self.gp.clone();
@@ -150,13 +129,7 @@ impl Hbm {
         directions
             .iter()
             .map(|d| {
-                if let Direction::Operating(p) = d
-                    && std::mem::discriminant(p) == std::mem::discriminant(&param)
-                {
-                    return Err(HbmError::Invalid(
-                        "a fold's sensitivity along its plane's own first parameter is undefined".into(),
-                    ));
-                }
+                across(d, param)?;
                 let dl = -w.dot(&self.residual_derivative(&x, &at, d)?) / turn;
                 if dl.is_finite() { Ok(dl) } else { Err(HbmError::NonFinite { order: at.order }) }
             })
@@ -217,4 +190,17 @@ fn left_null_vector(j: &DMatrix<f64>) -> Option<DVector<f64>> {
         }
     }
     Some(w)
+}
+
+/// Refuses a direction along the plane's own first parameter `param`: the singular point is a
+/// function of the other parameters, and has no derivative along the one it is located in.
+fn across(direction: &Direction<'_>, param: Parameter) -> Result<(), HbmError> {
+    match direction {
+        Direction::Operating(p) if std::mem::discriminant(p) == std::mem::discriminant(&param) => {
+            Err(HbmError::Invalid(
+                "a singular point's sensitivity along its plane's own first parameter is undefined".into(),
+            ))
+        }
+        _ => Ok(()),
+    }
 }

@@ -180,14 +180,7 @@ impl Hbm {
         sol: &HbmSolution,
         directions: &[Direction<'_>],
     ) -> Result<Vec<StateSensitivity>, HbmError> {
-        if sol.coefficients.len() != self.unknowns() {
-            return Err(HbmError::Invalid(format!(
-                "a state of {} unknowns cannot be differentiated on a problem of {}",
-                sol.coefficients.len(),
-                self.unknowns()
-            )));
-        }
-        let x = self.unknowns_from(Some(sol));
+        let x = self.differentiable(sol)?;
         let at = At { order: sol.order, omega: sol.omega, scale: sol.torque_scale };
         let rates = directions.iter().map(|d| self.residual_derivative(&x, &at, d)).collect::<Result<Vec<_>, _>>()?;
         self.assemble(&x, &at, Some(Parameter::Order));
@@ -207,6 +200,18 @@ impl Hbm {
                 Ok(StateSensitivity { coefficients, mean_torque, base_frequency_rate: d.base_frequency_rate(&at) })
             })
             .collect()
+    }
+
+    /// The unknowns of `sol`, refused when it is a state of another problem (another size).
+    pub(in crate::hbm) fn differentiable(&self, sol: &HbmSolution) -> Result<Vec<f64>, HbmError> {
+        if sol.coefficients.len() != self.unknowns() {
+            return Err(HbmError::Invalid(format!(
+                "a state of {} unknowns cannot be differentiated on a problem of {}",
+                sol.coefficients.len(),
+                self.unknowns()
+            )));
+        }
+        Ok(self.unknowns_from(Some(sol)))
     }
 
     /// ∂R̂/∂p at the unknowns x and `at` along `direction` (see the room's docs): the assembly's
