@@ -664,13 +664,13 @@ fn linear_elements(
                 amplitude: per_multiple(&e.amplitude, &e.phase),
                 peak: e.peak.unwrap_or(f64::NAN),
                 range: Range::about(e.mean, e.range.unwrap_or((f64::NAN, f64::NAN))),
-                torque: (!e.torque.is_empty() && (joint.spring.is_some() || joint.damper != 0.0)).then(|| {
-                    super::elements::ElementTorque {
+                torque: (!e.torque.is_empty() && crate::linear::element_law(mech, e.joint, true).is_some()).then(
+                    || super::elements::ElementTorque {
                         amplitude: per_multiple(&e.torque, &e.torque_phase),
                         peak: e.peak_torque.unwrap_or(f64::NAN),
                         range: Range::about(e.mean_torque, e.torque_range.unwrap_or((f64::NAN, f64::NAN))),
-                    }
-                }),
+                    },
+                ),
             }
         })
         .collect()
