@@ -6,6 +6,7 @@
 
 mod support;
 
+mod alternating_torque;
 mod backbone;
 mod broken_pipe;
 mod campbell_crossings;
