@@ -453,11 +453,21 @@ const RANGE_COLUMNS: [(&str, RangeField); 5] = [
 /// The summary's table of elements in steady states: one row per (speed in rpm, element), with
 /// the amplitudes at `multiples`·n, the peak and the torque; empty when there is no row.
 pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResponse)>, multiples: &[f64]) -> String {
+    labelled_element_table("rpm", rows.map(|(rpm, e)| (rpm.to_string(), e)), multiples)
+}
+
+/// [`element_table`] with rows labelled `label` (a speed and a state, say), its column headed
+/// `first`.
+pub(crate) fn labelled_element_table<'a>(
+    first: &str,
+    rows: impl Iterator<Item = (String, &'a ElementResponse)>,
+    multiples: &[f64],
+) -> String {
     let mut body = String::new();
     // The figures' number form (five significant digits, exponents only below 1e-3 or from 1e5
     // on), so that an angle reads 0.38677 here as in the other tables, not 3.8677e-1.
     let v = |x: f64| num(x, 5);
-    for (rpm, e) in rows {
+    for (label, e) in rows {
         let amps: Vec<String> = e.amplitude.iter().map(|a| v(*a)).collect();
         let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
             let per: Vec<String> = t.amplitude.iter().map(|a| v(*a)).collect();
@@ -472,7 +482,7 @@ pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResp
         let r = &e.range;
         let _ = writeln!(
             body,
-            "| {rpm} | `{}` | {} {} | {} | {} [{}, {}] | {} | {torque} |",
+            "| {label} | `{}` | {} {} | {} | {} [{}, {}] | {} | {torque} |",
             e.joint,
             amps.join(", "),
             e.unit,
@@ -489,7 +499,7 @@ pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResp
     let tags: Vec<String> = multiples.iter().map(|m| format!("{}n", fmt_num(*m))).collect();
     format!(
         "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
-         N·m, N for a slide; mean [min, max] and the largest |q| include the wind-up):\n\n| rpm | joint | \
+         N·m, N for a slide; mean [min, max] and the largest |q| include the wind-up):\n\n| {first} | joint | \
          amplitude | peak | mean [min, max] | max abs | torque |\n|---|---|---|---|---|---|---|\n{body}\n",
         tags.join(", ")
     )

@@ -37,6 +37,7 @@ mod hbm_events;
 mod hbm_fold_curve;
 mod hbm_neimark_sacker;
 mod hbm_period_doubling;
+mod hbm_state_elements;
 mod hbm_switch;
 mod hbm_tongue;
 mod honest_peaks;
