@@ -73,6 +73,7 @@
 mod bounded;
 mod campbell;
 mod damping;
+mod element_law;
 mod gravity;
 mod modes;
 mod multi_order;
@@ -82,6 +83,7 @@ pub use campbell::{
     CROSSING_RTOL, Campbell, CampbellOptions, CampbellTrack, Crossing, OrderLine, campbell, campbell_with,
 };
 pub use damping::{ModalCombination, ModalDamping};
+pub use element_law::{ElementLaw, element_law};
 pub use modes::{Modal, Mode, ModeKind};
 pub use multi_order::{
     ElementLines, GravityLine, HarmonicResponse, MultiOrderOptions, SpeedCase, SpeedResponse, multi_order_response,

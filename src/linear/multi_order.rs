@@ -6,7 +6,10 @@
 //! of the superposition: the peak is then taken over the common period of all the lines in the
 //! rotor angle (one revolution for integer orders, d revolutions for orders in steps of 1/d).
 
-use super::{C64, Input, LinResult, LinearError, ModalCombination, ModalDamping, OrderResponse, ResponseSpec, Spin};
+use super::{
+    C64, ElementLaw, Input, LinResult, LinearError, ModalCombination, ModalDamping, OrderResponse, ResponseSpec, Spin,
+    element_law,
+};
 use crate::model::excitation::{Harmonic, rpm_to_rad_s};
 use crate::model::mechanism::Mechanism;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -83,9 +86,10 @@ pub struct ElementLines {
     pub amplitude: Vec<f64>,
     /// Per harmonic, its phase, rad.
     pub phase: Vec<f64>,
-    /// Per harmonic, the amplitude of `k q + c q̇` of the joint's spring k and damper c, N·m (N
-    /// for a slide); empty for a joint with a staged spring, friction or end stops, whose torque
-    /// is not linear.
+    /// Per harmonic, the amplitude of the torque the joint's spring, damper and driving compliant
+    /// mesh transmit ([`super::ElementLaw`]; the dampers left out where modal damping replaces
+    /// them), N·m (N for a slide); empty for a joint with a staged spring, friction or end stops,
+    /// whose torque is not linear.
     pub torque: Vec<f64>,
     /// Per harmonic, the torque's phase, rad.
     pub torque_phase: Vec<f64>,
@@ -99,7 +103,8 @@ pub struct ElementLines {
     /// The lowest and highest value of the superposed oscillation about `mean`, rad (m); None as
     /// for `peak`.
     pub range: Option<(f64, f64)>,
-    /// The torque's mean `k (q⁰ − q_free)` (the damper adds nothing on average), N·m (N).
+    /// The torque's mean at the operating point q⁰, `k (q⁰ − q_free)` and the mesh's (the
+    /// dampers add nothing on average), N·m (N).
     pub mean_torque: f64,
     /// The same as `range` for the torque, N·m (N).
     pub torque_range: Option<(f64, f64)>,
@@ -202,6 +207,7 @@ fn element_lines(
     base_order: f64,
     omega: f64,
     harmonics: &[Harmonic],
+    dampers: bool,
 ) -> LinResult<Vec<ElementLines>> {
     if elements.is_empty() {
         return Ok(Vec::new());
@@ -212,8 +218,9 @@ fn element_lines(
     for &j in elements {
         let Some(c) = mech.coordinate(j) else { continue };
         let joint = &mech.joints[j];
+        // A joint without spring, damper or driving mesh transmits nothing: its torque is 0.
+        let law = element_law(mech, j, dampers).unwrap_or(ElementLaw { terms: Vec::new(), constant: 0.0 });
         let linear = joint.couplings.is_empty();
-        let k = joint.spring.map_or(0.0, |sp| sp.stiffness);
         let mean = resp.model.op.q[c];
         let mut e = ElementLines {
             joint: j,
@@ -225,7 +232,8 @@ fn element_lines(
             peak_torque: None,
             mean,
             range: None,
-            mean_torque: k * (mean - joint.spring.map_or(0.0, |sp| sp.free_angle)),
+            // The dampers add nothing on average.
+            mean_torque: law.at(&resp.model.op.q, &vec![0.0; resp.model.op.q.len()]),
             torque_range: None,
         };
         for (h, q) in harmonics.iter().zip(&per_harmonic) {
@@ -235,7 +243,7 @@ fn element_lines(
             e.phase.push(h.phase + qh.arg() + turn);
             if linear {
                 let w = h.multiple * base_order * omega;
-                let t = C64::new(k, w * joint.damper) * qh;
+                let t = law.phasor(q.as_slice(), w) * h.amplitude.abs();
                 e.torque.push(t.norm());
                 e.torque_phase.push(h.phase + t.arg() + turn);
             }
@@ -377,7 +385,9 @@ pub fn multi_order_response_with(
                 (peak_in_rotor_angle(&lines(false)), peak_in_rotor_angle(&lines(true)))
             }
         };
-        let elements = element_lines(mech, &resp, options.elements, base_order, omega, &case.harmonics)?;
+        // Modal damping in place of the dampers leaves them out of the transmitted torque too.
+        let dampers = !matches!(options.modal, Some((_, ModalCombination::Replace)));
+        let elements = element_lines(mech, &resp, options.elements, base_order, omega, &case.harmonics, dampers)?;
         out.push(SpeedResponse {
             rpm: case.rpm,
             omega,

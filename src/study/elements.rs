@@ -33,8 +33,10 @@ pub struct ElementTorque {
 }
 
 /// The honest extremes of a steady quantity (issue 29, item 3): its mean, lowest and highest
-/// value, and the largest absolute value `max(|min|, |max|)`, mean included (a wound-up
-/// spring's clearance to its stop is the largest |q|, not the oscillation about its mean).
+/// value, the largest absolute value `max(|min|, |max|)`, mean included (a wound-up spring's
+/// clearance to its stop is the largest |q|, not the oscillation about its mean), and the
+/// largest departure from the mean `max(max − mean, mean − min)` (a shaft's alternating torque,
+/// what fatigue sees, which a large mean torque hides in `max_abs`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, schemars::JsonSchema)]
 pub struct Range {
     /// Mean over the steady state.
@@ -45,13 +47,15 @@ pub struct Range {
     pub max: f64,
     /// `max(|min|, |max|)`.
     pub max_abs: f64,
+    /// `max(max − mean, mean − min)`: the largest |value − mean|, the alternating part's peak.
+    pub alt_max: f64,
 }
 
 impl Range {
     /// From the mean and the oscillating part's signed extremes `(lo, hi)` about it.
     pub fn about(mean: f64, (lo, hi): (f64, f64)) -> Self {
         let (min, max) = (mean + lo, mean + hi);
-        Range { mean, min, max, max_abs: min.abs().max(max.abs()) }
+        Range { mean, min, max, max_abs: min.abs().max(max.abs()), alt_max: hi.max(-lo) }
     }
 
     /// Of samples over a window, the extremes refined between the samples as
@@ -70,7 +74,7 @@ impl Range {
     /// Shifted by a constant (a preload).
     fn shifted(self, by: f64) -> Self {
         let (min, max) = (self.min + by, self.max + by);
-        Range { mean: self.mean + by, min, max, max_abs: min.abs().max(max.abs()) }
+        Range { mean: self.mean + by, min, max, max_abs: min.abs().max(max.abs()), alt_max: self.alt_max }
     }
 }
 
@@ -396,8 +400,10 @@ impl<'m> ElementStreams<'m> {
 pub(crate) type ElementColumn<'a> = dyn Fn(&dyn Fn(&ElementResponse) -> f64) -> Vec<f64> + 'a;
 
 /// Appends one element's columns to `table`: per multiple `<prefix><joint>_<m>x_<unit>`, then
-/// `<prefix><joint>_peak_<unit>`, and with `torque` the same for `<prefix><joint>_torque_…_Nm`
-/// (`_N` for a slide); `prefix` tells sources apart (`""`, `hbm_`, `hbm_locked_`). `value` reads one number of an [`ElementResponse`] for every row.
+/// `<prefix><joint>_peak_<unit>`, the [`Range`]'s `_mean_`, `_min_`, `_max_`, `_max_abs_` and
+/// `_alt_max_`, and with `torque` the same for `<prefix><joint>_torque_…_Nm` (`_N` for a slide);
+/// `prefix` tells sources apart (`""`, `hbm_`, `hbm_locked_`). `value` reads one number of an
+/// [`ElementResponse`] for every row.
 pub(crate) fn push_element_columns(
     table: &mut Table,
     joint: &crate::model::joint::Joint,
@@ -436,26 +442,47 @@ pub(crate) fn push_element_columns(
 type RangeField = fn(&Range) -> f64;
 
 /// The CSV columns of a [`Range`]: tag and read-out.
-const RANGE_COLUMNS: [(&str, RangeField); 4] =
-    [("mean", |r| r.mean), ("min", |r| r.min), ("max", |r| r.max), ("max_abs", |r| r.max_abs)];
+const RANGE_COLUMNS: [(&str, RangeField); 5] = [
+    ("mean", |r| r.mean),
+    ("min", |r| r.min),
+    ("max", |r| r.max),
+    ("max_abs", |r| r.max_abs),
+    ("alt_max", |r| r.alt_max),
+];
 
 /// The summary's table of elements in steady states: one row per (speed in rpm, element), with
 /// the amplitudes at `multiples`·n, the peak and the torque; empty when there is no row.
 pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResponse)>, multiples: &[f64]) -> String {
+    labelled_element_table("rpm", rows.map(|(rpm, e)| (rpm.to_string(), e)), multiples)
+}
+
+/// [`element_table`] with rows labelled `label` (a speed and a state, say), its column headed
+/// `first`.
+pub(crate) fn labelled_element_table<'a>(
+    first: &str,
+    rows: impl Iterator<Item = (String, &'a ElementResponse)>,
+    multiples: &[f64],
+) -> String {
     let mut body = String::new();
     // The figures' number form (five significant digits, exponents only below 1e-3 or from 1e5
     // on), so that an angle reads 0.38677 here as in the other tables, not 3.8677e-1.
     let v = |x: f64| num(x, 5);
-    for (rpm, e) in rows {
+    for (label, e) in rows {
         let amps: Vec<String> = e.amplitude.iter().map(|a| v(*a)).collect();
         let torque = e.torque.as_ref().map_or("–".to_string(), |t| {
             let per: Vec<String> = t.amplitude.iter().map(|a| v(*a)).collect();
-            format!("{}; peak {}; max abs {}", per.join(", "), v(t.peak), v(t.range.max_abs))
+            format!(
+                "{}; peak {}; max abs {}; alt max {}",
+                per.join(", "),
+                v(t.peak),
+                v(t.range.max_abs),
+                v(t.range.alt_max)
+            )
         });
         let r = &e.range;
         let _ = writeln!(
             body,
-            "| {rpm} | `{}` | {} {} | {} | {} [{}, {}] | {} | {torque} |",
+            "| {label} | `{}` | {} {} | {} | {} [{}, {}] | {} | {torque} |",
             e.joint,
             amps.join(", "),
             e.unit,
@@ -472,7 +499,7 @@ pub(crate) fn element_table<'a>(rows: impl Iterator<Item = (f64, &'a ElementResp
     let tags: Vec<String> = multiples.iter().map(|m| format!("{}n", fmt_num(*m))).collect();
     format!(
         "Elements, steady state over the last window (amplitudes at {}; torques of their spring and damper, \
-         N·m, N for a slide; mean [min, max] and the largest |q| include the wind-up):\n\n| rpm | joint | \
+         N·m, N for a slide; mean [min, max] and the largest |q| include the wind-up):\n\n| {first} | joint | \
          amplitude | peak | mean [min, max] | max abs | torque |\n|---|---|---|---|---|---|---|\n{body}\n",
         tags.join(", ")
     )

@@ -6,6 +6,7 @@
 
 mod support;
 
+mod alternating_torque;
 mod backbone;
 mod broken_pipe;
 mod campbell_crossings;
@@ -37,6 +38,7 @@ mod hbm_fold_curve;
 mod hbm_neimark_sacker;
 mod hbm_period_doubling;
 mod hbm_sensitivity;
+mod hbm_state_elements;
 mod hbm_switch;
 mod hbm_tongue;
 mod honest_peaks;

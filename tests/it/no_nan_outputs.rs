@@ -125,3 +125,50 @@ fn no_failing_study_writes_nan_or_inf() {
     println!("{scanned} files of failing studies scanned");
     assert!(scanned >= 25, "scanned only {scanned} files");
 }
+
+/// Every file under `dir`, recursively.
+fn every_file(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            out.extend(every_file(&path));
+        } else {
+            out.push(path);
+        }
+    }
+    out
+}
+
+/// Issue 49, item 4: a harmonic balance continued in torque has no one amplitude per case (NaN
+/// inside), and its figures' titles used to read "T_n = NaN N·m" in the SVGs and so in
+/// report.html. With elements (their figure) and in both continuation kinds, every file the run
+/// leaves, of every type (CSV, JSON, Markdown, SVG, HTML), is free of NaN and infinity words,
+/// and the elements figure names the continuation instead.
+#[test]
+fn a_harmonic_balance_in_torque_with_elements_writes_no_nan_in_any_file() {
+    let tmp = scratch("nonan-torque");
+    let root = tmp.path().to_path_buf();
+    copy_dir(Path::new("examples"), &root);
+    std::fs::write(
+        root.join("t.ron"),
+        r#"Study(name: "t", mechanism: "cpva.ron", spin_joint: "spin", response_body: "rotor", elements: ["pivot"],
+    analyses: [HarmonicBalance(name: "h", rpm: 1000.0, parameter: Torque(order: 3.1740911, min: 1.0, max: 120.0))])"#,
+    )
+    .unwrap();
+    let study = Study::from_file(&root.join("t.ron")).unwrap_or_else(|e| panic!("{e}"));
+    let report = run(&study, &RunOptions { out: Some(root.join("out")), progress: false }).unwrap();
+    assert!(report.failures.is_empty(), "{:?}", report.failures);
+    let files = every_file(&root.join("out"));
+    let mut kinds = std::collections::BTreeSet::new();
+    for f in &files {
+        let body = std::fs::read_to_string(f).unwrap();
+        assert!(non_finite_word(&body).is_none(), "{} holds {:?}", f.display(), non_finite_word(&body));
+        kinds.insert(f.extension().unwrap().to_string_lossy().to_string());
+    }
+    for kind in ["csv", "html", "json", "md", "svg"] {
+        assert!(kinds.contains(kind), "no {kind} file among {kinds:?}");
+    }
+    let elements = std::fs::read_to_string(root.join("out/t/h_elements.svg")).unwrap();
+    assert!(elements.contains("T_n continued at n = 3.1740911"), "the elements figure names the continuation");
+}

@@ -191,10 +191,11 @@ pub(crate) fn panel(results: &[(String, &FreeOscillationResult)]) -> Panel {
         });
     }
     let unit = results.first().map_or("", |r| r.1.unit);
-    let rpm = results.first().map_or(f64::NAN, |r| r.1.rpm);
+    // A Compare stopped before any member's free oscillation has no speed to name.
+    let speed = results.first().map_or_else(|| "no member reached".into(), |r| format!("{} rpm", fmt_num(r.1.rpm)));
     let spin = results.first().map_or(FreeSpin::Held, |r| r.1.spin);
     Panel {
-        title: format!("Free oscillation, {} ({} rpm, undamped); dotted: linear order", spin_words(spin), fmt_num(rpm)),
+        title: format!("Free oscillation, {} ({}, undamped); dotted: linear order", spin_words(spin), speed),
         x_label: format!("release amplitude, {unit}"),
         y_label: "order of the free oscillation".into(),
         series,

@@ -64,10 +64,10 @@ fn response_panel(study: &Study, spec: &HbmSpec, branches: &[HbmBranch], overlay
     markers.sort_by(|a, b| a.0.total_cmp(&b.0));
     markers.dedup_by(|a, b| (a.0 - b.0).abs() < 1e-3);
     let title = match spec.parameter {
-        HbmParameter::Order => format!("Harmonic balance, T_n = {amp} N·m, {} rpm", spec.rpm),
+        HbmParameter::Order => format!("Harmonic balance, {}, {} rpm", forcing_text(spec, amp), spec.rpm),
         HbmParameter::Speed { order, .. } => match &spec.engine {
             Some(e) => format!("Harmonic balance, engine {e}, n = {order}"),
-            None => format!("Harmonic balance, T_n = {amp} N·m, n = {order}"),
+            None => format!("Harmonic balance, {}, n = {order}", forcing_text(spec, amp)),
         },
         HbmParameter::Torque { order, .. } => format!("Harmonic balance, n = {order}, {} rpm", spec.rpm),
     };
@@ -120,6 +120,19 @@ fn sweep_jumps(study: &Study, overlay: &[&SweepRun], amp: f64) -> Vec<PointLabel
     labels
 }
 
+/// The forcing of case `amp` in words: `T_n = … N·m`, or where the case has no one amplitude
+/// (NaN: continued in torque, or an engine's orders) what stands for it, never a NaN.
+fn forcing_text(spec: &HbmSpec, amp: f64) -> String {
+    if amp.is_finite() {
+        return format!("T_n = {amp} N·m");
+    }
+    match (&spec.engine, spec.parameter) {
+        (Some(e), _) => format!("engine {e}"),
+        (None, HbmParameter::Torque { order, .. }) => format!("T_n continued at n = {order}"),
+        (None, _) => "T_n not given".into(),
+    }
+}
+
 /// `<name>_elements.svg`: the elements along each branch, their main-order amplitude (first
 /// reported multiple), one panel per amplitude, the branch from each end solid and dashed.
 pub(super) fn elements_figure(spec: &HbmSpec, branches: &[HbmBranch], dir: &Path) -> Result<PathBuf> {
@@ -147,7 +160,7 @@ pub(super) fn elements_figure(spec: &HbmSpec, branches: &[HbmBranch], dir: &Path
                 }
             }
             Panel {
-                title: format!("Elements at the {}, T_n = {amp} N·m", order_name(spec.multiples[0])),
+                title: format!("Elements at the {}, {}", order_name(spec.multiples[0]), forcing_text(spec, amp)),
                 x_label: ax.label.into(),
                 y_label: "amplitude, rad (m for slides)".into(),
                 log_y: true,
@@ -184,7 +197,7 @@ pub(super) fn backbone_figure(
             let mut series = Vec::new();
             for (b, br) in branches.iter().filter(|b| same(b.amplitude, amp)).enumerate() {
                 series.push(Series {
-                    label: if b == 0 { format!("forced, T_n = {amp} N·m") } else { String::new() },
+                    label: if b == 0 { format!("forced, {}", forcing_text(spec, amp)) } else { String::new() },
                     x: br.parameter.clone(),
                     y: br.relative_angle.clone(),
                     color: 0,
@@ -207,7 +220,7 @@ pub(super) fn backbone_figure(
                 style: LineStyle::Points,
             });
             Panel {
-                title: format!("Forced branches and the backbone, T_n = {amp} N·m, {} rpm", spec.rpm),
+                title: format!("Forced branches and the backbone, {}, {} rpm", forcing_text(spec, amp), spec.rpm),
                 x_label: "excitation order n".into(),
                 y_label: format!("largest peak joint angle, {}", bb.unit),
                 x_range: Some((spec.order_min, spec.order_max)),

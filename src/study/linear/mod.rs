@@ -96,8 +96,9 @@ pub struct ElementFrf {
     pub unit: &'static str,
     /// |q̂| per N·m at each order (rad or m per N·m).
     pub amplitude: Vec<f64>,
-    /// |(k + iωc)·q̂| per N·m at each order: the torque its spring and damper transmit (N·m per
-    /// N·m; N per N·m for a slide). Under modal damping, the spring's alone.
+    /// |(k + iωc)·q̂| per N·m at each order: the torque its spring and damper transmit, and the
+    /// compliant mesh driving it, if any ([`crate::linear::ElementLaw`]; N·m per N·m, N per N·m
+    /// for a slide). With modal damping in place of the dampers, the springs' alone.
     pub torque: Vec<f64>,
 }
 
@@ -338,13 +339,14 @@ impl Sweep<'_> {
         for &j in &self.study.elements {
             let joint = &m.joints[j];
             let Some(c) = m.coordinate(j) else { continue };
-            let k = joint.spring.map_or(0.0, |s| s.stiffness);
-            let damper = if replaced { 0.0 } else { joint.damper };
+            // The joint's spring and damper and the compliant mesh driving it (a shaft written as
+            // a mesh between two gears has its stiffness there); none transmits nothing.
+            let law = crate::linear::element_law(m, j, !replaced);
             let (amplitude, torque) = orders
                 .iter()
                 .zip(&states)
                 .map(|(&n, q)| match q {
-                    Some(q) => (q[c].norm(), (crate::linear::C64::new(k, n * omega * damper) * q[c]).norm()),
+                    Some(q) => (q[c].norm(), law.as_ref().map_or(0.0, |l| l.phasor(q.as_slice(), n * omega).norm())),
                     None => (f64::NAN, f64::NAN),
                 })
                 .unzip();

@@ -429,6 +429,28 @@ pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderRes
                 push_element_columns(&mut table, joint, &spec.multiples, torque, prefix, &el);
             }
         }
+        // Every state at each speed, numbered as `hbm` lists them: the upper state's elements
+        // where the low branch folds before the full torques and no ramp state carries them.
+        let states = result.speeds.iter().map(|s| s.hbm.len()).max().unwrap_or(0);
+        for k in 0..states {
+            let prefix = format!("hbm_state{}_", k + 1);
+            let stable = |s: &SpeedResult| s.hbm.get(k).and_then(|h| h.stable).map_or(f64::NAN, f64::from);
+            table.push(format!("{prefix}stable"), "1", result.speeds.iter().map(stable).collect());
+            for &j in &study.elements {
+                let joint = &study.mechanism.joints[j];
+                let pick = |s: &SpeedResult| -> Option<ElementResponse> {
+                    s.hbm.get(k)?.elements.iter().find(|e| e.joint == joint.name).cloned()
+                };
+                if !result.speeds.iter().any(|s| pick(s).is_some()) {
+                    continue;
+                }
+                let el = |f: &dyn Fn(&ElementResponse) -> f64| {
+                    result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |e| f(&e))).collect::<Vec<f64>>()
+                };
+                let torque = result.speeds.iter().filter_map(pick).any(|e| e.torque.is_some());
+                push_element_columns(&mut table, joint, &spec.multiples, torque, &prefix, &el);
+            }
+        }
     }
     table
 }
@@ -664,13 +686,13 @@ fn linear_elements(
                 amplitude: per_multiple(&e.amplitude, &e.phase),
                 peak: e.peak.unwrap_or(f64::NAN),
                 range: Range::about(e.mean, e.range.unwrap_or((f64::NAN, f64::NAN))),
-                torque: (!e.torque.is_empty() && (joint.spring.is_some() || joint.damper != 0.0)).then(|| {
-                    super::elements::ElementTorque {
+                torque: (!e.torque.is_empty() && crate::linear::element_law(mech, e.joint, true).is_some()).then(
+                    || super::elements::ElementTorque {
                         amplitude: per_multiple(&e.torque, &e.torque_phase),
                         peak: e.peak_torque.unwrap_or(f64::NAN),
                         range: Range::about(e.mean_torque, e.torque_range.unwrap_or((f64::NAN, f64::NAN))),
-                    }
-                }),
+                    },
+                ),
             }
         })
         .collect()

@@ -4,7 +4,7 @@
 use super::{MultiOrderResult, SpeedResult, table};
 use crate::error::Result;
 use crate::plot::{LineStyle, Panel, PointLabel, Series, num};
-use crate::study::elements::element_table;
+use crate::study::elements::{element_table, labelled_element_table};
 use crate::study::sweep::order_name;
 use crate::study::{MultiOrderSpec, Study, cell};
 use std::fmt::Write as _;
@@ -409,6 +409,24 @@ fn hbm_table(spec: &MultiOrderSpec, r: &MultiOrderResult) -> String {
         let _ = writeln!(md, "| {} | {} | {m} | {low} |", s.rpm, states.join(" "));
     }
     md.push('\n');
+    // Every state's elements, the upper state's too where the low branch folds and no ramp
+    // state carries them.
+    let rows = r.speeds.iter().flat_map(|s| {
+        s.hbm.iter().enumerate().flat_map(move |(k, h)| {
+            let st = match h.stable {
+                Some(true) => "stable",
+                Some(false) => "unstable",
+                None => "?",
+            };
+            h.elements.iter().map(move |e| (format!("{} (state {}, {st})", s.rpm, k + 1), e))
+        })
+    });
+    let t = labelled_element_table("rpm (state)", rows, &spec.multiples);
+    if !t.is_empty() {
+        let _ =
+            writeln!(md, "Elements on every state (numbered as listed above; CSV columns `hbm_state<k>_<joint>_…`):\n");
+        md += &t;
+    }
     let _ = writeln!(
         md,
         "The low-amplitude branch is continued in the torque scale s (all harmonics times s) from s = 0.01 \
