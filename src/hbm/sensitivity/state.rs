@@ -25,7 +25,7 @@ pub enum Direction<'a> {
 }
 
 /// A design parameter's value p with the family's problems at p ± h built once (h =
-/// [`DESIGN_STEP`] times the family's reference): every state of an operating set at this design
+/// 1e-5 times the family's reference): every state of an operating set at this design
 /// is differentiated with them, so the builds are paid once per design and parameter, and a
 /// state's derivative costs two residuals and a back-solve.
 #[derive(Debug)]
