@@ -83,19 +83,7 @@ fn hand_modes(m: &DMatrix<f64>, k: &DMatrix<f64>) -> (Vec<f64>, Vec<DVector<f64>
 /// Amplitude of the propeller-shaft torque (N·m) at propeller speed `rpm` under the fifth-order
 /// propeller torque `0.1 T_o (rpm/85)²`, with the dampers and the modal ratio ζ on every mode.
 fn hand_shaft_torque(rpm: f64) -> f64 {
-    let (m, k, c_d) = hand_matrices();
-    let (w, phi) = hand_modes(&m, &k);
-    let mut c = c_d;
-    for (wr, p) in w.iter().zip(&phi).skip(1) {
-        let mp = &m * p;
-        c += 2.0 * ZETA * wr * &mp * mp.transpose();
-    }
-    let omega = 5.0 * rpm * PI / 30.0;
-    let to_c = |a: &DMatrix<f64>| a.map(|x| Complex::new(x, 0.0));
-    let z = to_c(&(&k - omega * omega * &m)) + to_c(&c) * Complex::new(0.0, omega);
-    let mut force = DVector::from_element(6, Complex::new(0.0, 0.0));
-    force[0] = Complex::new(0.1 * 22.24e6 * F * (rpm / 85.0).powi(2), 0.0);
-    let x = z.lu().solve(&force).expect("regular away from resonance without damping");
+    let x = hand_state(rpm, 0.1 * 22.24e6 * F * (rpm / 85.0).powi(2));
     K_PS * (x[1] - x[0]).norm()
 }
 
