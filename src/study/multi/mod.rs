@@ -6,19 +6,20 @@ mod analysis;
 mod spec;
 pub use spec::*;
 
+mod columns;
 mod report;
 
-use super::elements::{ElementResponse, Range, from_hbm, from_window, push_element_columns};
+use super::elements::{ElementResponse, Range, from_hbm, from_window};
 use super::sim::{self, Progress};
-use super::table::Table;
 use super::{Output, Study};
 use crate::error::Result;
 use crate::model::excitation::{Excitation, Order, rpm_to_rad_s};
 use crate::study::TrackingSpec;
 use crate::time::probe::Outcome;
 use crate::time::steady::{SteadyOptions, WindowPair, settle};
+use columns::table;
 use rayon::prelude::*;
-use report::{fmt_mult, render};
+use report::render;
 use std::path::Path;
 
 /// The steady state at one speed (of the mechanism or of its locked twin).
@@ -318,141 +319,6 @@ impl SpeedResult {
     pub fn engine_torque(&self, order: f64) -> f64 {
         self.engine_torques.iter().find(|(o, _)| (o - order).abs() <= 1e-12 * order.abs()).map_or(f64::NAN, |t| t.1)
     }
-}
-
-/// The CSV table: one row per speed, per multiple the nonlinear, locked and ratio columns and
-/// the linear ones as asked for, then the steadiness columns.
-pub(crate) fn table(study: &Study, spec: &MultiOrderSpec, result: &MultiOrderResult) -> Table {
-    let mut table = Table::new(spec.name.clone());
-    table.push("rpm", "rpm", result.speeds.iter().map(|s| s.rpm).collect());
-    let has_locked = study.locked.is_some();
-    // The engine's order torques at each speed: what drives every response column after them.
-    for o in engine_orders(result) {
-        let col = result.speeds.iter().map(|s| s.engine_torque(o)).collect();
-        table.push(format!("engine_T_order{}_Nm", fmt_mult(o)), "N·m", col);
-    }
-    for (k, m) in spec.multiples.iter().enumerate() {
-        let tag = fmt_mult(*m);
-        let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
-        if spec.time_domain {
-            table.push(format!("amp_{tag}x_rad_s2"), "rad/s²", col(&|s| s.amplitude(k)));
-            if has_locked {
-                table.push(format!("locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.locked_amplitude(k)));
-                table.push(format!("ratio_{tag}x"), "1", col(&|s| s.ratio(k)));
-            }
-        }
-        if spec.linear {
-            table.push(format!("linear_{tag}x_rad_s2"), "rad/s²", col(&|s| s.linear_amplitude(k, false)));
-            if has_locked {
-                table.push(format!("linear_locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.linear_amplitude(k, true)));
-            }
-        }
-    }
-    // Gravity's order-1 line (order 1 of the rotation, whatever the base order).
-    if spec.linear && study.mechanism.loads.needs_world_orientation() {
-        let col = |f: &dyn Fn(&SpeedResult) -> Option<f64>| {
-            result.speeds.iter().map(|s| f(s).unwrap_or(f64::NAN)).collect::<Vec<f64>>()
-        };
-        table.push("linear_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity));
-        if has_locked {
-            table.push("linear_locked_gravity_order1_rad_s2", "rad/s²", col(&|s| s.linear_gravity_locked));
-        }
-    }
-    if spec.linear {
-        // Each reported element in the linear response: its amplitude per order and peak, and its
-        // spring-and-damper torque.
-        for (e, &j) in study.elements.iter().enumerate() {
-            let joint = &study.mechanism.joints[j];
-            let pick = |s: &SpeedResult| s.linear_elements.get(e).filter(|x| x.joint == joint.name).cloned();
-            if !result.speeds.iter().any(|s| pick(s).is_some()) {
-                continue;
-            }
-            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
-                result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |x| f(&x))).collect::<Vec<f64>>()
-            };
-            let torque = result.speeds.iter().filter_map(pick).any(|x| x.torque.is_some());
-            push_element_columns(&mut table, joint, &spec.multiples, torque, "linear_", &el);
-        }
-    }
-    if spec.time_domain {
-        let col = |f: &dyn Fn(&Steady) -> f64| {
-            result.speeds.iter().map(|s| s.response.as_ref().map_or(f64::NAN, f)).collect::<Vec<f64>>()
-        };
-        table.push("steady_change", "1", col(&|s| s.change));
-        table.push("max_relative_angle_rad", "rad", col(&|s| s.max_relative_angle));
-        table.push("simulated_s", "s", col(&|s| s.time_s));
-        // Each reported element over the last window: its amplitude per order and peak, and its
-        // spring-and-damper torque (N·m; N for a slide).
-        for (e, &j) in study.elements.iter().enumerate() {
-            let el = |f: &dyn Fn(&ElementResponse) -> f64| {
-                result
-                    .speeds
-                    .iter()
-                    .map(|s| s.response.as_ref().and_then(|r| r.elements.get(e)).map_or(f64::NAN, f))
-                    .collect::<Vec<f64>>()
-            };
-            let joint = &study.mechanism.joints[j];
-            let torque = joint.spring.is_some() || joint.damper != 0.0;
-            push_element_columns(&mut table, joint, &spec.multiples, torque, "", &el);
-        }
-    }
-    if spec.hbm {
-        for (k, m) in spec.multiples.iter().enumerate() {
-            let tag = fmt_mult(*m);
-            let col = |f: &dyn Fn(&SpeedResult) -> f64| result.speeds.iter().map(f).collect::<Vec<f64>>();
-            table.push(format!("hbm_{tag}x_rad_s2"), "rad/s²", col(&|s| s.hbm_amplitude(k, false)));
-            if has_locked {
-                table.push(format!("hbm_locked_{tag}x_rad_s2"), "rad/s²", col(&|s| s.hbm_amplitude(k, true)));
-                table.push(format!("hbm_ratio_{tag}x"), "1", col(&|s| s.hbm_ratio(k)));
-            }
-        }
-        // The elements on the torque ramp's state, of the mechanism and of the locked twin (by
-        // joint name: the twin lacks the locked joints).
-        for (prefix, locked) in [("hbm_", false), ("hbm_locked_", true)] {
-            if locked && !has_locked {
-                continue;
-            }
-            for &j in &study.elements {
-                let joint = &study.mechanism.joints[j];
-                let pick = |s: &SpeedResult| -> Option<ElementResponse> {
-                    let st = if locked { s.hbm_locked.as_ref() } else { s.hbm_ramp.as_ref() }?;
-                    st.elements.iter().find(|e| e.joint == joint.name).cloned()
-                };
-                let present = result.speeds.iter().any(|s| pick(s).is_some());
-                if !present {
-                    continue;
-                }
-                let el = |f: &dyn Fn(&ElementResponse) -> f64| {
-                    result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |e| f(&e))).collect::<Vec<f64>>()
-                };
-                let torque = result.speeds.iter().filter_map(pick).any(|e| e.torque.is_some());
-                push_element_columns(&mut table, joint, &spec.multiples, torque, prefix, &el);
-            }
-        }
-        // Every state at each speed, numbered as `hbm` lists them: the upper state's elements
-        // where the low branch folds before the full torques and no ramp state carries them.
-        let states = result.speeds.iter().map(|s| s.hbm.len()).max().unwrap_or(0);
-        for k in 0..states {
-            let prefix = format!("hbm_state{}_", k + 1);
-            let stable = |s: &SpeedResult| s.hbm.get(k).and_then(|h| h.stable).map_or(f64::NAN, f64::from);
-            table.push(format!("{prefix}stable"), "1", result.speeds.iter().map(stable).collect());
-            for &j in &study.elements {
-                let joint = &study.mechanism.joints[j];
-                let pick = |s: &SpeedResult| -> Option<ElementResponse> {
-                    s.hbm.get(k)?.elements.iter().find(|e| e.joint == joint.name).cloned()
-                };
-                if !result.speeds.iter().any(|s| pick(s).is_some()) {
-                    continue;
-                }
-                let el = |f: &dyn Fn(&ElementResponse) -> f64| {
-                    result.speeds.iter().map(|s| pick(s).map_or(f64::NAN, |e| f(&e))).collect::<Vec<f64>>()
-                };
-                let torque = result.speeds.iter().filter_map(pick).any(|e| e.torque.is_some());
-                push_element_columns(&mut table, joint, &spec.multiples, torque, &prefix, &el);
-            }
-        }
-    }
-    table
 }
 
 /// What the summary computes per speed beyond the results (also in `results.json`).
