@@ -53,6 +53,7 @@ pub mod combustion;
 pub mod cpva;
 pub mod plot;
 pub mod study;
+pub mod synthesis;
 
 /// The user guide's Rust chapter, whose examples run as doc tests (`cargo test --doc`).
 #[cfg(doctest)]

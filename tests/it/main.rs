@@ -74,6 +74,7 @@ mod shapes;
 mod stiff;
 mod study;
 mod study_reliability;
+mod synthesis;
 mod transient;
 mod truck_driveline;
 mod unison_averaging;
