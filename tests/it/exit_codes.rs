@@ -41,7 +41,7 @@ fn usage_errors_exit_2() {
     assert_exit(&kanedyn(tmp.path(), &["check", "cpva.ron", "--no-such-flag"]), 2, &["--no-such-flag"]);
     // Ours: values that parse but cannot be used (2 degrees of freedom, one value given).
     assert_exit(&kanedyn(tmp.path(), &["eom", "cpva.ron", "--q", "0", "--u", "0,0"]), 2, &["--q needs 2"]);
-    assert_exit(&kanedyn(tmp.path(), &["check", "cpva.ron", "--max-memory-mb", "-1"]), 2, &["--max-memory-mb"]);
+    assert_exit(&kanedyn(tmp.path(), &["check", "cpva.ron", "--max-memory-mb=0"]), 2, &["--max-memory-mb"]);
 }
 
 #[test]
