@@ -10,8 +10,8 @@
 # seconds. Needs python3 (≥ 3.9, with venv) and cargo on PATH; $PYTHON picks another
 # interpreter for a new environment.
 #
-# The package is built into the root crate's target folder (target/, or $CARGO_TARGET_DIR), not
-# python/target: the library and every crate below it resolve alike in both workspaces
+# The package is a member of the root's workspace, built into its target folder (target/, or
+# $CARGO_TARGET_DIR): the library and every crate below it resolve alike for both
 # (python/tests/test_lockfile.py), so after `cargo test --release` (./test.sh) the library is not
 # compiled again, only PyO3, numpy and the package's own crate.
 set -euo pipefail
