@@ -12,8 +12,8 @@
 #
 # The package is a member of the root's workspace, built into its target folder (target/, or
 # $CARGO_TARGET_DIR): the library and every crate below it resolve alike for both
-# (python/tests/test_lockfile.py), so after `cargo test --release` (./test.sh) the library is not
-# compiled again, only PyO3, numpy and the package's own crate.
+# (python/tests/test_lockfile.py), so after `cargo test --release` (./test.sh) no dependency is
+# compiled again, and the package and the CLI built below share one compilation of the library.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

@@ -30,11 +30,12 @@ def resolved(package):
 
 
 @pytest.mark.skipif(shutil.which("cargo") is None, reason="needs cargo")
-def test_the_library_resolves_alike_in_both_workspaces():
+def test_the_library_resolves_alike_for_the_crate_and_the_package():
     """The library and each crate below it have the same features whether the root crate or the
     package is built (cargo unifies features only over the packages a command builds). Then
-    their compiled units are the same, and run-tests.sh reuses the library that `cargo test
-    --release` compiled instead of compiling it once more (issue 54, item 1). The root's
+    their compiled units are the same, and run-tests.sh reuses the dependencies `cargo test
+    --release` compiled and one compilation of the library for the package and the CLI (issue
+    54, item 1). The root's
     Cargo.toml lists the features PyO3 and numpy add (matrixmultiply, once_cell, syn); a new
     dependency of the package that adds another makes this fail, naming it."""
     library = resolved("kanedyn")
