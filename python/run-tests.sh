@@ -9,10 +9,16 @@
 # (the notebook example, executed by a test) and opentorsion (the OpenTorsion importer's tests) into it; later runs reuse it, and cargo rebuilds only what changed, so a second run takes
 # seconds. Needs python3 (≥ 3.9, with venv) and cargo on PATH; $PYTHON picks another
 # interpreter for a new environment.
+#
+# The package is a member of the root's workspace, built into its target folder (target/, or
+# $CARGO_TARGET_DIR): the library and every crate below it resolve alike for both
+# (python/tests/test_lockfile.py), so after `cargo test --release` (./test.sh) no dependency is
+# compiled again, and the package and the CLI built below share one compilation of the library.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 root="$(dirname "$here")"
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 venv="${KANEDYN_VENV:-$here/.venv}"
 py="$venv/bin/python"
 

@@ -16,9 +16,9 @@
 # the crate (zig as linker changes every unit's fingerprint): measured on this 2-core VM, a cold
 # build of about 5 min next to the host build's 0.7 s (reusing run-tests.sh's build). To keep both
 # builds warm on a developer's machine, this one has its own target folder, python/target/wheel/.
-# KANEDYN_WHEEL_TAG=host builds with the host's toolchain in python/target instead (seconds after
-# python/run-tests.sh): the same check of the install, for a wheel that only installs on glibc as
-# new as the host's.
+# KANEDYN_WHEEL_TAG=host builds with the host's toolchain in the root's target folder instead, as
+# python/run-tests.sh does (seconds after it): the same check of the install, for a wheel that
+# only installs on glibc as new as the host's.
 #
 # Needs python3 (≥ 3.9, with venv) and cargo; maturin and ziglang are installed into a build
 # environment of their own (python/target/wheel/build-venv), so the test environment is untouched.
@@ -60,7 +60,8 @@ if [ "$zig" = 1 ]; then
         --manifest-path "$here/Cargo.toml" --zig --compatibility manylinux2014 --out "$dist"
 else
     echo "wheel-check: building the wheel with the host's toolchain (its manylinux tag)"
-    "$build_venv/bin/maturin" build --release --quiet --manifest-path "$here/Cargo.toml" --out "$dist"
+    CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}" "$build_venv/bin/maturin" build --release --quiet \
+        --manifest-path "$here/Cargo.toml" --out "$dist"
 fi
 build_s=$(since "$start")
 wheels=("$dist"/*.whl)

@@ -50,6 +50,16 @@ pub enum Error {
         /// What is wrong, in words.
         message: String,
     },
+    /// A limit refused the input: a file, a mechanism or a study's estimated work (memory, output,
+    /// CPU time) beyond a limit that can be raised on purpose (the message names the flag or
+    /// option). Input that is wrong, not just large, is [`Error::Input`].
+    #[error("{location}: {message}")]
+    Limit {
+        /// Where the refused quantity is set (the file, or the field that drives it).
+        location: Location,
+        /// What exceeds which limit and how to raise it, in words.
+        message: String,
+    },
     /// A mechanism that parses but cannot be simulated (e.g. a singular mass matrix).
     #[error("mechanism `{mechanism}`: {message}")]
     Model {
@@ -61,6 +71,23 @@ pub enum Error {
     /// A failure while evaluating the equations of motion.
     #[error(transparent)]
     Engine(#[from] EngineError),
+}
+
+impl Error {
+    /// Whether this is a limit's refusal ([`Error::Limit`]).
+    pub fn is_limit(&self) -> bool {
+        matches!(self, Error::Limit { .. })
+    }
+
+    /// This error as a limit's refusal when `limit` is true and it is an [`Error::Input`]; else
+    /// unchanged. Code that moves an input error to another file or field (an overlay, a
+    /// study's sub-study) builds an `Input` at the new place and keeps the class with this.
+    pub(crate) fn limit_if(self, limit: bool) -> Self {
+        match self {
+            Error::Input { location, message } if limit => Error::Limit { location, message },
+            other => other,
+        }
+    }
 }
 
 /// Failures of the equation-of-motion evaluation.

@@ -97,13 +97,15 @@ fn check_counts(spec: &MechanismSpec, src: &Source, policy: &ReadPolicy) -> Resu
         ("loads", spec.loads.len(), max.saturating_mul(10)),
     ] {
         if count > limit {
-            return Err(src.error(
-                field,
-                format!(
-                    "{count} {field}, more than the limit of {limit} (the body cap is {max}, loads may be ten \
+            return Err(src
+                .error(
+                    field,
+                    format!(
+                        "{count} {field}, more than the limit of {limit} (the body cap is {max}, loads may be ten \
                      times as many); raise it with `--max-bodies N` if the mechanism is genuine"
-                ),
-            ));
+                    ),
+                )
+                .limit_if(true));
         }
     }
     if spec.bodies.is_empty() {

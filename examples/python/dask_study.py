@@ -1,6 +1,11 @@
 """The design studies of examples/design_study.ron on a local Dask cluster, as a script.
 
-    pip install "kanedyn[dask]"
+kanedyn is not on the package index: install it from this repository, with the Dask extra, then run
+the script from the repository's root:
+
+    pip install "./python[dask]"                # compiles the crate (a Rust toolchain ≥ 1.90)
+    # or, with no Rust on the machine, a wheel built where Rust is (python/README.md, "Install"):
+    #   pip install "kanedyn-0.1.0-cp39-abi3-manylinux2014_x86_64.manylinux_2_17_x86_64.whl[dask]"
     python examples/python/dask_study.py
 """
 

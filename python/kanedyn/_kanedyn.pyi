@@ -11,6 +11,7 @@ __all__ = [
     "__version__",
     "KanedynError",
     "InputError",
+    "LimitError",
     "ReadError",
     "ModelError",
     "EngineError",
@@ -48,6 +49,9 @@ class InputError(KanedynError):
     column: Optional[int]
     field: str
     reason: str
+
+class LimitError(InputError):
+    """Input refused by a limit that can be raised on purpose (the message names the option)."""
 
 class ReadError(KanedynError):
     """A file could not be read."""

@@ -32,6 +32,15 @@ create_exception!(
 );
 create_exception!(
     kanedyn,
+    LimitError,
+    InputError,
+    "Input refused by a limit that can be raised on purpose: a file over the size cap, more bodies\n\
+     than the body cap, a study whose estimated memory, output or CPU time exceeds its limit. The\n\
+     message names the option that raises it.\n\n\
+     A subclass of `InputError` (code that catches that still catches this), with its attributes."
+);
+create_exception!(
+    kanedyn,
     ReadError,
     KanedynError,
     "A file could not be read (missing, not a regular file, no permission).\n\nAttribute: `file` (str)."
@@ -91,6 +100,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("KanedynError", py.get_type::<KanedynError>())?;
     m.add("InputError", py.get_type::<InputError>())?;
+    m.add("LimitError", py.get_type::<LimitError>())?;
     m.add("ReadError", py.get_type::<ReadError>())?;
     m.add("ModelError", py.get_type::<ModelError>())?;
     m.add("EngineError", py.get_type::<EngineError>())?;
@@ -132,6 +142,7 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
     let message = message_of(e);
     let err = match e {
         Error::Input { .. } => InputError::new_err(message),
+        Error::Limit { .. } => LimitError::new_err(message),
         Error::Io { .. } => ReadError::new_err(message),
         Error::Model { .. } => ModelError::new_err(message),
         Error::Engine(_) => EngineError::new_err(message),
@@ -144,7 +155,7 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
 
 fn set_attributes(value: &Bound<'_, pyo3::exceptions::PyBaseException>, e: &Error) -> PyResult<()> {
     match e {
-        Error::Input { location, message } => {
+        Error::Input { location, message } | Error::Limit { location, message } => {
             value.setattr("file", location.file.display().to_string())?;
             value.setattr("line", location.line_col.map(|(l, _)| l))?;
             value.setattr("column", location.line_col.map(|(_, c)| c))?;

@@ -69,7 +69,7 @@ def test_operating_point_and_matrices(cpva):
 def test_order_response_equals_the_cli_csv_bit_for_bit(cpva, cli_run):
     # examples/cpva_linear.ron: 1000 rpm, pivot locked in the twin, variant c_p = 5e-4 (the file's
     # own pivot damper).
-    csv = read_csv(cli_run(EXAMPLES / "cpva_linear.ron") / "figure2_c_p___5e-4.csv")
+    csv = read_csv(cli_run(EXAMPLES / "cpva_linear.ron") / "figure2_c_p_5e-4.csv")
     lin = kanedyn.linearize(cpva, "spin", 1000.0)
     r = lin.order_response("spin", "rotor", csv["order"], lock=["pivot"])
     assert same_bits(r.orders, csv["order"]) and len(r) == 1201

@@ -1,29 +1,46 @@
-"""The package is built with the same dependency versions as the CLI.
+"""The package is built with the same dependency versions and features as the CLI."""
 
-`python/Cargo.lock` is its own (the crate is its own workspace); a dependency at another version
-than the root's lock could change the numbers the bit-for-bit tests compare, so every package
-both locks hold must be at the same version.
-"""
+import shutil
+import subprocess
 
 import pytest
 
 from conftest import ROOT
 
-tomllib = pytest.importorskip("tomllib")
+
+def test_one_lock_file_for_the_library_and_the_package():
+    """The package is a member of the root's workspace (python/Cargo.toml has no `[workspace]`):
+    one Cargo.lock, so the library and the package are built with the same dependency versions,
+    and a version that differed could not change the numbers the bit-for-bit tests compare."""
+    assert not (ROOT / "python" / "Cargo.lock").exists()
+    assert "[workspace]" not in (ROOT / "python" / "Cargo.toml").read_text()
 
 
-def versions(path):
-    """Package name → the set of its locked versions (a name may be locked at two versions)."""
-    with open(path, "rb") as f:
-        out = {}
-        for p in tomllib.load(f)["package"]:
-            out.setdefault(p["name"], set()).add(p["version"])
-        return out
+def resolved(package):
+    """Each crate of `package`'s tree (no dev-dependencies) with its resolved features, as cargo
+    resolves them for a build of that package alone."""
+    p = subprocess.run(
+        ["cargo", "tree", "--manifest-path", str(ROOT / "Cargo.toml"), "-p", package, "-e", "no-dev", "-f", "{p} {f}", "--prefix", "none", "--locked"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    # A crate reached twice is marked `(*)` the second time: the same crate, the same features.
+    return {line.removesuffix(" (*)") for line in p.stdout.splitlines() if line.strip()}
 
 
-def test_shared_dependencies_have_the_root_versions():
-    root, py = versions(ROOT / "Cargo.lock"), versions(ROOT / "python" / "Cargo.lock")
-    shared = sorted(set(root) & set(py))
-    assert len(shared) > 50  # nalgebra, parry2d-f64, … (not a vacuous comparison)
-    differ = {name: (sorted(root[name]), sorted(py[name])) for name in shared if not py[name] <= root[name]}
-    assert not differ, f"python/Cargo.lock has versions the root's Cargo.lock has not (root, python): {differ}"
+@pytest.mark.skipif(shutil.which("cargo") is None, reason="needs cargo")
+def test_the_library_resolves_alike_for_the_crate_and_the_package():
+    """The library and each crate below it have the same features whether the root crate or the
+    package is built (cargo unifies features only over the packages a command builds). Then
+    their compiled units are the same, and run-tests.sh reuses the dependencies `cargo test
+    --release` compiled and one compilation of the library for the package and the CLI (issue
+    54, item 1). The root's
+    Cargo.toml lists the features PyO3 and numpy add (matrixmultiply, once_cell, syn); a new
+    dependency of the package that adds another makes this fail, naming it."""
+    library = resolved("kanedyn")
+    package = resolved("kanedyn-python")
+    assert len(library) > 100, sorted(library)[:5]
+    # A crate whose features differ is a different line: missing from the package's tree.
+    differ = sorted(library - package)
+    assert not differ, f"resolved differently when the package is built: {differ}"

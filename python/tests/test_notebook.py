@@ -1,4 +1,5 @@
-"""The notebook example (examples/python/cpva.ipynb) executes without error from its folder, and is
+"""The notebook example (examples/python/cpva.ipynb) executes without error with its kernel started
+at the repository's root (it finds examples/ from any folder inside the repository), and is
 stored with its outputs (so a reader sees its figures without running it) that a fresh execution
 reproduces: the same text results and printed lines."""
 
@@ -46,7 +47,7 @@ def test_the_notebook_executes(monkeypatch):
     stored = text_outputs(nbformat.read(NOTEBOOK, as_version=4))
     nb = nbformat.read(NOTEBOOK, as_version=4)
     client = nbclient.NotebookClient(
-        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(NOTEBOOK.parent)}}
+        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(EXAMPLES.parent)}}
     )
     client.execute()  # raises CellExecutionError, with the cell and its traceback, on any error
     printed = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs)

@@ -1,7 +1,10 @@
 //! The `kanedyn` command-line tool: check a mechanism, evaluate its equations of motion at a
 //! state, run a study.
+//!
+//! Exit codes by class of failure, for scripts (the table is in docs/guide/src/cli.md): see
+//! [`exit_code`].
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use kanedyn::kane::Kane;
 use kanedyn::model::excitation::Excitation;
@@ -26,6 +29,9 @@ enum Command {
     Check {
         /// Mechanism or study file (RON).
         file: PathBuf,
+        /// Print nothing when the file is valid: the exit code alone answers.
+        #[arg(long, short)]
+        quiet: bool,
         #[command(flatten)]
         limits: LimitArgs,
     },
@@ -61,8 +67,11 @@ enum Command {
         threads: Option<usize>,
         /// Also print the full summary (every table of summary.md) and the files written, before
         /// the digest.
-        #[arg(long, short)]
+        #[arg(long, short, conflicts_with = "quiet")]
         verbose: bool,
+        /// Print nothing on success: no progress, notes or digest (errors still go to stderr).
+        #[arg(long, short)]
+        quiet: bool,
         #[command(flatten)]
         limits: LimitArgs,
     },
@@ -122,7 +131,7 @@ impl LimitArgs {
             ("--max-cpu-hours", self.max_cpu_hours),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                bail!("{name} must be a finite, positive number, got {v}");
+                return Err(usage(format!("{name} must be a finite, positive number, got {v}")));
             }
         }
         let mb = 1024.0 * 1024.0;
@@ -144,12 +153,91 @@ impl LimitArgs {
 /// Most worker threads per core: more only adds memory and scheduling.
 const THREADS_PER_CORE: usize = 4;
 
+/// A command line that parses but asks for something impossible (a list of the wrong length, a
+/// limit that is not a positive number): a usage error, as clap's own.
+#[derive(Debug)]
+struct Usage(String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// A usage error with this message.
+fn usage(message: String) -> anyhow::Error {
+    Usage(message).into()
+}
+
+/// A run that completed with some analyses failed: their results are missing, the others are
+/// written.
+#[derive(Debug)]
+struct AnalysesFailed(String);
+
+impl std::fmt::Display for AnalysesFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for AnalysesFailed {}
+
+/// Exit codes by class: a script can tell a mistake in its command line from one in a file, a
+/// limit to raise, a machine problem and a partial result. clap exits with 2 on its own.
+mod exit {
+    /// A bug: anything not classed below (a panic exits with Rust's 101).
+    pub const INTERNAL: u8 = 1;
+    /// The command line: an unknown flag or subcommand (clap), an impossible value.
+    pub const USAGE: u8 = 2;
+    /// A file's content: syntax, unknown field, a value out of range, a mechanism that cannot be
+    /// evaluated.
+    pub const INPUT: u8 = 3;
+    /// A limit that can be raised on purpose (`--max-…`).
+    pub const LIMIT: u8 = 4;
+    /// The operating system: a file that cannot be read or written, standard output closed
+    /// with an error.
+    pub const OS: u8 = 5;
+    /// A run that completed with some analyses failed (the others' results are written).
+    pub const ANALYSES_FAILED: u8 = 6;
+}
+
+/// The exit code of an error: the class of the first cause that has one (see [`exit`]).
+fn exit_code(e: &anyhow::Error) -> u8 {
+    use kanedyn::error::Error as Lib;
+    for cause in e.chain() {
+        if cause.is::<Usage>() {
+            return exit::USAGE;
+        }
+        if cause.is::<AnalysesFailed>() {
+            return exit::ANALYSES_FAILED;
+        }
+        if cause.is::<std::io::Error>() {
+            return exit::OS;
+        }
+        if cause.is::<kanedyn::error::EngineError>() {
+            return exit::INPUT;
+        }
+        if let Some(lib) = cause.downcast_ref::<Lib>() {
+            return match lib {
+                Lib::Input { .. } | Lib::Model { .. } | Lib::Engine(_) => exit::INPUT,
+                Lib::Limit { .. } => exit::LIMIT,
+                Lib::Io { .. } => exit::OS,
+            };
+        }
+    }
+    exit::INTERNAL
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Check { file, limits } => check_file(&file, &limits),
+        Command::Check { file, quiet, limits } => check_file(&file, quiet, &limits),
         Command::Eom { file, q, u, t, joint_torque } => eom(&file, &q, &u, t, &joint_torque),
-        Command::Run { study, out, threads, verbose, limits } => run(&study, &out, threads, verbose, &limits),
+        Command::Run { study, out, threads, verbose, quiet, limits } => {
+            run(&study, &out, threads, Verbosity::from_flags(verbose, quiet), &limits)
+        }
         Command::Schema => serde_json::to_string_pretty(&kanedyn::study::json::schema())
             .map_err(Into::into)
             .and_then(|text| stdout(format_args!("{text}\n"))),
@@ -160,7 +248,7 @@ fn main() -> ExitCode {
         Err(e) => {
             // Not `eprintln!`, which panics when standard error is closed too.
             let _ = writeln!(std::io::stderr(), "error: {}", without_repeats(&e));
-            ExitCode::FAILURE
+            ExitCode::from(exit_code(&e))
         }
     }
 }
@@ -171,7 +259,9 @@ fn main() -> ExitCode {
 /// panicked with exit 101 and a backtrace). Any other write error is the command's error.
 fn stdout(args: std::fmt::Arguments<'_>) -> Result<()> {
     match std::io::stdout().lock().write_fmt(args) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(anyhow!("cannot write to standard output: {e}")),
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(e).context("cannot write to standard output"))
+        }
         _ => Ok(()),
     }
 }
@@ -195,14 +285,21 @@ macro_rules! sayln {
 
 /// `check` on a study (its text begins with `Study(`) prints the plan; on anything else it
 /// checks a mechanism.
-fn check_file(file: &Path, limits: &LimitArgs) -> Result<()> {
+fn check_file(file: &Path, quiet: bool, limits: &LimitArgs) -> Result<()> {
     let opts = limits.options()?;
     let capped = kanedyn::io::ReadPolicy::unrestricted().with_max_file_bytes(opts.max_file_bytes);
     let src = kanedyn::io::Source::read_with(file, &capped)?;
     if !src.text.lines().any(|l| l.trim_start().starts_with("Study(")) {
-        return check(file, &opts.policy_for(file));
+        let policy = opts.policy_for(file);
+        if quiet {
+            return Mechanism::from_file_with(file, &policy).map(|_| ()).map_err(Into::into);
+        }
+        return check(file, &policy);
     }
     let study = Study::from_source(src, &opts)?;
+    if quiet {
+        return Ok(());
+    }
     let plan = study.plan();
     sayln!("study `{}` ({}): OK", study.spec.name, file.display());
     sayln!(
@@ -308,15 +405,17 @@ fn check(file: &Path, policy: &kanedyn::io::ReadPolicy) -> Result<()> {
 
 fn parse_list(name: &str, values: &[String], n: usize) -> Result<Vec<f64>> {
     if values.len() != n {
-        bail!("--{name} needs {n} comma-separated values (one per degree of freedom), got {}", values.len());
+        let got = values.len();
+        return Err(usage(format!("--{name} needs {n} comma-separated values (one per degree of freedom), got {got}")));
     }
     values
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            let v: f64 = s.trim().parse().map_err(|_| anyhow!("--{name}: value {} `{s}` is not a number", i + 1))?;
+            let v: f64 =
+                s.trim().parse().map_err(|_| usage(format!("--{name}: value {} `{s}` is not a number", i + 1)))?;
             if !v.is_finite() {
-                bail!("--{name}: value {} is not finite ({s})", i + 1);
+                return Err(usage(format!("--{name}: value {} is not finite ({s})", i + 1)));
             }
             Ok(v)
         })
@@ -329,20 +428,22 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
     let q = parse_list("q", q, n)?;
     let u = parse_list("u", u, n)?;
     if !t.is_finite() {
-        bail!("--t must be finite");
+        return Err(usage("--t must be finite".into()));
     }
     let mut kane = Kane::new(&mech)?;
     for spec in torques {
         let (name, value) =
-            spec.split_once('=').ok_or_else(|| anyhow!("--joint-torque `{spec}`: expected NAME=VALUE"))?;
+            spec.split_once('=').ok_or_else(|| usage(format!("--joint-torque `{spec}`: expected NAME=VALUE")))?;
         let joint = mech.joint_index(name.trim()).ok_or_else(|| {
             let names: Vec<&str> = mech.joints.iter().map(|j| j.name.as_str()).collect();
-            anyhow!("--joint-torque: unknown joint `{name}` (joints: {})", names.join(", "))
+            usage(format!("--joint-torque: unknown joint `{name}` (joints: {})", names.join(", ")))
         })?;
-        let v: f64 =
-            value.trim().parse().with_context(|| format!("--joint-torque `{spec}`: `{value}` is not a number"))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|e| usage(format!("--joint-torque `{spec}`: `{value}` is not a number: {e}")))?;
         if !v.is_finite() {
-            bail!("--joint-torque `{spec}`: value is not finite");
+            return Err(usage(format!("--joint-torque `{spec}`: value is not finite")));
         }
         kane.set_joint_torque(joint, Excitation::constant(v));
     }
@@ -375,17 +476,42 @@ fn eom(file: &Path, q: &[String], u: &[String], t: f64, torques: &[String]) -> R
         .or_else(|| first_bad("q̇", &out.qdot))
         .or_else(|| first_bad("u̇", &out.udot));
     if let Some(what) = bad {
-        bail!("the equations of motion overflow at this state: {what} (values too large for f64?)");
+        // The state given on the command line is out of range for this mechanism.
+        return Err(usage(format!(
+            "the equations of motion overflow at this state: {what} (values too large for f64?)"
+        )));
     }
     sayln!("{}", serde_json::to_string(&out)?);
     Ok(())
 }
 
-fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &LimitArgs) -> Result<()> {
+/// How much `run` prints on success.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Verbosity {
+    /// Nothing (`--quiet`): the exit code answers, errors go to stderr.
+    Quiet,
+    /// Progress bars (on a terminal), notes and the digest.
+    Digest,
+    /// Also the whole summary and the files written (`--verbose`).
+    Verbose,
+}
+
+impl Verbosity {
+    fn from_flags(verbose: bool, quiet: bool) -> Self {
+        match (verbose, quiet) {
+            (_, true) => Verbosity::Quiet,
+            (true, false) => Verbosity::Verbose,
+            (false, false) => Verbosity::Digest,
+        }
+    }
+}
+
+fn run(file: &Path, out: &Path, threads: Option<usize>, verbosity: Verbosity, limits: &LimitArgs) -> Result<()> {
+    let quiet = verbosity == Verbosity::Quiet;
     if let Some(n) = threads {
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
         let cap = THREADS_PER_CORE * cores;
-        if n > cap {
+        if n > cap && !quiet {
             eprintln!(
                 "note: --threads {n} lowered to {cap} ({THREADS_PER_CORE} per core on this {cores}-core machine)"
             );
@@ -395,8 +521,8 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &
     }
     let study = Study::from_file_with(file, &limits.options()?)?;
     let start = std::time::Instant::now();
-    let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: true })?;
-    if verbose {
+    let report = kanedyn::study::run(&study, &RunOptions { out: Some(out.to_path_buf()), progress: !quiet })?;
+    if verbosity == Verbosity::Verbose {
         sayln!("{}", report.summary);
         sayln!("files written:");
         for f in &report.files {
@@ -404,16 +530,19 @@ fn run(file: &Path, out: &Path, threads: Option<usize>, verbose: bool, limits: &
         }
         sayln!();
     }
-    for line in kanedyn::study::digest(&study, &report, start.elapsed().as_secs_f64()) {
-        sayln!("{line}");
+    if !quiet {
+        for line in kanedyn::study::digest(&study, &report, start.elapsed().as_secs_f64()) {
+            sayln!("{line}");
+        }
     }
     if !report.failures.is_empty() {
         let summary = report.files.iter().find(|f| f.ends_with("summary.md"));
-        bail!(
+        return Err(AnalysesFailed(format!(
             "{} failure(s): the other results are complete; see the Failures section of {}",
             report.failures.len(),
             summary.map_or("summary.md".into(), |p| p.display().to_string())
-        );
+        ))
+        .into());
     }
     Ok(())
 }
@@ -435,5 +564,7 @@ fn import(file: &Path, out: Option<&Path>, name: Option<&str>, max_file_kb: u64)
         Some(path) => std::fs::write(path, &ron).with_context(|| format!("{}: cannot write", path.display()))?,
         None => say!("{ron}"),
     }
-    loaded.map(|_| ()).map_err(|e| anyhow!("the converted mechanism was written but does not load as it is: {e}"))
+    loaded
+        .map(|_| ())
+        .map_err(|e| anyhow::Error::new(e).context("the converted mechanism was written but does not load as it is"))
 }

@@ -354,6 +354,7 @@ fn read_capped(file: &Path, open: &Path, max: u64) -> Result<Vec<u8>> {
             "file is {size} bytes, more than the limit of {max} bytes (input files are a few kB); \
              if it is genuine, raise the limit with `--max-file-kb` (library: `ReadPolicy::with_max_file_bytes`)"
         ))
+        .limit_if(true)
     };
     // Stat before opening: opening a FIFO would block until someone writes to it.
     let meta = std::fs::metadata(open).map_err(io)?;

@@ -122,9 +122,10 @@ fn check_clashes(spec: &MechanismSpec, base_spec: &MechanismSpec, base: &str, sr
 /// Moves an error in the merged spec back to the file and item it came from: `list[N]` with N
 /// below the base's count is the base's own item, above it the overlay's `list[N − n_base]`.
 pub(super) fn relocate(e: Error, counts: &[(&str, usize)], src: &Source, base_src: &Source) -> Error {
+    let limit = e.is_limit();
     match e {
         // Errors inside a part file are already where they belong.
-        Error::Input { location, message } if location.file == src.file => {
+        Error::Input { location, message } | Error::Limit { location, message } if location.file == src.file => {
             let relocated = counts.iter().find_map(|&(list, n)| {
                 let rest = location.path.strip_prefix(list)?.strip_prefix('[')?;
                 let (index, tail) = rest.split_once(']')?;
@@ -135,7 +136,7 @@ pub(super) fn relocate(e: Error, counts: &[(&str, usize)], src: &Source, base_sr
                     src.locate(&format!("{list}[{}]{tail}", index - n))
                 })
             });
-            Error::Input { location: relocated.unwrap_or_else(|| src.locate(&location.path)), message }
+            Error::Input { location: relocated.unwrap_or_else(|| src.locate(&location.path)), message }.limit_if(limit)
         }
         other => other,
     }

@@ -176,9 +176,12 @@ impl<'a> Resources<'a> {
 /// no line, no field), moved to the study field that named it; other errors unchanged. Such
 /// errors used to name the file alone, not where the study asked for it.
 pub(crate) fn whole_file_at(e: Error, src: &Source, field: &str) -> Error {
+    let limit = e.is_limit();
     match e {
-        Error::Input { location, message } if location.line_col.is_none() && location.path.is_empty() => {
-            src.error(field, format!("{}: {message}", location.file.display()))
+        Error::Input { location, message } | Error::Limit { location, message }
+            if location.line_col.is_none() && location.path.is_empty() =>
+        {
+            src.error(field, format!("{}: {message}", location.file.display())).limit_if(limit)
         }
         other => other,
     }

@@ -95,7 +95,7 @@ impl Study {
         let mech_path = policy.resolve(&base, &spec.mechanism).map_err(|m| src.error("mechanism", m))?;
         let mechanism = Mechanism::from_file_with(&mech_path, &policy).map_err(|e| match e {
             Error::Io { .. } => src.error("mechanism", format!("cannot read mechanism file: {e}")),
-            other if matches!(&other, Error::Input { location, .. } if location.file == mech_path) => {
+            other if matches!(&other, Error::Input { location, .. } | Error::Limit { location, .. } if location.file == mech_path) => {
                 whole_file_at(other, &src, "mechanism")
             }
             other => other,
@@ -181,7 +181,7 @@ impl Study {
         let study =
             Study { spec, file, mechanism, locked, spin, elements, body, locked_body, source: src, sub_studies };
         if let Some((k, driver, message)) = study.plan().exceeds(&opts.limits) {
-            return Err(study.source.error(&format!("analyses[{k}].{driver}"), message));
+            return Err(study.source.error(&format!("analyses[{k}].{driver}"), message).limit_if(true));
         }
         Ok(study)
     }

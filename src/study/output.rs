@@ -201,8 +201,32 @@ impl CsvWriter {
     }
 }
 
-/// Writes a CSV file with a header row and columns of equal length; non-finite values are written
-/// as empty cells, text a spreadsheet would run as a formula is [`neutralised`].
+/// Smallest magnitude written in plain decimal: below it a number is data noise or a physical
+/// small quantity whose leading zeros say nothing (`0.000…000452` read as `4.52e-34`).
+const PLAIN_MIN: f64 = 1e-5;
+/// Smallest magnitude written with an exponent at the top: from 1e16 on, an f64 no longer holds
+/// every integer, and plain text would print digits it does not have.
+const PLAIN_MAX: f64 = 1e16;
+
+/// A number as a CSV cell: the shortest decimal text that reads back to the same `f64` (Rust's
+/// shortest round-trip digits, at most 17 significant), plain for `1e-5 ≤ |v| < 1e16` and in
+/// exponent form (`4.52089390554142e-34`, `1.5e16`) outside; zero of either sign is `0`, and a
+/// value that is not finite (NaN: does not exist or apply) is an empty cell.
+pub(crate) fn csv_number(v: f64) -> String {
+    if !v.is_finite() {
+        String::new()
+    } else if v == 0.0 {
+        // -0.0 compares equal to 0.0: a sign on nothing would read as a measurement.
+        "0".to_string()
+    } else if (PLAIN_MIN..PLAIN_MAX).contains(&v.abs()) {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
+/// Writes a CSV file with a header row and columns of equal length, each number as
+/// [`csv_number`] writes it (non-finite values as empty cells); text a spreadsheet would run as a formula is [`neutralised`].
 pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Result<()> {
     let io = |e: csv::Error| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e.into() };
     let mut w = CsvWriter::from_path(path).map_err(io)?;
@@ -213,7 +237,7 @@ pub(crate) fn write_csv(path: &Path, header: &[&str], columns: &[&[f64]]) -> Res
         rec.clear();
         // A value that does not exist or apply (a ratio to a zero reference, a trace that does
         // not reach this order) is NaN in memory and an empty cell on disk, never `NaN`/`inf`.
-        rec.extend(columns.iter().map(|c| if c[r].is_finite() { c[r].to_string() } else { String::new() }));
+        rec.extend(columns.iter().map(|c| csv_number(c[r])));
         w.write_numbers(&rec).map_err(io)?;
     }
     w.flush().map_err(|e| Error::Io { file: path.to_path_buf(), action: "cannot write", source: e })
@@ -229,6 +253,40 @@ mod finite_text_tests {
         assert_eq!(finite_text("t = -inf, x = Infinity"), "t = undefined, x = undefined");
         assert_eq!(finite_text("mechanism `inf` at /tmp/nan/s.ron:3:4"), "mechanism `inf` at /tmp/nan/s.ron:3:4");
         assert_eq!(finite_text("information, finite, 1e-300, inflow"), "information, finite, 1e-300, inflow");
+    }
+}
+
+#[cfg(test)]
+mod csv_number_tests {
+    use super::csv_number;
+
+    #[test]
+    fn shortest_round_trip_text_with_exponents_outside_the_plain_range() {
+        // Expected texts written by hand from the decimal values (not from the formatter).
+        let cases = [
+            (4.52089390554142e-34, "4.52089390554142e-34"),
+            (-4.336808689942018e-19, "-4.336808689942018e-19"),
+            (-0.0, "0"),
+            (0.0, "0"),
+            (1e-5, "0.00001"),
+            (9.99e-6, "9.99e-6"),
+            (0.1 + 0.2, "0.30000000000000004"),
+            (576.25, "576.25"),
+            (3.0, "3"),
+            (9999999999999998.0, "9999999999999998"),
+            (1e16, "1e16"),
+            (-2.5e300, "-2.5e300"),
+            (f64::MIN_POSITIVE, "2.2250738585072014e-308"),
+            (f64::NAN, ""),
+            (f64::INFINITY, ""),
+        ];
+        for (v, text) in cases {
+            assert_eq!(csv_number(v), text, "{v:e}");
+            if !text.is_empty() {
+                // Reads back to the same double, except that -0 is written as 0 on purpose.
+                assert_eq!(text.parse::<f64>().unwrap().to_bits(), (v + 0.0).to_bits(), "{text}");
+            }
+        }
     }
 }
 

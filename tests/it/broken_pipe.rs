@@ -46,9 +46,9 @@ fn every_command_ends_normally_when_its_reader_has_gone() {
     assert_clean(&with_closed_stdout(dir, &["check", "s.ron"]), 0, "check of a study");
     assert_clean(&with_closed_stdout(dir, &["eom", "cpva.ron", "--q", "0,0", "--u", "0,0"]), 0, "eom");
     assert_clean(&with_closed_stdout(dir, &["import", "t.json"]), 0, "import");
-    // A command's own failure keeps its status (1) and its message.
+    // A command's own failure keeps its status (5: the file cannot be read) and its message.
     let out = with_closed_stdout(dir, &["check", "missing.ron"]);
-    assert_clean(&out, 1, "check of a missing file");
+    assert_clean(&out, 5, "check of a missing file");
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ron"));
 
     // A run finishes its work: every file written and whole, as with a reader.

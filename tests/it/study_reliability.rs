@@ -103,7 +103,7 @@ fn overflowing_tracked_frequencies_are_refused_at_load() {
         let p = s.study("bad.ron", &study_with(&sweep));
         let o = kanedyn(&["run", p.to_str().unwrap(), "--out", s.out().to_str().unwrap()]);
         let t = text(&o);
-        assert_eq!(o.status.code(), Some(1), "{t}");
+        assert_eq!(o.status.code(), Some(3), "{t}");
         assert!(!t.contains("panicked"), "{t}");
         assert_located(&t, field);
     }
@@ -269,7 +269,7 @@ fn a_failing_analysis_costs_the_others_nothing() {
 "#;
     let p = s.study("iso.ron", study);
     let o = kanedyn(&["run", p.to_str().unwrap(), "--out", s.out().to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert_eq!(o.status.code(), Some(6), "{}", text(&o));
     let dir = s.out().join("iso");
     for f in ["before_as_built.csv", "before.svg", "after.csv", "after.svg", "summary.md", "results.json"] {
         assert!(dir.join(f).exists(), "{f} missing");

@@ -101,8 +101,10 @@ pub(crate) fn load(spec: &StudySpec, src: &Source, opts: &LoadOptions) -> Result
 /// itself, a joint or body the mechanism lacks) at the mechanism's entry. Errors located in
 /// other files (the mechanism's own) stay where they are.
 fn relocate(e: Error, src: &Source, k: usize, v: usize, label: &str) -> Error {
+    // A limit's refusal moved to its place is still a limit's.
+    let limit = e.is_limit();
     match e {
-        Error::Input { location, message } if location.file == src.file => {
+        Error::Input { location, message } | Error::Limit { location, message } if location.file == src.file => {
             let path = &location.path;
             if let Some(rest) = path.strip_prefix("analyses") {
                 src.error(&format!("analyses[{k}].analyses{rest}"), message)
@@ -117,6 +119,7 @@ fn relocate(e: Error, src: &Source, k: usize, v: usize, label: &str) -> Error {
         }
         other => other,
     }
+    .limit_if(limit)
 }
 
 /// Runs the comparison's analyses on each mechanism, then writes the overlays and the table.

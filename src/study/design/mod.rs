@@ -589,22 +589,30 @@ pub(crate) fn load_mechanisms(
             elements: d.elements.clone(),
             ..spec.clone()
         };
-        let study = Study::from_spec(sub, src.clone(), opts).map_err(|e| match e {
-            Error::Input { location, message } if location.file == src.file => {
-                let path = &location.path;
-                match path.strip_prefix("analyses[0]") {
-                    Some(rest) => src.error(&format!("analyses[{k}]{rest}"), message),
-                    // The design study's own `lock` and `elements` were the sub-study's.
-                    None if path.starts_with("lock") || path.starts_with("elements") => {
-                        src.error(&format!("analyses[{k}].{path}"), message)
-                    }
-                    None if path == "mechanism" => src.error(&format!("analyses[{k}].mechanism"), message),
-                    None => {
-                        src.error(&format!("analyses[{k}].mechanism"), format!("mechanism `{file}`: {path}: {message}"))
+        let study = Study::from_spec(sub, src.clone(), opts).map_err(|e| {
+            // A limit's refusal moved to its place is still a limit's.
+            let limit = e.is_limit();
+            match e {
+                Error::Input { location, message } | Error::Limit { location, message }
+                    if location.file == src.file =>
+                {
+                    let path = &location.path;
+                    match path.strip_prefix("analyses[0]") {
+                        Some(rest) => src.error(&format!("analyses[{k}]{rest}"), message),
+                        // The design study's own `lock` and `elements` were the sub-study's.
+                        None if path.starts_with("lock") || path.starts_with("elements") => {
+                            src.error(&format!("analyses[{k}].{path}"), message)
+                        }
+                        None if path == "mechanism" => src.error(&format!("analyses[{k}].mechanism"), message),
+                        None => src.error(
+                            &format!("analyses[{k}].mechanism"),
+                            format!("mechanism `{file}`: {path}: {message}"),
+                        ),
                     }
                 }
+                other => other,
             }
-            other => other,
+            .limit_if(limit)
         })?;
         out.push((k, vec![(file.clone(), study)]));
     }

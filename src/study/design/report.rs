@@ -92,10 +92,9 @@ pub(super) fn write_csv(r: &DesignResult, dir: &Path) -> Result<PathBuf> {
     header.extend(r.parameters.iter().chain(&r.results).map(|c| c.name.clone()));
     header.extend(["status".to_string(), "error".to_string()]);
     w.write_record(&header).map_err(io)?;
-    let cell = |v: f64| if v.is_finite() { v.to_string() } else { String::new() };
     for c in &r.cases {
         let mut rec = vec![c.index.to_string()];
-        rec.extend(c.values.iter().chain(&c.results).map(|&v| cell(v)));
+        rec.extend(c.values.iter().chain(&c.results).map(|&v| crate::study::output::csv_number(v)));
         rec.push(c.status.as_str().to_string());
         rec.push(c.error.clone());
         w.write_record(&rec).map_err(io)?;

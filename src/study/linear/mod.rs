@@ -17,10 +17,25 @@ use crate::model::mechanism::Mechanism;
 use nalgebra::DVector;
 use std::path::{Path, PathBuf};
 
-/// A variant label as a file-name part: characters other than letters, digits, `.` and `-`
-/// become `_`.
+/// A variant label as a file-name part: ASCII letters, digits, `.` and `-` stay; every run of
+/// other characters (spaces, `=`, `_`, `/`, non-ASCII) becomes one `_`, and none is left at
+/// either end: `c_p = 5e-4` → `c_p_5e-4`, `locked (rigid)` → `locked_rigid`. The result is safe
+/// on every file system and shell (no separators, quotes or `=`), and two labels that give the
+/// same name are refused at load (the analysis's `check`).
 pub(crate) fn slug(label: &str) -> String {
-    label.chars().map(|c| if c.is_ascii_alphanumeric() || c == '.' || c == '-' { c } else { '_' }).collect()
+    let keep = |c: char| c.is_ascii_alphanumeric() || c == '.' || c == '-';
+    let mut out = String::with_capacity(label.len());
+    for c in label.chars() {
+        if keep(c) {
+            out.push(c);
+        } else if !out.is_empty() && !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    if out.ends_with('_') {
+        out.pop();
+    }
+    out
 }
 
 /// A variant's legend entry with the unit of what it sets: the label as written when it names
@@ -408,4 +423,23 @@ pub(crate) fn render_response(
     }
     files.push(figure::response_figure(study, spec, result, dir)?);
     Ok((summary::summary(study, spec, result), files))
+}
+
+#[cfg(test)]
+mod slug_tests {
+    use super::slug;
+
+    #[test]
+    fn labels_become_readable_safe_file_name_parts() {
+        for (label, name) in [
+            ("c_p = 5e-4", "c_p_5e-4"),
+            ("c_p=5e-4", "c_p_5e-4"),
+            ("  locked (rigid) ", "locked_rigid"),
+            ("ζ = 0.02", "0.02"),
+            ("a/b\\c:d", "a_b_c_d"),
+            ("plain-1.5", "plain-1.5"),
+        ] {
+            assert_eq!(slug(label), name, "{label:?}");
+        }
+    }
 }
