@@ -14,6 +14,7 @@ mod catalog;
 mod cli;
 mod cli_digest;
 mod closed_form;
+mod compare_budget;
 mod couplings;
 mod cpva_paths;
 mod damping_laws;
