@@ -71,6 +71,7 @@ mod results_json;
 mod results_schema;
 mod rollers;
 mod ron_errors;
+mod settled_peaks;
 mod shapes;
 mod stiff;
 mod study;
