@@ -49,6 +49,7 @@ mod importer_fuzz;
 mod input_hardening;
 mod integration;
 mod joint_kinds;
+mod label_names;
 mod linear;
 mod marine_gearbox;
 mod mistuning;
