@@ -35,8 +35,11 @@ fn a_runaway_member_leaves_the_other_members_their_budget() {
 "#;
     let path = dir.join("cb.ron");
     std::fs::write(&path, text).unwrap();
-    // No multiple of the plan, one second each: the comparison as a whole used to get just that.
-    let limits = Limits { watchdog: Watchdog { factor: 0.0, floor_s: 1.0 }, ..Limits::default() };
+    // No multiple of the plan, five seconds each: the comparison as a whole used to get just
+    // that. An ordinary member needs a fraction of a second of CPU; five leave room for a
+    // loaded machine (wall time) running other tests beside this one (the process's CPU time),
+    // which together pass a one-second budget.
+    let limits = Limits { watchdog: Watchdog { factor: 0.0, floor_s: 5.0 }, ..Limits::default() };
     let study = Study::from_file_with(&path, &LoadOptions { limits, ..LoadOptions::default() }).unwrap();
 
     // The plan sees the runaway: on the light rotor the sweep is planned far above the same sweep
@@ -48,10 +51,12 @@ fn a_runaway_member_leaves_the_other_members_their_budget() {
 
     let report = run(&study, &RunOptions { out: Some(dir.join("out")), progress: false }).unwrap();
     println!("{:#?}", report.failures);
-    // Only the runaway is stopped, by its own budget.
-    assert_eq!(report.failures.len(), 1, "{:#?}", report.failures);
-    let f = &report.failures[0];
-    assert!(f.contains("c_a_s") && f.contains("stopped by the watchdog") && f.contains("1.0 s"), "{f}");
+    // Only the runaway is stopped, by its own budget (its run, and its locked twin too when
+    // the twin starts after the budget is spent).
+    assert!(!report.failures.is_empty() && report.failures.len() <= 2, "{:#?}", report.failures);
+    for f in &report.failures {
+        assert!(f.contains("c_a_s_") && f.contains("stopped by the watchdog") && f.contains("5.0 s"), "{f}");
+    }
     // Every other member wrote its CSV files with rows.
     let out = dir.join("out").join("cb");
     let mut checked = 0;
