@@ -16,6 +16,7 @@ mod joints;
 mod loads;
 mod overlay;
 mod parts;
+pub(crate) use parts::check_printable;
 mod tree;
 
 use crate::error::Result;

@@ -3,11 +3,15 @@
 //! harmonic-balance branch, free oscillation on the paper's CPVA) with numbers drawn from a pool of ordinary and hostile values, loads it
 //! and, when it loads, runs it with a tight watchdog (3 × plan + 1 s) and the CPU limit at 60 s (the
 //! harmonic-balance plan bounds a branch by its 2000-point cap, so 5 s would refuse nearly all).
+//! A sixth analysis compares two mechanisms' free oscillations (`Compare`), whose overlay figure
+//! and table draw on every member's result, or on none when all were stopped.
 //! Every execution must end in a located load error or a run that returns within the watchdog's
-//! budget (3 × its plan + 1 s, plus 0.5 s for its files, as CPU time measured in-process: the
-//! short and long tests are never run together), whose files hold no NaN or inf text and are
-//! listed once each. A run whose dynamics the plan cannot see (a torque of 1e9 N·m whirls the
-//! pendulum) is stopped by the watchdog.
+//! budget (3 × its plan, plus 1 s for each analysis the watchdog stopped and 1.5 s for the rest
+//! and the files, as CPU time measured in-process: the short and long tests are never run
+//! together). Every file in the output folder, whatever its type (CSV, JSON, Markdown, SVG,
+//! HTML), is read and must hold no NaN or infinity as a word of its own, and every file the run
+//! lists is listed once and is in the folder. A run whose dynamics the plan cannot see is
+//! stopped by the watchdog.
 //!
 //! The short version (40 executions) runs with the normal tests; the long one is
 //! `cargo test --release --test fuzz_runs long -- --ignored --nocapture` (2000 executions, or
@@ -59,6 +63,19 @@ fn non_finite_word(text: &str) -> bool {
         .any(|w| w == "nan" || w == "inf" || w == "infinity")
 }
 
+/// Every file under `dir`, at any depth (the run's whole output, not only the files it lists).
+fn files_under(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() { todo.push(p) } else { out.push(p) }
+        }
+    }
+    out
+}
+
 /// The study of execution `i`: each number from the pool or its usual value.
 fn study_text(rng: &mut Rng) -> String {
     let mut f = |usual: &'static str| if rng.next().is_multiple_of(16) { rng.pick(FLOATS) } else { usual };
@@ -76,6 +93,8 @@ fn study_text(rng: &mut Rng) -> String {
          OrderSweep(name: \"s\", rpm: {rpm}, order_min: {omin}, order_max: {omax}, duration_s: {dur}, amplitudes: [{amp}], directions: [Up]),\n\
          HarmonicBalance(name: \"h\", rpm: {rpm}, order_min: {omin}, order_max: {omax}, amplitudes: [{hamp}], harmonics: {harmonics}),\n\
          FreeOscillation(name: \"o\", rpm: {rpm}, joint: \"pivot\", amplitudes: [0.1, {swing}]),\n\
+         Compare(name: \"k\", mechanisms: [(label: \"a\", mechanism: \"cpva.ron\"), (label: \"b\", mechanism: \"cpva.ron\")],\n\
+           analyses: [FreeOscillation(name: \"o\", rpm: {rpm2}, joint: \"pivot\", amplitudes: [{swing}, 0.2])]),\n\
          ])\n"
     )
 }
@@ -87,7 +106,7 @@ fn fuzz(seed: u64, executions: usize) {
     let only: Option<usize> = std::env::var("KANEDYN_FUZZ_ONLY").ok().and_then(|v| v.parse().ok());
     let limits = Limits { max_cpu_s: 60.0, watchdog: Watchdog { factor: 3.0, floor_s: 1.0 }, ..Limits::default() };
     let opts = LoadOptions { limits, ..LoadOptions::default() };
-    let (mut refused, mut ran, mut watchdog, mut slowest) = (0, 0, 0, 0.0_f64);
+    let (mut refused, mut ran, mut watchdog, mut slowest, mut scanned) = (0, 0, 0, 0.0_f64, 0);
     for i in 0..executions {
         let mut rng = Rng(seed.wrapping_add(i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
         let text = study_text(&mut rng);
@@ -111,21 +130,28 @@ fn fuzz(seed: u64, executions: usize) {
             .unwrap_or_else(|e| panic!("execution {i}: the run itself failed: {e}\n{text}"));
         let (took, cpu) = (start.elapsed().as_secs_f64(), cpu_s() - cpu0);
         slowest = slowest.max(took);
-        // The watchdog's budget is 3 × plan + 1 s of wall time per analysis; a run may not
-        // take more CPU than that plus half a second for writing its files.
-        assert!(cpu <= 3.0 * planned + 1.5, "execution {i}: {cpu:.2} s CPU against a plan of {planned:.2} s\n{text}");
-        watchdog += report.failures.iter().filter(|f| f.contains("stopped by the watchdog")).count();
+        // The watchdog's budget is 3 × plan + 1 s per analysis (per compared mechanism's inner
+        // analysis too); an analysis it stops has spent its second, the others need not.
+        let stopped = report.failures.iter().filter(|f| f.contains("stopped by the watchdog")).count();
+        let bound = 3.0 * planned + stopped as f64 + 1.5;
+        assert!(cpu <= bound, "execution {i}: {cpu:.2} s CPU against a plan of {planned:.2} s\n{text}");
+        watchdog += stopped;
         let mut seen = std::collections::HashSet::new();
         for f in &report.files {
             assert!(seen.insert(f.clone()), "execution {i}: {} listed twice\n{text}", f.display());
-            let body = std::fs::read_to_string(f).unwrap();
+            assert!(f.is_file(), "execution {i}: {} listed but not written\n{text}", f.display());
+        }
+        for f in files_under(&root.join("out").join("f")) {
+            let body = std::fs::read(&f).unwrap();
+            let body = String::from_utf8_lossy(&body);
             assert!(!non_finite_word(&body), "execution {i}: {} holds NaN or inf\n{text}", f.display());
+            scanned += 1;
         }
         ran += 1;
     }
     println!(
         "seed {seed}: {executions} executions, {refused} refused at load, {ran} runs ({watchdog} analyses stopped by \
-         the watchdog), slowest {slowest:.2} s"
+         the watchdog), slowest {slowest:.2} s, {scanned} files scanned"
     );
 }
 

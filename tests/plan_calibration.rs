@@ -96,6 +96,17 @@ fn measured_cpu_time_is_at_most_three_times_the_plan() {
             "integration: (sample_hz: 1000.0),",
             r#"Transient(name: "t", duration_s: 20.0, speed: Free(rpm: 1000.0), angles: [("shaft", 0.01)])"#,
         ),
+        // A torque that whirls the rotor (issue 49, item 5), inside a comparison: the swing it
+        // drives sets the steps. The paper's rotor at 1e9 N·m turns near 10⁶ rad/s, so 0.2 s
+        // already cost seconds.
+        (
+            "cpva.ron",
+            "\"pivot\"",
+            "order_tracking: (window_s: 0.1, hop_s: 0.05),",
+            r#"Compare(name: "k", mechanisms: [(label: "a", mechanism: "cpva.ron")],
+                 analyses: [OrderSweep(name: "s", rpm: 1000.0, order_min: 2.9, order_max: 3.3, duration_s: 0.2,
+                 amplitudes: [1e9], directions: [Up], ramp_s: 0.0)])"#,
+        ),
         (
             "cpva.ron",
             "\"pivot\"",

@@ -4,6 +4,12 @@ assembly is read element by element into kanedyn's node form and handed over as 
 
 The `opentorsion` package is not imported: any object with OpenTorsion's `Assembly` attributes
 (`shaft_elements`, `disk_elements`, `gear_elements`) is read.
+
+The elements are what is converted, so a stiffness matrix `assembly.K` edited after the
+assembly was built (OpenTorsion's own example `test_friswell_09_06` adds springs to ground that
+way) is compared with the one the elements give (`assembly.assemble_K()`): springs to ground
+added on the diagonal of an assembly without gears are converted like disks' `k`; any other
+edit is refused, naming the entries that differ.
 """
 
 import json
@@ -31,13 +37,54 @@ def _parent_index(gear: Any, i: int, gears: List[Any]) -> Optional[int]:
     return matches[0]
 
 
+def _edited_ground_springs(assembly: Any, has_gears: bool) -> List[Dict[str, Any]]:
+    """Disks (node, no inertia, `k`) for the springs to ground added to `assembly.K` after it was
+    built; `ArgumentError` naming the entries for any edit that is not one (see the module)."""
+    stored = getattr(assembly, "K", None)
+    rebuild = getattr(assembly, "assemble_K", None)
+    # Older OpenTorsion versions assemble K on each call: there is nothing stored to edit.
+    if stored is None or callable(stored) or not callable(rebuild):
+        return []
+    try:
+        edited = [[float(v) for v in row] for row in stored]
+        built = [[float(v) for v in row] for row in rebuild()]
+    except (TypeError, ValueError) as e:
+        raise ArgumentError(f"assembly.K: not a matrix of numbers ({e})") from None
+    if len(edited) != len(built) or any(len(a) != len(b) for a, b in zip(edited, built)):
+        raise ArgumentError(
+            f"assembly.K: its shape differs from the {len(built)}×{len(built)} matrix its elements give"
+        )
+    # Entries the edit did not touch are the same sums in the same order: equal to rounding.
+    scale = max((abs(v) for row in built for v in row), default=0.0)
+    differ = [
+        (i, j, a, b)
+        for i, (row_e, row_b) in enumerate(zip(edited, built))
+        for j, (a, b) in enumerate(zip(row_e, row_b))
+        if not abs(a - b) <= 1e-12 * scale
+    ]
+    if not differ:
+        return []
+    convertible = not has_gears and all(i == j and a - b > 0.0 and a - b < float("inf") for i, j, a, b in differ)
+    if not convertible:
+        shown = "; ".join(f"K[{i}, {j}] = {a:g} where the elements give {b:g}" for i, j, a, b in differ[:6])
+        more = f" (and {len(differ) - 6} more)" if len(differ) > 6 else ""
+        raise ArgumentError(
+            f"assembly.K was edited after the assembly was built: {shown}{more}. Only springs to ground "
+            "added on the diagonal of an assembly without gears are converted; add the others as elements "
+            "(a disk's `k` is a spring to ground)"
+        )
+    return [{"node": i, "inertia": 0.0, "c": 0.0, "k": a - b} for i, _, a, b in differ]
+
+
 def from_opentorsion(assembly: Any, name: str = "opentorsion") -> str:
     """The mechanism RON (text) of an `opentorsion.Assembly`, named `name`.
 
     Every node is a body; gears become gear couplings, shafts joint springs or compliant
     couplings, disk dampers ground dampers (the RON's comments and the README say how). Load it
     with `kanedyn.Mechanism.from_str(ron, "name.ron")`, or write it to a file and add absorbers
-    with an overlay (`base: "name.ron"`). Elastic gears are not converted (`ArgumentError`).
+    with an overlay (`base: "name.ron"`). Elastic gears are not converted (`ArgumentError`), nor
+    is an edited `assembly.K` other than springs to ground added to its diagonal (see the
+    module).
     """
     if getattr(assembly, "elastic_gear_elements", None):
         raise ArgumentError("assembly.elastic_gear_elements: elastic gears are not converted (rigid gears only)")
@@ -57,6 +104,7 @@ def from_opentorsion(assembly: Any, name: str = "opentorsion") -> str:
             for i, g in enumerate(gears)
         ],
     }
+    node_form["disks"] += _edited_ground_springs(assembly, bool(gears))
     try:
         text = json.dumps(node_form, allow_nan=False)
     except ValueError:

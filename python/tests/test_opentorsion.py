@@ -163,3 +163,69 @@ def test_a_huge_node_index_is_an_argument_error_not_a_crash():
         where = rf"assembly\.disk_elements\[1\]\.node: node {node} is beyond the elements"
         with pytest.raises(kanedyn.ArgumentError, match=where):
             kanedyn.from_opentorsion(huge)
+
+
+def friswell_09_06():
+    """OpenTorsion's example `test_friswell_09_06` (Friswell et al., Example 9.6): a chain of nine
+    disks on shafts, with springs to ground at nodes 0 and 5 added to `assembly.K` after it was
+    built. Returns the assembly, edited, and the two springs."""
+    k1, k2, k7, k9 = 10e6, 2.5e6, 40e6, 3e6
+    inertias = [90, 140, 140, 140, 140, 90, 350, 500, 22000]
+    stiffnesses = [k2, k2, k2, k2, k2, k7, k7, k9]
+    disks = [ot.Disk(n, I=i) for n, i in enumerate(inertias)]
+    shafts = [ot.Shaft(n, n + 1, None, None, k=k) for n, k in enumerate(stiffnesses)]
+    assembly = ot.Assembly(shafts, disk_elements=disks)
+    assembly.K[0, 0] += k1
+    assembly.K[5, 5] += k1
+    return assembly, {0: k1, 5: k1}
+
+
+def linear_frequencies(mechanism):
+    """The natural frequencies (rad/s) of a linear chain from its equations of motion: M and the
+    forcing F at rest from `Mechanism.eom`, the stiffness -dF/dq by central differences (exact
+    to rounding: F is linear in q here), and the generalised eigenproblem by numpy."""
+    n = mechanism.ndof
+    zero = np.zeros(n)
+    mass, _, _, _ = mechanism.eom(zero, zero)
+    stiffness = np.zeros((n, n))
+    for j in range(n):
+        step = np.zeros(n)
+        step[j] = 1e-6
+        _, up, _, _ = mechanism.eom(step, zero)
+        _, down, _, _ = mechanism.eom(-step, zero)
+        stiffness[:, j] = -(np.asarray(up) - np.asarray(down)) / 2e-6
+    lam = np.linalg.eigvals(np.linalg.solve(np.asarray(mass), stiffness))
+    return np.sort(np.sqrt(np.abs(lam.real)))
+
+
+def test_an_edited_stiffness_matrix_converts_its_ground_springs():
+    """Issue 49, item 10: the springs added to `assembly.K` used to be dropped without a word (the
+    elements alone were converted). Now they become springs to ground, and the converted model's
+    natural frequencies equal those of the edited K with OpenTorsion's M (numpy on OpenTorsion's
+    matrices against numpy on kanedyn's equations of motion; 1e-8 relative, above the central
+    differences' rounding on a chain whose inertias span 90 to 22 000 kg·m²)."""
+    assembly, springs = friswell_09_06()
+    ron = kanedyn.from_opentorsion(assembly, "friswell")
+    got = linear_frequencies(kanedyn.Mechanism.from_str(ron, "friswell.ron"))
+    lam = np.linalg.eigvals(np.linalg.solve(assembly.M, assembly.K))
+    want = np.sort(np.sqrt(lam.real))
+    print("kanedyn", got, "OpenTorsion's matrices", want)
+    assert len(got) == 9
+    assert np.abs(got / want - 1).max() <= 1e-8
+    # Without the edit the chain turns freely (a zero frequency): the springs made the difference.
+    unedited = ot.Assembly(assembly.shaft_elements, disk_elements=assembly.disk_elements)
+    plain = linear_frequencies(kanedyn.Mechanism.from_str(kanedyn.from_opentorsion(unedited, "p"), "p.ron"))
+    assert plain[0] < 1e-6 * plain[1] and got[0] > 0.1 * plain[1]
+    assert sorted(springs) == [0, 5]
+
+
+def test_an_edit_that_is_not_a_ground_spring_is_refused_by_entry():
+    assembly, _ = friswell_09_06()
+    assembly.K[0, 1] -= 1e5
+    assembly.K[1, 0] -= 1e5
+    with pytest.raises(kanedyn.ArgumentError, match=r"K\[0, 1\] = .* where the elements give -2\.5e\+06; K\[1, 0\]"):
+        kanedyn.from_opentorsion(assembly)
+    assembly, _ = friswell_09_06()
+    assembly.K[3, 3] -= 1e5
+    with pytest.raises(kanedyn.ArgumentError, match=r"K\[3, 3\] = 4\.9e\+06 where the elements give 5e\+06"):
+        kanedyn.from_opentorsion(assembly)

@@ -21,8 +21,9 @@ pub(super) fn check_name(src: &Source, path: &str, name: &str) -> Result<()> {
     check_printable(src, path, name)
 }
 
-/// A name (of a body, a joint or the mechanism) takes printable characters only.
-pub(super) fn check_printable(src: &Source, path: &str, name: &str) -> Result<()> {
+/// A name (of a body, a joint or the mechanism; a study's variant label) takes printable
+/// characters only.
+pub(crate) fn check_printable(src: &Source, path: &str, name: &str) -> Result<()> {
     if let Some(c) = name.chars().find(|c| c.is_control()) {
         return Err(src.error(
             path,

@@ -59,17 +59,19 @@ impl Default for Limits {
     }
 }
 
-/// The watchdog of a run: an analysis may take `factor ×` its planned CPU time plus `floor_s`
-/// of wall time; past that its time runs stop (a located entry under Failures) and the study
-/// goes on with the next analysis. The plan is an upper bound within a few times (see the
-/// module docs and `tests/plan_calibration.rs`), so only an analysis whose cost the plan cannot
-/// see (a stiff model, a branch that creeps) reaches the limit; the floor keeps a loaded
-/// machine from stopping small analyses.
+/// The watchdog of a run: an analysis may take `factor ×` its planned CPU time plus `floor_s`;
+/// once both its wall time and the process's CPU time since it started are past that budget
+/// (`crate::deadline`: a loaded machine stretches the wall time, not the work), its loops stop
+/// (a located entry under Failures) and the study goes on with the next analysis. Each
+/// analysis inside a comparison has the budget of its own plan. The plan is an upper bound
+/// within a few times (see the module docs and `tests/plan_calibration.rs`), so only an
+/// analysis whose cost the plan cannot see (a stiff model, a branch that creeps) reaches the
+/// limit; the floor keeps small analyses, whose plans are the least exact, from being stopped.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Watchdog {
     /// Multiple of the planned CPU time.
     pub factor: f64,
-    /// Wall time added to it, s.
+    /// Time added to it, s.
     pub floor_s: f64,
 }
 
@@ -81,7 +83,7 @@ impl Default for Watchdog {
 }
 
 impl Watchdog {
-    /// The wall-time budget of an analysis planned at `cpu_s`.
+    /// The time budget of an analysis planned at `cpu_s`, s.
     pub fn budget_s(&self, cpu_s: f64) -> f64 {
         let b = self.factor * cpu_s + self.floor_s;
         if b.is_finite() { b } else { f64::MAX }
@@ -258,6 +260,39 @@ pub(crate) fn time_run_s(study: &Study, duration_s: f64, f_hz: f64) -> f64 {
     let stable = duration_s * decay / STABLE_STEP_RATES;
     let steps = accurate.max(stable).min(i.max_steps as f64);
     (12.0 * steps + duration_s * i.sample_hz) * rhs_s(n)
+}
+
+/// The speed (rpm) a time run's dynamics is planned at when an alternating torque of amplitude
+/// `torque_nm` acts on the spin joint at orders from `order_min` of `rpm` for `duration_s`: the
+/// nominal speed plus the mean of the speed's swing. On the rigid driveline (inertia
+/// `J = uᵀ M(0) u` about the spin joint, `u` the steady rotation at unit rate) the torque
+/// swings the speed by `Δω = T/(J n Ω)` (and by no more than `T·t/J` at orders near zero);
+/// a torque large enough that `Δω` passes `Ω` whirls the rotor and its absorbers at rates
+/// near `Δω`, whose lines the steps must follow (a 1e9 N·m sweep on the paper's rotor spun it
+/// near 10⁶ rad/s and took over 1000 times its plan at the nominal speed). Over a period the
+/// mean of `|ω|` is `Ω + (2/π) Δω` at most; an ordinary torque moves it by a fraction of a
+/// percent.
+pub(crate) fn swung_rpm(study: &Study, torque_nm: f64, rpm: f64, order_min: f64, duration_s: f64) -> f64 {
+    let inertia = spin_inertia(study);
+    let omega = rpm.abs() * std::f64::consts::PI / 30.0;
+    let dwell = (1.0 / (order_min.abs() * omega)).min(duration_s.abs());
+    let swing = torque_nm.abs() / inertia * dwell;
+    if !(swing.is_finite() && inertia > 0.0) {
+        return rpm;
+    }
+    rpm.abs() + 2.0 / std::f64::consts::PI * swing * 30.0 / std::f64::consts::PI
+}
+
+/// The inertia of the rigidly turning driveline about the spin joint, kg·m² (0 when the mass
+/// matrix cannot be formed).
+fn spin_inertia(study: &Study) -> f64 {
+    let mech = &study.mechanism;
+    let n = mech.ndof();
+    let Ok(mut kane) = crate::kane::Kane::new(mech) else { return 0.0 };
+    let x = Study::initial_state(mech, study.spin, 1.0);
+    let u = nalgebra::DVector::from_column_slice(&x[n..]);
+    let m = kane.mass_matrix(&x[..n]);
+    u.dot(&(m * &u))
 }
 
 /// The mechanism's fastest time scales at q = 0: the highest natural frequency of its springs,

@@ -147,7 +147,7 @@ pub(crate) fn options(spec: &IntegrationSpec) -> IntegrateOptions {
         sample_rate_hz: Some(spec.sample_hz),
         sample_derivatives: true,
         max_steps: spec.max_steps,
-        deadline: spec.deadline.map(|d| (d.at, d.budget_s)),
+        deadline: spec.deadline,
         method: match spec.integrator {
             Integrator::Implicit => Method::Radau5,
             Integrator::Explicit | Integrator::Auto => Method::Dop853,

@@ -194,8 +194,8 @@ fn start<Y: Slab>(
 
 /// The watchdog's budget (s) when its deadline has passed.
 fn past_deadline(opts: &IntegrateOptions) -> Option<f64> {
-    let (at, budget_s) = opts.deadline?;
-    (std::time::Instant::now() >= at).then_some(budget_s)
+    let d = opts.deadline?;
+    d.passed().then_some(d.budget_s)
 }
 
 /// The samples that fall inside the step just accepted (`ends`: the derivatives at its two

@@ -117,11 +117,11 @@ fn drive<Y: Slab, S: OrdinaryNumericalMethod<f64, Y> + Interpolation<f64, Y>>(
         if 0.1 * h.abs() <= t.abs() * f64::EPSILON || h == 0.0 {
             return Err(IntegrateError::StepSizeUnderflow { t_reached: t, h, stats: sys.counted(stats) });
         }
-        if let Some((at, budget_s)) = opts.deadline
+        if let Some(d) = opts.deadline
             && (stats.accepted + stats.rejected).is_multiple_of(64)
-            && std::time::Instant::now() >= at
+            && d.passed()
         {
-            return Err(IntegrateError::Deadline { budget_s, t_reached: t, stats: sys.counted(stats) });
+            return Err(IntegrateError::Deadline { budget_s: d.budget_s, t_reached: t, stats: sys.counted(stats) });
         }
         let res = solver.step(sys);
         if let Some(fault) = sys.fault.borrow_mut().take() {

@@ -28,9 +28,9 @@ pub struct IntegrateOptions {
     pub h0: Option<f64>,
     /// Largest step size, s (`None`: unbounded).
     pub h_max: Option<f64>,
-    /// A wall-clock instant past which the run stops with [`IntegrateError::Deadline`], with
-    /// the budget it came from in seconds (`None`: no deadline). The study's watchdog sets it.
-    pub deadline: Option<(std::time::Instant, f64)>,
+    /// The watchdog's deadline, past which the run stops with [`IntegrateError::Deadline`]
+    /// (`None`: no deadline). The study's watchdog sets it.
+    pub deadline: Option<crate::deadline::Deadline>,
     /// The integration method (default [`Method::Dop853`]).
     pub method: Method,
 }

@@ -447,7 +447,7 @@ impl Release {
             atol: RTOL * a.abs().max(f64::MIN_POSITIVE),
             sample_rate_hz: Some(1.0 / dt),
             sample_derivatives: true,
-            deadline: deadline.map(|d| (d.at, d.budget_s)),
+            deadline,
             ..IntegrateOptions::default()
         };
         // The joint's and the spin's (t, q, q̇) at the previous sample, and the crossings found:

@@ -6,7 +6,8 @@
 //! comparison's analyses renamed `<comparison>_<label>_<analysis>` so their files and results
 //! stay apart), read and checked when the study file is read: an error in a compared mechanism
 //! or in an analysis that does not fit it is located in the study file. At run time one
-//! mechanism's failure costs the others nothing.
+//! mechanism's failure costs the others nothing, and each inner analysis has the watchdog's
+//! budget of its own plan, so one that overruns costs the others no time either.
 //!
 //! Overlays: order sweeps and harmonic-balance branches draw the response's main order and the
 //! first reported element's main-order amplitude per torque amplitude, one colour per mechanism
@@ -152,8 +153,10 @@ pub(crate) fn run(
     for (label, sub) in studies {
         let mut completed = Vec::with_capacity(sub.spec.analyses.len());
         let _ = writeln!(sections, "### Mechanism `{label}` (`{}`)\n", sub.mechanism.name);
-        for a in &sub.spec.analyses {
-            let (section, done) = run_guarded_inner(sub, a, dir, progress, report);
+        let plan = sub.plan();
+        for (i, a) in sub.spec.analyses.iter().enumerate() {
+            let timed = own_budget(study, sub, plan.analyses[i].cpu_s);
+            let (section, done) = run_guarded_inner(timed.as_ref().unwrap_or(sub), a, dir, progress, report);
             completed.push(done);
             sections += &demote(&section);
         }
@@ -183,6 +186,16 @@ pub(crate) fn run(
     md.push('\n');
     md += &sections;
     Ok(Output { markdown: md, files, failures: Vec::new(), results: Box::new(result) })
+}
+
+/// Mechanism `sub` with the watchdog's budget of one inner analysis planned at `cpu_s`, counted
+/// from now: each inner analysis gets its own share as a top-level analysis does, so one that
+/// runs away (a torque that whirls a pendulum) is stopped alone and cannot leave the
+/// mechanisms after it unrun. `None` when the comparison runs without a watchdog (a library
+/// call without a deadline).
+fn own_budget(study: &Study, sub: &Study, cpu_s: f64) -> Option<Study> {
+    let watchdog = study.spec.integration.watchdog;
+    study.spec.integration.deadline.map(|_| sub.with_deadline(watchdog.budget_s(cpu_s)))
 }
 
 /// One inner analysis, contained like a top-level one; its failures carry no location prefix

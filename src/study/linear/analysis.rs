@@ -76,6 +76,8 @@ impl Analysis for LinearResponseSpec {
                     src.error(&format!("{vp}.label"), format!("label must have 1 to {MAX_NAME_CHARS} characters"))
                 );
             }
+            // The label is a legend and a summary cell: a newline there splits its table row.
+            crate::load::check_printable(src, &format!("{vp}.label"), &v.label)?;
             if !files.insert(super::slug(&v.label)) {
                 return Err(src.error(
                     &format!("{vp}.label"),

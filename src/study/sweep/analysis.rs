@@ -100,7 +100,12 @@ impl Analysis for SweepSpec {
         let samples = s.duration_s * fs + 1.0;
         let windows = s.duration_s / spec.order_tracking.hop_s + 1.0;
         let series_cols = if s.write_time_series { 4.0 + n } else { 0.0 };
-        let f = s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * s.rpm / 60.0;
+        let line_hz = |rpm: f64| s.order_max * s.multiples.iter().copied().fold(1.0, f64::max) * rpm / 60.0;
+        // A torque that swings the speed far (`plan::swung_rpm`) whirls the absorbers with it;
+        // the locked twin has none moving, and its lines stay where the nominal speed puts them.
+        let torque = s.amplitudes.iter().fold(0.0, |m: f64, a| m.max(a.abs()));
+        let swung = line_hz(crate::study::plan::swung_rpm(study, torque, s.rpm, s.order_min, s.duration_s));
+        let (free, twins) = ((s.amplitudes.len() * s.directions.len()) as f64, (s.amplitudes.len() * locked) as f64);
         let r = runs as f64;
         // The analysis streams (`sim::RunStream`): per channel (the response, each element's
         // coordinate and torque) under two tracking windows and its traces; the record itself only
@@ -114,7 +119,9 @@ impl Analysis for SweepSpec {
             memory_bytes: r * (samples * 8.0 * series_cols + channels * (2.0 * window + traces) + 4.0 * window),
             output_bytes: r * samples * series_cols * CSV_CELL_BYTES
                 + r * windows * CSV_CELL_BYTES * (2.0 + 3.0 * s.multiples.len() as f64),
-            cpu_s: r * (time_run_s(study, s.duration_s, f) + stft_s(windows, spec.order_tracking.window_s * fs)),
+            cpu_s: free * time_run_s(study, s.duration_s, swung)
+                + twins * time_run_s(study, s.duration_s, line_hz(s.rpm))
+                + r * stft_s(windows, spec.order_tracking.window_s * fs),
             driver: if s.write_time_series { "write_time_series" } else { "duration_s" },
             ..base
         }
