@@ -104,9 +104,15 @@ def from_opentorsion(assembly: Any, name: str = "opentorsion") -> str:
             for i, g in enumerate(gears)
         ],
     }
-    node_form["disks"] += _edited_ground_springs(assembly, bool(gears))
     try:
         text = json.dumps(node_form, allow_nan=False)
     except ValueError:
         raise ArgumentError("the assembly has a number that is not finite (NaN or infinity)") from None
-    return _opentorsion_ron(text, name)
+    # The elements are checked first: an element edited after the build (a negative stiffness)
+    # also makes the stored K differ from the elements', and its own error names it.
+    ron = _opentorsion_ron(text, name)
+    extra = _edited_ground_springs(assembly, bool(gears))
+    if not extra:
+        return ron
+    node_form["disks"] += extra
+    return _opentorsion_ron(json.dumps(node_form, allow_nan=False), name)
