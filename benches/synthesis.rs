@@ -5,26 +5,16 @@
 //! form; printed: the worst response reached, the design evaluations, the harmonic-balance
 //! solves and the wall time. `cargo bench --bench synthesis`.
 
+#[path = "../tests/it/support/cpva_hbm.rs"]
+#[allow(dead_code)]
+mod cpva_hbm;
+
+use cpva_hbm::Design;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::model::excitation::rpm_to_rad_s;
-use kanedyn::model::mechanism::Mechanism;
 use kanedyn::synthesis::{Evaluation, OptimiseOptions, Problem, Variable};
 use std::cell::Cell;
 use std::time::Instant;
-
-fn set_pivot_radius(m: &mut Mechanism, v: f64) -> Result<(), String> {
-    let j = m.joint_index("pivot").ok_or("no pivot")?;
-    let at = m.joints[j].at;
-    m.joints[j].at = at * (v / at.norm());
-    Ok(())
-}
-
-fn set_com_radius(m: &mut Mechanism, v: f64) -> Result<(), String> {
-    let b = m.body_index("pendulum").ok_or("no pendulum")?;
-    let com = m.bodies[b].inertia.com;
-    m.bodies[b].inertia.com = com * (v / com.norm());
-    Ok(())
-}
 
 fn problem() -> Problem {
     let mech = CpvaParams::canonical().mechanism(None).unwrap();
@@ -39,8 +29,24 @@ fn problem() -> Problem {
         jump_margin: Some(1.25),
         harmonics: 10,
         variables: vec![
-            Variable { name: "R".into(), lower: 0.15, upper: 0.19, set: Box::new(set_pivot_radius) },
-            Variable { name: "L".into(), lower: 0.0140, upper: 0.0175, set: Box::new(set_com_radius) },
+            Variable {
+                name: "R".into(),
+                lower: 0.15,
+                upper: 0.19,
+                set: Box::new(|m, v| {
+                    Design::PivotRadius.set(m, v);
+                    Ok(())
+                }),
+            },
+            Variable {
+                name: "L".into(),
+                lower: 0.0140,
+                upper: 0.0175,
+                set: Box::new(|m, v| {
+                    Design::ComRadius.set(m, v);
+                    Ok(())
+                }),
+            },
         ],
     }
 }

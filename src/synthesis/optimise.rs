@@ -10,7 +10,7 @@
 //! run on threads; their optima are compared and the distinct ones reported.
 
 use super::kkt::{Kkt, kkt};
-use super::problem::{Evaluation, Problem, SynthesisError};
+use super::problem::{Evaluation, Problem, SynthesisError, search_scale};
 use rayon::prelude::*;
 
 /// A scaled constraint value at most this counts as met (the rows are O(1)).
@@ -80,7 +80,8 @@ pub struct Optimum {
 impl Optimum {
     /// Whether every constraint is met to `tol` (scaled).
     pub fn feasible(&self, tol: f64) -> bool {
-        self.constraints.iter().filter(|c| !c.name.starts_with("response")).all(|c| c.value <= tol)
+        // The response rows come first, one per operating point; they bound t, not the design.
+        self.constraints.iter().skip(self.evaluation.points.len()).all(|c| c.value <= tol)
     }
 }
 
@@ -108,9 +109,12 @@ pub(super) fn rows(problem: &Problem, ev: &Evaluation, a_ref: f64, t: f64) -> Ve
         out.push(last);
         out
     };
+    let at = |p: &super::problem::OperatingValue| {
+        format!("{} rpm, {} N·m", crate::plot::num(p.rpm, 6), crate::plot::num(p.torque_nm, 6))
+    };
     let mut out = Vec::new();
     for p in &ev.points {
-        let at = format!("{} rpm, {} N·m", crate::plot::num(p.rpm, 6), crate::plot::num(p.torque_nm, 6));
+        let at = at(p);
         out.push((
             format!("response at {at}"),
             p.rotor_accel / a_ref - t,
@@ -119,7 +123,7 @@ pub(super) fn rows(problem: &Problem, ev: &Evaluation, a_ref: f64, t: f64) -> Ve
     }
     if let Some(travel) = problem.travel {
         for p in &ev.points {
-            let at = format!("{} rpm, {} N·m", crate::plot::num(p.rpm, 6), crate::plot::num(p.torque_nm, 6));
+            let at = at(p);
             out.push((
                 format!("travel at {at}"),
                 p.absorber_peak / travel - 1.0,
@@ -133,10 +137,8 @@ pub(super) fn rows(problem: &Problem, ev: &Evaluation, a_ref: f64, t: f64) -> Ve
         let name = format!("jump margin at {} rpm", crate::plot::num(j.rpm, 6));
         let (value, grad) = match j.torque_nm {
             Some(tj) => (1.0 - tj / need, j.gradient.iter().map(|g| -g).collect::<Vec<f64>>()),
-            None => (
-                1.0 - 1.25 * problem.jump_margin.unwrap_or(1.0).max(1.0) / problem.jump_margin.unwrap_or(1.0),
-                vec![0.0; n],
-            ),
+            // No fold up to the searched torque: the margin holds with at least that to spare.
+            None => (1.0 - search_scale(problem.jump_margin) / problem.jump_margin.unwrap_or(1.0), vec![0.0; n]),
         };
         out.push((name, value, scaled(&grad, need, 0.0)));
     }
@@ -218,29 +220,30 @@ impl Problem {
         let mut trail = Trail::default();
         let mut u = u0.to_vec();
         let mut status = String::new();
+        let mut reached = None;
         for pass in 0..=RESTARTS {
             let stopped = self.slsqp_pass(&u, a_ref, opts, &mut trail);
             status = if pass == 0 { stopped } else { format!("{stopped} (after {pass} restarts)") };
             u = self.best_of(&trail, &u);
-            let check = self.evaluate(&design(self, &u)).map(|ev| {
+            let ev = self.evaluate(&design(self, &u));
+            let residual = ev.as_ref().ok().map(|ev| {
                 trail.solves += ev.solves;
-                let t = ev.worst_response() / a_ref;
-                kkt(&rows(self, &ev, a_ref, t), &u, u.len()).residual
+                kkt(&rows(self, ev, a_ref, ev.worst_response() / a_ref), &u, u.len()).residual
             });
-            if check.is_ok_and(|r| r <= KKT_TOL) || trail.history.len() >= opts.max_evaluations {
+            reached = Some(ev);
+            if residual.is_some_and(|r| r <= KKT_TOL) || trail.history.len() >= opts.max_evaluations {
                 break;
             }
         }
         let x = design(self, &u);
         let (history, solves) = (trail.history, trail.solves);
-        let (evaluation, status) = match self.evaluate(&x) {
+        let (evaluation, status) = match reached.expect("at least one pass") {
             Ok(ev) => (ev, status),
             Err(e) => {
                 let empty = Evaluation { x: x.clone(), points: Vec::new(), jumps: Vec::new(), solves: 0 };
                 (empty, format!("{status}; the design it stopped at failed: {e}"))
             }
         };
-        let evaluation_solves = evaluation.solves;
         let t = evaluation.worst_response() / a_ref;
         let all = rows(self, &evaluation, a_ref, t);
         let kkt = kkt(&all, &u, u.len());
@@ -249,16 +252,7 @@ impl Problem {
             .zip(&kkt.multipliers)
             .map(|((name, value, _), &multiplier)| ConstraintValue { name: name.clone(), value: *value, multiplier })
             .collect();
-        Optimum {
-            start: design(self, u0),
-            x,
-            evaluation,
-            constraints,
-            kkt,
-            status,
-            history,
-            solves: solves + evaluation_solves,
-        }
+        Optimum { start: design(self, u0), x, evaluation, constraints, kkt, status, history, solves }
     }
 }
 

@@ -146,7 +146,7 @@ pub enum SynthesisError {
 
 /// The torque scale the branch is followed to, in units of the largest operating torque: past
 /// the jump margin so that a jump just above it is located, not cut off.
-fn search_scale(margin: Option<f64>) -> f64 {
+pub(super) fn search_scale(margin: Option<f64>) -> f64 {
     1.25 * margin.unwrap_or(1.0).max(1.0)
 }
 

@@ -4,26 +4,10 @@
 //! rest, a fold solve and polished states), and the optimum against the best case of a 20 × 20
 //! grid of whole evaluations over the same box.
 
+use crate::support::cpva_hbm::Design;
 use kanedyn::cpva::CpvaParams;
 use kanedyn::model::excitation::rpm_to_rad_s;
-use kanedyn::model::mechanism::Mechanism;
 use kanedyn::synthesis::{Evaluation, OptimiseOptions, Problem, SynthesisError, Variable};
-
-/// Sets the pivot's distance from the rotor axis, m.
-fn set_pivot_radius(m: &mut Mechanism, v: f64) -> Result<(), String> {
-    let j = m.joint_index("pivot").ok_or("no pivot")?;
-    let at = m.joints[j].at;
-    m.joints[j].at = at * (v / at.norm());
-    Ok(())
-}
-
-/// Sets the pendulum's centre-of-mass distance from its pivot, m.
-fn set_com_radius(m: &mut Mechanism, v: f64) -> Result<(), String> {
-    let b = m.body_index("pendulum").ok_or("no pendulum")?;
-    let com = m.bodies[b].inertia.com;
-    m.bodies[b].inertia.com = com * (v / com.norm());
-    Ok(())
-}
 
 /// The paper's rotor at 1000 rpm, order 3, torques `torques`, pivot and centre-of-mass radius
 /// free in the given boxes.
@@ -40,8 +24,24 @@ fn problem(torques: Vec<f64>, travel: Option<f64>, margin: Option<f64>, r: (f64,
         jump_margin: margin,
         harmonics: 10,
         variables: vec![
-            Variable { name: "R".into(), lower: r.0, upper: r.1, set: Box::new(set_pivot_radius) },
-            Variable { name: "L".into(), lower: l.0, upper: l.1, set: Box::new(set_com_radius) },
+            Variable {
+                name: "R".into(),
+                lower: r.0,
+                upper: r.1,
+                set: Box::new(|m, v| {
+                    Design::PivotRadius.set(m, v);
+                    Ok(())
+                }),
+            },
+            Variable {
+                name: "L".into(),
+                lower: l.0,
+                upper: l.1,
+                set: Box::new(|m, v| {
+                    Design::ComRadius.set(m, v);
+                    Ok(())
+                }),
+            },
         ],
     }
 }
